@@ -1,0 +1,35 @@
+"""The contract every steering controller meets.
+
+A controller is stepped by :func:`blender_turning.core.simulate.simulate`: once per accepted
+step it is told the time and state (``begin_step``, where it may update its memory), and during
+the step's integrator stages it is asked for the demanded foot curvature (``desired_cf``, pure:
+no memory change).  The integrator bounds the demand (``dynamics.bound_cf``).  States have shape
+``(5, n)`` or ``(5,)``; every method works on either.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..dynamics import THETA_V, inverse_cf
+from ..params import BodyParams
+
+
+class Controller:
+    """Base class: a controller that demands a lean acceleration and steers by Eq. (1)."""
+
+    def __init__(self, body: BodyParams):
+        self.body = body
+
+    def begin_step(self, t: float, state: np.ndarray) -> None:
+        """Called once at the start of each step with the accepted state."""
+
+    def desired_alpha(self, t: float, state: np.ndarray):
+        raise NotImplementedError
+
+    def desired_cf(self, t: float, state: np.ndarray):
+        """The curvature that produces :meth:`desired_alpha` (Eq. 1, physical root)."""
+        return inverse_cf(self.body, state[THETA_V], self.desired_alpha(t, state))
+
+    def target(self, t: float):
+        """``(omega0, theta_max)`` of the ellipse the motion is following now (for the phase)."""
+        raise NotImplementedError

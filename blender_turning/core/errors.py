@@ -1,0 +1,16 @@
+"""Domain errors of the core. The CLI turns them into one line and exit code 2."""
+from __future__ import annotations
+
+
+class TurningError(Exception):
+    """Base class of the core's domain errors."""
+
+
+class FellOver(TurningError):
+    """The lean exceeded the fall bound. Carries the time and the trajectory up to there."""
+
+    def __init__(self, t: float, theta_v: float, trajectory=None):
+        super().__init__(f"the figure fell over at t = {t:.2f} s (lean {theta_v * 57.29578:.1f} deg)")
+        self.t = t
+        self.theta_v = theta_v
+        self.trajectory = trajectory

@@ -1,0 +1,123 @@
+"""Body parameters, limits and the four sport presets (SI units, radians).
+
+The physical model is the inverted pendulum of Section 3 (Fig. 2): a mass ``m`` at height ``l``
+above a steerable "foot", roll inertia ``I_v`` about the centre of mass (Eq. 13), moving forward
+at a constant ``V_cm``.  Everything here is a frozen dataclass validated in ``__post_init__``:
+a bad value raises ``ValueError`` naming the field, the value and the allowed range.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+__all__ = ["BodyParams", "Limits", "Figure", "PRESETS", "preset", "check_range"]
+
+
+def check_range(name: str, value: float, lo: float, hi: float, *, lo_open: bool = False,
+                hi_open: bool = False) -> float:
+    """Return ``float(value)`` or raise ``ValueError`` naming ``name``, the value and the range."""
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} = {value!r} is not a number; allowed range "
+                         f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}") from None
+    ok = not math.isnan(v)
+    ok = ok and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
+    if not ok:
+        raise ValueError(f"{name} = {value!r} is outside the allowed range "
+                         f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}")
+    return v
+
+
+@dataclass(frozen=True)
+class BodyParams:
+    """The inverted pendulum of Fig. 2."""
+
+    m: float = 75.0
+    """Mass of the body, kg."""
+    l: float = 1.0
+    """Height of the centre of mass above the foot, m."""
+    I_v: float = 12.0
+    """Roll moment of inertia about the centre of mass (Eq. 13), kg m^2."""
+    V_cm: float = 10.0
+    """Forward speed of the centre of mass, m/s (constant, Section 3)."""
+    g: float = 9.81
+    """Gravitational acceleration, m/s^2."""
+
+    def __post_init__(self):
+        check_range("m", self.m, 0.0, 1e4, lo_open=True)
+        check_range("l", self.l, 0.0, 10.0, lo_open=True)
+        check_range("I_v", self.I_v, 0.0, 1e5)
+        check_range("V_cm", self.V_cm, 0.0, 100.0, lo_open=True)
+        check_range("g", self.g, 0.0, 100.0, lo_open=True)
+
+    @property
+    def J(self) -> float:
+        """``(I_v + l^2 m) / (m l)``: the inertia term of Eqs. (1), (2) and (9), m."""
+        return (self.I_v + self.l * self.l * self.m) / (self.m * self.l)
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Bounds on the steering and the lean (Sections 3, 5.1 and 6.1)."""
+
+    C_f_max: float = math.inf
+    """Largest |C_f|, 1/m (a ski's sidecut, a bicycle's steering lock)."""
+    dC_f_max: float = math.inf
+    """Largest |dC_f/dt|, 1/(m s) (how fast the foot can change its curvature)."""
+    theta_fall: float = math.radians(60.0)
+    """|theta_v| beyond which the figure has fallen, rad."""
+
+    def __post_init__(self):
+        check_range("C_f_max", self.C_f_max, 0.0, math.inf, lo_open=True)
+        check_range("dC_f_max", self.dC_f_max, 0.0, math.inf, lo_open=True)
+        check_range("theta_fall", self.theta_fall, 0.0, math.pi / 2, lo_open=True, hi_open=True)
+
+
+@dataclass(frozen=True)
+class Figure:
+    """A sport preset: a body and its limits."""
+
+    name: str
+    body: BodyParams
+    limits: Limits
+    doc: str = field(default="", compare=False)
+
+
+# Each number is a round, defensible figure, not a fit:
+# - Skier: 75 kg adult; COM ~1.0 m above the skis in an athletic stance; roll inertia about the
+#   COM of a 1.75 m adult ~12 kg m^2 (m * (0.4 m)^2); 10 m/s is a brisk recreational slalom.
+#   A slalom ski has a ~12 m sidecut radius; edged and bent it carves ~R cos(edge) -> about 6 m at
+#   60 deg, so |C_f| <= 1/6 m^-1. Edge-to-edge takes ~0.5 s: |dC_f/dt| <= 2 * (1/6) / 0.5 ~ 0.67.
+# - Snowboarder: 70 kg, COM 0.95 m, I_v 10; 8 m/s; a board's ~7-8 m sidecut carves to ~5 m:
+#   |C_f| <= 0.2; heel-to-toe edge change ~0.5 s: 0.8.
+# - Telemark: as the skier but slower (8 m/s); the turn comes from the angle between the skis,
+#   which is limited by the stance (~8 m radius): |C_f| <= 0.125; slower edge change: 0.5.
+# - Cyclist: rider + bicycle 85 kg, COM ~1.0 m, I_v 15 (bicycle adds roll inertia); 6 m/s.
+#   A 1.0 m wheelbase with ~27 deg of usable steer gives C_f = tan(27 deg)/1.0 ~ 0.5; the bar can be
+#   turned lock to lock in ~0.5 s: |dC_f/dt| <= 2.0. A bicycle steers sharper and faster than a ski.
+PRESETS: dict[str, Figure] = {
+    "skier": Figure("skier", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=10.0),
+                    Limits(C_f_max=1 / 6, dC_f_max=0.67, theta_fall=math.radians(60)),
+                    "alpine skier on slalom skis"),
+    "snowboarder": Figure("snowboarder", BodyParams(m=70.0, l=0.95, I_v=10.0, V_cm=8.0),
+                          Limits(C_f_max=0.2, dC_f_max=0.8, theta_fall=math.radians(60)),
+                          "carving snowboarder"),
+    "telemark": Figure("telemark", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=8.0),
+                       Limits(C_f_max=0.125, dC_f_max=0.5, theta_fall=math.radians(55)),
+                       "telemark skier"),
+    "cyclist": Figure("cyclist", BodyParams(m=85.0, l=1.0, I_v=15.0, V_cm=6.0),
+                      Limits(C_f_max=0.5, dC_f_max=2.0, theta_fall=math.radians(50)),
+                      "cyclist on a road bicycle"),
+}
+
+
+def preset(name: str, **body_overrides) -> Figure:
+    """The preset ``name`` with optional body overrides (``m=80``, ``V_cm=12`` ...)."""
+    key = name.lower()
+    if key not in PRESETS:
+        raise ValueError(f"preset = {name!r} is not one of {', '.join(PRESETS)}")
+    fig = PRESETS[key]
+    if body_overrides:
+        fig = replace(fig, body=replace(fig.body, **body_overrides))
+    return fig
