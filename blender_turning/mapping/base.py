@@ -1,0 +1,70 @@
+"""The contract between the mapping layer (Section 7) and the Blender bake.
+
+A sport mapping turns a :class:`~blender_turning.core.Trajectory` (already resampled to the
+animation's frame rate) into a :class:`PoseTrack`: for every frame, the armature object's
+transform and each animated bone's pose channels, exactly the values the bake writes into
+F-curves.  Everything is numpy arrays with ``n`` frames first; no bpy, no mathutils.
+
+Conventions (Blender's): bone channels are in the bone's own rest frame (``PoseBone.location``
+and ``PoseBone.rotation_quaternion`` with mode ``'QUATERNION'``, quaternions ``(w, x, y, z)``);
+the object's rotation is Euler XYZ in radians.  The armature's rest pose faces +Y with Z up.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+#: Custom properties baked onto the armature object (animated), with the trajectory column each
+#: comes from.  Users drive their own extras from these.
+STATE_PROPS = {"turn_phase": "phi", "turn_lean": "theta_v", "turn_curvature": "C_f",
+               "turn_leg_force": "F_leg", "turn_speed": "V_f"}
+
+
+@dataclass(frozen=True)
+class BoneChannels:
+    """Animated channels of one pose bone: ``location`` (n, 3) and/or ``rotation`` (n, 4) w,x,y,z."""
+
+    location: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+
+    def __post_init__(self):
+        for name, shape in (("location", 3), ("rotation", 4)):
+            v = getattr(self, name)
+            if v is not None:
+                v = np.ascontiguousarray(v, float)
+                if v.ndim != 2 or v.shape[1] != shape:
+                    raise ValueError(f"{name} must have shape (n, {shape}), not {v.shape}")
+                object.__setattr__(self, name, v)
+
+
+@dataclass(frozen=True)
+class PoseTrack:
+    """All animated values of one figure over ``n`` frames."""
+
+    frames: np.ndarray
+    """(n,) scene frame numbers (floats; integers for a bake on every frame)."""
+    location: np.ndarray
+    """(n, 3) armature object location, m (the foot point on the ground)."""
+    rotation: np.ndarray
+    """(n, 3) armature object rotation, Euler XYZ, rad (heading about Z)."""
+    bones: dict = field(default_factory=dict)
+    """bone name -> :class:`BoneChannels`."""
+    props: dict = field(default_factory=dict)
+    """custom property name -> (n,) values (see ``STATE_PROPS``)."""
+
+    def __post_init__(self):
+        n = len(self.frames)
+        for name in ("location", "rotation"):
+            if np.shape(getattr(self, name)) != (n, 3):
+                raise ValueError(f"{name} must have shape ({n}, 3)")
+        for bone, ch in self.bones.items():
+            for arr in (ch.location, ch.rotation):
+                if arr is not None and len(arr) != n:
+                    raise ValueError(f"bone {bone!r} has {len(arr)} frames, not {n}")
+        for prop, arr in self.props.items():
+            if np.shape(arr) != (n,):
+                raise ValueError(f"property {prop!r} must have shape ({n},)")
+
+    def __len__(self) -> int:
+        return len(self.frames)
