@@ -1,0 +1,45 @@
+"""The command line: ``python -m blender_turning <command> ...``.  No bpy needed.
+
+Each command is a module with ``register(subparsers)`` (adds its parser and sets
+``func=run``) and ``run(args) -> int``; ``COMMANDS`` lists them in help order.  A domain error or a
+bad value (``ValueError``, ``TurningError``, ``OSError``) becomes one line on stderr and exit 2.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from ..core.errors import TurningError
+
+COMMANDS = ("simulate", "figures", "follow")
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):          # argparse's own errors: one line, exit 2
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="python -m blender_turning",
+                     description="Physically based turning (van de Panne, Fiume, Vranesic 1993).")
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for name in COMMANDS:
+        try:
+            module = importlib.import_module(f".{name}", __name__)
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+            continue                  # a command whose module is not there yet
+        module.register(sub)
+    return parser
+
+
+def main(argv=None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except (ValueError, TurningError, OSError) as exc:
+        print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
+        return 2
