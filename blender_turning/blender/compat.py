@@ -1,0 +1,146 @@
+"""Every Blender-version difference the add-on meets, in one place (Blender 4.2 LTS to 5.0).
+
+Each guard carries a one-line reason.  The rest of ``blender/`` calls these helpers and never
+tests ``bpy.app.version`` itself.
+"""
+from __future__ import annotations
+
+import bpy
+
+VERSION = bpy.app.version
+
+# Slotted (layered) actions arrived in 4.4; 5.0 removed Action.fcurves/groups/id_root.
+SLOTTED_ACTIONS = VERSION >= (4, 4, 0)
+
+# EEVEE's engine id was 'BLENDER_EEVEE_NEXT' in 4.2-4.5 and is 'BLENDER_EEVEE' again in 5.0.
+_ENGINES = {e.identifier for e in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items}
+EEVEE_ENGINE = "BLENDER_EEVEE" if "BLENDER_EEVEE" in _ENGINES else "BLENDER_EEVEE_NEXT"
+
+_LINEAR = None
+
+
+def linear_interpolation_value() -> int:
+    """The enum value of ``'LINEAR'`` for ``Keyframe.interpolation`` (for ``foreach_set``)."""
+    global _LINEAR
+    if _LINEAR is None:
+        _LINEAR = bpy.types.Keyframe.bl_rna.properties["interpolation"].enum_items["LINEAR"].value
+    return _LINEAR
+
+
+def assign_new_action(id_data, name: str):
+    """Create the action ``name`` and assign it to ``id_data``; return the action.
+
+    On 4.4+ the action gets one slot for ``id_data`` and a layer/strip/channelbag holding it.
+    """
+    adt = id_data.animation_data or id_data.animation_data_create()
+    action = bpy.data.actions.new(name)
+    if SLOTTED_ACTIONS:
+        # 4.4+: F-curves live in a channelbag per slot; create the slot first, then assign both.
+        slot = action.slots.new(id_type=id_data.id_type, name=id_data.name)
+        layer = action.layers.new("Layer")
+        strip = layer.strips.new(type="KEYFRAME")
+        strip.channelbags.new(slot)
+        adt.action = action
+        adt.action_slot = slot
+    else:
+        # 4.2/4.3: the action holds its F-curves directly.
+        adt.action = action
+    return action
+
+
+def channels(id_data, action=None):
+    """The F-curve/group container (``.fcurves``, ``.groups``) of ``id_data``'s animation.
+
+    ``action`` defaults to the assigned one.  Returns ``None`` when there is none (no action, or on
+    4.4+ no channelbag for the assigned slot).
+    """
+    adt = id_data.animation_data
+    if action is None:
+        action = adt.action if adt else None
+    if action is None:
+        return None
+    if not SLOTTED_ACTIONS:
+        return action                     # 4.2/4.3: Action.fcurves and Action.groups
+    slot = adt.action_slot if adt and adt.action == action else None
+    if slot is None:
+        return None
+    for layer in action.layers:           # 4.4+: anim_utils' helper, inlined (not in 4.2)
+        for strip in layer.strips:
+            bag = strip.channelbag(slot)
+            if bag:
+                return bag
+    return None
+
+
+def new_fcurve(bag, data_path: str, index: int, group: str):
+    """A new F-curve in ``bag`` (see :func:`channels`), in the group ``group`` (made if needed)."""
+    grp = bag.groups.get(group) or bag.groups.new(group)
+    if SLOTTED_ACTIONS:
+        # Channelbag.fcurves.new has no group argument; set it afterwards.
+        fc = bag.fcurves.new(data_path, index=index)
+        fc.group = grp
+        return fc
+    return bag.fcurves.new(data_path, index=index, action_group=group)
+
+
+def all_fcurves(action):
+    """Every F-curve of ``action`` over all slots (for inspection and snapshots)."""
+    if not SLOTTED_ACTIONS:
+        return list(action.fcurves)
+    out = []
+    for layer in action.layers:
+        for strip in layer.strips:
+            for bag in getattr(strip, "channelbags", ()):
+                out.extend(bag.fcurves)
+    return out
+
+
+def nla_strip_new(track, name: str, frame: int, action):
+    """Put ``action`` on an NLA ``track`` keeping the slot it was assigned with (4.4+)."""
+    adt = track.id_data.animation_data
+    slot = adt.action_slot if SLOTTED_ACTIONS else None
+    strip = track.strips.new(name, int(frame), action)
+    if SLOTTED_ACTIONS and slot is not None:
+        strip.action_slot = slot          # 4.4+: a strip animates through a slot too
+    return strip
+
+
+def restore_action(id_data, action, slot_name: str | None = None):
+    """Assign ``action`` back to ``id_data`` (on 4.4+ with the slot named ``slot_name``)."""
+    adt = id_data.animation_data or id_data.animation_data_create()
+    adt.action = action
+    if SLOTTED_ACTIONS and action is not None and slot_name:
+        for slot in action.slots:
+            if slot.identifier == slot_name:
+                adt.action_slot = slot
+                break
+
+
+def slot_identifier(id_data) -> str | None:
+    """The identifier of the slot ``id_data`` is animated through (``None`` before 4.4)."""
+    adt = id_data.animation_data
+    if not SLOTTED_ACTIONS or adt is None or adt.action_slot is None:
+        return None
+    return adt.action_slot.identifier
+
+
+def set_base_color(mat, rgba, roughness: float, metallic: float) -> None:
+    """Colour a material's Principled BSDF (for EEVEE and Cycles renders)."""
+    if mat.node_tree is None:
+        # Before 5.0 a new material has no node tree until use_nodes is set (deprecated in 5.0).
+        mat.use_nodes = True
+    bsdf = next((n for n in mat.node_tree.nodes if n.type == "BSDF_PRINCIPLED"), None)
+    if bsdf is not None:
+        bsdf.inputs["Base Color"].default_value = rgba
+        bsdf.inputs["Roughness"].default_value = roughness
+        bsdf.inputs["Metallic"].default_value = metallic
+
+
+def poll_message(cls, message: str) -> None:
+    """``Operator.poll_message_set`` (present since 3.0; kept here so poll code reads the same)."""
+    cls.poll_message_set(message)
+
+
+def temp_override(context, **kwargs):
+    """``Context.temp_override`` (3.2+), for the one edit-mode switch of the rig builder."""
+    return context.temp_override(**kwargs)
