@@ -1,0 +1,209 @@
+"""The path to follow (Section 6, Fig. 11): a piecewise cubic Hermite spline, and the distance d_i
+from a foot position to it (Fig. 12).
+
+A :class:`HermitePath` of ``n`` segments holds the ``n + 1`` knots and, per segment, the tangent
+leaving its start knot and the tangent arriving at its end knot.  Built from points and tangents it
+is C1 (both tangents at a knot are the same); built from a Bezier curve it is exactly that curve
+(a cubic Bezier ``P0..P3`` is the Hermite segment with tangents ``3 (P1 - P0)`` and
+``3 (P3 - P2)``), corners included; built from a polyline each segment is the straight chord.
+
+:class:`PathDistance` is the paper's ``d_i = min_j |P_i - S_j|`` over samples ``S_j`` taken at
+``per_segment`` (default 12) equal parameter steps per segment, or, with ``exact=True``, the
+distance to the nearest point of the spline itself.  Both are distances to a set, so both are
+1-Lipschitz in the foot position, which the planner's lower bound relies on.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["HermitePath", "PathDistance"]
+
+# Hermite basis in monomial form: S(u) = [1 u u^2 u^3] @ _H @ [P0, T0, P1, T1].
+_H = np.array([[1.0, 0.0, 0.0, 0.0],
+               [0.0, 1.0, 0.0, 0.0],
+               [-3.0, -2.0, 3.0, -1.0],
+               [2.0, 1.0, -2.0, 1.0]])
+
+
+def _points(name, value, min_rows):
+    a = np.asarray(value, float)
+    if a.ndim != 2 or a.shape[1] != 2 or a.shape[0] < min_rows:
+        raise ValueError(f"{name} must be an array of at least {min_rows} (x, y) rows, "
+                         f"not shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{name} has a value that is not a finite number")
+    return a
+
+
+class HermitePath:
+    """A piecewise cubic Hermite spline in the ground plane (m).
+
+    ``knots`` has shape ``(n + 1, 2)``; ``t_out[i]`` and ``t_in[i]`` (shape ``(n, 2)``, m per unit
+    parameter) are segment ``i``'s tangents at its start and its end.
+    """
+
+    def __init__(self, knots, t_out, t_in):
+        self.knots = _points("path points", knots, 2)
+        n = len(self.knots) - 1
+        self.t_out = _points("path tangents", t_out, n)
+        self.t_in = _points("path tangents", t_in, n)
+        if len(self.t_out) != n or len(self.t_in) != n:
+            raise ValueError(f"a path of {n + 1} points needs {n} segment tangents")
+        geom = np.stack([self.knots[:-1], self.t_out, self.knots[1:], self.t_in], axis=1)
+        #: Monomial coefficients, shape (n, 4, 2): S_i(u) = sum_k coef[i, k] u^k.
+        self.coef = np.einsum("kj,njd->nkd", _H, geom)
+
+    # -- constructors ------------------------------------------------------------------------
+    @classmethod
+    def from_points(cls, points, tangents) -> "HermitePath":
+        """Section 6: knots and one tangent per knot (C1 at every knot)."""
+        p = _points("path points", points, 2)
+        t = _points("path tangents", tangents, 1)
+        if len(t) != len(p):
+            raise ValueError(f"path has {len(p)} points but {len(t)} tangents")
+        return cls(p, t[:-1], t[1:])
+
+    @classmethod
+    def from_polyline(cls, points) -> "HermitePath":
+        """Connected straight segments (Section 6: "could be used equally well")."""
+        p = _points("path points", points, 2)
+        chord = np.diff(p, axis=0)
+        return cls(p, chord, chord)
+
+    @classmethod
+    def from_bezier(cls, control) -> "HermitePath":
+        """Cubic Bezier control points ``P0, P1, P2, P3, P4, ...`` (shape ``(3 n + 1, 2)``), as
+        Blender stores them (knot, right handle, next left handle, next knot).  Exact."""
+        c = _points("path bezier", control, 4)
+        if (len(c) - 1) % 3:
+            raise ValueError(f"path bezier needs 3 n + 1 control points, not {len(c)}")
+        return cls(c[0::3], 3.0 * (c[1::3] - c[0:-1:3]), 3.0 * (c[3::3] - c[2::3]))
+
+    # -- evaluation --------------------------------------------------------------------------
+    @property
+    def n_segments(self) -> int:
+        return len(self.coef)
+
+    def evaluate(self, seg, u, derivative: int = 0):
+        """Point (or derivative 1, 2) of segment(s) ``seg`` at parameter(s) ``u`` in [0, 1]."""
+        c = self.coef[np.asarray(seg)]
+        u = np.asarray(u, float)[..., None]
+        if derivative == 0:
+            return c[..., 0, :] + u * (c[..., 1, :] + u * (c[..., 2, :] + u * c[..., 3, :]))
+        if derivative == 1:
+            return c[..., 1, :] + u * (2.0 * c[..., 2, :] + 3.0 * u * c[..., 3, :])
+        if derivative == 2:
+            return 2.0 * c[..., 2, :] + 6.0 * u * c[..., 3, :]
+        raise ValueError(f"derivative = {derivative!r} is not one of 0, 1, 2")
+
+    def sample(self, per_segment: int = 12) -> np.ndarray:
+        """``per_segment`` points per segment at equal parameter steps, plus the last knot:
+        shape ``(n * per_segment + 1, 2)``."""
+        if int(per_segment) != per_segment or per_segment < 1:
+            raise ValueError(f"samples per segment = {per_segment!r} is outside [1, inf)")
+        per = int(per_segment)
+        u = np.arange(per) / per
+        seg = np.repeat(np.arange(self.n_segments), per)
+        pts = self.evaluate(seg, np.tile(u, self.n_segments))
+        return np.vstack([pts, self.knots[-1:]])
+
+    def end_direction(self) -> np.ndarray:
+        """Unit tangent at the end of the path."""
+        d = self.evaluate(self.n_segments - 1, 1.0, 1)
+        if not np.any(d):
+            d = self.knots[-1] - self.evaluate(self.n_segments - 1, 0.99)
+        return d / np.linalg.norm(d)
+
+    def extended(self, length: float) -> "HermitePath":
+        """This path with a straight run-out of ``length`` m along its end tangent (the planner
+        looks beyond the end of the path; without a run-out it would turn back to the end)."""
+        if not length > 0:
+            return self
+        d = self.end_direction() * length
+        return HermitePath(np.vstack([self.knots, self.knots[-1] + d]),
+                           np.vstack([self.t_out, d]), np.vstack([self.t_in, d]))
+
+    def length(self, per_segment: int = 64) -> float:
+        """Arc length (polyline through ``per_segment`` samples per segment), m."""
+        return float(np.sum(np.linalg.norm(np.diff(self.sample(per_segment), axis=0), axis=1)))
+
+
+class PathDistance:
+    """``d(P)``: distance from foot positions ``P`` (shape ``(..., 2)``) to the path.
+
+    Default: the paper's nearest-sample distance (Section 6, ``per_segment`` samples per spline
+    segment).  ``exact=True``: distance to the spline's nearest point (a Newton refinement on every
+    sample interval, started from the projection on its chord).
+    """
+
+    def __init__(self, path: HermitePath, per_segment: int = 12, exact: bool = False,
+                 _subset=None):
+        self.path = path
+        self.per_segment = int(per_segment)
+        self.exact = bool(exact)
+        pts = path.sample(self.per_segment)
+        seg = np.minimum(np.arange(len(pts)) // self.per_segment, path.n_segments - 1)
+        u = np.arange(len(pts)) / self.per_segment - seg
+        self._all = (pts, seg, u)
+        idx = np.arange(len(pts)) if _subset is None else np.asarray(_subset)
+        self.samples = pts[idx]
+        self._idx = idx
+
+    def near(self, center, radius: float) -> "PathDistance":
+        """The same distance function for points within ``radius`` of ``center``, on fewer samples.
+
+        Exact: with ``d0`` the distance from ``center`` to the nearest sample, a point ``P`` in the
+        disc has ``d(P) <= radius + d0``; a sample farther than ``2 radius + d0`` from ``center``
+        is farther than that from ``P`` and can never be the nearest.
+        """
+        pts = self._all[0]
+        r = np.linalg.norm(pts - np.asarray(center, float), axis=1)
+        keep = np.flatnonzero(r <= 2.0 * radius + r.min() + 1e-9)
+        if self.exact:            # keep the neighbouring samples: intervals need both ends
+            keep = np.unique(np.clip(np.concatenate([keep - 1, keep, keep + 1]), 0, len(pts) - 1))
+        return PathDistance(self.path, self.per_segment, self.exact, keep)
+
+    def __call__(self, P) -> np.ndarray:
+        P = np.asarray(P, float)
+        diff = P[..., None, :] - self.samples
+        d2 = np.einsum("...k,...k->...", diff, diff)
+        d = np.sqrt(d2.min(axis=-1))
+        if self.exact:
+            d = np.minimum(d, self._refined(P))
+        return d
+
+    def nearest_index(self, P) -> np.ndarray:
+        """Index (into the full sample list) of the nearest sample to each point."""
+        P = np.asarray(P, float)
+        diff = P[..., None, :] - self.samples
+        return self._idx[np.argmin(np.einsum("...k,...k->...", diff, diff), axis=-1)]
+
+    def _refined(self, P):
+        pts, seg, u = self._all
+        idx = self._idx
+        # Sample intervals [j, j+1] with both ends present and in the same segment.
+        j = idx[:-1][(np.diff(idx) == 1)]
+        j = j[seg[j] == seg[np.minimum(j + 1, len(seg) - 1)]]
+        if len(j) == 0:
+            return np.full(P.shape[:-1], np.inf)
+        s = seg[j]
+        u0 = u[j]
+        du = 1.0 / self.per_segment
+        a, b = pts[j], pts[j + 1]
+        ab = b - a
+        flat = P.reshape(-1, 2)[:, None, :]
+        w = np.clip(np.einsum("mjk,jk->mj", flat - a, ab) / np.maximum(
+            np.einsum("jk,jk->j", ab, ab), 1e-300), 0.0, 1.0)
+        uu = u0 + w * du
+        for _ in range(4):      # Newton on g(u) = (S(u) - P) . S'(u)
+            S = self.path.evaluate(s, uu)
+            S1 = self.path.evaluate(s, uu, 1)
+            S2 = self.path.evaluate(s, uu, 2)
+            r = S - flat
+            g = np.einsum("mjk,mjk->mj", r, S1)
+            h = np.einsum("mjk,mjk->mj", S1, S1) + np.einsum("mjk,mjk->mj", r, S2)
+            step = np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0)
+            uu = np.clip(uu - step, u0, u0 + du)
+        r = self.path.evaluate(s, uu) - flat
+        d = np.sqrt(np.einsum("mjk,mjk->mj", r, r).min(axis=1))
+        return d.reshape(P.shape[:-1])

@@ -1,0 +1,127 @@
+"""Receding-horizon path following (Section 6.1): plan N stages, apply the first, plan again.
+
+:func:`follow` returns a :class:`FollowResult`: the trajectory (the DESIGN.md columns, ``phi``
+from the Section 6.2 post-pass) and one :class:`Replan` per planning step.  When no plan survives
+(every branch hits an obstacle or falls) it raises :class:`..errors.PlanInfeasible` with the time,
+the position and the trajectory up to there: never a silent fall-through.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..dynamics import leg_force
+from ..errors import PlanInfeasible
+from ..phase_estimate import estimate_phase
+from ..trajectory import Trajectory
+from .problem import Problem, _BatchBody, start_derivative
+from .search import SearchStats, branch_and_bound
+
+__all__ = ["Replan", "FollowResult", "follow"]
+
+
+@dataclass(frozen=True)
+class Replan:
+    """One planning step: when, from where, what it chose and what the search did."""
+
+    t: float
+    x: float
+    y: float
+    f_opt: float
+    u: float
+    stats: SearchStats
+
+    def as_dict(self) -> dict:
+        return {"t": self.t, "x": self.x, "y": self.y, "f_opt": self.f_opt, "dC_f_dt": self.u,
+                **self.stats.as_dict()}
+
+
+@dataclass(frozen=True)
+class FollowResult:
+    trajectory: Trajectory
+    replans: tuple
+    reached_end: bool
+
+    def totals(self) -> dict:
+        keys = ("expanded", "generated", "clipped_collision", "clipped_fall", "clipped_bound",
+                "leaves", "wall_time")
+        out = {k: sum(getattr(r.stats, k) for r in self.replans) for k in keys}
+        out["replans"] = len(self.replans)
+        out["proven"] = all(r.stats.proven for r in self.replans)
+        out["duration"] = self.trajectory.duration
+        return out
+
+
+def _past_end(problem: Problem, end, end_dir, xy) -> bool:
+    return float(np.dot(np.asarray(xy) - end, end_dir)) >= 0.0
+
+
+def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None = None,
+           end=None, end_dir=None, meta: dict | None = None) -> FollowResult:
+    """Follow the path from ``state0`` (shape ``(5,)``) until the foot passes the plane through
+    ``end`` normal to ``end_dir`` (the path's last point and direction) or ``duration`` seconds.
+
+    At least one of ``duration`` and ``end`` must be given.
+    """
+    if duration is None and end is None:
+        raise ValueError("follow needs a duration or an end point")
+    st = problem.settings
+    limit = duration if duration is not None else 1e4
+    x = np.asarray(state0, float).reshape(5, 1).copy()
+    cf, t, s = float(C_f0), 0.0, 0.0
+    rows = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")}
+    replans = []
+    previous = None
+    reached = False
+    end = None if end is None else np.asarray(end, float)
+    while t < limit - 1e-9:
+        clock = time.perf_counter()
+        local = problem.local(x[:2, 0])
+        plan = branch_and_bound(local, x[:, 0], cf, t, s, previous)
+        if plan is None:
+            traj = _trajectory(problem, rows, x, cf, t, s, meta)
+            raise PlanInfeasible(t, (float(x[0, 0]), float(x[1, 0])), traj,
+                                 branch_and_bound.last_stats)
+        stats = plan.stats
+        stats = SearchStats(**{**stats.as_dict(), "wall_time": time.perf_counter() - clock})
+        replans.append(Replan(t, float(x[0, 0]), float(x[1, 0]), plan.f_opt, plan.u[0], stats))
+        r = local.simulate_stage(x, np.array([cf]), np.array([plan.u[0]]), np.array([t]),
+                                 np.array([s]), record=True)
+        for k in rows:
+            rows[k].extend(r.record[k])
+        x, cf, s, t = r.state, float(r.C_f[0]), float(r.s[0]), t + st.t_stage
+        previous = plan.choices
+        if end is not None and _past_end(problem, end, end_dir, x[:2, 0]):
+            reached = True
+            break
+    return FollowResult(_trajectory(problem, rows, x, cf, t, s, meta), tuple(replans), reached)
+
+
+def _trajectory(problem: Problem, rows, x, cf, t, s, meta) -> Trajectory:
+    """The recorded steps plus the final state, with F_leg, s and the post-pass phase."""
+    body = problem.body
+    states = [np.asarray(v).reshape(5) for v in rows["state"]] + [x.reshape(5)]
+    S = np.array(states).T
+    C = np.array([float(np.ravel(v)[0]) for v in rows["C_f"]] + [cf])
+    T = np.array([float(np.ravel(v)[0]) for v in rows["t"]] + [t])
+    V = np.array([float(np.ravel(v)[0]) for v in rows["V_f"]] + [np.nan])
+    A = np.array([float(np.ravel(v)[0]) for v in rows["alpha_v"]] + [np.nan])
+    # The final sample's alpha_v and V_f: from its own state and curvature.
+    body_end = problem._body_at(np.array([t]), np.array([s]))
+    _, a_end, v_end = start_derivative(body_end, x, np.array([cf]), np.sin(x[3]), np.cos(x[3]))
+    A[-1], V[-1] = float(np.ravel(a_end)[0]), float(np.ravel(v_end)[0])
+    cols = {"t": T, "x": S[0], "y": S[1], "theta_dir": S[2], "theta_v": S[3], "omega_v": S[4],
+            "alpha_v": A, "C_f": C, "V_f": V}
+    # V_cm recovered from V_f (Eq. 21), so a varying speed profile is honoured.
+    v_cm = V * (1.0 - C * body.l * np.sin(S[3]))
+    cols["F_leg"] = leg_force(_BatchBody(body.m, body.l, body.I_v, v_cm, body.g, body.J),
+                              S[3], S[4], A, C)[0]
+    ds = 0.5 * (V[1:] + V[:-1]) * np.diff(T)
+    cols["s"] = np.concatenate([[0.0], np.cumsum(ds)])
+    cols["phi"] = estimate_phase(T, S[3], S[4]).phi if len(T) > 1 else np.zeros(len(T))
+    meta = {"preset": problem.figure.name, "dt": problem.settings.dt,
+            "planner": "branch-and-bound (Section 6)", **(meta or {})}
+    return Trajectory.from_columns(cols, meta)
+

@@ -1,0 +1,262 @@
+"""The branch-and-bound search of Fig. 14, made exact-and-fast, and the exhaustive reference.
+
+Nodes are the states at stage boundaries (Fig. 13).  A node's ``f`` is ``sum d_i`` over the track
+samples so far (Section 6); ``f`` never decreases along a branch, so a node whose ``f`` (plus an
+admissible lower bound on the cost still to come) exceeds the best complete plan found so far
+cannot lead to a better one and is clipped.  Clipping uses a strict ``>`` (with a 1e-9 relative
+tolerance for rounding), so the search returns the same optimal ``f_opt`` as the exhaustive search
+of all ``q^N`` plans, whatever the order in which it expands nodes.
+
+Beyond the paper (each switchable, for the benchmarks and the exactness tests):
+
+- warm start: the previous plan shifted by one stage (all q choices for the new last stage) is
+  simulated first and gives the first upper bound; without a previous plan, a greedy dive does;
+- lower bound: ``Problem.lower_bound``, added to ``f`` both for ordering (A*) and for clipping;
+- batches: ``batch`` queue nodes are expanded together, their ``batch * q`` children simulated as
+  one array operation.
+"""
+from __future__ import annotations
+
+import heapq
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .problem import Problem
+
+__all__ = ["SearchStats", "Plan", "branch_and_bound", "exhaustive"]
+
+_REL_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class SearchStats:
+    """What one search did.  Clipped counts are children (or queued nodes) dropped, by reason."""
+
+    expanded: int
+    generated: int
+    clipped_collision: int
+    clipped_fall: int
+    clipped_bound: int
+    leaves: int
+    wall_time: float
+    proven: bool
+    warm_cost: float
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The best plan: indices into ``Problem.u_values`` per stage, its u values and ``f_opt``."""
+
+    choices: tuple
+    u: tuple
+    f_opt: float
+    stats: SearchStats
+
+
+class _Nodes:
+    """Growable column store of search nodes."""
+
+    def __init__(self, cap=1024):
+        self.n = 0
+        self.state = np.empty((5, cap))
+        self.cols = {k: np.empty(cap) for k in ("cf", "f", "d", "t", "s")}
+        self.depth = np.empty(cap, np.int64)
+        self.parent = np.empty(cap, np.int64)
+        self.choice = np.empty(cap, np.int64)
+
+    def add(self, state, depth, parent, choice, **cols):
+        m = state.shape[1]
+        need = self.n + m
+        if need > self.state.shape[1]:
+            cap = max(need, 2 * self.state.shape[1])
+            self.state = np.concatenate([self.state, np.empty((5, cap - self.state.shape[1]))], 1)
+            for k, v in self.cols.items():
+                self.cols[k] = np.concatenate([v, np.empty(cap - len(v))])
+            for k in ("depth", "parent", "choice"):
+                v = getattr(self, k)
+                setattr(self, k, np.concatenate([v, np.empty(cap - len(v), np.int64)]))
+        sl = slice(self.n, need)
+        self.state[:, sl] = state
+        self.depth[sl], self.parent[sl], self.choice[sl] = depth, parent, choice
+        for k, v in cols.items():
+            self.cols[k][sl] = v
+        self.n = need
+        return np.arange(sl.start, sl.stop)
+
+    def choices(self, i):
+        out = []
+        while i >= 0 and self.parent[i] >= -1 and self.depth[i] > 0:
+            out.append(int(self.choice[i]))
+            i = int(self.parent[i])
+        return out[::-1]
+
+
+def _expand(problem: Problem, nodes: _Nodes, ids):
+    """Simulate all q children of nodes ``ids``; returns the stage result and parent/choice."""
+    q = problem.settings.q
+    ids = np.asarray(ids)
+    par = np.repeat(ids, q)
+    ch = np.tile(np.arange(q), len(ids))
+    t0 = nodes.cols["t"][par]
+    args = (nodes.state[:, par], nodes.cols["cf"][par], problem.u_values[ch], t0,
+            nodes.cols["s"][par])
+    if problem.settings.vectorize_children:
+        r = problem.simulate_stage(*args)
+    else:                         # the paper's one child at a time (the benchmark baseline)
+        parts = [problem.simulate_stage(args[0][:, j:j + 1], *(a[j:j + 1] for a in args[1:]))
+                 for j in range(len(par))]
+        r = type(parts[0])(*(np.concatenate([getattr(p, f) for p in parts], axis=-1)
+                             for f in ("state", "C_f", "s", "cost", "d_last", "collided", "fell")))
+    return r, par, ch
+
+
+def _root(state, C_f, t0, s0):
+    nodes = _Nodes()
+    nodes.add(np.asarray(state, float).reshape(5, 1), 0, -1, -1, cf=C_f, f=0.0, d=0.0, t=t0,
+              s=s0)
+    return nodes
+
+
+def _follow_choices(problem, state, C_f, t0, s0, choices):
+    """Simulate one fixed plan (all q choices at its last stage when ``choices`` is one short).
+    Returns ``(cost, full choices)`` of its best feasible completion, or ``(inf, None)``."""
+    st = problem.settings
+    x, cf, t, s, f = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0]), 0.0
+    f = np.zeros(1)
+    for k, c in enumerate(choices):
+        r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
+        if r.collided[0] or r.fell[0]:
+            return np.inf, None
+        x, cf, s, f, t = r.state, r.C_f, r.s, f + r.cost, t + st.t_stage
+    if len(choices) < st.n_stages:
+        q = st.q
+        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
+                                   np.full(q, t), np.repeat(s, q))
+        fc = np.where(r.collided | r.fell, np.inf, f[0] + r.cost)
+        j = int(np.argmin(fc))
+        return (float(fc[j]), list(choices) + [j]) if np.isfinite(fc[j]) else (np.inf, None)
+    return float(f[0]), list(choices)
+
+
+def _greedy_dive(problem, state, C_f, t0, s0):
+    """A first complete plan: at each stage take the child with the least ``f + lower bound``."""
+    st = problem.settings
+    q = st.q
+    x, cf, t, s, f = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0]), 0.0
+    choices = []
+    for depth in range(1, st.n_stages + 1):
+        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
+                                   np.full(q, t), np.repeat(s, q))
+        key = f + r.cost + problem.lower_bound(r.d_last, depth)
+        key = np.where(r.collided | r.fell, np.inf, key)
+        j = int(np.argmin(key))
+        if not np.isfinite(key[j]):
+            return np.inf, None
+        choices.append(j)
+        x, cf, s, f, t = r.state[:, [j]], r.C_f[[j]], r.s[[j]], f + r.cost[j], t + st.t_stage
+    return float(f), choices
+
+
+def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
+                     previous: tuple | None = None) -> Plan | None:
+    """Fig. 14 from ``state`` (shape ``(5,)``) with curvature ``C_f`` at time ``t0``.
+
+    ``previous``: the last plan's choices (warm start).  Returns the optimal :class:`Plan`, or
+    ``None`` with statistics in ``branch_and_bound.last_stats`` when every branch is clipped by a
+    collision or a fall (the caller raises ``PlanInfeasible``).
+    """
+    st = problem.settings
+    clock = time.perf_counter()
+    N, q = st.n_stages, st.q
+    ub, best = np.inf, None
+    warm_cost = np.inf
+    if st.warm_start:
+        if previous is not None and len(previous) == N:
+            ub, best = _follow_choices(problem, state, C_f, t0, s0, list(previous[1:]))
+        if best is None:
+            ub, best = _greedy_dive(problem, state, C_f, t0, s0)
+        warm_cost = ub
+    nodes = _root(state, C_f, t0, s0)
+    heap = [(0.0, 0, 0)]
+    expanded = generated = leaves = 0
+    clip_col = clip_fall = clip_bound = 0
+    proven = True
+    tol = lambda: _REL_TOL * max(1.0, abs(ub))     # noqa: E731
+    while heap:
+        ids = []
+        while heap and len(ids) < st.batch:
+            prio, _, i = heapq.heappop(heap)
+            if prio > ub + tol():          # everything left in the queue is worse
+                clip_bound += 1 + len(heap)
+                heap.clear()
+                break
+            ids.append(i)
+        if not ids:
+            break
+        if st.max_expansions and expanded >= st.max_expansions:
+            proven = False
+            break
+        expanded += len(ids)
+        r, par, ch = _expand(problem, nodes, ids)
+        generated += len(par)
+        depth = nodes.depth[par] + 1
+        f = nodes.cols["f"][par] + r.cost
+        clip_col += int(np.count_nonzero(r.collided))
+        clip_fall += int(np.count_nonzero(r.fell & ~r.collided))
+        alive = ~(r.collided | r.fell)
+        leaf = alive & (depth == N)
+        leaves += int(np.count_nonzero(leaf))
+        if leaf.any():
+            j = np.flatnonzero(leaf)[np.argmin(f[leaf])]
+            if f[j] < ub:
+                ub = float(f[j])
+                best = nodes.choices(int(par[j])) + [int(ch[j])]
+        inner = alive & (depth < N)
+        prio = f + problem.lower_bound(r.d_last, depth) if st.lower_bound else f
+        keep = inner & ~(prio > ub + tol())
+        clip_bound += int(np.count_nonzero(inner & ~keep))
+        if keep.any():
+            k = np.flatnonzero(keep)
+            new = nodes.add(r.state[:, k], depth[k], par[k], ch[k], cf=r.C_f[k], f=f[k],
+                            d=r.d_last[k], t=nodes.cols["t"][par[k]] + st.t_stage, s=r.s[k])
+            seq = new.tolist()
+            for p, dd, i in zip(prio[k].tolist(), depth[k].tolist(), seq):
+                heapq.heappush(heap, (p, -dd, i))
+    stats = SearchStats(expanded, generated, clip_col, clip_fall, clip_bound, leaves,
+                        time.perf_counter() - clock, proven, float(warm_cost))
+    branch_and_bound.last_stats = stats
+    if best is None:
+        return None
+    return Plan(tuple(best), tuple(float(problem.u_values[c]) for c in best), float(ub), stats)
+
+
+branch_and_bound.last_stats = None
+
+
+def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0):
+    """Reference: simulate all ``q^N`` plans level by level (clipping only collisions and falls)
+    and return ``(f_opt, choices)``, or ``(inf, None)`` when none survives."""
+    st = problem.settings
+    q = st.q
+    x = np.asarray(state, float).reshape(5, 1)
+    cf, t, s, f = np.array([C_f], float), np.array([t0], float), np.array([s0], float), np.zeros(1)
+    paths = np.zeros((1, 0), np.int64)
+    for _ in range(st.n_stages):
+        m = x.shape[1]
+        par = np.repeat(np.arange(m), q)
+        ch = np.tile(np.arange(q), m)
+        r = problem.simulate_stage(x[:, par], cf[par], problem.u_values[ch], t[par], s[par])
+        alive = ~(r.collided | r.fell)
+        if not alive.any():
+            return np.inf, None
+        x, cf, s = r.state[:, alive], r.C_f[alive], r.s[alive]
+        f = (f[par] + r.cost)[alive]
+        t = t[par][alive] + st.t_stage
+        paths = np.concatenate([paths[par], ch[:, None]], axis=1)[alive]
+    j = int(np.argmin(f))
+    return float(f[j]), tuple(int(c) for c in paths[j])

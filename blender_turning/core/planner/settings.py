@@ -1,0 +1,120 @@
+"""Planner settings (Section 6.1) and the speed profile along the path (Section 6: "the speed can
+be made to vary as a function of the terrain")."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..params import check_range
+
+__all__ = ["PlannerSettings", "SpeedProfile"]
+
+
+@dataclass(frozen=True)
+class PlannerSettings:
+    """The branch-and-bound search of Fig. 14.  Defaults are the paper's typical values (6.1)."""
+
+    t_stage: float = 0.3
+    """Duration of one stage, during which dC_f/dt is held constant, s."""
+    n_stages: int = 10
+    """N, the number of stages planned ahead (the horizon is N t_stage)."""
+    q: int = 5
+    """Number of dC_f/dt values tried per stage, spread evenly over [-dC_f_max, dC_f_max]."""
+    theta_bound: float = math.radians(30.0)
+    """|theta_v| beyond which a branch counts as fallen over and is clipped, rad."""
+    sample_dt: float = 0.1
+    """Interval at which the track is sampled for f_opt = sum d_i, s."""
+    dt: float = 0.05
+    """Integration step (RK4), s; t_stage and sample_dt must be whole multiples of it."""
+    warm_start: bool = True
+    """Use the previous plan, shifted by one stage, as the first upper bound."""
+    lower_bound: bool = True
+    """Add an admissible bound on the cost still to come (the foot closes on the path no faster
+    than its largest speed) when clipping and ordering."""
+    batch: int = 8
+    """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
+    one node at a time).  Any value returns the same optimum."""
+    vectorize_children: bool = True
+    """Simulate the q children of a node as one (5, q) array (False: one child at a time)."""
+    max_expansions: int = 0
+    """Stop a search after this many node expansions (0: no limit).  A stopped search is not
+    proven optimal and says so in its statistics."""
+
+    def __post_init__(self):
+        check_range("t_stage", self.t_stage, 0.0, 60.0, lo_open=True)
+        check_range("n_stages", self.n_stages, 1, 64)
+        check_range("q", self.q, 2, 64)
+        check_range("theta_bound", self.theta_bound, 0.0, math.pi / 2, lo_open=True, hi_open=True)
+        check_range("sample_dt", self.sample_dt, 0.0, 60.0, lo_open=True)
+        check_range("dt", self.dt, 1e-4, 1.0)
+        check_range("batch", self.batch, 1, 4096)
+        check_range("max_expansions", self.max_expansions, 0, 1e12)
+        for name in ("n_stages", "q", "batch", "max_expansions"):
+            if int(getattr(self, name)) != getattr(self, name):
+                raise ValueError(f"{name} = {getattr(self, name)!r} is not a whole number")
+        for name in ("t_stage", "sample_dt"):
+            k = getattr(self, name) / self.dt
+            if abs(k - round(k)) > 1e-9 or round(k) < 1:
+                raise ValueError(f"{name} = {getattr(self, name)!r} is not a whole multiple of "
+                                 f"dt = {self.dt!r}")
+        k = self.t_stage / self.sample_dt
+        if abs(k - round(k)) > 1e-9:
+            raise ValueError(f"t_stage = {self.t_stage!r} is not a whole multiple of "
+                             f"sample_dt = {self.sample_dt!r}")
+
+    @property
+    def steps_per_stage(self) -> int:
+        return int(round(self.t_stage / self.dt))
+
+    @property
+    def steps_per_sample(self) -> int:
+        return int(round(self.sample_dt / self.dt))
+
+    @property
+    def samples_per_stage(self) -> int:
+        return int(round(self.t_stage / self.sample_dt))
+
+    @property
+    def horizon(self) -> float:
+        return self.n_stages * self.t_stage
+
+
+class SpeedProfile:
+    """``V_cm`` as a function of time (``by="time"``) or of the foot's distance travelled
+    (``by="distance"``): piecewise linear through ``(at[i], V_cm[i])``, constant beyond the ends.
+    ``SpeedProfile.constant(v)`` is the default.  Within one integration step the speed is held at
+    its value at the step's start."""
+
+    def __init__(self, by: str, at, V_cm):
+        if by not in ("constant", "time", "distance"):
+            raise ValueError(f"speed.by = {by!r} is not one of constant, time, distance")
+        self.by = by
+        self.at = np.asarray(at, float).reshape(-1)
+        self.V = np.asarray(V_cm, float).reshape(-1)
+        if len(self.at) != len(self.V) or len(self.V) == 0:
+            raise ValueError("speed.at and speed.V_cm must have the same, non-zero length")
+        if np.any(np.diff(self.at) <= 0):
+            raise ValueError("speed.at must increase strictly")
+        for i, v in enumerate(self.V):
+            check_range(f"speed.V_cm[{i}]", v, 0.0, 100.0, lo_open=True)
+
+    @classmethod
+    def constant(cls, V_cm: float) -> "SpeedProfile":
+        return cls("constant", [0.0], [V_cm])
+
+    @property
+    def is_constant(self) -> bool:
+        return self.by == "constant" or bool(np.all(self.V == self.V[0]))
+
+    @property
+    def max(self) -> float:
+        return float(self.V.max())
+
+    def __call__(self, t, s):
+        """``V_cm`` at times ``t`` and distances ``s`` (broadcast), m/s."""
+        if self.by == "constant":
+            return np.full(np.broadcast(np.asarray(t), np.asarray(s)).shape, self.V[0])
+        x = t if self.by == "time" else s
+        return np.interp(x, self.at, self.V)
