@@ -14,3 +14,17 @@ class FellOver(TurningError):
         self.t = t
         self.theta_v = theta_v
         self.trajectory = trajectory
+
+
+class PlanInfeasible(TurningError):
+    """Path following (Section 6): every branch of the search hits an obstacle or falls over.
+    Carries the time, the foot position, the trajectory up to there and the search statistics."""
+
+    def __init__(self, t: float, position, trajectory=None, stats=None):
+        x, y = float(position[0]), float(position[1])
+        super().__init__(f"no feasible plan at t = {t:.2f} s, position ({x:.2f}, {y:.2f}) m: "
+                         f"every branch hits an obstacle or falls over")
+        self.t = t
+        self.position = (x, y)
+        self.trajectory = trajectory
+        self.stats = stats
