@@ -18,6 +18,7 @@ visit that creates the bones.
 """
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -48,13 +49,13 @@ class RigSpecError(ValueError):
 
 
 def load_spec(sport: str) -> dict:
-    """The shipped spec of ``sport`` (through the mapping layer's loader when it offers one)."""
+    """The shipped spec of ``sport``, validated by the mapping layer's loader, as a dict."""
     try:
-        from ..mapping import rig_spec
-    except ImportError:
-        rig_spec = None
-    if rig_spec is not None and hasattr(rig_spec, "load_raw"):
-        return rig_spec.load_raw(sport)
+        from ..mapping.rig_spec import load_rig
+    except ImportError:                    # the mapping layer's loader is not there: read the JSON
+        load_rig = None
+    if load_rig is not None:
+        return as_dict(load_rig(sport.lower()))
     path = RIGS_DIR / f"{sport.lower()}.json"
     if not path.is_file():
         raise RigSpecError(f"no rig spec for sport {sport!r} (looked for {path})")
@@ -63,11 +64,11 @@ def load_spec(sport: str) -> dict:
 
 
 def as_dict(spec) -> dict:
-    """Accept the JSON dict or any object with ``to_dict()``/``__dict__`` describing the same."""
+    """Accept the JSON dict or the mapping layer's ``RigSpec`` dataclass."""
     if isinstance(spec, dict):
         return spec
-    if hasattr(spec, "to_dict"):
-        return spec.to_dict()
+    if dataclasses.is_dataclass(spec):
+        return dataclasses.asdict(spec)
     raise RigSpecError(f"cannot read a rig spec from {type(spec).__name__}")
 
 
@@ -230,7 +231,11 @@ def build_figure(context, spec, name: str | None = None, location=(0.0, 0.0, 0.0
     arm_obj = build_armature(context, spec, name, collection)
     arm_obj.location = location
     arm_obj[RIG_TAG] = spec.get("sport", spec["name"])
-    build_mesh(spec, arm_obj, f"{arm_obj.name} Body", collection)
+    try:
+        build_mesh(spec, arm_obj, f"{arm_obj.name} Body", collection)
+    except BaseException:
+        remove_figure(arm_obj)          # nothing half-built stays behind
+        raise
     return arm_obj
 
 

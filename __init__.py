@@ -1,0 +1,12 @@
+"""Extension entry point (Blender 4.2+): the repository root is the extension's root, so this
+package is ``bl_ext.<repository>.blender_turning``; everything is in the inner package."""
+
+
+def register():
+    from .blender_turning import blender
+    blender.register()
+
+
+def unregister():
+    from .blender_turning import blender
+    blender.unregister()

@@ -1,0 +1,76 @@
+"""``turning.bake_turns`` and ``turning.clear_bake``: the parametric controller (Section 5) over the
+scene's frame range, and its removal."""
+from __future__ import annotations
+
+import bpy
+
+from ..core.errors import TurningError
+from . import bake, foot_track
+from .ops_common import context_figure, poll_figure
+from .pipeline import figure_pose_track
+from .scene_adapters import FrameRange
+
+
+def apply_bake(fig, traj, track):
+    """Write a computed bake: F-curves, then the foot track.  Returns the bake result."""
+    result = bake.bake_pose_track(fig, track)
+    foot_track.write_foot_track(fig, traj.x, traj.y)
+    return result
+
+
+class TURNING_OT_bake_turns(bpy.types.Operator):
+    """Simulate the active figure's turns over the scene's frame range and bake them to keys"""
+
+    bl_idname = "turning.bake_turns"
+    bl_label = "Bake Turns"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if not poll_figure(cls, context):
+            return False
+        if context.scene.frame_end <= context.scene.frame_start:
+            cls.poll_message_set("The scene's frame range needs at least two frames")
+            return False
+        return True
+
+    def execute(self, context):
+        fig = context_figure(context)
+        try:
+            frames = FrameRange.of_scene(context.scene)
+            traj, track = figure_pose_track(fig, frames)      # nothing written yet
+        except (ValueError, TurningError) as exc:
+            self.report({"ERROR"}, f"Bake Turns: {fig.name}: {exc}")
+            return {"CANCELLED"}
+        result = apply_bake(fig, traj, track)
+        self.report({"INFO"}, f"Baked {fig.name}: {result.fcurves} F-curves x {result.frames} "
+                              f"frames ({frames.start}-{frames.end})")
+        return {"FINISHED"}
+
+
+class TURNING_OT_clear_bake(bpy.types.Operator):
+    """Remove the active figure's baked turns and foot track (the user's own keys stay)"""
+
+    bl_idname = "turning.clear_bake"
+    bl_label = "Clear Bake"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if not poll_figure(cls, context):
+            return False
+        if bake.figure_action(context_figure(context)) is None:
+            cls.poll_message_set("The active figure has no baked turns")
+            return False
+        return True
+
+    def execute(self, context):
+        fig = context_figure(context)
+        bake.clear_bake(fig)
+        foot_track.remove_foot_track(fig)
+        self.report({"INFO"}, f"Cleared the bake of {fig.name}")
+        return {"FINISHED"}
+
+
+classes = (TURNING_OT_bake_turns, TURNING_OT_clear_bake)
+register, unregister = bpy.utils.register_classes_factory(classes)

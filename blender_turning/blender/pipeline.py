@@ -1,0 +1,42 @@
+"""Figure settings -> trajectory -> pose track: the whole computation before anything is written.
+
+Operators and headless jobs call :func:`figure_pose_track`, then :func:`..bake.bake_pose_track`.
+Everything that can fail (bad settings, a fall, a mapping error) fails here, before the scene is
+touched.
+"""
+from __future__ import annotations
+
+from ..core import DEFAULT_DT, simulate
+from .scene_adapters import (FrameRange, controller_from_settings, figure_from_settings,
+                             start_state)
+
+
+def map_track(sport: str, traj, frames: FrameRange, options=None):
+    """The sport's Section 7 mapping of ``traj`` (already at ``frames.fps``) to a pose track."""
+    from ..mapping import map_trajectory      # the mapping layer's entry point
+    return map_trajectory(sport.lower(), traj, options, frame_start=frames.start, fps=frames.fps)
+
+
+def resampled(traj, frames: FrameRange):
+    """``traj`` at every frame of ``frames`` (exactly ``end - start + 1`` samples)."""
+    out = traj.resample(frames.fps, start=0.0)
+    n = frames.end - frames.start + 1
+    if len(out) < n:
+        raise ValueError(f"the trajectory covers {len(out)} of {n} frames")
+    return type(out)(out.data[:, :n], out.meta)
+
+
+def simulate_figure(obj, frames: FrameRange):
+    """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames``; the trajectory at
+    every frame.  Raises ``ValueError`` or the core's ``FellOver``."""
+    figure = figure_from_settings(obj.turning)
+    controller = controller_from_settings(obj, figure, frames)
+    traj = simulate(figure, controller, frames.duration + 2 * DEFAULT_DT,
+                    state0=start_state(obj, controller), meta={"figure": obj.name})
+    return resampled(traj, frames)
+
+
+def figure_pose_track(obj, frames: FrameRange, options=None):
+    """``(trajectory, pose track)`` of the figure ``obj`` over ``frames``."""
+    traj = simulate_figure(obj, frames)
+    return traj, map_track(obj.turning.sport, traj, frames, options)

@@ -1,0 +1,11 @@
+import bpy
+settings = bpy.context.object.turning
+
+settings.sport = 'TELEMARK'
+settings.mass = 75.0
+settings.com_height = 1.0
+settings.inertia = 12.0
+settings.speed = 8.0
+settings.curvature_max = 0.125
+settings.curvature_rate_max = 0.5
+settings.fall_angle = 0.9599310885968813
