@@ -1,15 +1,19 @@
-"""Equations of motion of the turning pendulum (Section 3, Appendix A), vectorised.
+"""Equations of motion of the turning pendulum (Section 3, Appendix A).
 
-The state of a batch of ``n`` figures is an array of shape ``(5, n)`` (or ``(5,)`` for one),
-rows named by ``STATE``: foot position ``x, y`` (m), heading ``theta_dir`` (rad, CCW from +x),
-lean ``theta_v`` (rad, > 0 leans left) and lean rate ``omega_v`` (rad/s).  The control is the foot
-curvature ``C_f`` (1/m, > 0 curves left).  Sign conventions: ``shared/DESIGN.md`` Section 1.
+The state of a figure is ``(x, y, theta_dir, theta_v, omega_v)`` (rows named by ``STATE``): foot
+position (m), heading (rad, CCW from +x), lean (rad, > 0 leans left) and lean rate (rad/s).  The
+control is the foot curvature ``C_f`` (1/m, > 0 curves left).  Sign conventions:
+``shared/DESIGN.md`` Section 1.  Every function takes Python floats (one figure) or numpy arrays
+(a batch, state shape ``(5, n)``); see :mod:`.xp`.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
 from .params import BodyParams, Limits
+from .xp import Numpy, Scalar, backend
 
 STATE = ("x", "y", "theta_dir", "theta_v", "omega_v")
 X, Y, THETA_DIR, THETA_V, OMEGA_V = range(5)
@@ -17,12 +21,14 @@ X, Y, THETA_DIR, THETA_V, OMEGA_V = range(5)
 #: Fraction of the way to the singular curvature ``1/(l sin theta_v)`` that ``C_f`` may go
 #: (Eq. 21 divides by ``1 - C_f l sin theta_v``).  Beyond it the foot would have to outrun the body.
 PHYSICAL_MARGIN = 0.9
+_TINY = 1e-300
 
 
 def forward_alpha(body: BodyParams, theta_v, C_f, sin_t=None, cos_t=None):
     """Eq. (2): lean acceleration ``alpha_v`` (rad/s^2) produced by the foot curvature ``C_f``."""
-    s = np.sin(theta_v) if sin_t is None else sin_t
-    c = np.cos(theta_v) if cos_t is None else cos_t
+    xp = backend(theta_v, C_f)
+    s = xp.sin(theta_v) if sin_t is None else sin_t
+    c = xp.cos(theta_v) if cos_t is None else cos_t
     k = C_f * body.V_cm ** 2 * c / (1.0 - C_f * body.l * s)
     return (body.g * s - k) / body.J
 
@@ -35,38 +41,38 @@ def inverse_cf(body: BodyParams, theta_v, alpha_v, sin_t=None, cos_t=None):
     denominator ``k l sin th + V^2 cos th`` is not positive the demand is unreachable on the
     physical branch and the result is ``sign(k) * inf``, for :func:`bound_cf` to clamp.
     """
-    s = np.sin(theta_v) if sin_t is None else sin_t
-    c = np.cos(theta_v) if cos_t is None else cos_t
-    k = body.g * s - np.asarray(alpha_v) * body.J
+    xp = backend(theta_v, alpha_v)
+    s = xp.sin(theta_v) if sin_t is None else sin_t
+    c = xp.cos(theta_v) if cos_t is None else cos_t
+    k = body.g * s - alpha_v * body.J
     den = k * body.l * s + body.V_cm ** 2 * c
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cf = np.where(den > 0.0, k / np.where(den > 0.0, den, 1.0), np.sign(k) * np.inf)
-    return cf
+    ok = den > 0.0
+    return xp.where(ok, k / xp.where(ok, den, 1.0), xp.copysign(math.inf, k))
 
 
-def physical_cf_limit(body: BodyParams, sin_t):
-    """Largest ``C_f`` in the lean's direction keeping ``1 - C_f l sin th >= 1 - PHYSICAL_MARGIN``."""
-    with np.errstate(divide="ignore"):
-        return PHYSICAL_MARGIN / (body.l * np.abs(sin_t))
+def physical_cf_limit(body: BodyParams, sin_t, xp=None):
+    """Largest ``C_f`` toward the lean keeping ``1 - C_f l sin th >= 1 - PHYSICAL_MARGIN``."""
+    xp = xp or backend(sin_t)
+    return PHYSICAL_MARGIN / xp.maximum(body.l * xp.abs(sin_t), _TINY)
 
 
-def bound_cf(body: BodyParams, limits: Limits, C_f, sin_t, anchor=None, tau=0.0):
+def bound_cf(body: BodyParams, limits: Limits, C_f, sin_t, anchor=None, tau=0.0, xp=None):
     """Section 3: clamp a demanded ``C_f`` to ``|C_f| <= C_f_max``, to the physical branch, and
     (given the curvature ``anchor`` at ``tau`` seconds ago) to ``|dC_f/dt| <= dC_f_max``."""
-    lim = np.minimum(limits.C_f_max, physical_cf_limit(body, sin_t))
-    # The physical limit only binds on the side the body leans to (C_f sin th > 0).
-    hi = np.where(sin_t > 0, lim, limits.C_f_max)
-    lo = np.where(sin_t < 0, -lim, -limits.C_f_max)
-    cf = np.clip(C_f, lo, hi)
-    if anchor is not None and np.isfinite(limits.dC_f_max):
+    xp = xp or backend(C_f, sin_t, anchor)
+    cmax = limits.C_f_max
+    lim = xp.minimum(cmax, physical_cf_limit(body, sin_t, xp))
+    # The physical limit binds only on the side the body leans to (C_f sin th > 0).
+    cf = xp.clip(C_f, xp.where(sin_t < 0, -lim, -cmax), xp.where(sin_t > 0, lim, cmax))
+    if anchor is not None and limits.dC_f_max != math.inf:
         step = limits.dC_f_max * tau
-        cf = np.clip(cf, anchor - step, anchor + step)
+        cf = xp.clip(cf, anchor - step, anchor + step)
     return cf
 
 
 def foot_speed(body: BodyParams, theta_v, C_f, sin_t=None):
     """Eq. (21): ``V_f = V_cm / (1 - C_f l sin theta_v)``, m/s."""
-    s = np.sin(theta_v) if sin_t is None else sin_t
+    s = backend(theta_v).sin(theta_v) if sin_t is None else sin_t
     return body.V_cm / (1.0 - C_f * body.l * s)
 
 
@@ -77,45 +83,57 @@ def leg_force(body: BodyParams, theta_v, omega_v, alpha_v, C_f):
     feel).  ``F_along = m (g cos th + V_cm V_f C_f sin th - l omega_v^2)``; the component across the
     leg is ``I_v alpha_v / l`` (the torque about the centre of mass, Eq. 13).
     """
-    s, c = np.sin(theta_v), np.cos(theta_v)
+    xp = backend(theta_v, omega_v, alpha_v, C_f)
+    s, c = xp.sin(theta_v), xp.cos(theta_v)
     V_f = foot_speed(body, theta_v, C_f, s)
-    along = body.m * (body.g * c + body.V_cm * V_f * C_f * s - body.l * np.asarray(omega_v) ** 2)
-    across = body.I_v * np.asarray(alpha_v) / body.l
-    return np.hypot(along, across), along
+    along = body.m * (body.g * c + body.V_cm * V_f * C_f * s - body.l * omega_v * omega_v)
+    across = body.I_v * alpha_v / body.l
+    return xp.hypot(along, across), along
 
 
-def derivatives(body: BodyParams, state, C_f, sin_t, cos_t, out=None):
-    """Time derivative of ``state`` under curvature ``C_f``; also returns ``alpha_v`` and ``V_f``."""
-    V_f = body.V_cm / (1.0 - C_f * body.l * sin_t)
-    alpha = forward_alpha(body, None, C_f, sin_t, cos_t)
-    d = np.empty_like(state) if out is None else out
-    th_dir = state[THETA_DIR]
-    d[X] = V_f * np.cos(th_dir)
-    d[Y] = V_f * np.sin(th_dir)
-    d[THETA_DIR] = V_f * C_f
-    d[THETA_V] = state[OMEGA_V]
-    d[OMEGA_V] = alpha
-    return d, alpha, V_f
+def stage(body: BodyParams, limits: Limits, desired_cf, t, state, anchor, tau):
+    """One evaluation of the right-hand side under a steering law (Fig. 4's loop body).
+
+    ``desired_cf(t, state)`` is bounded by :func:`bound_cf` relative to ``anchor`` (the curvature
+    ``tau`` seconds earlier) and ``alpha_v`` is recomputed from the bounded value (Section 3).
+    Returns ``(derivative tuple, C_f, alpha_v, V_f)``.
+    """
+    th = state[THETA_V]
+    xp = Scalar if type(th) is float else Numpy
+    s, c = xp.sin(th), xp.cos(th)
+    cf = bound_cf(body, limits, desired_cf(t, state), s, anchor, tau, xp)
+    ratio = 1.0 / (1.0 - cf * body.l * s)                       # Eq. (21): V_f / V_cm
+    V_f = body.V_cm * ratio
+    alpha = (body.g * s - cf * body.V_cm * body.V_cm * c * ratio) / body.J       # Eq. (2)
+    d = state[THETA_DIR]
+    return (V_f * xp.cos(d), V_f * xp.sin(d), V_f * cf, state[OMEGA_V], alpha), cf, alpha, V_f
 
 
 def rk4_step(body: BodyParams, limits: Limits, state, t, dt, desired_cf, anchor, k1=None):
-    """One classical Runge-Kutta step of the pendulum under a steering law.
+    """One classical Runge-Kutta step; ``state`` is a 5-sequence of floats or a ``(5, n)`` array.
 
-    ``desired_cf(t, state)`` returns the demanded curvature; at every stage it is bounded by
-    :func:`bound_cf` relative to ``anchor``, the curvature at the start of the step (so ``C_f`` is
-    continuous and its rate bounded), and ``alpha_v`` is recomputed from the bounded value.
-    ``k1`` is the derivative at the start, when the caller has it already.  Returns the state
-    after ``dt``.
+    ``C_f`` is evaluated and bounded at every stage relative to ``anchor``, the curvature at the
+    start of the step, so it is continuous and its rate bounded.  ``k1`` is the start derivative
+    when the caller has it.  Returns the new state (a list for floats, an array for arrays).
     """
-    def stage(tt, s, tau):
-        sin_t, cos_t = np.sin(s[THETA_V]), np.cos(s[THETA_V])
-        cf = bound_cf(body, limits, desired_cf(tt, s), sin_t, anchor, tau)
-        return derivatives(body, s, cf, sin_t, cos_t)[0]
-
     h = 0.5 * dt
     if k1 is None:
-        k1 = stage(t, state, 0.0)
-    k2 = stage(t + h, state + h * k1, h)
-    k3 = stage(t + h, state + h * k2, h)
-    k4 = stage(t + dt, state + dt * k3, dt)
-    return state + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+        k1 = stage(body, limits, desired_cf, t, state, anchor, 0.0)[0]
+    if isinstance(state, np.ndarray):
+        k1 = np.asarray(k1)
+        k2 = np.asarray(stage(body, limits, desired_cf, t + h, state + h * k1, anchor, h)[0])
+        k3 = np.asarray(stage(body, limits, desired_cf, t + h, state + h * k2, anchor, h)[0])
+        k4 = np.asarray(stage(body, limits, desired_cf, t + dt, state + dt * k3, anchor, dt)[0])
+        return state + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+    s = state
+    k2 = stage(body, limits, desired_cf, t + h, [a + h * b for a, b in zip(s, k1)], anchor, h)[0]
+    k3 = stage(body, limits, desired_cf, t + h, [a + h * b for a, b in zip(s, k2)], anchor, h)[0]
+    k4 = stage(body, limits, desired_cf, t + dt, [a + dt * b for a, b in zip(s, k3)], anchor,
+               dt)[0]
+    w = dt / 6.0
+    return [a + w * (p + 2.0 * (q + r) + u) for a, p, q, r, u in zip(s, k1, k2, k3, k4)]
+
+
+__all__ = ["STATE", "X", "Y", "THETA_DIR", "THETA_V", "OMEGA_V", "PHYSICAL_MARGIN",
+           "forward_alpha", "inverse_cf", "physical_cf_limit", "bound_cf", "foot_speed",
+           "leg_force", "stage", "rk4_step", "Numpy", "Scalar"]

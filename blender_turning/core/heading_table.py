@@ -30,7 +30,7 @@ def simulate_half_turns(body: BodyParams, theta_max, omega0, steps: int = 96):
     """Heading change over one half-turn (phase 0 -> 180 deg) on each ellipse, rad (Eq. 6)."""
     theta_max, omega0 = np.broadcast_arrays(np.asarray(theta_max, float), np.asarray(omega0, float))
     shape = theta_max.shape
-    th, w = theta_max.ravel(), omega0.ravel()
+    th, w = theta_max.ravel().copy(), omega0.ravel().copy()
     n = th.size
     state = np.zeros((5, n))
     state[4] = w * th                      # on the ellipse at phase 0
@@ -100,14 +100,17 @@ class HeadingTable:
         a, c = lo.copy(), hi.copy()            # bracket: F(a) <= 0 <= F(c) where reachable
         for _ in range(iterations):
             f = F(beta)
+            done = np.abs(f) < 1e-10          # 1e-10 rad of heading: converged, frozen
+            if np.all(done):
+                break
             a = np.where(f <= 0, beta, a)
             c = np.where(f > 0, beta, c)
             h = 1e-4 * beta
             df = (F(beta + h) - F(beta - h)) / (2 * h)
             with np.errstate(divide="ignore", invalid="ignore"):
                 nb = beta - f / df
-            bad = ~np.isfinite(nb) | (nb <= a) | (nb >= c)
-            beta = np.where(bad, 0.5 * (a + c), nb)
+            bad = ~np.isfinite(nb) | (nb < a) | (nb > c)
+            beta = np.where(done, beta, np.where(bad, 0.5 * (a + c), nb))
         beta = np.where(f_lo >= 0, lo, np.where(f_hi <= 0, hi, beta))
         return beta
 

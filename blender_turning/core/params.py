@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 __all__ = ["BodyParams", "Limits", "Figure", "PRESETS", "preset", "check_range"]
 
@@ -51,7 +52,7 @@ class BodyParams:
         check_range("V_cm", self.V_cm, 0.0, 100.0, lo_open=True)
         check_range("g", self.g, 0.0, 100.0, lo_open=True)
 
-    @property
+    @cached_property
     def J(self) -> float:
         """``(I_v + l^2 m) / (m l)``: the inertia term of Eqs. (1), (2) and (9), m."""
         return (self.I_v + self.l * self.l * self.m) / (self.m * self.l)

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .xp import backend
+
 TWO_PI = 2.0 * np.pi
 
 
@@ -24,4 +26,4 @@ def ellipse_radius(theta_v, omega_v, theta_max, omega0):
 
 def open_loop_alpha(phi, theta_max, omega0):
     """Eq. (5): ``alpha_v = -omega0^2 theta_max sin(phi)`` with ``phi = omega0 t``."""
-    return -omega0 * omega0 * theta_max * np.sin(phi)
+    return -omega0 * omega0 * theta_max * backend(phi).sin(phi)

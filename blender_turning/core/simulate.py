@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .controllers import Controller
-from .dynamics import OMEGA_V, THETA_V, bound_cf, derivatives, leg_force, rk4_step
+from .dynamics import THETA_V, leg_force, rk4_step, stage
 from .errors import FellOver
 from .params import BodyParams, Figure, Limits, check_range
 from .phase import phase
@@ -33,45 +33,48 @@ class Run:
 
 def run(body: BodyParams, limits: Limits, controller: Controller, state0, duration: float,
         dt: float = DEFAULT_DT, C_f0=None, stop_on_fall: bool = True) -> Run:
-    """Integrate ``state0`` (shape ``(5,)`` or ``(5, n)``) for ``duration`` seconds.
+    """Integrate ``state0`` (shape ``(5,)`` for one figure, ``(5, n)`` for a batch).
 
-    ``C_f0`` is the curvature just before the start (for the rate bound); ``None`` lets the first
-    demand through unrated.  With ``stop_on_fall`` the run ends at the first sample where any
-    ``|theta_v|`` exceeds ``limits.theta_fall`` and reports the time in ``fell_at``.
+    One figure is stepped on Python floats, a batch on numpy arrays (see :mod:`.xp`); the
+    formulas are the same.  ``C_f0`` is the curvature just before the start (for the rate
+    bound); ``None`` lets the first demand through unrated.  With ``stop_on_fall`` the run ends at
+    the first sample where any ``|theta_v|`` exceeds ``limits.theta_fall`` (``fell_at``).
     """
     check_range("duration", duration, 0.0, 1e6, lo_open=True)
     check_range("dt", dt, 1e-5, 1.0)
     n = int(math.floor(duration / dt + 1e-9)) + 1
-    state = np.array(state0, float)
-    if state.shape[0] != 5 or not np.all(np.isfinite(state)):
+    arr = np.array(state0, float)
+    if arr.shape[0] != 5 or arr.ndim > 2 or not np.all(np.isfinite(arr)):
         raise ValueError("state0 must be finite with shape (5,) or (5, n)")
-    rec = np.empty((n, 9) + state.shape[1:])       # x y theta_dir theta_v omega_v alpha C_f V_f phi
-    anchor = None if C_f0 is None else np.asarray(C_f0, float)
+    batch = arr.ndim == 2
+    state = arr if batch else [float(v) for v in arr]
+    anchor = None if C_f0 is None else (np.asarray(C_f0, float) if batch else float(C_f0))
+    rec = np.empty((n, 10) + arr.shape[1:])   # state, alpha_v, C_f, V_f, omega0, theta_max
     fell_at = None
-    t = 0.0
-    for i in range(n):
-        t = i * dt
-        controller.begin_step(t, state)
-        sin_t, cos_t = np.sin(state[THETA_V]), np.cos(state[THETA_V])
-        cf = bound_cf(body, limits, controller.desired_cf(t, state), sin_t, anchor, dt)
-        k1, alpha, V_f = derivatives(body, state, cf, sin_t, cos_t)
-        w, tm = controller.target(t)
-        rec[i, :5] = state
-        rec[i, 5], rec[i, 6], rec[i, 7] = alpha, cf, V_f
-        rec[i, 8] = phase(state[THETA_V], state[OMEGA_V], tm, w)
-        if stop_on_fall and np.any(np.abs(state[THETA_V]) > limits.theta_fall):
-            fell_at, n = t, i + 1
-            rec = rec[:n]
-            break
-        if i + 1 < n:
-            state = rk4_step(body, limits, state, t, dt, controller.desired_cf, cf, k1)
-            anchor = cf
-    ts = np.arange(n) * dt
-    ts = ts.reshape((n,) + (1,) * (rec.ndim - 2))
-    cols = {"t": np.broadcast_to(ts, rec.shape[:1] + rec.shape[2:]).copy()}
-    for j, name in enumerate(("x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f", "V_f",
-                              "phi")):
+    desired = controller.desired_cf
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for i in range(n):
+            t = i * dt
+            controller.begin_step(t, state)
+            k1, cf, alpha, V_f = stage(body, limits, desired, t, state, anchor, dt)
+            rec[i, :5] = state
+            rec[i, 5], rec[i, 6], rec[i, 7] = alpha, cf, V_f
+            rec[i, 8], rec[i, 9] = controller.target(t)
+            th = state[THETA_V]
+            if stop_on_fall and (np.any(np.abs(th) > limits.theta_fall) if batch
+                                 else abs(th) > limits.theta_fall):
+                fell_at, n = t, i + 1
+                rec = rec[:n]
+                break
+            if i + 1 < n:
+                state = rk4_step(body, limits, state, t, dt, desired, cf, k1)
+                anchor = cf
+    cols = {"t": np.broadcast_to((np.arange(n) * dt).reshape((n,) + (1,) * (rec.ndim - 2)),
+                                 rec.shape[:1] + rec.shape[2:]).copy()}
+    for j, name in enumerate(("x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f",
+                              "V_f")):
         cols[name] = rec[:, j]
+    cols["phi"] = phase(cols["theta_v"], cols["omega_v"], rec[:, 9], rec[:, 8])
     cols["F_leg"] = leg_force(body, cols["theta_v"], cols["omega_v"], cols["alpha_v"],
                               cols["C_f"])[0]
     # Foot distance travelled: trapezoid on V_f (the foot moves at V_f, Eq. 21).

@@ -1,5 +1,5 @@
 """The parameterized controller of Section 5: phase-ellipse control (5.1) with directional
-control (5.2).  Vectorised over a batch of figures.
+control (5.2).  Works on one figure (floats) or a batch (arrays).
 
 Section 5.1, read geometrically (``shared/DESIGN.md`` Section 2): the controlling ellipse through
 the current state shares the target's lean intercept ``theta_max`` in quadrants 1 and 3 (Fig. 7a)
@@ -12,11 +12,20 @@ Eq. (3) ``alpha_v = -omega0'^2 theta_v`` (Eq. 5), so
 
 The paper's ``omega0' = omega_v / (theta_max cos phi)`` uses the phase on the *controlling*
 ellipse, ``cos phi' = sqrt(1 - y^2)``; with the target's phase it would not pass through the state.
+Beyond the paper: in Q1/Q3 a Fig. 7a ellipse more than ``SLOW_FACTOR`` times slower than the
+target is replaced by the Fig. 7b ellipse through the state.  Otherwise a state with little lean
+rate creeps toward ``theta_max`` on an ever slower ellipse and never arrives when ``theta_max``
+grows over time; and ``(0 < theta_v < theta_max, omega_v = 0)`` is a fixed point of the paper's
+law (a steady circle).  The Fig. 7b ellipse turns back at once and meets the target at the
+``omega_v`` axis.
+
 States on no controlling ellipse get ``alpha_v = -alpha_max sign(omega_v)`` (+ in Q2, Q3; - in Q1,
 Q4), a small disc around the origin gets a fixed push, and every demand is clipped to
 ``|alpha_v| <= alpha_max``.
 """
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -24,24 +33,30 @@ from ..dynamics import OMEGA_V, THETA_DIR, THETA_V
 from ..heading_table import SMALL_OMEGA0, SMALL_THETA, heading_table, linear_beta
 from ..params import BodyParams
 from ..schedule import Schedule
+from ..xp import Scalar, backend
 from .base import Controller
+
+
+SLOW_FACTOR = 3.0
 
 
 def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=0.05):
     """Section 5.1: the lean acceleration that takes the state onto the target ellipse."""
-    th, om = np.asarray(theta_v, float), np.asarray(omega_v, float)
+    xp = backend(theta_v, omega_v, theta_max, omega0)
+    th, om = theta_v, omega_v
     y = th / theta_max
     x = om / (omega0 * theta_max)
-    q13 = th * om >= 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a13 = -om * om * th / (theta_max * theta_max - th * th)
-        a24 = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / th
-    inside = np.where(q13, np.abs(y) < 1.0, np.abs(x) < 1.0)
-    a = np.where(q13, a13, a24)
-    away = -alpha_max * np.where(om != 0.0, np.sign(om), np.sign(th))
-    a = np.where(inside & np.isfinite(a), a, away)
-    a = np.where(np.hypot(x, y) < origin_radius, 0.5 * alpha_max, a)
-    return np.clip(a, -alpha_max, alpha_max)
+    den = theta_max * theta_max - th * th
+    w13_sq = om * om / xp.where(den > 0.0, den, 1.0)           # omega0'^2 of the Fig. 7a ellipse
+    slow = (w13_sq * SLOW_FACTOR ** 2 < omega0 * omega0) & (th != 0.0) & (den > 0.0)
+    q13 = (th * om >= 0.0) & ~slow            # quadrants 1, 3 and the axes: Fig. 7a
+    a13 = -w13_sq * th
+    a24 = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / xp.where(th != 0.0, th, 1.0)
+    inside = xp.where(q13, xp.abs(y) < 1.0, xp.abs(x) < 1.0)
+    away = -alpha_max * xp.where(om != 0.0, xp.sign(om), xp.sign(th))
+    a = xp.where(inside, xp.where(q13, a13, a24), away)
+    a = xp.where(xp.hypot(x, y) < origin_radius, 0.5 * alpha_max, a)
+    return xp.clip(a, -alpha_max, alpha_max)
 
 
 class PhaseEllipse(Controller):
@@ -70,7 +85,7 @@ class PhaseEllipse(Controller):
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):
         """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad."""
-        return heading_table(self.body)(theta_max, omega0)
+        return float(heading_table(self.body)(theta_max, omega0))
 
     def _solve_beta(self, theta_max, omega0, wanted):
         use_linear = self.directional == "linear" or (
@@ -83,33 +98,36 @@ class PhaseEllipse(Controller):
 
     def begin_step(self, t, state):
         th, om = state[THETA_V], state[OMEGA_V]
-        side = np.where(th > 0, 1.0, np.where(th < 0, -1.0, np.where(om >= 0, 1.0, -1.0)))
+        xp = backend(th)
+        side = xp.where(th > 0, 1.0, xp.where(th < 0, -1.0, xp.where(om >= 0, 1.0, -1.0)))
         if self._beta is None:
-            self._beta = np.ones_like(np.asarray(th, float))
-            near_axis = np.abs(th) < 0.05 * self.theta_max(t)
-            self._side = np.where(near_axis, -side, side)     # a start on the axis is a crossing
+            self._beta = xp.where(th == th, 1.0, 1.0)          # ones of th's shape
+            near_axis = xp.abs(th) < 0.05 * self.theta_max(t)
+            self._side = xp.where(near_axis, -side, side)     # a start on the axis is a crossing
         crossed = side != self._side
         self._side = side
-        if self.heading is None or not np.any(crossed):
-            self._beta = np.where(crossed, 1.0, self._beta)
+        if self.heading is None or not xp.any(crossed):
+            self._beta = xp.where(crossed, 1.0, self._beta)
             return
         w, tm = self.omega0(t), self.theta_max(t)
         change = self.half_turn_change(tm, w)
         # Mean heading: the heading is at an extreme at a crossing (C_f is in phase with theta_v).
         mean = state[THETA_DIR] + side * 0.5 * change
-        err = np.angle(np.exp(1j * (self.heading(t) - mean)))        # wrapped to (-pi, pi]
+        err = (self.heading(t) - mean + math.pi) % (2 * math.pi) - math.pi
         wanted = change + side * err                                # Eq. (7), in the turn's sense
         beta = self._solve_beta(tm, w, wanted)
-        self._beta = np.where(crossed, beta, self._beta)
+        beta = float(beta) if xp is Scalar else np.asarray(beta)
+        self._beta = xp.where(crossed, beta, self._beta)
 
     # -- Section 5.1 -------------------------------------------------------------------------
     def target(self, t):
-        b = self._beta if self._beta is not None else 1.0
+        b = 1.0 if self._beta is None else self._beta
         return self.omega0(t) / b, b * self.theta_max(t)
 
     def desired_alpha(self, t, state):
-        w, tm = self.target(t)
-        amax = self.alpha_max if self.alpha_max is not None else \
-            2.0 * self.omega0(t) ** 2 * self.theta_max(t)
-        return ellipse_alpha(state[THETA_V], state[OMEGA_V], tm, w, amax, self.origin_radius)
-
+        w0 = self.omega0(t)
+        tm0 = self.theta_max(t)
+        b = 1.0 if self._beta is None else self._beta
+        amax = self.alpha_max if self.alpha_max is not None else 2.0 * w0 * w0 * tm0
+        return ellipse_alpha(state[THETA_V], state[OMEGA_V], b * tm0, w0 / b, amax,
+                             self.origin_radius)

@@ -1,0 +1,161 @@
+"""Sections 4-5: open-loop turns, the phase-ellipse controller and directional control."""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from blender_turning.core import (Limits, OpenLoop, PhaseEllipse, Schedule, preset, run,
+                                  simulate)
+from blender_turning.core.heading_table import heading_table, simulate_half_turns
+from blender_turning.core.phase import ellipse_radius
+
+TWO_PI = 2 * math.pi
+FIG6 = [(2.0, 23.0), (3.0, 23.0), (2.0, 7.0)]        # the three ellipses of Fig. 6
+
+
+def centred(fig, w, tm, heading=0.0):
+    swing = PhaseEllipse(fig.body, w, tm).half_turn_change(tm, w)
+    return (0.0, 0.0, heading - 0.5 * swing, 0.0, w * tm)
+
+
+def chord_headings(tr):
+    """Direction of travel over each full turn: between successive upward zero crossings of
+    theta_v (phase 0), the direction of the foot's displacement.  Returns (times, headings)."""
+    th = tr.theta_v
+    up = np.nonzero((th[:-1] < 0) & (th[1:] >= 0))[0]
+    f = -th[up] / (th[up + 1] - th[up])                  # linear interpolation of the crossing
+    t = tr.t[up] + f * (tr.t[up + 1] - tr.t[up])
+    x = tr.x[up] + f * (tr.x[up + 1] - tr.x[up])
+    y = tr.y[up] + f * (tr.y[up + 1] - tr.y[up])
+    return t[1:], np.arctan2(np.diff(y), np.diff(x))
+
+
+@pytest.mark.parametrize("period,lean", FIG6)
+def test_open_loop_tracks_the_sinusoid(skier_unbounded, period, lean):
+    w, tm = TWO_PI / period, math.radians(lean)
+    tr = simulate(skier_unbounded, OpenLoop(skier_unbounded.body, w, tm), 10 * period,
+                  state0=(0, 0, 0, 0, w * tm))
+    err = np.abs(tr.theta_v - tm * np.sin(w * tr.t)).max()
+    assert math.degrees(err) < 0.2
+
+
+@pytest.mark.parametrize("period,lean", FIG6)
+def test_symmetric_slalom_does_not_drift(skier_unbounded, period, lean):
+    w, tm = TWO_PI / period, math.radians(lean)
+    fig = skier_unbounded
+    tr = simulate(fig, OpenLoop(fig.body, w, tm), 10 * period, state0=centred(fig, w, tm))
+    _, heads = chord_headings(tr)
+    drift = np.degrees(heads[-1] - heads[0]) / (len(heads) - 1)
+    assert abs(drift) < 0.05
+    assert abs(math.degrees(heads.mean())) < 0.1        # centred start: mean heading 0
+
+
+def test_simulation_is_mirror_symmetric(skier):
+    w, tm = TWO_PI / 2, math.radians(20)
+    s0 = (0.0, 0.0, 0.3, math.radians(5), 0.2)
+    a = simulate(skier, PhaseEllipse(skier.body, w, tm, heading=0.2), 8.0, state0=s0)
+    m0 = (0.0, 0.0, -0.3, -math.radians(5), -0.2)
+    b = simulate(skier, PhaseEllipse(skier.body, w, tm, heading=-0.2), 8.0, state0=m0)
+    for col in ("theta_v", "omega_v", "C_f", "theta_dir", "y", "alpha_v"):
+        np.testing.assert_allclose(getattr(b, col), -getattr(a, col), atol=1e-9)
+    np.testing.assert_allclose(b.x, a.x, atol=1e-9)
+    np.testing.assert_allclose(b.F_leg, a.F_leg, rtol=1e-12)
+
+
+STARTS = [(0, 0), (0, 30), (0, -40), (10, 0), (10, 30), (10, -40), (-10, 30), (-10, -40),
+          (23, 0), (30, 0), (-30, 0), (35, -20), (-35, 20), (0, 150), (5, -120), (1, 1)]
+
+
+@pytest.mark.parametrize("th0,om0", STARTS)
+def test_ellipse_controller_converges_within_two_periods(skier, th0, om0):
+    w, tm = TWO_PI / 2, math.radians(23)
+    tr = simulate(skier, PhaseEllipse(skier.body, w, tm), 6.0,
+                  state0=(0, 0, 0, math.radians(th0), math.radians(om0)))
+    r = ellipse_radius(tr.theta_v, tr.omega_v, tm, w)
+    after = tr.t >= 2 * 2.0
+    # 2% of the ellipse's size is 0.46 deg of lean: the bounds' transients are long gone.
+    assert np.abs(r[after] - 1).max() < 0.02
+    lim = skier.limits
+    assert np.abs(tr.C_f).max() <= lim.C_f_max * (1 + 1e-12)
+    assert (np.abs(np.diff(tr.C_f)) / np.diff(tr.t)).max() <= lim.dC_f_max * (1 + 1e-9)
+
+
+def test_controller_follows_a_mid_run_change_of_ellipse(skier):
+    w1, tm1, w2, tm2 = TWO_PI / 2, math.radians(23), TWO_PI / 3, math.radians(15)
+    w = Schedule(lambda t: w1 if t < 6 else w2)
+    tm = Schedule(lambda t: tm1 if t < 6 else tm2)
+    tr = simulate(skier, PhaseEllipse(skier.body, w, tm), 14.0, state0=centred(skier, w1, tm1))
+    before = (tr.t > 2) & (tr.t < 6)
+    after = tr.t > 6 + 2 * 3.0
+    assert np.abs(ellipse_radius(tr.theta_v, tr.omega_v, tm1, w1)[before] - 1).max() < 0.02
+    assert np.abs(ellipse_radius(tr.theta_v, tr.omega_v, tm2, w2)[after] - 1).max() < 0.02
+
+
+@pytest.mark.parametrize("change_deg", [5, -5, 10, -10])
+def test_heading_change_is_met(skier, change_deg):
+    w, tm = TWO_PI / 2, math.radians(23)
+    head = Schedule(lambda t: 0.0 if t < 4 else math.radians(change_deg))
+    tr = simulate(skier, PhaseEllipse(skier.body, w, tm, heading=head), 14.0,
+                  state0=centred(skier, w, tm))
+    t, h = chord_headings(tr)
+    assert np.abs(np.degrees(h[t < 4])).max() < 0.5
+    # The modified half-turn starts at the first crossing after 4 s; from the turn after that
+    # the heading holds the new value.
+    done = t > 4 + 2 * 2.0
+    assert done.sum() >= 2
+    assert np.abs(np.degrees(h[done]) - change_deg).max() < 0.5
+
+
+def test_unreachable_heading_change_is_spread_over_turns(skier):
+    w, tm = TWO_PI / 2, math.radians(23)
+    tr = simulate(skier, PhaseEllipse(skier.body, w, tm, heading=math.radians(60)), 30.0,
+                  state0=centred(skier, w, tm))
+    assert np.all(np.isfinite(tr.data))
+    t, h = chord_headings(tr)
+    assert abs(math.degrees(h[-1]) - 60) < 0.5
+
+
+def test_heading_table_matches_direct_simulation():
+    body = preset("skier").body
+    table = heading_table(body)
+    rng = np.random.default_rng(3)
+    th = np.radians(rng.uniform(3, 40, 40))
+    w = TWO_PI / rng.uniform(1.0, 6.0, 40)
+    exact = simulate_half_turns(body, th, w, steps=200)
+    # Bilinear on a 48 x 48 grid of a smooth function: well under 1% of the change.
+    np.testing.assert_allclose(table(th, w), exact, rtol=0.01)
+
+
+def test_leg_force_relative_variation_is_independent_of_mass_and_speed():
+    base = replace(preset("skier"), limits=Limits(theta_fall=math.radians(80)))
+    w, tm = TWO_PI / 2, math.radians(23)
+    rel = []
+    for scale, speed in ((1.0, 10.0), (1.6, 10.0), (1.0, 16.0), (0.7, 6.0)):
+        body = replace(base.body, m=75 * scale, I_v=12 * scale, V_cm=speed)
+        fig = replace(base, body=body)
+        tr = simulate(fig, OpenLoop(body, w, tm), 4.0, state0=(0, 0, 0, 0, w * tm))
+        rel.append(tr.F_leg / (body.m * body.g))
+    for r in rel[1:]:
+        np.testing.assert_allclose(r, rel[0], rtol=1e-9)
+    assert 0.1 < rel[0].max() - rel[0].min() < 0.8      # the paper's ~+-30% swing
+
+
+def test_batch_equals_single_runs(skier):
+    w, tm = TWO_PI / 2, math.radians(23)
+    starts = np.array([[0, 0, 0, 0, w * tm], [1, 2, 0.5, 0.1, 0.0], [0, 0, -0.2, -0.2, 0.3]]).T
+    batch = run(skier.body, skier.limits, PhaseEllipse(skier.body, w, tm, heading=0.1),
+                starts, 6.0)
+    for j in range(3):
+        one = run(skier.body, skier.limits, PhaseEllipse(skier.body, w, tm, heading=0.1),
+                  starts[:, j], 6.0)
+        for k in ("x", "y", "theta_dir", "theta_v", "C_f", "phi", "F_leg"):
+            np.testing.assert_allclose(batch.columns[k][:, j], one.columns[k], atol=1e-10)
+
+
+def test_fall_is_reported(skier):
+    from blender_turning.core import FellOver
+    with pytest.raises(FellOver) as e:
+        simulate(skier, PhaseEllipse(skier.body, TWO_PI / 2, math.radians(23)), 5.0,
+                 state0=(0, 0, 0, math.radians(40), math.radians(150)))
+    assert e.value.t < 1.0 and len(e.value.trajectory) > 1
