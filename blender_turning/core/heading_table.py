@@ -59,6 +59,7 @@ class HeadingTable:
                                  math.log(2 * math.pi / period_range[0]), n_omega)
         T, W = np.meshgrid(self.theta, np.exp(self.log_w), indexing="ij")
         self.values = simulate_half_turns(body, T, W)
+        self._curves = {}
 
     def __call__(self, theta_max, omega0):
         """Bilinear interpolation (clamped to the grid) of ``dtheta_dir``."""
@@ -82,6 +83,18 @@ class HeadingTable:
                                 self.theta[-1] / theta_max, omega0 / math.exp(self.log_w[0])])
         return lo, np.maximum(hi, lo)
 
+    def _curve(self, theta_max: float, omega0: float):
+        """``(beta, dtheta_dir(beta theta_max, omega0 / beta))`` on 257 betas, cached."""
+        key = (theta_max, omega0)
+        if key not in self._curves:
+            if len(self._curves) > 64:
+                self._curves.clear()
+            lo, hi = self.beta_range(np.float64(theta_max), np.float64(omega0))
+            b = np.linspace(float(lo), float(hi), 257)
+            v = self(b * theta_max, omega0 / b)
+            self._curves[key] = (b, np.maximum.accumulate(v))   # monotone for np.interp
+        return self._curves[key]
+
     def solve_beta(self, theta_max, omega0, wanted, iterations: int = 12):
         """Eq. (8) by safeguarded Newton-Raphson: beta with dtheta_dir(b th, w / b) = wanted.
 
@@ -95,12 +108,17 @@ class HeadingTable:
             return self(b * theta_max, omega0 / b) - wanted
 
         f_lo, f_hi = F(lo), F(hi)
-        beta = np.clip(linear_beta(self.body, theta_max, omega0, wanted - self(theta_max, omega0)),
-                       lo, hi)
+        if theta_max.ndim == 0 or (np.ptp(theta_max) == 0 and np.ptp(omega0) == 0):
+            # One ellipse for all: invert its sampled curve dtheta_dir(beta) as the first guess.
+            b, v = self._curve(float(theta_max.flat[0]), float(omega0.flat[0]))
+            beta = np.interp(wanted, v, b)
+        else:
+            beta = linear_beta(self.body, theta_max, omega0, wanted - self(theta_max, omega0))
+        beta = np.clip(beta, lo, hi)
         a, c = lo.copy(), hi.copy()            # bracket: F(a) <= 0 <= F(c) where reachable
         for _ in range(iterations):
             f = F(beta)
-            done = np.abs(f) < 1e-10          # 1e-10 rad of heading: converged, frozen
+            done = np.abs(f) < 1e-9           # 1e-9 rad of heading: converged, frozen
             if np.all(done):
                 break
             a = np.where(f <= 0, beta, a)

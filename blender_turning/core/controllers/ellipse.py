@@ -111,13 +111,21 @@ class PhaseEllipse(Controller):
             return
         w, tm = self.omega0(t), self.theta_max(t)
         change = self.half_turn_change(tm, w)
+        if xp is Scalar:
+            self._beta = float(self._modifier(state[THETA_DIR], side, t, tm, w, change))
+        else:                                   # solve only for the figures that crossed
+            idx = np.nonzero(crossed)[0]
+            beta = np.array(self._beta, float)
+            beta[idx] = self._modifier(state[THETA_DIR][idx], side[idx], t, tm, w, change)
+            self._beta = beta
+
+    def _modifier(self, theta_dir, side, t, tm, w, change):
+        """beta of the half-turn starting now on ``side`` (Eqs. 7-12)."""
         # Mean heading: the heading is at an extreme at a crossing (C_f is in phase with theta_v).
-        mean = state[THETA_DIR] + side * 0.5 * change
+        mean = theta_dir + side * 0.5 * change
         err = (self.heading(t) - mean + math.pi) % (2 * math.pi) - math.pi
         wanted = change + side * err                                # Eq. (7), in the turn's sense
-        beta = self._solve_beta(tm, w, wanted)
-        beta = float(beta) if xp is Scalar else np.asarray(beta)
-        self._beta = xp.where(crossed, beta, self._beta)
+        return self._solve_beta(tm, w, wanted)
 
     # -- Section 5.1 -------------------------------------------------------------------------
     def target(self, t):
