@@ -136,6 +136,21 @@ def set_base_color(mat, rgba, roughness: float, metallic: float) -> None:
         bsdf.inputs["Metallic"].default_value = metallic
 
 
+def set_output_format(scene, kind: str) -> None:
+    """``kind``: 'PNG' frames or 'VIDEO' (H.264 in an MP4 container)."""
+    image = scene.render.image_settings
+    if kind == "VIDEO":
+        if hasattr(image, "media_type"):
+            image.media_type = "VIDEO"      # 5.0: video output is chosen by media type first
+        image.file_format = "FFMPEG"
+        scene.render.ffmpeg.format = "MPEG4"
+        scene.render.ffmpeg.codec = "H264"
+    else:
+        if hasattr(image, "media_type"):
+            image.media_type = "IMAGE"
+        image.file_format = "PNG"
+
+
 def poll_message(cls, message: str) -> None:
     """``Operator.poll_message_set`` (present since 3.0; kept here so poll code reads the same)."""
     cls.poll_message_set(message)

@@ -1,0 +1,79 @@
+"""Packaging: Blender's extension tool validates and builds the add-on; the built zip installs
+into the bpy wheel, enables, runs an operator, disables; register/unregister/register leaves
+nothing behind (issue 4).  Each install runs in a fresh interpreter with its own user folder."""
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
+bpy = pytest.importorskip("bpy")
+
+pytestmark = pytest.mark.blender
+ROOT = Path(__file__).resolve().parents[1]
+EXT_TOOL = Path(bpy.utils.resource_path("LOCAL")) / "scripts/addons_core/bl_pkg/cli/blender_ext.py"
+
+INSTALL = textwrap.dedent("""
+    import os, sys, tempfile
+    os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="turning-ext-")
+    import bpy, addon_utils
+    MOD = "bl_ext.user_default.blender_turning"
+
+    def leftovers():
+        out = [n for n in dir(bpy.types) if n.startswith(("TURNING_", "VIEW3D_PT_turning"))]
+        if hasattr(bpy.types.Object, "turning"):
+            out.append("Object.turning")
+        out += bpy.utils.preset_paths("turning_figure")
+        return out
+
+    assert bpy.ops.extensions.package_install_files(
+        filepath=sys.argv[1], repo="user_default", enable_on_install=True) == {"FINISHED"}
+    assert MOD in bpy.context.preferences.addons, list(bpy.context.preferences.addons.keys())
+    assert bpy.utils.preset_paths("turning_figure"), "sport presets not registered"
+    assert bpy.ops.turning.add_figure(sport="CYCLIST") == {"FINISHED"}
+    fig = bpy.context.view_layer.objects.active
+    assert fig.turning.is_figure and fig.turning.sport == "CYCLIST", fig
+    for _ in range(2):                       # disable, enable, disable: nothing left behind
+        addon_utils.disable(MOD, default_set=True)
+        assert not leftovers(), leftovers()
+        addon_utils.enable(MOD, default_set=True)
+        assert hasattr(bpy.types.Object, "turning")
+    addon_utils.disable(MOD, default_set=True)
+    assert not leftovers(), leftovers()
+    print("EXTENSION-OK", bpy.app.version_string)
+""")
+
+
+@pytest.fixture(scope="module")
+def built_zip(tmp_path_factory):
+    out = tmp_path_factory.mktemp("ext")
+    r = subprocess.run([sys.executable, str(EXT_TOOL), "validate", str(ROOT)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    r = subprocess.run([sys.executable, str(EXT_TOOL), "build", "--source-dir", str(ROOT),
+                        "--output-dir", str(out)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    (zp,) = out.glob("*.zip")
+    return zp
+
+
+def test_built_zip_holds_the_addon_only(built_zip):
+    import zipfile
+    names = zipfile.ZipFile(built_zip).namelist()
+    assert "__init__.py" in names and "blender_manifest.toml" in names
+    assert "blender_turning/blender/bake.py" in names
+    assert any(n.startswith("rigs/") for n in names)
+    assert "presets/turning_figure/skier.py" in names
+    assert not [n for n in names if n.startswith((".venv", "tests/", "scripts/", ".git/"))]
+
+
+def test_install_enable_run_disable(built_zip, tmp_path):
+    script = tmp_path / "install.py"
+    script.write_text(INSTALL)
+    r = subprocess.run([sys.executable, str(script), str(built_zip)], capture_output=True,
+                       text=True, timeout=300, cwd=tmp_path)
+    assert "EXTENSION-OK" in r.stdout, r.stdout[-3000:] + r.stderr[-3000:]
