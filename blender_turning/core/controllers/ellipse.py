@@ -19,9 +19,13 @@ grows over time; and ``(0 < theta_v < theta_max, omega_v = 0)`` is a fixed point
 law (a steady circle).  The Fig. 7b ellipse turns back at once and meets the target at the
 ``omega_v`` axis.
 
-States on no controlling ellipse get ``alpha_v = -alpha_max sign(omega_v)`` (+ in Q2, Q3; - in Q1,
-Q4), a small disc around the origin gets a fixed push, and every demand is clipped to
-``|alpha_v| <= alpha_max``.
+Also beyond the paper: a state just outside the target in Q1/Q3 (``|y| >= 1``) is steered by the
+Fig. 7b ellipse through it, and one in Q2/Q4 with ``|x| >= 1`` by the Fig. 7a ellipse, where those
+exist.  Both meet the target at the next axis and agree with the on-ellipse law at ``r = 1``, so
+the demand is continuous across the target ellipse; the paper's ``+-alpha_max`` right outside it
+made the lean chatter at every turn's apex (period jitter of ~0.2% at dt = 0.02 s).  Only states
+on neither family get ``alpha_v = -alpha_max sign(omega_v)`` (+ in Q2, Q3; - in Q1, Q4).  A small
+disc around the origin gets a fixed push, and every demand is clipped to ``|alpha_v| <= alpha_max``.
 """
 from __future__ import annotations
 
@@ -38,6 +42,7 @@ from .base import Controller
 
 
 SLOW_FACTOR = 3.0
+NEAR = 1.1
 
 
 def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=0.05):
@@ -48,13 +53,22 @@ def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=
     x = om / (omega0 * theta_max)
     den = theta_max * theta_max - th * th
     w13_sq = om * om / xp.where(den > 0.0, den, 1.0)           # omega0'^2 of the Fig. 7a ellipse
-    slow = (w13_sq * SLOW_FACTOR ** 2 < omega0 * omega0) & (th != 0.0) & (den > 0.0)
-    q13 = (th * om >= 0.0) & ~slow            # quadrants 1, 3 and the axes: Fig. 7a
+    on_a = den > 0.0                           # |y| < 1: a Fig. 7a ellipse passes through
+    on_b = (xp.abs(x) < 1.0) & (th != 0.0)     # |x| < 1: a Fig. 7b ellipse passes through
+    slow = (w13_sq * SLOW_FACTOR ** 2 < omega0 * omega0) & (th != 0.0) & on_a
+    # Preferred family: Fig. 7a in quadrants 1, 3 (and on the axes) unless slow, else Fig. 7b.
+    # (No ``~``: on Python bools it is integer negation.)
+    prefer_b = (th * om < 0.0) | slow
+    prefer_a = (th * om >= 0.0) & (slow == False)  # noqa: E712 (elementwise on arrays)
     a13 = -w13_sq * th
     a24 = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / xp.where(th != 0.0, th, 1.0)
-    inside = xp.where(q13, xp.abs(y) < 1.0, xp.abs(x) < 1.0)
+    # The other family only for states near the target (within NEAR on the preferred family's
+    # axis): far outside, the paper's +-alpha_max is what brings the lean back.
+    near = xp.where(prefer_a, xp.abs(y) < NEAR, xp.abs(x) < NEAR)
+    use_a = on_a & (prefer_a | near)
+    use_b = on_b & (prefer_b | near)
     away = -alpha_max * xp.where(om != 0.0, xp.sign(om), xp.sign(th))
-    a = xp.where(inside, xp.where(q13, a13, a24), away)
+    a = xp.where(prefer_a & on_a, a13, xp.where(use_b, a24, xp.where(use_a, a13, away)))
     a = xp.where(xp.hypot(x, y) < origin_radius, 0.5 * alpha_max, a)
     return xp.clip(a, -alpha_max, alpha_max)
 
