@@ -85,31 +85,34 @@ class Figure:
     doc: str = field(default="", compare=False)
 
 
-# Each number is a round, defensible figure, not a fit:
-# - Skier: 75 kg adult; COM ~1.0 m above the skis in an athletic stance; roll inertia about the
-#   COM of a 1.75 m adult ~12 kg m^2 (m * (0.4 m)^2); 10 m/s is a brisk recreational slalom.
-#   A slalom ski has a ~12 m sidecut radius; edged and bent it carves ~R cos(edge) -> about 6 m at
-#   60 deg, so |C_f| <= 1/6 m^-1. Edge-to-edge takes ~0.5 s: |dC_f/dt| <= 2 * (1/6) / 0.5 ~ 0.67.
-# - Snowboarder: 70 kg, COM 0.95 m, I_v 10; 8 m/s; a board's ~7-8 m sidecut carves to ~5 m:
-#   |C_f| <= 0.2; heel-to-toe edge change ~0.5 s: 0.8.
-# - Telemark: as the skier but slower (8 m/s); the turn comes from the angle between the skis,
-#   which is limited by the stance (~8 m radius): |C_f| <= 0.125; slower edge change: 0.5.
-# - Cyclist: rider + bicycle 85 kg, COM ~1.0 m, I_v 15 (bicycle adds roll inertia); 6 m/s.
-#   A 1.0 m wheelbase with ~27 deg of usable steer gives C_f = tan(27 deg)/1.0 ~ 0.5; the bar can be
-#   turned lock to lock in ~0.5 s: |dC_f/dt| <= 2.0. A bicycle steers sharper and faster than a ski.
 PRESETS: dict[str, Figure] = {
-    "skier": Figure("skier", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=10.0),
-                    Limits(C_f_max=1 / 6, dC_f_max=0.67, theta_fall=math.radians(60)),
-                    "alpine skier on slalom skis"),
-    "snowboarder": Figure("snowboarder", BodyParams(m=70.0, l=0.95, I_v=10.0, V_cm=8.0),
-                          Limits(C_f_max=0.2, dC_f_max=0.8, theta_fall=math.radians(60)),
-                          "carving snowboarder"),
-    "telemark": Figure("telemark", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=8.0),
-                       Limits(C_f_max=0.125, dC_f_max=0.5, theta_fall=math.radians(55)),
-                       "telemark skier"),
-    "cyclist": Figure("cyclist", BodyParams(m=85.0, l=1.0, I_v=15.0, V_cm=6.0),
-                      Limits(C_f_max=0.5, dC_f_max=2.0, theta_fall=math.radians(50)),
-                      "cyclist on a road bicycle"),
+    "skier": Figure(
+        "skier", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=10.0),
+        Limits(C_f_max=1 / 6, dC_f_max=0.67, theta_fall=math.radians(60)),
+        """Alpine skier on slalom skis.  75 kg adult; centre of mass ~1.0 m above the skis in an
+        athletic stance; roll inertia about the centre of mass of a 1.75 m adult ~12 kg m^2
+        (m (0.4 m)^2); 10 m/s, a brisk recreational slalom.  A slalom ski has a ~12 m sidecut
+        radius; edged and bent it carves ~R cos(edge angle), about 6 m at 60 deg, so
+        |C_f| <= 1/6 1/m.  Edge to edge takes ~0.5 s: |dC_f/dt| <= 2 (1/6) / 0.5 ~ 0.67."""),
+    "snowboarder": Figure(
+        "snowboarder", BodyParams(m=70.0, l=0.95, I_v=10.0, V_cm=8.0),
+        Limits(C_f_max=0.2, dC_f_max=0.8, theta_fall=math.radians(60)),
+        """Carving snowboarder.  70 kg, centre of mass 0.95 m, I_v 10 kg m^2; 8 m/s.  A board's
+        ~7-8 m sidecut carves down to ~5 m: |C_f| <= 0.2; heel-to-toe edge change in ~0.5 s:
+        |dC_f/dt| <= 0.8."""),
+    "telemark": Figure(
+        "telemark", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=8.0),
+        Limits(C_f_max=0.125, dC_f_max=0.5, theta_fall=math.radians(55)),
+        """Telemark skier.  The skier's body at a gentler 8 m/s; the turn comes from the angle
+        between the skis (Section 3), which the split stance limits to about an 8 m radius:
+        |C_f| <= 0.125; changing the lead ski is slower than an edge change: 0.5."""),
+    "cyclist": Figure(
+        "cyclist", BodyParams(m=85.0, l=1.0, I_v=15.0, V_cm=6.0),
+        Limits(C_f_max=0.5, dC_f_max=2.0, theta_fall=math.radians(50)),
+        """Cyclist on a road bicycle.  Rider and bicycle 85 kg, centre of mass ~1.0 m, I_v 15 kg
+        m^2 (the bicycle adds roll inertia); 6 m/s.  A 1.0 m wheelbase with ~27 deg of usable
+        steer gives C_f = tan(27 deg) / 1.0 ~ 0.5; the bar goes lock to lock in ~0.5 s:
+        |dC_f/dt| <= 2.0.  A bicycle steers sharper and faster than a ski (Section 5.2)."""),
 }
 
 
