@@ -1,0 +1,253 @@
+"""Operators on the bpy wheel: polls that say why, presets, bad input reported with nothing
+half-written, Bake Turns reading back equal to the mapping, baking twice = once, Clear Bake,
+Follow Path (infeasible plan, cancel) leaving the scene as it was (issue 4)."""
+import math
+import os
+import tempfile
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
+bpy = pytest.importorskip("bpy")
+
+from blender_turning import blender as addon  # noqa: E402
+from blender_turning.blender import compat, ops_path, presets  # noqa: E402
+from blender_turning.blender.follow_job import Cancelled  # noqa: E402
+from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
+from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.core.params import PRESETS  # noqa: E402
+
+pytestmark = pytest.mark.blender
+OPERATORS = ("add_figure", "bake_turns", "follow_path", "clear_bake")
+
+
+def have_mapping():
+    try:
+        from blender_turning.mapping import map_trajectory  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+needs_mapping = pytest.mark.skipif(not have_mapping(), reason="the mapping layer is not there")
+
+
+@pytest.fixture(scope="module", autouse=True)
+def registered():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon.register()
+    yield
+    addon.unregister()
+
+
+@pytest.fixture
+def scene(registered):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.frame_start, sc.frame_end = 1, 72
+    sc.render.fps = 24
+    return sc
+
+
+def add(sport="SKIER", at=(0, 0, 0)):
+    bpy.context.scene.cursor.location = at
+    assert bpy.ops.turning.add_figure(sport=sport) == {"FINISHED"}
+    return bpy.context.view_layer.objects.active
+
+
+def snapshot():
+    """Everything a failed or cancelled operator must leave alone."""
+    sc = bpy.context.scene
+    out = {"frames": (sc.frame_start, sc.frame_end, sc.frame_current),
+           "objects": sorted(o.name for o in bpy.data.objects),
+           "actions": sorted(a.name for a in bpy.data.actions),
+           "curves": sorted(c.name for c in bpy.data.curves)}
+    for a in bpy.data.actions:
+        for fc in compat.all_fcurves(a):
+            co = np.empty(2 * len(fc.keyframe_points), np.float32)
+            fc.keyframe_points.foreach_get("co", co)
+            out[(a.name, fc.data_path, fc.array_index)] = co.tobytes()
+    for o in bpy.data.objects:
+        out[o.name] = (tuple(o.location), tuple(o.rotation_euler),
+                       o.animation_data.action.name if o.animation_data and
+                       o.animation_data.action else None)
+    return out
+
+
+def test_every_operator_has_undo_and_a_poll():
+    for name in OPERATORS:
+        cls = getattr(bpy.types, f"TURNING_OT_{name}")
+        assert {"REGISTER", "UNDO"} <= cls.bl_options, name
+
+
+@pytest.mark.parametrize("op, why", [("bake_turns", "No figure selected"),
+                                     ("clear_bake", "No figure selected"),
+                                     ("follow_path", "No figure selected")])
+def test_poll_says_why(scene, op, why):
+    with pytest.raises(RuntimeError, match=why):
+        getattr(bpy.ops.turning, op)()
+
+
+def test_poll_without_bake_or_path(scene):
+    add()
+    with pytest.raises(RuntimeError, match="no baked turns"):
+        bpy.ops.turning.clear_bake()
+    with pytest.raises(RuntimeError, match="path curve"):
+        bpy.ops.turning.follow_path()
+    scene.frame_end = scene.frame_start
+    with pytest.raises(RuntimeError, match="at least two frames"):
+        bpy.ops.turning.bake_turns()
+
+
+@pytest.mark.parametrize("sport", ["SKIER", "SNOWBOARDER", "TELEMARK", "CYCLIST"])
+def test_add_figure_at_cursor_from_preset(scene, sport):
+    obj = add(sport, at=(3, -2, 0))
+    assert obj.type == "ARMATURE" and obj.select_get()
+    assert tuple(obj.location) == pytest.approx((3, -2, 0))
+    s, fig = obj.turning, PRESETS[sport.lower()]
+    assert s.is_figure and s.sport == sport
+    assert (s.mass, s.com_height, s.speed) == pytest.approx((fig.body.m, fig.body.l, fig.body.V_cm))
+    assert s.curvature_max == pytest.approx(fig.limits.C_f_max, rel=1e-6)
+    body = obj.children[0]
+    assert body.type == "MESH" and body.modifiers[0].object == obj
+
+
+def test_shipped_presets_are_the_core_presets(scene):
+    obj = add("SKIER")
+    paths = bpy.utils.preset_paths(presets.PRESET_SUBDIR)
+    assert paths, "preset path not registered"
+    for sport, fig in PRESETS.items():
+        path = os.path.join(paths[0], f"{sport}.py")
+        bpy.ops.script.execute_preset(filepath=path, menu_idname="TURNING_MT_figure_presets")
+        s = obj.turning
+        assert s.sport == sport.upper()
+        assert (s.mass, s.com_height, s.inertia, s.speed) == pytest.approx(
+            (fig.body.m, fig.body.l, fig.body.I_v, fig.body.V_cm), rel=1e-6)
+        assert (s.curvature_max, s.curvature_rate_max, s.fall_angle) == pytest.approx(
+            (fig.limits.C_f_max, fig.limits.dC_f_max, fig.limits.theta_fall), rel=1e-6)
+
+
+def test_bad_setting_is_reported_and_nothing_written(scene):
+    obj = add("SKIER")
+    obj.turning.lean = obj.turning.fall_angle          # beyond the fall bound: a bad input
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="lean"):
+        bpy.ops.turning.bake_turns()
+    assert snapshot() == before
+
+
+@needs_mapping
+def test_bake_turns_reads_back_equal_to_the_mapping(scene):
+    obj = add("SKIER")
+    obj.turning.period = 2.5
+    obj.keyframe_insert("turning.period", frame=1)     # a keyed controller parameter
+    obj.turning.period = 1.8
+    obj.keyframe_insert("turning.period", frame=72)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    frames = FrameRange.of_scene(scene)
+    _, track = figure_pose_track(obj, frames)
+    bag = compat.channels(obj)
+    fcs = {(fc.data_path, fc.array_index): fc for fc in bag.fcurves}
+    assert ("turning.period", 0) in fcs                   # the user's keys stay
+    for bone, ch in track.bones.items():
+        for attr, arr in (("location", ch.location), ("rotation_quaternion", ch.rotation)):
+            if arr is None:
+                continue
+            for i in range(arr.shape[1]):
+                fc = fcs[(f'pose.bones["{bone}"].{attr}', i)]
+                co = np.empty(2 * len(fc.keyframe_points), np.float32)
+                fc.keyframe_points.foreach_get("co", co)
+                np.testing.assert_array_equal(co[0::2], np.arange(1, 73))
+                np.testing.assert_allclose(co[1::2], arr[:, i], atol=2e-6)
+    assert obj.turning.foot_track is not None
+    assert len(obj.turning.foot_track.data.splines[0].points) == 72
+
+
+@needs_mapping
+def test_bake_twice_equals_once_and_clear_restores(scene):
+    obj = add("SKIER")
+    before = snapshot()
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    once = snapshot()
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert snapshot() == once
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}
+    after = snapshot()
+    # The figure is back where it was, with no action and no foot track.
+    assert after["actions"] == before["actions"] and after["objects"] == before["objects"]
+    assert obj.turning.foot_track is None
+
+
+def make_path(points, name="Path"):
+    curve = bpy.data.curves.new(name, "CURVE")
+    sp = curve.splines.new("BEZIER")
+    sp.bezier_points.add(len(points) - 1)
+    for bp, (x, y) in zip(sp.bezier_points, points):
+        bp.co = (x, y, 0)
+        bp.handle_left_type = bp.handle_right_type = "AUTO"
+    obj = bpy.data.objects.new(name, curve)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+def make_wall(name, center, size):
+    mesh = bpy.data.meshes.new(name)
+    sx, sy = size[0] / 2, size[1] / 2
+    mesh.from_pydata([(-sx, -sy, 0), (sx, -sy, 0), (sx, sy, 0), (-sx, sy, 0),
+                      (-sx, -sy, 1), (sx, -sy, 1), (sx, sy, 1), (-sx, sy, 1)], [],
+                     [(0, 1, 2, 3), (4, 5, 6, 7)])
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location = (*center, 0)
+    return obj
+
+
+def test_path_with_one_point_is_reported(scene):
+    obj = add("CYCLIST")
+    obj.turning.path = make_path([(0, 0)])
+    bpy.context.view_layer.objects.active = obj
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="needs at least 2"):
+        bpy.ops.turning.follow_path()
+    assert snapshot() == before
+
+
+def test_infeasible_plan_is_reported_and_scene_unchanged(scene):
+    obj = add("CYCLIST")
+    obj.turning.path = make_path([(0, 0), (0, -30)])
+    walls = bpy.data.collections.new("Walls")
+    scene.collection.children.link(walls)
+    walls.objects.link(make_wall("Wall", (0, -8), (60, 1.0)))   # across the road
+    obj.turning.obstacles = walls
+    bpy.context.view_layer.objects.active = obj
+    before = snapshot()
+    with pytest.raises(RuntimeError, match=r"no feasible plan at t = [\d.]+ s, position"):
+        bpy.ops.turning.follow_path()
+    assert snapshot() == before
+
+
+def test_cancelled_follow_path_leaves_scene_unchanged(scene):
+    obj = add("TELEMARK")
+    obj.turning.path = make_path([(0, 0), (3, -12), (-3, -24), (0, -36)])
+    before = snapshot()
+    job = ops_path.prepare(bpy.context, obj)
+    job.start()
+    job.cancel(wait=True)                                 # what ESC does in the modal operator
+    assert isinstance(job.error, Cancelled) or job.result is not None
+    assert snapshot() == before
+
+
+@needs_mapping
+def test_follow_path_bakes_and_fits_the_frame_range(scene):
+    obj = add("SKIER")
+    obj.turning.path = make_path([(0, 0), (3, -12), (-3, -24), (0, -36)])
+    assert bpy.ops.turning.follow_path() == {"FINISHED"}
+    action = obj.animation_data.action
+    assert action.name == obj.name
+    # The run ends past the end of the path; the scene's range fits the run exactly.
+    track = obj.turning.foot_track.data.splines[0].points
+    end = np.array(track[len(track) - 1].co[:2])
+    assert end[1] < -30.0
+    assert scene.frame_end == scene.frame_start + len(track) - 1
+    fc = next(f for f in compat.channels(obj).fcurves if f.data_path == "location")
+    assert len(fc.keyframe_points) == len(track)
