@@ -1,1 +1,31 @@
-"""Section 7: the physical state -> per-bone pose channels. numpy only, one module per sport."""
+"""Section 7: the physical state -> per-bone pose channels. numpy only, one module per sport.
+
+``map_trajectory(sport, traj)`` turns a trajectory into a :class:`PoseTrack` for the sport's rig
+(``rigs/<sport>.json``); ``MAPPINGS`` is the registry, one :class:`Mapping` per sport.
+"""
+from __future__ import annotations
+
+from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
+from .skier import SkierMapping, SkierOptions
+
+MAPPINGS: dict[str, Mapping] = {
+    "skier": SkierMapping(),
+}
+
+__all__ = ["STATE_PROPS", "BoneChannels", "Mapping", "PoseTrack", "MAPPINGS", "map_trajectory",
+           "SkierOptions"]
+
+
+def map_trajectory(sport: str, traj, options=None, frame_start: int = 1,
+                   fps: float | None = None) -> PoseTrack:
+    """Map ``traj`` onto the rig of ``sport``: one pose per sample, at frames
+    ``frame_start + k``.  With ``fps`` the trajectory is first resampled at that rate (one
+    sample per frame); without it the samples are used as they are (already resampled)."""
+    if sport not in MAPPINGS:
+        raise ValueError(f"sport = {sport!r} is not one of {', '.join(MAPPINGS)}")
+    if fps is not None:
+        traj = traj.resample(fps)
+    if len(traj) == 0:
+        raise ValueError("the trajectory has no samples")
+    frames = float(frame_start) + __import__("numpy").arange(len(traj), dtype=float)
+    return MAPPINGS[sport].map(traj, options, frames)

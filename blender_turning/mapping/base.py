@@ -68,3 +68,54 @@ class PoseTrack:
 
     def __len__(self) -> int:
         return len(self.frames)
+
+
+class Mapping:
+    """Base of the sport mappings (Section 7): one subclass per sport, registered in
+    ``MAPPINGS``.
+
+    A subclass sets ``sport`` (also the rig's name in ``rigs/``) and ``Options`` (a frozen
+    dataclass of its parameters, SI units), and implements :meth:`pose`, which fills a
+    :class:`~blender_turning.mapping.kinematics.PoseBuilder` from the trajectory.  :meth:`map`
+    does the rest: it loads and checks the rig, places the object on the foot point with the
+    heading, and bakes the state properties.
+    """
+
+    sport: str = ""
+    Options: type = type(None)
+
+    def pose(self, builder, traj, options, spec) -> None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def map(self, traj, options=None, frames=None) -> PoseTrack:
+        from .bones import REQUIRED, require
+        from .kinematics import PoseBuilder, Skeleton, quat_continuous
+        from .rig_spec import load_rig
+
+        options = self.Options() if options is None else options
+        if not isinstance(options, self.Options):
+            raise TypeError(f"options for {self.sport!r} must be {self.Options.__name__}, "
+                            f"not {type(options).__name__}")
+        spec = load_rig(self.sport)
+        require(spec.bone_names, REQUIRED[self.sport], f"rig {spec.name!r}")
+        n = len(traj)
+        frames = np.arange(n, dtype=float) + 1.0 if frames is None else np.asarray(frames, float)
+        builder = PoseBuilder(Skeleton.from_spec(spec), n)
+        self.pose(builder, traj, options, spec)
+        skel = builder.skel
+        bones = {}
+        for name in skel.names:   # parent-before-child order, for a readable bake
+            rot, loc = builder.rot.get(name), builder.loc.get(name)
+            if skel.connected[skel.i(name)]:
+                loc = None
+            if rot is None and loc is None:
+                continue
+            bones[name] = BoneChannels(location=loc,
+                                       rotation=None if rot is None else quat_continuous(rot))
+        # The object carries the foot point and the heading: the rig faces +Y, theta_dir is
+        # measured counter-clockwise from +x (DESIGN.md Section 1).
+        zeros = np.zeros(n)
+        location = np.stack([traj.x, traj.y, zeros], axis=1)
+        rotation = np.stack([zeros, zeros, traj.theta_dir - np.pi / 2], axis=1)
+        props = {prop: np.array(getattr(traj, col), float) for prop, col in STATE_PROPS.items()}
+        return PoseTrack(frames, location, rotation, bones, props)

@@ -1,0 +1,56 @@
+"""Bone names, in one place (STYLE.md rule 6).
+
+Human bones carry Rigify's metarig names so animators know them; equipment bones are named after
+the equipment.  ``root`` stays on the ground under the foot point (the object carries position
+and heading); ``lean`` pivots about the line of the foot (the travel line, the rig's +Y axis).
+"""
+from __future__ import annotations
+
+ROOT = "root"
+LEAN = "lean"
+
+HIPS, SPINE, SPINE_2, CHEST, NECK, NECK_2, HEAD = (
+    "spine", "spine.001", "spine.002", "spine.003", "spine.004", "spine.005", "spine.006")
+SPINE_CHAIN = (HIPS, SPINE, SPINE_2, CHEST, NECK, NECK_2, HEAD)
+
+
+def side(base: str, s: str) -> str:
+    """``side("thigh", "L") -> "thigh.L"``."""
+    if s not in ("L", "R"):
+        raise ValueError(f"side = {s!r} is not 'L' or 'R'")
+    return f"{base}.{s}"
+
+
+def mirror(name: str) -> str:
+    """``thigh.L <-> thigh.R``; names without a side are returned unchanged."""
+    if name.endswith(".L"):
+        return name[:-2] + ".R"
+    if name.endswith(".R"):
+        return name[:-2] + ".L"
+    return name
+
+
+SIDED_HUMAN = ("shoulder", "upper_arm", "forearm", "hand", "thigh", "shin", "foot", "toe")
+HUMAN = SPINE_CHAIN + tuple(side(b, s) for b in SIDED_HUMAN for s in ("L", "R"))
+
+SKI = ("ski.L", "ski.R")
+POLE = ("pole.L", "pole.R")
+BOARD = "board"
+FRAME, FORK, WHEEL_F, WHEEL_R, CRANK = "frame", "fork", "wheel.F", "wheel.R", "crank"
+PEDAL = ("pedal.L", "pedal.R")
+
+#: Bones each sport's rig must have (checked when a mapping starts).
+REQUIRED = {
+    "skier": (ROOT, LEAN) + HUMAN + SKI + POLE,
+    "telemark": (ROOT, LEAN) + HUMAN + SKI + POLE,
+    "snowboarder": (ROOT, LEAN) + HUMAN + (BOARD,),
+    "cyclist": (ROOT, LEAN) + HUMAN + (FRAME, FORK, WHEEL_F, WHEEL_R, CRANK) + PEDAL,
+}
+
+
+def require(names, wanted, rig: str = "rig") -> None:
+    """Raise ``KeyError`` naming the first bone of ``wanted`` missing from ``names``."""
+    have = set(names)
+    for b in wanted:
+        if b not in have:
+            raise KeyError(f"bone {b!r} is missing from {rig}")

@@ -1,0 +1,341 @@
+"""Forward and inverse kinematics of an armature, numpy only, in Blender's conventions.
+
+* Quaternions are ``(w, x, y, z)``; arrays of them have shape ``(..., 4)``.
+* A bone's rest frame follows Blender: Y from head to tail, X and Z from the roll by Blender's
+  ``vec_roll_to_mat3`` (:func:`vec_roll_to_mat3`); its 4x4 rest matrix in armature space is
+  ``bone.matrix_local``.
+* Pose channels are local (``PoseBone.location``, ``PoseBone.rotation_quaternion``), composed as
+  Blender does for bones with the default inherit flags::
+
+      pose_arm = pose_arm_parent @ (rest_arm_parent^-1 @ rest_arm) @ T(location) @ R(quat)
+
+  A connected bone's location is ignored by Blender, so :class:`PoseBuilder` never writes one.
+
+:class:`PoseBuilder` holds the channels of all bones over ``n`` frames; a mapping sets local
+rotations directly, or sets a bone's armature-space pose (from IK, or "stay on the ski") and lets
+the builder derive the local channels from the parent's current pose.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["quat_mul", "quat_conj", "quat_from_axis_angle", "quat_to_matrix", "quat_from_matrix",
+           "quat_continuous", "vec_roll_to_mat3", "rest_matrix", "translation", "rotation4",
+           "rot_axis_angle", "two_bone_ik", "frame_from_yx", "Skeleton", "PoseBuilder"]
+
+IDENTITY_QUAT = np.array([1.0, 0.0, 0.0, 0.0])
+
+
+# -- quaternions ---------------------------------------------------------------------------------
+def quat_mul(a, b):
+    """Hamilton product ``a * b`` (rotate by ``b`` first, then ``a``)."""
+    a, b = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float))
+    w1, x1, y1, z1 = np.moveaxis(a, -1, 0)
+    w2, x2, y2, z2 = np.moveaxis(b, -1, 0)
+    return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+                     w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+                     w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+                     w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2], axis=-1)
+
+
+def quat_conj(q):
+    return np.asarray(q, float) * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_from_axis_angle(axis, angle):
+    """Rotation by ``angle`` (rad, right-handed) about ``axis`` (normalised here)."""
+    axis = np.asarray(axis, float)
+    axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    half = 0.5 * np.asarray(angle, float)[..., None]
+    return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
+
+
+def quat_to_matrix(q):
+    """(..., 4) unit quaternions -> (..., 3, 3) rotation matrices."""
+    q = np.asarray(q, float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
+
+
+def quat_from_matrix(m):
+    """(..., 3, 3) rotation matrices -> (..., 4) unit quaternions with ``w >= 0``.
+
+    Shepperd's method: of the four candidate formulas the one with the largest pivot is used,
+    so the result is accurate for every rotation (including 180 deg).
+    """
+    m = np.asarray(m, float)
+    shape = m.shape[:-2]
+    m = m.reshape(-1, 3, 3)
+    tr = np.trace(m, axis1=1, axis2=2)
+    d = np.stack([tr, m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]], axis=1)
+    k = np.argmax(d, axis=1)
+    q = np.empty((len(m), 4))
+    for case in range(4):
+        s = k == case
+        if not np.any(s):
+            continue
+        a = m[s]
+        if case == 0:
+            r = np.sqrt(1.0 + tr[s]) * 2.0
+            q[s] = np.stack([0.25 * r, (a[:, 2, 1] - a[:, 1, 2]) / r,
+                             (a[:, 0, 2] - a[:, 2, 0]) / r, (a[:, 1, 0] - a[:, 0, 1]) / r], 1)
+        else:
+            i, j, kk = case - 1, case % 3, (case + 1) % 3
+            r = np.sqrt(1.0 + a[:, i, i] - a[:, j, j] - a[:, kk, kk]) * 2.0
+            v = np.empty((len(a), 4))
+            v[:, 0] = (a[:, kk, j] - a[:, j, kk]) / r
+            v[:, 1 + i] = 0.25 * r
+            v[:, 1 + j] = (a[:, j, i] + a[:, i, j]) / r
+            v[:, 1 + kk] = (a[:, kk, i] + a[:, i, kk]) / r
+            q[s] = v
+    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    return q.reshape(shape + (4,))
+
+
+def quat_continuous(q):
+    """Flip signs along axis 0 so consecutive quaternions have a non-negative dot product.
+
+    ``q`` and ``-q`` are the same rotation, but F-curves interpolate the components: a sign jump
+    between two keys would spin the bone the long way round.
+    """
+    q = np.array(q, float)
+    if len(q) < 2:
+        return q
+    flip = np.sum(q[1:] * q[:-1], axis=1) < 0
+    sign = np.concatenate([[1.0], np.where(np.cumsum(flip) % 2 == 1, -1.0, 1.0)])
+    return q * sign[:, None]
+
+
+# -- rest frames (Blender's armature.cc) ---------------------------------------------------------
+def rot_axis_angle(axis, angle):
+    """(3, 3) rotation matrix by ``angle`` about unit ``axis`` (Rodrigues)."""
+    x, y, z = axis
+    c, s = np.cos(angle), np.sin(angle)
+    t = 1.0 - c
+    return np.array([[t * x * x + c, t * x * y - s * z, t * x * z + s * y],
+                     [t * x * y + s * z, t * y * y + c, t * y * z - s * x],
+                     [t * x * z - s * y, t * y * z + s * x, t * z * z + c]])
+
+
+def vec_roll_to_mat3(vec, roll: float) -> np.ndarray:
+    """Blender's ``vec_roll_to_mat3``: the bone rotation for direction ``vec`` and ``roll`` (rad).
+
+    A transcription of ``vec_roll_to_mat3_normalized`` (blenkernel/intern/armature.cc), including
+    its thresholds near the singular direction -Y.  Columns are the bone's X, Y, Z axes.
+    """
+    nor = np.asarray(vec, float)
+    nor = nor / np.linalg.norm(nor)
+    x, y, z = nor
+    safe, critical = 6.1e-3, 2.5e-4
+    theta = 1.0 + y
+    theta_alt = x * x + z * z
+    b = np.zeros((3, 3))   # row-major here: b[row, col]; Blender's bMatrix[col][row]
+    if theta > safe or theta_alt > critical * critical:
+        b[0, 1], b[1, 0], b[1, 1], b[2, 1], b[1, 2] = x, -x, y, z, -z
+        if theta <= safe:
+            # Series expansion of theta from x, z where 1 + y has lost its precision.
+            theta = theta_alt * 0.5 + theta_alt * theta_alt * 0.125
+        b[0, 0] = 1.0 - x * x / theta
+        b[2, 2] = 1.0 - z * z / theta
+        b[0, 2] = b[2, 0] = -x * z / theta
+    else:
+        b = np.eye(3)
+        b[0, 0] = b[1, 1] = -1.0
+    return rot_axis_angle(nor, roll) @ b
+
+
+def rest_matrix(head, tail, roll: float) -> np.ndarray:
+    """4x4 ``bone.matrix_local``: rotation from (tail - head, roll), translation ``head``."""
+    m = np.eye(4)
+    m[:3, :3] = vec_roll_to_mat3(np.subtract(tail, head), roll)
+    m[:3, 3] = head
+    return m
+
+
+def translation(v):
+    """(..., 3) -> (..., 4, 4) translation matrices."""
+    v = np.asarray(v, float)
+    m = np.broadcast_to(np.eye(4), v.shape[:-1] + (4, 4)).copy()
+    m[..., :3, 3] = v
+    return m
+
+
+def rotation4(r):
+    """(..., 3, 3) -> (..., 4, 4)."""
+    r = np.asarray(r, float)
+    m = np.broadcast_to(np.eye(4), r.shape[:-2] + (4, 4)).copy()
+    m[..., :3, :3] = r
+    return m
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def frame_from_yx(y_axis, x_hint):
+    """(..., 3, 3) rotations whose Y column is ``y_axis`` and X column lies along ``x_hint``
+    (made orthogonal to Y); Z = X x Y."""
+    y = _unit(y_axis)
+    x = _unit(x_hint - np.sum(x_hint * y, axis=-1, keepdims=True) * y)
+    return np.stack([x, y, np.cross(x, y)], axis=-1)
+
+
+def two_bone_ik(root, target, l1: float, l2: float, pole, reach: float = 0.9999):
+    """Analytic two-bone IK: the middle joint for a chain ``root -> mid -> target``.
+
+    ``root``, ``target``, ``pole`` have shape (..., 3); ``pole`` is a direction (not a point)
+    towards which the middle joint bends (a knee forward, an elbow back).  Targets farther than
+    ``reach * (l1 + l2)`` or nearer than ``|l1 - l2|`` are clamped along the same line.
+    Returns ``(mid, end)``: the middle joint and the end actually reached.
+    """
+    root = np.asarray(root, float)
+    d = np.asarray(target, float) - root
+    dist = np.linalg.norm(d, axis=-1, keepdims=True)
+    u = d / np.maximum(dist, 1e-12)
+    dist = np.clip(dist, abs(l1 - l2) + 1e-9, reach * (l1 + l2))
+    # Law of cosines: distance of the middle joint's projection along u, and its offset.
+    a = (l1 * l1 - l2 * l2 + dist * dist) / (2.0 * dist)
+    h = np.sqrt(np.maximum(l1 * l1 - a * a, 0.0))
+    p = np.asarray(pole, float)
+    p = p - np.sum(p * u, axis=-1, keepdims=True) * u
+    p = _unit(p)
+    return root + a * u + h * p, root + dist * u
+
+
+# -- skeleton and pose ----------------------------------------------------------------------------
+class Skeleton:
+    """Bones in parent-before-child order with their rest matrices (armature space)."""
+
+    def __init__(self, names, parents, rest, connected, lengths=None):
+        self.names = tuple(names)
+        self.lengths = None if lengths is None else tuple(float(v) for v in lengths)
+        self.index = {n: i for i, n in enumerate(self.names)}
+        self.parents = tuple(parents)   # parent name or None
+        self.rest = np.asarray(rest, float)            # (k, 4, 4)
+        self.connected = tuple(bool(c) for c in connected)
+        for n, p in zip(self.names, self.parents):
+            if p is not None and self.index.get(p, len(self.names)) >= self.index[n]:
+                raise ValueError(f"bone {n!r}: parent {p!r} must come before it")
+
+    @classmethod
+    def from_spec(cls, spec) -> "Skeleton":
+        return cls([b.name for b in spec.bones], [b.parent for b in spec.bones],
+                   [rest_matrix(b.head, b.tail, b.roll) for b in spec.bones],
+                   [b.connected for b in spec.bones], [b.length for b in spec.bones])
+
+    def i(self, name: str) -> int:
+        try:
+            return self.index[name]
+        except KeyError:
+            raise KeyError(f"bone {name!r} is not in the rig") from None
+
+    def length(self, name: str) -> float:
+        """Rest length (head to tail), m."""
+        if self.lengths is None:
+            raise ValueError("this skeleton was built without bone lengths")
+        return self.lengths[self.i(name)]
+
+    def rest_of(self, name: str) -> np.ndarray:
+        return self.rest[self.i(name)]
+
+    def rest_relative(self, name: str) -> np.ndarray:
+        """``rest_arm_parent^-1 @ rest_arm`` (the rest matrix itself for a root bone)."""
+        i = self.i(name)
+        p = self.parents[i]
+        return self.rest[i] if p is None else np.linalg.inv(self.rest_of(p)) @ self.rest[i]
+
+    def carry(self, poses: dict, bone: str, p_rest) -> np.ndarray:
+        """Where bone ``bone``'s pose (from :meth:`fk`) carries the armature-space rest point
+        ``p_rest``: (n, 3)."""
+        rel = np.linalg.inv(self.rest_of(bone)) @ np.append(np.asarray(p_rest, float), 1.0)
+        return (poses[bone] @ rel)[:, :3]
+
+    def fk(self, channels: dict, n: int) -> dict:
+        """Armature-space pose matrices (n, 4, 4) of all bones from local channels.
+
+        ``channels`` maps a bone name to an object with ``location`` (n, 3) or None and
+        ``rotation`` (n, 4) or None (a :class:`~blender_turning.mapping.base.BoneChannels`).
+        """
+        out = {}
+        for i, name in enumerate(self.names):
+            p = self.parents[i]
+            m = np.broadcast_to(self.rest_relative(name), (n, 4, 4))
+            if p is not None:
+                m = out[p] @ m
+            ch = channels.get(name)
+            if ch is not None:
+                if ch.location is not None and not self.connected[i]:
+                    m = m @ translation(ch.location)
+                if ch.rotation is not None:
+                    m = m @ rotation4(quat_to_matrix(ch.rotation))
+            out[name] = np.array(m)
+        return out
+
+
+class PoseBuilder:
+    """Local channels of every bone over ``n`` frames, filled in parent-before-child order."""
+
+    def __init__(self, skeleton: Skeleton, n: int):
+        self.skel = skeleton
+        self.n = n
+        self.loc = {}
+        self.rot = {}
+
+    def set_local(self, name, rotation=None, location=None):
+        self.skel.i(name)
+        if rotation is not None:
+            self.rot[name] = np.broadcast_to(np.asarray(rotation, float), (self.n, 4)).copy()
+        if location is not None:
+            self.loc[name] = np.broadcast_to(np.asarray(location, float), (self.n, 3)).copy()
+
+    def pose(self, name) -> np.ndarray:
+        """Current armature-space pose (n, 4, 4) of ``name``, from its ancestors' channels."""
+        i = self.skel.i(name)
+        p = self.skel.parents[i]
+        m = np.broadcast_to(self.skel.rest_relative(name), (self.n, 4, 4))
+        if p is not None:
+            m = self.pose(p) @ m
+        if name in self.loc and not self.skel.connected[i]:
+            m = m @ translation(self.loc[name])
+        if name in self.rot:
+            m = m @ rotation4(quat_to_matrix(self.rot[name]))
+        return np.array(m)
+
+    def unposed(self, name) -> np.ndarray:
+        """The pose ``name`` would have with identity channels (its parent as now posed)."""
+        p = self.skel.parents[self.skel.i(name)]
+        m = self.skel.rest_relative(name)
+        return np.array(np.broadcast_to(m, (self.n, 4, 4)) if p is None else self.pose(p) @ m)
+
+    def set_pose(self, name, rotation, head=None):
+        """Give ``name`` the armature-space rotation (n, 3, 3) and head (n, 3) (or keep its head).
+
+        The local channels follow from the parent's current pose; a connected bone gets no
+        location (its head is its parent's tail), so a head off that point is an error.
+        """
+        base = self.unposed(name)
+        target = rotation4(rotation)
+        target[:, :3, 3] = base[:, :3, 3] if head is None else head
+        local = np.linalg.inv(base) @ target
+        i = self.skel.i(name)
+        if self.skel.connected[i]:
+            gap = np.max(np.abs(local[:, :3, 3])) if self.n else 0.0
+            if gap > 1e-6:
+                raise ValueError(f"bone {name!r} is connected; its head cannot move ({gap:.3g} m)")
+        elif head is not None:
+            self.loc[name] = local[:, :3, 3].copy()
+        self.rot[name] = quat_from_matrix(local[:, :3, :3])
+
+    def head(self, name) -> np.ndarray:
+        return self.pose(name)[:, :3, 3]
+
+    def point(self, name, p_rest) -> np.ndarray:
+        """Where the armature-space rest point ``p_rest`` is carried by bone ``name``'s pose."""
+        rel = np.linalg.inv(self.skel.rest_of(name)) @ np.append(p_rest, 1.0)
+        return (self.pose(name) @ rel)[:, :3]

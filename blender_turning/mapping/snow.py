@@ -1,0 +1,105 @@
+"""Pieces shared by the snow sports (skier, telemark skier, snowboarder; Section 7).
+
+* The legs act as a spring driven by ``F_leg``: the hip-to-ankle length along the body is
+  ``L = L_static - (F_leg - m g) / k_s`` (Section 7: "Given the force at any instant and k_s,
+  the leg length is determined and inverse kinematics is used to calculate the bend of the
+  knees"); Fig. 5 shows ``F_leg`` swinging about +-30 % around ``m g``.
+* The pelvis is carried by the lean and slides along the leaned body axis to give that length.
+* The equipment (skis, board) is tilted on edge linearly in ``C_f`` and set on the ground;
+  the boots are glued to it and the legs reach them by two-bone IK.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import bones as B
+from .common import add_local_rotation, carried, ik_limb, leg_lengths, static_force
+
+__all__ = ["spring_length", "tilt_gain", "set_pelvis", "hip_drop", "knee_flexion",
+           "carry_vec", "bend_waist", "twist_upper_body", "level_head"]
+
+
+def spring_length(traj, k_s: float, static: float, lo: float, hi: float) -> np.ndarray:
+    """Hip-to-ankle length (n,), m: a spring of stiffness ``k_s`` (N/m) about ``static``."""
+    return np.clip(static - (traj.F_leg - static_force(traj)) / k_s, lo, hi)
+
+
+def tilt_gain(traj, gain) -> float:
+    """``gain`` or, if None, the least-squares slope of ``theta_v`` on ``C_f`` (rad m).
+
+    Section 7: "A linear relationship is assumed between the curvature of the ski and the angle
+    at which the ski is tilted.  The constant to use is easily estimated from a plot like the
+    one in Fig. 5" -- this is that estimate, made from the trajectory itself.
+    """
+    if gain is not None:
+        return float(gain)
+    c = traj.C_f
+    den = float(np.dot(c, c))
+    return float(np.dot(traj.theta_v, c) / den) if den > 0 else 0.0
+
+
+def carry_vec(b, bone: str, v) -> np.ndarray:
+    """The armature-space rest direction ``v`` as carried by ``bone``'s current pose, (n, 3)."""
+    p = b.pose(bone)[:, :3, :3] @ b.skel.rest_of(bone)[:3, :3].T
+    return p @ np.asarray(v, float)
+
+
+def set_pelvis(b, theta_v, length, ankle_z: float, drop=0.0):
+    """Slide the hips along the leaned body axis so the hip joints sit ``length`` above the
+    ankles measured along the body (ankles at height ``ankle_z``), lowered by ``drop`` (n,)."""
+    skel = b.skel
+    hip_z = 0.5 * (skel.rest_of("thigh.L")[2, 3] + skel.rest_of("thigh.R")[2, 3])
+    h = length + ankle_z / np.cos(theta_v) - drop
+    up_local = skel.rest_of(B.HIPS)[:3, :3].T @ np.array([0.0, 0.0, 1.0])
+    b.set_local(B.HIPS, location=(h - hip_z)[:, None] * up_local)
+
+
+def hip_drop(b, ankles: dict, reach: float) -> np.ndarray:
+    """How far (n,) the hips must slide down the body axis for every leg to reach its ankle
+    with at most ``reach`` of its full length."""
+    up = carry_vec(b, B.LEAN, (0.0, 0.0, 1.0))
+    drop = np.zeros(b.n)
+    for s, ankle in ankles.items():
+        l1, l2 = leg_lengths(b.skel, B.side("thigh", s), B.side("shin", s))
+        v = b.unposed(B.side("thigh", s))[:, :3, 3] - ankle
+        vu = np.sum(v * up, axis=1)
+        target = reach * (l1 + l2)
+        disc = target * target - np.sum(v * v, axis=1) + vu * vu
+        need = vu - np.sqrt(np.maximum(disc, 0.0))
+        drop = np.maximum(drop, np.where(np.linalg.norm(v, axis=1) > target, need, 0.0))
+    return drop
+
+
+def knee_flexion(b, s: str) -> np.ndarray:
+    """Angle (n,) between thigh and shin, rad (0 = straight leg)."""
+    y1 = b.pose(B.side("thigh", s))[:, :3, 1]
+    y2 = b.pose(B.side("shin", s))[:, :3, 1]
+    return np.arccos(np.clip(np.sum(y1 * y2, axis=1), -1.0, 1.0))
+
+
+def legs_to(b, ankles: dict, pole, twist: dict | None = None, carriers: dict | None = None):
+    """IK both legs to their ankles and glue each foot to its carrier (ski, board)."""
+    for s, ankle in ankles.items():
+        ik_limb(b, B.side("thigh", s), B.side("shin", s), ankle, pole,
+                None if twist is None else twist[s])
+        if carriers:
+            foot = B.side("foot", s)
+            p = carried(b, foot, carriers[s])
+            b.set_pose(foot, p[:, :3, :3])
+
+
+def bend_waist(b, right, angle):
+    """Bend forward at the waist by ``angle`` (n,) rad (Section 7: tied to the knee bend)."""
+    add_local_rotation(b, B.SPINE, right, -np.asarray(angle))
+
+
+def twist_upper_body(b, up, angle):
+    """Twist the upper body about the body's up axis by ``angle`` (n,) rad (left positive),
+    spread over the three spine segments above the hips."""
+    for bone in (B.SPINE, B.SPINE_2, B.CHEST):
+        add_local_rotation(b, bone, up, np.asarray(angle) / 3.0)
+
+
+def level_head(b, theta_v, amount: float):
+    """Turn the neck against the lean by ``amount * theta_v``, as people keep their eyes level."""
+    add_local_rotation(b, B.NECK, (0.0, 1.0, 0.0), amount * np.asarray(theta_v))

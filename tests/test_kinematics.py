@@ -1,0 +1,130 @@
+"""numpy FK/IK in Blender's conventions (mapping/kinematics.py)."""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from blender_turning.mapping.base import BoneChannels
+from blender_turning.mapping.kinematics import (PoseBuilder, Skeleton, quat_continuous,
+                                                quat_from_axis_angle, quat_from_matrix,
+                                                quat_mul, quat_to_matrix, rest_matrix,
+                                                two_bone_ik, vec_roll_to_mat3)
+
+unit = st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1)
+
+
+def test_vec_roll_known_frames():
+    # Blender: a bone along +Y with roll 0 has the identity frame; along -Z, X stays +X and Z
+    # becomes +Y; along +X, X becomes -Y.  (Values checked against bpy 5.0.1 bone.matrix_local,
+    # together with 30 random bones with random rolls, to 2e-6 = float32 precision.)
+    assert np.allclose(vec_roll_to_mat3((0, 1, 0), 0.0), np.eye(3))
+    assert np.allclose(vec_roll_to_mat3((0, 0, -1), 0.0), [[1, 0, 0], [0, 0, 1], [0, -1, 0]])
+    assert np.allclose(vec_roll_to_mat3((1, 0, 0), 0.0), [[0, 1, 0], [-1, 0, 0], [0, 0, 1]])
+    # The singular direction -Y: Blender's symmetric fallback.
+    assert np.allclose(vec_roll_to_mat3((0, -1, 0), 0.0), np.diag([-1, -1, 1]))
+    # Roll rotates X and Z about the bone axis (right-handed).
+    m = vec_roll_to_mat3((0, 1, 0), math.pi / 2)
+    assert np.allclose(m[:, 0], (0, 0, -1)) and np.allclose(m[:, 2], (1, 0, 0))
+
+
+@settings(max_examples=200, deadline=None)
+@given(unit, st.floats(-math.pi, math.pi))
+def test_vec_roll_is_a_rotation_with_y_along_the_bone(v, roll):
+    m = vec_roll_to_mat3(v, roll)
+    # Within 6e-3 of -Y Blender replaces 1 + y by a two-term series, which leaves the frame
+    # orthonormal only to ~1e-5 (Blender's own float32 matrices do the same).
+    assert np.allclose(m @ m.T, np.eye(3), atol=1e-4)
+    assert np.isclose(np.linalg.det(m), 1.0, atol=1e-4)
+    assert np.allclose(m[:, 1], np.asarray(v) / np.linalg.norm(v), atol=1e-9)
+
+
+@settings(max_examples=200, deadline=None)
+@given(unit, st.floats(-2 * math.pi, 2 * math.pi))
+def test_quaternion_matrix_round_trip(axis, angle):
+    q = quat_from_axis_angle(np.asarray(axis), angle)
+    back = quat_from_matrix(quat_to_matrix(q))
+    assert np.allclose(back, q * np.sign(q[0] if q[0] != 0 else 1), atol=1e-9) or \
+        np.allclose(back, -q, atol=1e-9)
+    # Composition matches matrix products.
+    q2 = quat_from_axis_angle(np.array([0.3, -0.2, 0.9]), 0.7)
+    assert np.allclose(quat_to_matrix(quat_mul(q2, q)), quat_to_matrix(q2) @ quat_to_matrix(q),
+                       atol=1e-12)
+
+
+def test_quat_continuous_removes_sign_flips():
+    q = quat_from_axis_angle(np.tile([0.0, 0.0, 1.0], (50, 1)), np.linspace(0, 4 * math.pi, 50))
+    q[::3] *= -1
+    c = quat_continuous(q)
+    assert np.all(np.sum(c[1:] * c[:-1], axis=1) >= 0)
+    assert np.allclose(quat_to_matrix(c), quat_to_matrix(q))
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.tuples(*[st.floats(-0.7, 0.7)] * 3), unit)
+def test_two_bone_ik_reaches_reachable_targets(target, pole):
+    root = np.zeros(3)
+    t = np.asarray(target)
+    if not 0.05 < np.linalg.norm(t) < 0.75 or np.linalg.norm(np.cross(t, pole)) < 1e-3:
+        return
+    mid, end = two_bone_ik(root, t, 0.45, 0.4, np.asarray(pole))
+    assert np.allclose(end, t, atol=1e-9)
+    assert np.isclose(np.linalg.norm(mid - root), 0.45) and np.isclose(np.linalg.norm(end - mid), 0.4)
+    # The joint bends towards the pole side of the root-target line.
+    assert np.dot(mid - root, np.asarray(pole) - np.dot(pole, t) / np.dot(t, t) * t) > -1e-9
+
+
+def chain():
+    """A three-bone chain with a rolled, unconnected middle bone."""
+    heads = [(0, 0, 0), (0, 0, 1), (0.2, 0.1, 1.5)]
+    tails = [(0, 0, 1), (0.2, 0.1, 1.5), (0.5, 0.4, 1.2)]
+    rest = [rest_matrix(h, t, r) for h, t, r in zip(heads, tails, (0.0, 0.4, -1.0))]
+    return Skeleton(["a", "b", "c"], [None, "a", "b"], rest, [False, True, True])
+
+
+def test_fk_composition_matches_blender_formula():
+    sk = chain()
+    n = 5
+    rng = np.random.default_rng(0)
+    q = {k: quat_from_axis_angle(rng.normal(size=(n, 3)), rng.normal(size=n)) for k in "abc"}
+    loc = rng.normal(size=(n, 3))
+    ch = {"a": BoneChannels(loc, q["a"]), "b": BoneChannels(None, q["b"]),
+          "c": BoneChannels(None, q["c"])}
+    P = sk.fk(ch, n)
+    for k in range(n):
+        def T(v):
+            m = np.eye(4)
+            m[:3, 3] = v
+            return m
+
+        def R(qq):
+            m = np.eye(4)
+            m[:3, :3] = quat_to_matrix(qq)
+            return m
+        pa = sk.rest[0] @ T(loc[k]) @ R(q["a"][k])
+        pb = pa @ np.linalg.inv(sk.rest[0]) @ sk.rest[1] @ R(q["b"][k])
+        pc = pb @ np.linalg.inv(sk.rest[1]) @ sk.rest[2] @ R(q["c"][k])
+        assert np.allclose(P["a"][k], pa) and np.allclose(P["b"][k], pb)
+        assert np.allclose(P["c"][k], pc)
+    # Connected bones stay attached: b's head is a's tail.
+    assert np.allclose(P["b"][:, :3, 3], P["a"][:, :3, 3] + P["a"][:, :3, 1] * 1.0)
+
+
+def test_set_pose_inverts_fk():
+    sk = chain()
+    n = 4
+    rng = np.random.default_rng(1)
+    b = PoseBuilder(sk, n)
+    b.set_local("a", quat_from_axis_angle(rng.normal(size=(n, 3)), rng.normal(size=n)),
+                rng.normal(size=(n, 3)))
+    want = quat_to_matrix(quat_from_axis_angle(rng.normal(size=(n, 3)), rng.normal(size=n)))
+    b.set_pose("b", want)
+    assert np.allclose(b.pose("b")[:, :3, :3], want)
+    ch = {k: BoneChannels(b.loc.get(k), b.rot.get(k)) for k in "ab"}
+    assert np.allclose(sk.fk(ch, n)["b"], b.pose("b"))
+
+
+def test_missing_bone_is_named():
+    with pytest.raises(KeyError, match="'nope'"):
+        chain().i("nope")

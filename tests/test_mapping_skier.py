@@ -1,0 +1,151 @@
+"""The skier mapping (Section 7), checked with numpy forward kinematics on the baked channels."""
+import math
+
+import numpy as np
+import pytest
+
+from blender_turning.core import PhaseEllipse, preset, simulate
+from blender_turning.mapping import MAPPINGS, STATE_PROPS, map_trajectory
+from blender_turning.mapping.common import mesh_points
+from blender_turning.mapping.kinematics import Skeleton
+from blender_turning.mapping.rig_spec import load_rig
+from blender_turning.mapping.skier import SkierOptions
+
+
+def run(sport, seconds=10.0, theta_max=23.0, period=2.0):
+    fig = preset(sport)
+    return simulate(fig, PhaseEllipse(fig.body, omega0=2 * math.pi / period,
+                                      theta_max=math.radians(theta_max), heading=0.0),
+                    duration=seconds).resample(24)
+
+
+def posed(sport, traj, options=None):
+    track = map_trajectory(sport, traj, options)
+    spec = load_rig(sport)
+    sk = Skeleton.from_spec(spec)
+    return track, spec, sk, sk.fk(track.bones, len(track))
+
+
+def knee(P, s):
+    y1, y2 = P[f"thigh.{s}"][:, :3, 1], P[f"shin.{s}"][:, :3, 1]
+    return np.arccos(np.clip(np.sum(y1 * y2, axis=1), -1, 1))
+
+
+def lowest_box_z(spec, P, bone):
+    c = mesh_points(spec, bone)
+    return (np.einsum("nij,kj->nki", P[bone][:, :3, :3], c)[..., 2] + P[bone][:, None, 2, 3]).min(1)
+
+
+@pytest.fixture(scope="module")
+def skier():
+    traj = run("skier")
+    return (traj,) + posed("skier", traj)
+
+
+def test_track_shape_object_placement_and_props(skier):
+    traj, track, *_ = skier
+    n = len(traj)
+    assert np.array_equal(track.frames, 1 + np.arange(n))
+    assert np.allclose(track.location[:, :2], np.stack([traj.x, traj.y], 1))
+    assert np.allclose(track.location[:, 2], 0)
+    # The rig faces +Y; theta_dir is counter-clockwise from +x.
+    assert np.allclose(track.rotation[:, 2], traj.theta_dir - math.pi / 2)
+    assert set(track.props) == set(STATE_PROPS)
+    for prop, col in STATE_PROPS.items():
+        assert np.array_equal(track.props[prop], getattr(traj, col))
+    for name, ch in track.bones.items():
+        assert ch.rotation is None or np.allclose(np.linalg.norm(ch.rotation, axis=1), 1)
+        if ch.rotation is not None:   # no sign flips between keys (F-curves interpolate)
+            assert np.all(np.sum(ch.rotation[1:] * ch.rotation[:-1], axis=1) > 0), name
+
+
+def test_frame_start_and_fps():
+    traj = run("skier", seconds=2.0)
+    tr = map_trajectory("skier", traj, frame_start=101)
+    assert tr.frames[0] == 101 and tr.frames[-1] == 100 + len(traj)
+    tr30 = map_trajectory("skier", run("skier", seconds=2.0), fps=30)
+    assert len(tr30) == 61
+
+
+def test_skis_stay_on_the_ground_and_boots_on_the_skis(skier):
+    traj, track, spec, sk, P = skier
+    for s in "LR":
+        low = lowest_box_z(spec, P, f"ski.{s}")
+        # Exact by construction: the lowest corner of the tilted ski is set on z = 0.
+        assert np.abs(low).max() < 1e-9
+        ankle_on_ski = sk.carry(P, f"ski.{s}", sk.rest_of(f"foot.{s}")[:3, 3])
+        assert np.abs(ankle_on_ski - P[f"foot.{s}"][:, :3, 3]).max() < 0.01
+        # the boot keeps its rest orientation relative to the ski
+        rel = np.linalg.inv(P[f"ski.{s}"]) @ P[f"foot.{s}"]
+        want = np.linalg.inv(sk.rest_of(f"ski.{s}")) @ sk.rest_of(f"foot.{s}")
+        assert np.allclose(rel[:, :3, :3], want[:3, :3], atol=1e-6)
+
+
+def test_ski_tilt_is_linear_in_cf_outside_ski_more(skier):
+    traj, track, spec, sk, P = skier
+    tilt = {s: np.arctan2(-P[f"ski.{s}"][:, 2, 0], P[f"ski.{s}"][:, 0, 0]) for s in "LR"}
+    for s in "LR":
+        # tilt measured as the roll of the ski's X axis: positive = up on the left edge
+        assert np.corrcoef(-tilt[s], traj.C_f)[0, 1] > 0.99
+    left = traj.C_f > 1e-3   # left turn: the right ski is the outside one
+    right = traj.C_f < -1e-3
+    assert np.all(np.abs(tilt["R"][left]) > np.abs(tilt["L"][left]))
+    assert np.all(np.abs(tilt["L"][right]) > np.abs(tilt["R"][right]))
+
+
+def test_knee_bend_rises_with_leg_force(skier):
+    traj, track, spec, sk, P = skier
+    bend = 0.5 * (knee(P, "L") + knee(P, "R"))
+    # Section 7: the legs are a spring driven by F_leg, the knees follow by IK.
+    assert np.corrcoef(bend, traj.F_leg)[0, 1] > 0.9
+    # a stiffer spring bends the knees less
+    _, _, _, P2 = posed("skier", traj, SkierOptions(k_s=30000.0))
+    assert np.ptp(0.5 * (knee(P2, "L") + knee(P2, "R"))) < 0.5 * np.ptp(bend)
+
+
+def test_pole_tips_touch_the_ground_at_the_plant_phases(skier):
+    traj, track, spec, sk, P = skier
+    for s, plant in (("L", 30.0), ("R", 210.0)):
+        tip = sk.carry(P, f"pole.{s}", spec.bone(f"pole.{s}").tail)
+        d = np.degrees(np.abs((traj.phi - math.radians(plant) + math.pi) % (2 * math.pi) - math.pi))
+        near = d < 15.0
+        assert near.sum() > 10
+        assert np.all(np.abs(tip[near, 2]) < 0.01)
+        assert np.all(tip[d > 100.0, 2] > 0.2)      # lifted away from the plant
+        # the planted pole is on its own side of the body and ahead of the shoulders
+        side = -1 if s == "L" else 1
+        assert np.all(side * tip[near, 0] > 0)
+
+
+def test_lean_follows_theta_v(skier):
+    traj, track, spec, sk, P = skier
+    # the spine's up axis tilts left of travel (-X in the rig) when theta_v > 0
+    up = P["spine"][:, :3, 1]
+    roll = np.arctan2(-up[:, 0], up[:, 2])
+    assert np.allclose(roll, traj.theta_v, atol=1e-9)
+
+
+def test_upper_body_twist_follows_the_phase(skier):
+    traj, track, spec, sk, P = skier
+    fwd = P["spine.003"][:, :3, 2]      # chest's Z axis (backwards at rest) projected
+    hip_fwd = P["spine"][:, :3, 2]
+    yaw = np.arctan2(np.cross(hip_fwd, fwd)[:, 2], np.sum(hip_fwd * fwd, axis=1))
+    # counter-rotation: against the turn, in phase with it
+    assert np.corrcoef(yaw, -np.sin(traj.phi))[0, 1] > 0.9
+
+
+def test_options_are_validated():
+    with pytest.raises(ValueError, match="k_s"):
+        SkierOptions(k_s=0.0)
+    with pytest.raises(ValueError, match="pole_hold"):
+        SkierOptions(pole_hold=-1.0)
+    with pytest.raises(TypeError):
+        map_trajectory("skier", run("skier", seconds=1.0), options=object())
+    with pytest.raises(ValueError, match="sport"):
+        map_trajectory("curling", run("skier", seconds=1.0))
+
+
+def test_registry_has_one_mapping_per_rig():
+    assert set(MAPPINGS) <= {"skier", "snowboarder", "telemark", "cyclist"}
+    for sport, m in MAPPINGS.items():
+        assert m.sport == sport
