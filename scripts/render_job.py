@@ -1,0 +1,436 @@
+"""Headless job: build a scene from a TOML config, bake the figures, save a .blend, render.
+
+    blender -b --python scripts/render_job.py -- --config scripts/configs/demo.toml
+    python scripts/render_job.py --config scripts/configs/demo.toml      # on the bpy wheel
+
+The scene: a ground plane, the figures (each baked with the parametric controller, ``control =
+"turns"``, or along a path around obstacles, ``control = "path"``), the path curves, the obstacle
+objects, a camera that follows the figures and a sun.  Frames go to ``<output>/frames/`` (PNG) or
+``<output>/<name>.mp4`` (``format = "VIDEO"``); the scene to ``<output>/<name>.blend``.  A bad
+config exits with status 2 and one line naming the problem; a failed bake with status 1.
+See ``scripts/configs/*.toml`` for the format.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:                      # inside a Blender binary: find the package
+    sys.path.insert(0, str(ROOT))
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-job-"))
+
+ENGINES = ("WORKBENCH", "EEVEE", "CYCLES")
+SPORTS = ("skier", "snowboarder", "telemark", "cyclist")
+
+
+class ConfigError(ValueError):
+    """A config that cannot be run (the message names the key)."""
+
+
+# -- config --------------------------------------------------------------------------------------
+
+_REQUIRED = object()
+
+
+def _get(table, key, kind, default=_REQUIRED, where=""):
+    """``table[key]`` checked to be a ``kind``; ``default`` when absent (required if not given)."""
+    if key not in table:
+        if default is _REQUIRED:
+            raise ConfigError(f"{where}{key} is missing")
+        return default
+    v = table[key]
+    if kind is float and isinstance(v, int) and not isinstance(v, bool):
+        v = float(v)
+    if not isinstance(v, kind) or (kind is int and isinstance(v, bool)):
+        raise ConfigError(f"{where}{key} = {v!r} should be a {kind.__name__}")
+    return v
+
+
+def _xy(v, where):
+    if not (isinstance(v, list) and len(v) == 2 and all(isinstance(a, (int, float)) for a in v)):
+        raise ConfigError(f"{where} = {v!r} should be [x, y] in metres")
+    return float(v[0]), float(v[1])
+
+
+def load_config(path: Path, overrides) -> dict:
+    try:
+        with open(path, "rb") as fh:
+            doc = tomllib.load(fh)
+    except OSError as exc:
+        raise ConfigError(f"cannot read config {str(path)!r}: {exc.strerror}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"config {str(path)!r} is not valid TOML: {exc}") from None
+    unknown = set(doc) - {"job", "render", "camera", "ground", "figures", "paths", "obstacles"}
+    if unknown:
+        raise ConfigError(f"unknown section [{sorted(unknown)[0]}]")
+    job = doc.get("job", {})
+    cfg = {"name": _get(job, "name", str, path.stem, "job."),
+           "seconds": _get(job, "seconds", float, 5.0, "job."),
+           "fps": _get(job, "fps", int, 24, "job."),
+           "frame_step": _get(job, "frame_step", int, 1, "job.")}
+    if not 0 < cfg["seconds"] <= 600:
+        raise ConfigError(f"job.seconds = {cfg['seconds']} is outside (0, 600]")
+    if not 1 <= cfg["fps"] <= 240 or cfg["frame_step"] < 1:
+        raise ConfigError("job.fps must be in [1, 240] and job.frame_step at least 1")
+    out = overrides.output or _get(job, "output", str, f"out/{cfg['name']}", "job.")
+    cfg["output"] = Path(out).resolve()
+    r = doc.get("render", {})
+    engine = (overrides.engine or _get(r, "engine", str, "WORKBENCH", "render.")).upper()
+    if engine not in ENGINES:
+        raise ConfigError(f"render.engine = {engine!r} is not one of {', '.join(ENGINES)}")
+    res = overrides.resolution or _get(r, "resolution", list, [640, 360], "render.")
+    if isinstance(res, str):
+        try:
+            res = [int(v) for v in res.lower().split("x")]
+        except ValueError:
+            raise ConfigError(f"--resolution {res!r} should be WIDTHxHEIGHT") from None
+    if len(res) != 2 or not all(isinstance(v, int) and 4 <= v <= 8192 for v in res):
+        raise ConfigError(f"render.resolution = {res!r} should be [width, height] in pixels")
+    fmt = _get(r, "format", str, "PNG", "render.").upper()
+    if fmt not in ("PNG", "VIDEO"):
+        raise ConfigError(f"render.format = {fmt!r} is not PNG or VIDEO")
+    cfg["render"] = {"engine": engine, "resolution": res, "format": fmt,
+                     "samples": _get(r, "samples", int, 16, "render.")}
+    cam = doc.get("camera", {})
+    cfg["camera"] = {"follow": _get(cam, "follow", str, "all", "camera."),
+                     "distance": _get(cam, "distance", float, 16.0, "camera."),
+                     "height": _get(cam, "height", float, 6.0, "camera."),
+                     "lens": _get(cam, "lens", float, 35.0, "camera.")}
+    cfg["ground"] = _get(doc.get("ground", {}), "kind", str, "snow", "ground.")
+    if cfg["ground"] not in ("snow", "road"):
+        raise ConfigError(f"ground.kind = {cfg['ground']!r} is not snow or road")
+    paths = {}
+    for name, p in doc.get("paths", {}).items():
+        pts = p.get("points") if isinstance(p, dict) else None
+        if not isinstance(pts, list) or len(pts) < 2:
+            raise ConfigError(f"paths.{name}.points needs at least two [x, y] points")
+        paths[name] = [_xy(v, f"paths.{name}.points[{i}]") for i, v in enumerate(pts)]
+    obstacles = []
+    for i, o in enumerate(doc.get("obstacles", [])):
+        w = f"obstacles[{i}]."
+        kind = _get(o, "kind", str, "pole", w)
+        if kind not in ("pole", "box"):
+            raise ConfigError(f"{w}kind = {kind!r} is not pole or box")
+        obstacles.append({"group": _get(o, "group", str, "obstacles", w), "kind": kind,
+                          "at": _xy(o.get("at"), w + "at"),
+                          "size": _get(o, "size", float, 0.6, w),
+                          "height": _get(o, "height", float, 1.8, w)})
+    figures = doc.get("figures", [])
+    if not figures:
+        raise ConfigError("the config has no [[figures]]")
+    cfg["figures"] = []
+    for i, f in enumerate(figures):
+        w = f"figures[{i}]."
+        sport = _get(f, "sport", str, where=w).lower()
+        if sport not in SPORTS:
+            raise ConfigError(f"{w}sport = {sport!r} is not one of {', '.join(SPORTS)}")
+        control = _get(f, "control", str, "turns", w)
+        if control not in ("turns", "path"):
+            raise ConfigError(f"{w}control = {control!r} is not turns or path")
+        fig = {"sport": sport, "control": control, "name": _get(f, "name", str, sport.title(), w),
+               "start": _xy(f.get("start", [0, 0]), w + "start"),
+               "direction_deg": _get(f, "direction_deg", float, 90.0, w),
+               "period": _get(f, "period", float, 2.0, w),
+               "lean_deg": _get(f, "lean_deg", float, 20.0, w),
+               "heading_deg": _get(f, "heading_deg", float, None, w),
+               "path": _get(f, "path", str, None, w),
+               "obstacles": _get(f, "obstacles", str, None, w)}
+        if control == "path" and fig["path"] not in paths:
+            raise ConfigError(f"{w}path = {fig['path']!r} is not a [paths.<name>] of the config")
+        if fig["obstacles"] and not any(o["group"] == fig["obstacles"] for o in obstacles):
+            raise ConfigError(f"{w}obstacles = {fig['obstacles']!r} names no obstacle group")
+        cfg["figures"].append(fig)
+    cfg["paths"], cfg["obstacles"] = paths, obstacles
+    if overrides.seconds:
+        cfg["seconds"] = overrides.seconds
+    return cfg
+
+
+# -- scene ---------------------------------------------------------------------------------------
+
+def log(msg: str) -> None:
+    print(f"render_job: {msg}", flush=True)
+
+
+def _material(bpy, name, rgba):
+    from blender_turning.blender import compat
+    mat = bpy.data.materials.get(name) or bpy.data.materials.new(name)
+    mat.diffuse_color = rgba
+    compat.set_base_color(mat, rgba, 0.6, 0.0)
+    return mat
+
+
+def make_path(bpy, name, points):
+    curve = bpy.data.curves.new(f"Path {name}", "CURVE")
+    curve.dimensions = "3D"
+    curve.bevel_depth = 0.04
+    sp = curve.splines.new("BEZIER")
+    sp.bezier_points.add(len(points) - 1)
+    for bp, (x, y) in zip(sp.bezier_points, points):
+        bp.co = (x, y, 0.02)
+        bp.handle_left_type = bp.handle_right_type = "AUTO"
+    obj = bpy.data.objects.new(f"Path {name}", curve)
+    bpy.context.scene.collection.objects.link(obj)
+    curve.materials.append(_material(bpy, "Path", (0.1, 0.6, 0.1, 1.0)))
+    return obj
+
+
+def make_obstacles(bpy, obstacles):
+    groups = {}
+    for i, o in enumerate(obstacles):
+        coll = groups.get(o["group"])
+        if coll is None:
+            coll = groups[o["group"]] = bpy.data.collections.new(o["group"])
+            bpy.context.scene.collection.children.link(coll)
+        mesh = bpy.data.meshes.new(f"{o['group']}.{i}")
+        s, h = o["size"] / 2, o["height"]
+        if o["kind"] == "pole":
+            n = 12
+            ring = [(s * math.cos(2 * math.pi * k / n), s * math.sin(2 * math.pi * k / n))
+                    for k in range(n)]
+            verts = [(x, y, 0.0) for x, y in ring] + [(x, y, h) for x, y in ring]
+            faces = [(k, (k + 1) % n, n + (k + 1) % n, n + k) for k in range(n)]
+            faces += [tuple(range(n - 1, -1, -1)), tuple(range(n, 2 * n))]
+        else:
+            verts = [(x, y, z) for z in (0.0, h) for x, y in ((-s, -s), (s, -s), (s, s), (-s, s))]
+            faces = [(0, 3, 2, 1), (4, 5, 6, 7), (0, 1, 5, 4), (1, 2, 6, 5), (2, 3, 7, 6),
+                     (3, 0, 4, 7)]
+        mesh.from_pydata(verts, [], faces)
+        mesh.materials.append(_material(bpy, "Gate", (0.85, 0.1, 0.1, 1.0) if i % 2 == 0
+                                        else (0.1, 0.2, 0.85, 1.0)))
+        obj = bpy.data.objects.new(mesh.name, mesh)
+        obj.location = (*o["at"], 0.0)
+        coll.objects.link(obj)
+    return groups
+
+
+def add_figure(bpy, fig, cfg, paths, groups):
+    scene = bpy.context.scene
+    scene.cursor.location = (*fig["start"], 0.0)
+    scene.cursor.rotation_euler = (0.0, 0.0, math.radians(fig["direction_deg"]) - math.pi / 2)
+    bpy.ops.turning.add_figure(sport=fig["sport"].upper())
+    obj = bpy.context.view_layer.objects.active
+    obj.name = fig["name"]
+    for child in obj.children:
+        child.name = f"{obj.name} Body"
+    s = obj.turning
+    s.period = fig["period"]
+    s.lean = math.radians(fig["lean_deg"])
+    s.use_heading = fig["heading_deg"] is not None
+    if s.use_heading:
+        s.heading = math.radians(fig["heading_deg"])
+    if fig["control"] == "path":
+        s.path = paths[fig["path"]]
+        s.obstacles = groups.get(fig["obstacles"]) if fig["obstacles"] else None
+    return obj
+
+
+def bake_figure(bpy, obj, fig, frame_end):
+    scene = bpy.context.scene
+    scene.frame_end = frame_end
+    t = time.perf_counter()
+    op = bpy.ops.turning.follow_path if fig["control"] == "path" else bpy.ops.turning.bake_turns
+    op()                                       # a failure raises RuntimeError with the report
+    log(f"baked {obj.name} ({fig['sport']}, {fig['control']}) in "
+        f"{time.perf_counter() - t:.2f} s")
+    scene.frame_end = frame_end
+
+
+def _sampled_locations(bpy, obj, frames):
+    from blender_turning.blender import compat
+    bag = compat.channels(obj)
+    fcs = {fc.array_index: fc for fc in bag.fcurves if fc.data_path == "location"}
+    return [[fcs[i].evaluate(f) for i in range(3)] for f in frames]
+
+
+def make_camera(bpy, cfg, figures):
+    import numpy as np
+    from blender_turning.blender import bake
+    scene = bpy.context.scene
+    frames = list(range(scene.frame_start, scene.frame_end + 1))
+    follow = cfg["camera"]["follow"]
+    chosen = figures if follow == "all" else [o for o in figures if o.name == follow]
+    if not chosen:
+        raise ConfigError(f"camera.follow = {follow!r} is not 'all' or a figure's name")
+    locs = np.mean([_sampled_locations(bpy, o, frames) for o in chosen], axis=0)
+    target = bpy.data.objects.new("Camera Target", None)
+    scene.collection.objects.link(target)
+    target.animation_data_create()
+    from blender_turning.blender import compat
+    compat.assign_new_action(target, "Camera Target")
+    bake.write_channels(compat.channels(target),
+                        [("location", i, "Object Transforms", locs[:, i] + (i == 2) * 1.0)
+                         for i in range(3)], np.asarray(frames, float))
+    d = locs[-1, :2] - locs[0, :2]
+    d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-6 else np.array([0.0, 1.0])
+    side = np.array([-d[1], d[0]])
+    dist, h = cfg["camera"]["distance"], cfg["camera"]["height"]
+    offset = -0.55 * dist * d + 0.85 * dist * side
+    cam_data = bpy.data.cameras.new("Camera")
+    cam_data.lens = cfg["camera"]["lens"]
+    cam = bpy.data.objects.new("Camera", cam_data)
+    scene.collection.objects.link(cam)
+    cam.location = (offset[0], offset[1], h)
+    c = cam.constraints.new("COPY_LOCATION")
+    c.target, c.use_offset = target, True
+    c = cam.constraints.new("TRACK_TO")
+    c.target, c.track_axis, c.up_axis = target, "TRACK_NEGATIVE_Z", "UP_Y"
+    scene.camera = cam
+    return locs
+
+
+def make_ground_and_light(bpy, cfg, locs, figures):
+    import numpy as np
+    scene = bpy.context.scene
+    pts = [locs[:, :2]]
+    for o in figures:
+        tr = o.turning.foot_track
+        if tr is not None:
+            co = np.empty(4 * len(tr.data.splines[0].points))
+            tr.data.splines[0].points.foreach_get("co", co)
+            pts.append(co.reshape(-1, 4)[:, :2])
+    pts = np.vstack(pts)
+    lo, hi = pts.min(axis=0) - 40.0, pts.max(axis=0) + 40.0
+    mesh = bpy.data.meshes.new("Ground")
+    mesh.from_pydata([(lo[0], lo[1], 0), (hi[0], lo[1], 0), (hi[0], hi[1], 0), (lo[0], hi[1], 0)],
+                     [], [(0, 1, 2, 3)])
+    color = (0.92, 0.94, 0.98, 1.0) if cfg["ground"] == "snow" else (0.25, 0.25, 0.27, 1.0)
+    mesh.materials.append(_material(bpy, "Ground", color))
+    ground = bpy.data.objects.new("Ground", mesh)
+    scene.collection.objects.link(ground)
+    sun_data = bpy.data.lights.new("Sun", "SUN")
+    sun_data.energy = 3.0
+    sun = bpy.data.objects.new("Sun", sun_data)
+    sun.rotation_euler = (math.radians(50), 0.0, math.radians(30))
+    scene.collection.objects.link(sun)
+    world = scene.world or bpy.data.worlds.new("World")
+    scene.world = world
+    world.color = (0.55, 0.7, 0.9)
+
+
+def setup_render(bpy, cfg):
+    from blender_turning.blender import compat
+    scene = bpy.context.scene
+    r, rc = scene.render, cfg["render"]
+    r.engine = {"WORKBENCH": "BLENDER_WORKBENCH", "EEVEE": compat.EEVEE_ENGINE,
+                "CYCLES": "CYCLES"}[rc["engine"]]
+    r.resolution_x, r.resolution_y = rc["resolution"]
+    r.resolution_percentage = 100
+    scene.frame_step = cfg["frame_step"]
+    if rc["engine"] == "WORKBENCH":
+        shading = scene.display.shading
+        shading.light, shading.color_type = "STUDIO", "MATERIAL"
+        shading.show_shadows = True
+    elif rc["engine"] == "CYCLES":
+        scene.cycles.samples = rc["samples"]
+        scene.cycles.device = "CPU"
+    else:
+        eevee = scene.eevee
+        if hasattr(eevee, "taa_render_samples"):
+            eevee.taa_render_samples = rc["samples"]
+    out = cfg["output"]
+    if rc["format"] == "VIDEO":
+        compat.set_output_format(scene, "VIDEO")
+        r.filepath = str(out / f"{cfg['name']}.mp4")
+    else:
+        compat.set_output_format(scene, "PNG")
+        r.filepath = str(out / "frames" / "frame_")
+
+
+def run(cfg, render: bool = True) -> dict:
+    import bpy
+    from blender_turning import blender as addon
+    if not hasattr(bpy.types.Object, "turning"):
+        addon.register()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.fps, scene.render.fps_base = cfg["fps"], 1.0
+    scene.frame_start = 1
+    frame_end = 1 + int(round(cfg["seconds"] * cfg["fps"]))
+    scene.frame_end = frame_end
+    paths = {name: make_path(bpy, name, pts) for name, pts in cfg["paths"].items()}
+    groups = make_obstacles(bpy, cfg["obstacles"])
+    figures = []
+    for fig in cfg["figures"]:
+        obj = add_figure(bpy, fig, cfg, paths, groups)
+        bake_figure(bpy, obj, fig, frame_end)
+        figures.append(obj)
+    locs = make_camera(bpy, cfg, figures)
+    make_ground_and_light(bpy, cfg, locs, figures)
+    setup_render(bpy, cfg)
+    out = cfg["output"]
+    out.mkdir(parents=True, exist_ok=True)
+    blend = out / f"{cfg['name']}.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend), check_existing=False)
+    log(f"saved {blend}")
+    result = {"blend": blend, "frames": None}
+    if not render:
+        return result
+    n = len(range(scene.frame_start, scene.frame_end + 1, scene.frame_step))
+    done = []
+
+    def progress(scene_, *_):
+        done.append(scene_.frame_current)
+        log(f"rendered frame {scene_.frame_current} ({len(done)}/{n})")
+
+    bpy.app.handlers.render_post.append(progress)
+    t = time.perf_counter()
+    try:
+        bpy.ops.render.render(animation=True)
+    finally:
+        bpy.app.handlers.render_post.remove(progress)
+    log(f"rendered {len(done)} frames with {cfg['render']['engine']} in "
+        f"{time.perf_counter() - t:.1f} s")
+    result["frames"] = (out / f"{cfg['name']}.mp4" if cfg["render"]["format"] == "VIDEO"
+                        else out / "frames")
+    return result
+
+
+def parse_args(argv):
+    argv = argv[argv.index("--") + 1:] if "--" in argv else argv[1:]
+    p = argparse.ArgumentParser(prog="render_job.py", description=__doc__.split("\n\n")[0])
+    p.add_argument("--config", required=True, type=Path, help="the job's TOML file")
+    p.add_argument("--output", help="output folder (overrides job.output)")
+    p.add_argument("--engine", help="WORKBENCH, EEVEE or CYCLES (overrides render.engine)")
+    p.add_argument("--resolution", help="WIDTHxHEIGHT in pixels (overrides render.resolution)")
+    p.add_argument("--seconds", type=float, help="length of the animation (overrides job.seconds)")
+    p.add_argument("--no-render", action="store_true", help="build, bake and save only")
+    return p.parse_args(argv)
+
+
+def main(argv=None) -> int:
+    args = parse_args(sys.argv if argv is None else argv)
+    try:
+        cfg = load_config(args.config, args)
+    except ConfigError as exc:
+        print(f"render_job: error: {exc}", file=sys.stderr, flush=True)
+        return 2
+    log(f"job {cfg['name']!r}: {len(cfg['figures'])} figure(s), {cfg['seconds']:g} s at "
+        f"{cfg['fps']} fps, {cfg['render']['engine']} {cfg['render']['resolution'][0]}x"
+        f"{cfg['render']['resolution'][1]}")
+    try:
+        res = run(cfg, render=not args.no_render)
+    except ConfigError as exc:
+        print(f"render_job: error: {exc}", file=sys.stderr, flush=True)
+        return 2
+    except RuntimeError as exc:                   # an operator's report (fell over, no plan)
+        reason = str(exc).strip().splitlines()[0] if str(exc).strip() else "bake failed"
+        print(f"render_job: error: {reason}", file=sys.stderr, flush=True)
+        return 1
+    log(f"blend: {res['blend']}")
+    if res["frames"] is not None:
+        log(f"frames: {res['frames']}")
+    return 0
+
+
+if __name__ == "__main__":
+    code = main()
+    if code:
+        sys.exit(code)

@@ -1,0 +1,68 @@
+"""The headless job (scripts/render_job.py) on the bpy wheel: builds, bakes, saves a .blend and
+renders tiny PNG frames; a bad config exits non-zero with a one-line reason (issue 4)."""
+import os
+import struct
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
+pytest.importorskip("bpy")
+
+pytestmark = pytest.mark.blender
+ROOT = Path(__file__).resolve().parents[1]
+JOB = ROOT / "scripts" / "render_job.py"
+CONFIGS = ROOT / "scripts" / "configs"
+
+
+def run_job(*args, timeout=600):
+    return subprocess.run([sys.executable, str(JOB), *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout, cwd=ROOT)
+
+
+def png_size(path):
+    with open(path, "rb") as fh:
+        head = fh.read(24)
+    assert head[:8] == b"\x89PNG\r\n\x1a\n"
+    return struct.unpack(">II", head[16:24])
+
+
+def test_demo_job_renders_tiny_frames(tmp_path):
+    r = run_job("--config", CONFIGS / "demo.toml", "--resolution", "32x24", "--seconds", "0.125",
+                "--output", tmp_path)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    frames = sorted((tmp_path / "frames").glob("frame_*.png"))
+    assert len(frames) == 4                                   # 0.125 s at 24 fps: frames 1-4
+    assert all(png_size(f) == (32, 24) for f in frames)
+    assert (tmp_path / "demo.blend").stat().st_size > 0
+    assert "rendered frame 4 (4/4)" in r.stdout and f"blend: {tmp_path / 'demo.blend'}" in r.stdout
+    for name in ("Skier", "Snowboarder", "Telemark", "Cyclist"):
+        assert f"baked {name}" in r.stdout
+
+
+@pytest.mark.parametrize("config", sorted(p.name for p in CONFIGS.glob("*.toml")))
+def test_shipped_configs_build_and_bake(tmp_path, config):
+    r = run_job("--config", CONFIGS / config, "--seconds", "1", "--no-render", "--output", tmp_path)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert list(tmp_path.glob("*.blend"))
+
+
+@pytest.mark.parametrize("text, reason", [
+    ("[job]\nseconds = 2\n", "no [[figures]]"),
+    ('[[figures]]\nsport = "unicyclist"\n', "figures[0].sport = 'unicyclist'"),
+    ('[render]\nengine = "POVRAY"\n[[figures]]\nsport = "skier"\n', "render.engine"),
+    ('[[figures]]\nsport = "skier"\ncontrol = "path"\npath = "nowhere"\n', "figures[0].path"),
+    ("[job\n", "not valid TOML"),
+])
+def test_bad_config_exits_with_one_line(tmp_path, text, reason):
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text(text)
+    r = run_job("--config", cfg, "--output", tmp_path / "out")
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("render_job: error:") and reason in lines[0], \
+        r.stderr
+    assert not (tmp_path / "out").exists()
