@@ -6,14 +6,16 @@
 from __future__ import annotations
 
 from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
+from .cyclist import CyclistMapping, CyclistOptions
 from .skier import SkierMapping, SkierOptions
 
 MAPPINGS: dict[str, Mapping] = {
     "skier": SkierMapping(),
+    "cyclist": CyclistMapping(),
 }
 
 __all__ = ["STATE_PROPS", "BoneChannels", "Mapping", "PoseTrack", "MAPPINGS", "map_trajectory",
-           "SkierOptions"]
+           "SkierOptions", "CyclistOptions"]
 
 
 def map_trajectory(sport: str, traj, options=None, frame_start: int = 1,
