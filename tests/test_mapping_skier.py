@@ -83,10 +83,12 @@ def test_skis_stay_on_the_ground_and_boots_on_the_skis(skier):
 
 def test_ski_tilt_is_linear_in_cf_outside_ski_more(skier):
     traj, track, spec, sk, P = skier
-    tilt = {s: np.arctan2(-P[f"ski.{s}"][:, 2, 0], P[f"ski.{s}"][:, 0, 0]) for s in "LR"}
+    # the roll of the ski's X axis: > 0 on its left edge (right edge up), as theta_v > 0
+    tilt = {s: np.arctan2(P[f"ski.{s}"][:, 2, 0], P[f"ski.{s}"][:, 0, 0]) for s in "LR"}
     for s in "LR":
-        # tilt measured as the roll of the ski's X axis: positive = up on the left edge
-        assert np.corrcoef(-tilt[s], traj.C_f)[0, 1] > 0.99
+        assert np.corrcoef(tilt[s], traj.C_f)[0, 1] > 0.99
+        assert np.all(np.sign(tilt[s][np.abs(traj.C_f) > 1e-3])
+                      == np.sign(traj.C_f[np.abs(traj.C_f) > 1e-3]))
     left = traj.C_f > 1e-3   # left turn: the right ski is the outside one
     right = traj.C_f < -1e-3
     assert np.all(np.abs(tilt["R"][left]) > np.abs(tilt["L"][left]))

@@ -8,14 +8,16 @@ from __future__ import annotations
 from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
 from .cyclist import CyclistMapping, CyclistOptions
 from .skier import SkierMapping, SkierOptions
+from .snowboarder import SnowboarderMapping, SnowboarderOptions
 
 MAPPINGS: dict[str, Mapping] = {
     "skier": SkierMapping(),
+    "snowboarder": SnowboarderMapping(),
     "cyclist": CyclistMapping(),
 }
 
 __all__ = ["STATE_PROPS", "BoneChannels", "Mapping", "PoseTrack", "MAPPINGS", "map_trajectory",
-           "SkierOptions", "CyclistOptions"]
+           "SkierOptions", "SnowboarderOptions", "CyclistOptions"]
 
 
 def map_trajectory(sport: str, traj, options=None, frame_start: int = 1,

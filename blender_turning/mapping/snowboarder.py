@@ -1,0 +1,119 @@
+"""The snowboarder (Section 7): "The bend at the knees and waist are calculated based upon the
+leg force, as with the skier.  The upper body is made to twist in phase with C_f.  Tilting the
+snowboard with respect to the body is easily accomplished by bending at the ankles.  The arms
+are moved to lead the twisting motion of the upper body slightly."
+
+The rig rides regular (left foot forward, facing +X, the toe edge on the right of travel), so a
+left turn (``C_f > 0``) is a heelside turn.  The board is tilted linearly in ``C_f`` and set on
+its edge on the ground; the boots are glued to it, so the ankles take up the difference between
+the board's tilt and the body's lean ``theta_v``.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.params import check_range
+from . import bones as B
+from .base import Mapping
+from .common import add_local_rotation, body_axes, carried, lean, place_on_ground, rot_y
+from .snow import (bend_waist, carry_vec, hip_drop, knee_flexion, legs_to, level_head,
+                   set_pelvis, spring_length, tilt_gain, twist_upper_body)
+
+SIDES = ("L", "R")
+
+
+@dataclass(frozen=True)
+class SnowboarderOptions:
+    """Parameters of the snowboarder mapping (SI units, angles in radians)."""
+
+    k_s: float = 3000.0
+    """Leg spring stiffness, N/m: the legs shorten by (F_leg - m g) / k_s."""
+    stance: float = 0.92
+    """Hip-to-ankle length at the static force m g, fraction of the full leg length."""
+    leg_min: float = 0.62
+    """Shortest hip-to-ankle length, fraction of the full leg length."""
+    leg_max: float = 0.985
+    """Longest hip-to-ankle length, fraction of the full leg length."""
+    tilt_gain: float | None = None
+    """Board tilt per unit curvature, rad m (tilt = tilt_gain C_f); None fits theta_v ~ C_f."""
+    tilt_max: float = math.radians(70.0)
+    """Largest board tilt, rad."""
+    waist_ratio: float = 0.6
+    """Forward bend at the waist per radian of knee bend, rad/rad."""
+    twist_gain: float = 2.5
+    """Upper-body twist per unit curvature, rad m (towards the turn)."""
+    twist_max: float = math.radians(40.0)
+    """Largest upper-body twist, rad."""
+    arm_lead: float = 0.15
+    """How far ahead in time the arms anticipate the twist, s."""
+    arm_gain: float = 1.0
+    """Arm swing about the chest's up axis per radian of twist still to come
+    (twist ``arm_lead`` later minus twist now), rad/rad."""
+    arm_spread: float = math.radians(35.0)
+    """How far the arms are held out from the body, rad."""
+    head_level: float = 0.5
+    """Fraction of the lean the neck takes back to keep the eyes level."""
+
+    def __post_init__(self):
+        check_range("k_s", self.k_s, 0.0, 1e7, lo_open=True)
+        check_range("leg_min", self.leg_min, 0.2, 1.0)
+        check_range("leg_max", self.leg_max, self.leg_min, 0.999)
+        check_range("stance", self.stance, self.leg_min, self.leg_max)
+        if self.tilt_gain is not None:
+            check_range("tilt_gain", self.tilt_gain, 0.0, 1e3)
+        check_range("tilt_max", self.tilt_max, 0.0, math.pi / 2, hi_open=True)
+        check_range("waist_ratio", self.waist_ratio, 0.0, 3.0)
+        check_range("twist_gain", self.twist_gain, -100.0, 100.0)
+        check_range("twist_max", self.twist_max, 0.0, math.pi / 2)
+        check_range("arm_lead", self.arm_lead, 0.0, 2.0)
+        check_range("arm_gain", self.arm_gain, 0.0, 5.0)
+        check_range("arm_spread", self.arm_spread, 0.0, math.pi / 2)
+        check_range("head_level", self.head_level, 0.0, 1.0)
+
+
+class SnowboarderMapping(Mapping):
+    sport = "snowboarder"
+    Options = SnowboarderOptions
+
+    def pose(self, b, traj, o, spec):
+        skel = b.skel
+        th = np.asarray(traj.theta_v, float)
+        right, fwd, up = body_axes(skel)
+        lean(b, th)
+        full = (float(np.linalg.norm(skel.rest_of("shin.L")[:3, 3] - skel.rest_of("thigh.L")[:3, 3]))
+                + float(np.linalg.norm(skel.rest_of("foot.L")[:3, 3]
+                                       - skel.rest_of("shin.L")[:3, 3])))
+        length = spring_length(traj, o.k_s, o.stance * full, o.leg_min * full, o.leg_max * full)
+        ankle_rest = {s: skel.rest_of(B.side("foot", s))[:3, 3] for s in SIDES}
+        anchor = 0.5 * (ankle_rest["L"] + ankle_rest["R"])
+        tilt = np.clip(tilt_gain(traj, o.tilt_gain) * traj.C_f, -o.tilt_max, o.tilt_max)
+        R = rot_y(-tilt) @ skel.rest_of(B.BOARD)[:3, :3]
+        drop = np.zeros(len(traj))
+        for _ in range(3):      # the hips drop if a leg cannot reach its boot
+            set_pelvis(b, th, length, float(anchor[2]), drop)
+            hip = 0.5 * (b.unposed("thigh.L")[:, :3, 3] + b.unposed("thigh.R")[:, :3, 3])
+            xy = np.stack([hip[:, 0] + np.tan(th) * (hip[:, 2] - anchor[2]),
+                           np.full(len(traj), anchor[1])], 1)
+            place_on_ground(b, spec, B.BOARD, R, anchor, xy)
+            ankles = {s: carried(b, B.side("foot", s), B.BOARD)[:, :3, 3] for s in SIDES}
+            extra = hip_drop(b, ankles, 0.97)
+            if not np.any(extra > 1e-9):
+                break
+            drop = drop + extra
+        # The boots are bound to the board: the ankles bend to tilt it (Section 7).
+        legs_to(b, ankles, carry_vec(b, B.LEAN, fwd), None, {s: B.BOARD for s in SIDES})
+        knee = 0.5 * (knee_flexion(b, "L") + knee_flexion(b, "R"))
+        bend_waist(b, right, o.waist_ratio * knee)
+        twist = np.clip(o.twist_gain * traj.C_f, -o.twist_max, o.twist_max)
+        twist_upper_body(b, up, twist)
+        level_head(b, th, o.head_level)
+        # Arms out to the sides, swinging ahead of the twist: the twist arm_lead seconds later.
+        ahead = np.clip(o.twist_gain * np.interp(traj.t + o.arm_lead, traj.t, traj.C_f),
+                        -o.twist_max, o.twist_max)
+        for s, sx in (("L", -1.0), ("R", 1.0)):
+            arm = B.side("upper_arm", s)
+            add_local_rotation(b, arm, fwd, np.full(len(traj), -sx * o.arm_spread))
+            add_local_rotation(b, arm, up, o.arm_gain * (ahead - twist))

@@ -1,0 +1,65 @@
+"""The snowboarder mapping (Section 7), checked with numpy forward kinematics."""
+import math
+
+import numpy as np
+import pytest
+
+from blender_turning.mapping.snowboarder import SnowboarderOptions
+from test_mapping_skier import knee, lowest_box_z, posed, run
+
+
+@pytest.fixture(scope="module")
+def rider():
+    traj = run("snowboarder")
+    return (traj,) + posed("snowboarder", traj)
+
+
+def yaw_about_z(a, b):
+    """Signed angle about +Z from the horizontal part of ``a`` to that of ``b`` (n,)."""
+    return np.arctan2(np.cross(a, b)[:, 2], np.sum(a[:, :2] * b[:, :2], axis=1))
+
+
+def test_board_on_the_ground_and_boots_bound(rider):
+    traj, track, spec, sk, P = rider
+    assert np.abs(lowest_box_z(spec, P, "board")).max() < 1e-9
+    for s in "LR":
+        want = sk.carry(P, "board", sk.rest_of(f"foot.{s}")[:3, 3])
+        assert np.abs(want - P[f"foot.{s}"][:, :3, 3]).max() < 0.01
+        rel = np.linalg.inv(P["board"]) @ P[f"foot.{s}"]
+        ref = np.linalg.inv(sk.rest_of("board")) @ sk.rest_of(f"foot.{s}")
+        assert np.allclose(rel[:, :3, :3], ref[:3, :3], atol=1e-6)
+
+
+def test_board_tilt_linear_in_cf_and_taken_up_by_the_ankles(rider):
+    traj, track, spec, sk, P = rider
+    x = P["board"][:, :3, 0]
+    tilt = np.arctan2(x[:, 2], x[:, 0])     # > 0: on its left edge (right edge up)
+    assert np.corrcoef(tilt, traj.C_f)[0, 1] > 0.999
+    # the ankle (shin vs foot) is what differs from the body's lean: ankle bend varies
+    for s in "LR":
+        ankle = np.arccos(np.clip(np.sum(P[f"shin.{s}"][:, :3, 1] * P[f"foot.{s}"][:, :3, 1], 1),
+                                  -1, 1))
+        assert np.ptp(ankle) > math.radians(10)
+
+
+def test_knees_follow_the_leg_force(rider):
+    traj, track, spec, sk, P = rider
+    assert np.corrcoef(knee(P, "L") + knee(P, "R"), traj.F_leg)[0, 1] > 0.9
+
+
+def test_upper_body_twists_with_cf_and_arms_lead(rider):
+    traj, track, spec, sk, P = rider
+    twist = yaw_about_z(P["spine"][:, :3, 0], P["spine.003"][:, :3, 0])
+    assert np.corrcoef(twist, traj.C_f)[0, 1] > 0.95
+    # the arms (shoulder-to-shoulder line of the upper arms' elbows) turn ahead of the chest:
+    # their twist best matches the chest's twist some frames later
+    elbows = P["forearm.R"][:, :3, 3] - P["forearm.L"][:, :3, 3]
+    arms = yaw_about_z(P["spine"][:, :3, 0], elbows)
+    lags = range(0, 12)
+    best = max(lags, key=lambda k: np.corrcoef(arms[:len(arms) - k], twist[k:])[0, 1])
+    assert best > 0
+
+
+def test_options_are_validated():
+    with pytest.raises(ValueError, match="arm_lead"):
+        SnowboarderOptions(arm_lead=-1.0)
