@@ -9,15 +9,17 @@ from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
 from .cyclist import CyclistMapping, CyclistOptions
 from .skier import SkierMapping, SkierOptions
 from .snowboarder import SnowboarderMapping, SnowboarderOptions
+from .telemark import TelemarkMapping, TelemarkOptions
 
 MAPPINGS: dict[str, Mapping] = {
     "skier": SkierMapping(),
     "snowboarder": SnowboarderMapping(),
+    "telemark": TelemarkMapping(),
     "cyclist": CyclistMapping(),
 }
 
 __all__ = ["STATE_PROPS", "BoneChannels", "Mapping", "PoseTrack", "MAPPINGS", "map_trajectory",
-           "SkierOptions", "SnowboarderOptions", "CyclistOptions"]
+           "SkierOptions", "SnowboarderOptions", "TelemarkOptions", "CyclistOptions"]
 
 
 def map_trajectory(sport: str, traj, options=None, frame_start: int = 1,
