@@ -71,7 +71,8 @@ def test_two_bone_ik_reaches_reachable_targets(target, pole):
         return
     mid, end = two_bone_ik(root, t, 0.45, 0.4, np.asarray(pole))
     assert np.allclose(end, t, atol=1e-9)
-    assert np.isclose(np.linalg.norm(mid - root), 0.45) and np.isclose(np.linalg.norm(end - mid), 0.4)
+    assert np.isclose(np.linalg.norm(mid - root), 0.45)
+    assert np.isclose(np.linalg.norm(end - mid), 0.4)
     # The joint bends towards the pole side of the root-target line.
     assert np.dot(mid - root, np.asarray(pole) - np.dot(pole, t) / np.dot(t, t) * t) > -1e-9
 

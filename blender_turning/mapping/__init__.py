@@ -5,6 +5,8 @@
 """
 from __future__ import annotations
 
+import numpy as np
+
 from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
 from .cyclist import CyclistMapping, CyclistOptions
 from .skier import SkierMapping, SkierOptions
@@ -33,5 +35,5 @@ def map_trajectory(sport: str, traj, options=None, frame_start: int = 1,
         traj = traj.resample(fps)
     if len(traj) == 0:
         raise ValueError("the trajectory has no samples")
-    frames = float(frame_start) + __import__("numpy").arange(len(traj), dtype=float)
+    frames = float(frame_start) + np.arange(len(traj), dtype=float)
     return MAPPINGS[sport].map(traj, options, frames)

@@ -12,10 +12,11 @@ import math
 import numpy as np
 
 from . import bones as B
-from .kinematics import PoseBuilder, frame_from_yx, quat_from_axis_angle, quat_mul, two_bone_ik
+from .kinematics import (PoseBuilder, frame_from_yx, quat_from_axis_angle, quat_mul, quat_to_matrix,
+                         two_bone_ik)
 
 __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "static_force",
-           "add_local_rotation", "lean", "glue", "carried", "ik_limb", "place_on_ground",
+           "add_local_rotation", "lean", "carried", "ik_limb", "place_on_ground",
            "body_axes", "mesh_points", "leg_lengths"]
 
 
@@ -94,22 +95,15 @@ def carried(b: PoseBuilder, bone: str, carrier: str) -> np.ndarray:
     return b.pose(carrier) @ (np.linalg.inv(skel.rest_of(carrier)) @ skel.rest_of(bone))
 
 
-def glue(b: PoseBuilder, bone: str, carrier: str) -> np.ndarray:
-    """Give ``bone`` the pose it has relative to ``carrier`` at rest (a boot on a ski, a hand on
-    the handlebar); returns that pose."""
-    p = carried(b, bone, carrier)
-    b.set_pose(bone, p[:, :3, :3], None if b.skel.connected[b.skel.i(bone)] else p[:, :3, 3])
-    return p
-
-
 def leg_lengths(skel, upper: str, lower: str):
+    """Rest lengths (m) of a two-bone chain ``upper -> lower`` (head to head, head to the
+    connected child's head)."""
     return (float(np.linalg.norm(skel.rest_of(lower)[:3, 3] - skel.rest_of(upper)[:3, 3])),
             _length(skel, lower))
 
 
 def _length(skel, bone):
-    """Rest length of ``bone``: the distance to a connected child's head, else the parent's
-    connected chain is not enough, so children are searched and the tail is unknown -> error."""
+    """Rest distance from ``bone``'s head to its connected child's head (its tail), m."""
     for i, p in enumerate(skel.parents):
         if p == bone and skel.connected[i]:
             return float(np.linalg.norm(skel.rest[i][:3, 3] - skel.rest_of(bone)[:3, 3]))
@@ -138,7 +132,6 @@ def ik_limb(b: PoseBuilder, upper: str, lower: str, target, pole, twist=None, re
 
 def mesh_points(spec, bone: str, shapes=("box",)):
     """Corner points (k, 3) of ``bone``'s box meshes, in the bone's rest frame (from its head)."""
-    from .kinematics import quat_to_matrix
     pts = []
     for m in spec.meshes_of(bone):
         if m.shape not in shapes:

@@ -316,26 +316,19 @@ class PoseBuilder:
     def set_pose(self, name, rotation, head=None):
         """Give ``name`` the armature-space rotation (n, 3, 3) and head (n, 3) (or keep its head).
 
-        The local channels follow from the parent's current pose; a connected bone gets no
-        location (its head is its parent's tail), so a head off that point is an error.
+        The local channels follow from the parent's current pose.  A connected bone gets no
+        location (Blender ignores it: its head is its parent's tail), so pass ``head=None``.
         """
         base = self.unposed(name)
         target = rotation4(rotation)
         target[:, :3, 3] = base[:, :3, 3] if head is None else head
         local = np.linalg.inv(base) @ target
         i = self.skel.i(name)
-        if self.skel.connected[i]:
-            gap = np.max(np.abs(local[:, :3, 3])) if self.n else 0.0
-            if gap > 1e-6:
-                raise ValueError(f"bone {name!r} is connected; its head cannot move ({gap:.3g} m)")
-        elif head is not None:
+        if head is not None and self.skel.connected[i]:
+            raise ValueError(f"bone {name!r} is connected: its head follows its parent's tail")
+        if head is not None:
             self.loc[name] = local[:, :3, 3].copy()
         self.rot[name] = quat_from_matrix(local[:, :3, :3])
 
     def head(self, name) -> np.ndarray:
         return self.pose(name)[:, :3, 3]
-
-    def point(self, name, p_rest) -> np.ndarray:
-        """Where the armature-space rest point ``p_rest`` is carried by bone ``name``'s pose."""
-        rel = np.linalg.inv(self.skel.rest_of(name)) @ np.append(p_rest, 1.0)
-        return (self.pose(name) @ rel)[:, :3]

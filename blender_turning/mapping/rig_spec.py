@@ -133,7 +133,8 @@ def parse_rig(doc: dict, source: str = "rig") -> RigSpec:
         if name in seen:
             raise ValueError(f"{source}: bone {name!r} appears twice")
         where = f"{source}: bone {name!r}"
-        head, tail = _vec(f"{where} head", b.get("head"), 3), _vec(f"{where} tail", b.get("tail"), 3)
+        head = _vec(f"{where} head", b.get("head"), 3)
+        tail = _vec(f"{where} tail", b.get("tail"), 3)
         if np.linalg.norm(np.subtract(tail, head)) < 1e-4:
             raise ValueError(f"{where}: head and tail coincide (length < 0.1 mm)")
         parent = b.get("parent")

@@ -16,7 +16,8 @@ import numpy as np
 from ..core.params import check_range
 from . import bones as B
 from .base import Mapping
-from .common import body_axes, carried, ik_limb, lean, phase_window, place_on_ground, rot_y, rot_z
+from .common import (body_axes, carried, ik_limb, lean, leg_lengths, phase_window, place_on_ground,
+                     rot_y, rot_z)
 from .kinematics import frame_from_yx
 from .snow import (bend_waist, carry_vec, hip_drop, knee_flexion, legs_to, level_head,
                    set_pelvis, spring_length, tilt_gain, twist_upper_body)
@@ -111,9 +112,7 @@ class SkierMapping(Mapping):
         th = np.asarray(traj.theta_v, float)
         right, fwd, up = body_axes(skel)
         lean(b, th)
-        l1 = skel.rest_of("shin.L")[:3, 3] - skel.rest_of("thigh.L")[:3, 3]
-        full = float(np.linalg.norm(l1)) + float(np.linalg.norm(
-            skel.rest_of("foot.L")[:3, 3] - skel.rest_of("shin.L")[:3, 3]))
+        full = sum(leg_lengths(skel, "thigh.L", "shin.L"))
         length = spring_length(traj, o.k_s, o.stance * full, o.leg_min * full, o.leg_max * full)
         ankle_z = float(skel.rest_of("foot.L")[2, 3])
         tilts = ski_tilts(traj, o)

@@ -18,7 +18,8 @@ import numpy as np
 from ..core.params import check_range
 from . import bones as B
 from .base import Mapping
-from .common import add_local_rotation, body_axes, carried, lean, place_on_ground, rot_y
+from .common import (add_local_rotation, body_axes, carried, lean, leg_lengths, place_on_ground,
+                     rot_y)
 from .snow import (bend_waist, carry_vec, hip_drop, knee_flexion, legs_to, level_head,
                    set_pelvis, spring_length, tilt_gain, twist_upper_body)
 
@@ -83,9 +84,7 @@ class SnowboarderMapping(Mapping):
         th = np.asarray(traj.theta_v, float)
         right, fwd, up = body_axes(skel)
         lean(b, th)
-        full = (float(np.linalg.norm(skel.rest_of("shin.L")[:3, 3] - skel.rest_of("thigh.L")[:3, 3]))
-                + float(np.linalg.norm(skel.rest_of("foot.L")[:3, 3]
-                                       - skel.rest_of("shin.L")[:3, 3])))
+        full = sum(leg_lengths(skel, "thigh.L", "shin.L"))
         length = spring_length(traj, o.k_s, o.stance * full, o.leg_min * full, o.leg_max * full)
         ankle_rest = {s: skel.rest_of(B.side("foot", s))[:3, 3] for s in SIDES}
         anchor = 0.5 * (ankle_rest["L"] + ankle_rest["R"])
