@@ -42,8 +42,9 @@ class SnowboarderOptions:
     """Board tilt per unit curvature, rad m (tilt = tilt_gain C_f); None fits theta_v ~ C_f."""
     tilt_max: float = math.radians(70.0)
     """Largest board tilt, rad."""
-    waist_ratio: float = 0.6
-    """Forward bend at the waist per radian of knee bend, rad/rad."""
+    waist_ratio: float = 0.3
+    """Forward bend at the waist per radian of knee bend, rad/rad (less than the skier's: the
+    lean already pitches a side-on rider forwards or back)."""
     twist_gain: float = 2.5
     """Upper-body twist per unit curvature, rad m (towards the turn)."""
     twist_max: float = math.radians(40.0)
