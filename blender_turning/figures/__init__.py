@@ -11,4 +11,8 @@ FIGURES = {
     "fig05_typical_turn": ("parametric", "fig05"),
     "fig06_tracks": ("parametric", "fig06"),
     "fig10_parametric_tracks": ("parametric", "fig10"),
+    "fig16_tree_skiing": ("planner", "fig16"),
+    "fig17_slalom": ("planner", "fig17"),
+    "fig18_cyclist_corner": ("planner", "fig18"),
+    "photo5_potholes": ("planner", "photo5"),
 }

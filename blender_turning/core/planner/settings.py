@@ -33,7 +33,7 @@ class PlannerSettings:
     lower_bound: bool = True
     """Add an admissible bound on the cost still to come (the foot closes on the path no faster
     than its largest speed) when clipping and ordering."""
-    batch: int = 8
+    batch: int = 64
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
     one node at a time).  Any value returns the same optimum."""
     vectorize_children: bool = True

@@ -1,0 +1,131 @@
+"""The branch-and-bound search returns the exhaustive search's optimum (issue 3, part 4)."""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from blender_turning.core import preset
+from blender_turning.core.obstacles import Obstacles
+from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
+
+
+def random_problem(rng, N, q, **settings):
+    """A small random scene near the start: a wiggly path, a few trees, poles and a polygon."""
+    fig = preset(str(rng.choice(["skier", "cyclist", "snowboarder"])))
+    fig = replace(fig, limits=replace(fig.limits, dC_f_max=float(rng.uniform(0.05, 0.4))))
+    v = fig.body.V_cm
+    span = v * N * 0.3
+    xs = np.linspace(0.0, span * 1.5, 4)
+    pts = np.column_stack([xs, rng.normal(0.0, 0.15 * span, 4)])
+    tang = np.column_stack([np.full(4, xs[1]), rng.normal(0, 0.2 * span, 4)])
+    path = HermitePath.from_points(pts, tang)
+    n_c = int(rng.integers(0, 4))
+    circles = np.column_stack([rng.uniform(0.5, 1.0, n_c) * span,
+                               rng.choice([-1, 1], n_c) * rng.uniform(0.05, 0.3, n_c) * span,
+                               rng.uniform(0.2, 0.05 * span + 0.3, n_c)])
+    n_s = int(rng.integers(0, 3))
+    a = np.column_stack([rng.uniform(0.5, 1.0, n_s) * span,
+                         rng.choice([-1, 1], n_s) * rng.uniform(0.05, 0.3, n_s) * span])
+    segs = np.stack([a, a + rng.normal(0, 0.1 * span, (n_s, 2))], axis=1)
+    polys = []
+    if rng.random() < 0.3:
+        c = np.array([rng.uniform(0.6, 1.0) * span, rng.choice([-1, 1]) * 0.3 * span])
+        polys.append(c + rng.uniform(0.5, 2) * np.array([[1, 0], [0, 1], [-1, 0.2], [0, -1]]))
+    obs = Obstacles(segs, circles, polys, clearance=float(rng.uniform(0.0, 0.5)))
+    st = PlannerSettings(n_stages=N, q=q, **settings)
+    problem = Problem(fig, PathDistance(path, exact=bool(rng.random() < 0.2)), obs, st)
+    state = np.array([0.0, 0.0, rng.normal(0, 0.1), rng.normal(0, 0.05), rng.normal(0, 0.1)])
+    cf = float(rng.uniform(-0.5, 0.5) * fig.limits.C_f_max * 0.2)
+    return problem, state, cf
+
+
+VARIANTS = [dict(warm_start=w, lower_bound=lb, batch=b)
+            for w in (False, True) for lb in (False, True) for b in (1, 8)]
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_same_optimum_as_exhaustive(seed):
+    rng = np.random.default_rng(seed)
+    N = int(rng.integers(1, 6))
+    q = int(rng.integers(2, 6)) if seed % 8 == 0 else int(rng.integers(3, 6))
+    problem, state, cf = random_problem(rng, N, q)
+    f_ref, plan_ref = exhaustive(problem, state, cf)
+    previous = tuple(int(c) for c in rng.integers(0, q, N))
+    for v in VARIANTS:
+        p = replace(problem.settings, **v)
+        pb = Problem(problem.figure, problem.distance, problem.obstacles, p)
+        plan = branch_and_bound(pb, state, cf, previous=previous)
+        if plan_ref is None:
+            assert plan is None, v
+            continue
+        assert plan is not None, v
+        assert plan.f_opt == pytest.approx(f_ref, rel=1e-9, abs=1e-9), v
+        assert plan.stats.proven
+        # The plan's value is what its choices really cost.
+        assert len(plan.choices) == N
+
+
+def test_vectorised_children_change_nothing():
+    rng = np.random.default_rng(123)
+    problem, state, cf = random_problem(rng, 4, 4)
+    a = branch_and_bound(problem, state, cf)
+    pb = Problem(problem.figure, problem.distance, problem.obstacles,
+                 replace(problem.settings, vectorize_children=False, batch=1, warm_start=False,
+                         lower_bound=False))
+    b = branch_and_bound(pb, state, cf)
+    f_ref, _ = exhaustive(problem, state, cf)
+    assert a.f_opt == pytest.approx(f_ref, rel=1e-9) and b.f_opt == pytest.approx(f_ref, rel=1e-9)
+
+
+def test_warm_start_from_the_previous_optimum_is_exact():
+    """Receding horizon: plan, apply a stage, plan again with the shifted plan as first bound."""
+    rng = np.random.default_rng(7)
+    problem, state, cf = random_problem(rng, 4, 5)
+    previous, t = None, 0.0
+    for _ in range(3):
+        plan = branch_and_bound(problem, state, cf, t, previous=previous)
+        f_ref, _ = exhaustive(problem, state, cf, t)
+        if plan is None:
+            assert f_ref == math.inf
+            return
+        assert plan.f_opt == pytest.approx(f_ref, rel=1e-9, abs=1e-9)
+        r = problem.simulate_stage(state[:, None], np.array([cf]), np.array([plan.u[0]]),
+                                   np.array([t]), np.zeros(1))
+        state, cf, t, previous = r.state[:, 0], float(r.C_f[0]), t + 0.3, plan.choices
+
+
+def test_lower_bound_is_admissible():
+    """Along every surviving branch the cost still to come is at least the lower bound."""
+    rng = np.random.default_rng(5)
+    problem, state, cf = random_problem(rng, 4, 3)
+    st = problem.settings
+    q = st.q
+    x, c, f = state[:, None], np.array([cf]), np.zeros(1)
+    t, s = np.zeros(1), np.zeros(1)
+    lbs, fs, owners = [], [], np.zeros(1, int)
+    hist = []
+    for depth in range(1, st.n_stages + 1):
+        m = x.shape[1]
+        par = np.repeat(np.arange(m), q)
+        ch = np.tile(np.arange(q), m)
+        r = problem.simulate_stage(x[:, par], c[par], problem.u_values[ch], t[par], s[par])
+        f = f[par] + r.cost
+        hist.append((par, f.copy(), problem.lower_bound(r.d_last, depth)))
+        x, c, t, s = r.state, r.C_f, t[par] + 0.3, r.s
+    # Walk back: final cost of each leaf minus cost at each depth >= lower bound at that depth.
+    final = hist[-1][1]
+    idx = np.arange(len(final))
+    for par, f_d, lb_d in reversed(hist):
+        assert np.all(final - f_d[idx] >= lb_d[idx] - 1e-9)
+        idx = par[idx]
+
+
+def test_settings_are_validated():
+    with pytest.raises(ValueError, match="n_stages"):
+        PlannerSettings(n_stages=0)
+    with pytest.raises(ValueError, match="t_stage"):
+        PlannerSettings(t_stage=0.33)
+    with pytest.raises(ValueError, match="q = 1"):
+        PlannerSettings(q=1)
