@@ -31,14 +31,14 @@ def png_size(path):
 
 
 def test_demo_job_renders_tiny_frames(tmp_path):
-    r = run_job("--config", CONFIGS / "demo.toml", "--resolution", "32x24", "--seconds", "0.125",
+    r = run_job("--config", CONFIGS / "demo.toml", "--resolution", "32x24", "--seconds", "0.25",
                 "--output", tmp_path)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     frames = sorted((tmp_path / "frames").glob("frame_*.png"))
-    assert len(frames) == 4                                   # 0.125 s at 24 fps: frames 1-4
+    assert len(frames) == 4                    # 0.25 s at 24 fps, frame_step 2: frames 1, 3, 5, 7
     assert all(png_size(f) == (32, 24) for f in frames)
     assert (tmp_path / "demo.blend").stat().st_size > 0
-    assert "rendered frame 4 (4/4)" in r.stdout and f"blend: {tmp_path / 'demo.blend'}" in r.stdout
+    assert "rendered frame 7 (4/4)" in r.stdout and f"blend: {tmp_path / 'demo.blend'}" in r.stdout
     for name in ("Skier", "Snowboarder", "Telemark", "Cyclist"):
         assert f"baked {name}" in r.stdout
 
