@@ -38,7 +38,7 @@ def test_vec_roll_is_a_rotation_with_y_along_the_bone(v, roll):
     # own float32 matrices do the same).
     assert np.allclose(m @ m.T, np.eye(3), atol=1e-4)
     assert np.isclose(np.linalg.det(m), 1.0, atol=1e-4)
-    assert np.allclose(m[:, 1], np.asarray(v) / np.linalg.norm(v), atol=1e-4)
+    assert np.allclose(m[:, 1], np.asarray(v) / np.linalg.norm(v), atol=3e-4)
 
 
 @settings(max_examples=200, deadline=None)

@@ -72,7 +72,9 @@ def test_missing_required_bone_is_named():
     doc = raw("skier")
     doc["bones"] = [b for b in doc["bones"] if b["name"] != "pole.R"]
     doc["meshes"] = [m for m in doc["meshes"] if m["bone"] != "pole.R"]
-    with pytest.raises(KeyError, match="'pole.R'"):
+    with pytest.raises(B.MissingBoneError, match="'pole.R'"):
+        parse_rig(doc)
+    with pytest.raises(ValueError, match="'pole.R'"):      # what the operators catch
         parse_rig(doc)
     with pytest.raises(KeyError, match="'nope'"):
         load_rig("skier").bone("nope")

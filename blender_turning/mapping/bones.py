@@ -6,6 +6,17 @@ and heading); ``lean`` pivots about the line of the foot (the travel line, the r
 """
 from __future__ import annotations
 
+class MissingBoneError(KeyError, ValueError):
+    """A bone a rig or a mapping needs is not there; the message names it.
+
+    A ``KeyError`` (a failed lookup) that is also a ``ValueError``, so the Blender operators'
+    ``except ValueError`` reports it instead of raising a traceback.
+    """
+
+    def __str__(self):
+        return str(self.args[0]) if self.args else ""
+
+
 ROOT = "root"
 LEAN = "lean"
 
@@ -49,8 +60,8 @@ REQUIRED = {
 
 
 def require(names, wanted, rig: str = "rig") -> None:
-    """Raise ``KeyError`` naming the first bone of ``wanted`` missing from ``names``."""
+    """Raise :class:`MissingBoneError` naming the first bone of ``wanted`` not in ``names``."""
     have = set(names)
     for b in wanted:
         if b not in have:
-            raise KeyError(f"bone {b!r} is missing from {rig}")
+            raise MissingBoneError(f"bone {b!r} is missing from {rig}")

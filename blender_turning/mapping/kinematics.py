@@ -233,7 +233,8 @@ class Skeleton:
         try:
             return self.index[name]
         except KeyError:
-            raise KeyError(f"bone {name!r} is not in the rig") from None
+            from .bones import MissingBoneError
+            raise MissingBoneError(f"bone {name!r} is not in the rig") from None
 
     def length(self, name: str) -> float:
         """Rest length (head to tail), m."""

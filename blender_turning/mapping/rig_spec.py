@@ -43,7 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .bones import REQUIRED
+from .bones import REQUIRED, MissingBoneError
 
 __all__ = ["BoneSpec", "MeshSpec", "RigSpec", "RIGS_DIR", "RIG_NAMES", "MATERIALS", "SHAPES",
            "load_rig", "parse_rig"]
@@ -97,7 +97,7 @@ class RigSpec:
         for b in self.bones:
             if b.name == name:
                 return b
-        raise KeyError(f"bone {name!r} is not in rig {self.name!r}")
+        raise MissingBoneError(f"bone {name!r} is not in rig {self.name!r}")
 
     @property
     def bone_names(self) -> tuple:
@@ -154,7 +154,7 @@ def parse_rig(doc: dict, source: str = "rig") -> RigSpec:
         bones.append(bone)
     missing = [n for n in REQUIRED[sport] if n not in seen]
     if missing:
-        raise KeyError(f"{source}: bone {missing[0]!r} is missing (a {sport} rig needs it)")
+        raise MissingBoneError(f"{source}: bone {missing[0]!r} is missing (a {sport} rig needs it)")
     meshes = []
     for k, m in enumerate(doc["meshes"]):
         where = f"{source}: mesh {m.get('name', '#' + str(k))!r}"
