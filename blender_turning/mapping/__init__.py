@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
+from .bones import MissingBoneError
 from .cyclist import CyclistMapping, CyclistOptions
 from .skier import SkierMapping, SkierOptions
 from .snowboarder import SnowboarderMapping, SnowboarderOptions
@@ -21,6 +22,7 @@ MAPPINGS: dict[str, Mapping] = {
 }
 
 __all__ = ["STATE_PROPS", "BoneChannels", "Mapping", "PoseTrack", "MAPPINGS", "map_trajectory",
+           "MissingBoneError",
            "SkierOptions", "SnowboarderOptions", "TelemarkOptions", "CyclistOptions"]
 
 
