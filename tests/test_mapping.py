@@ -61,3 +61,20 @@ def test_empty_trajectory_is_refused():
     empty = Trajectory.from_columns({k: v[:0] for k, v in traj.columns().items()})
     with pytest.raises(ValueError, match="no samples"):
         map_trajectory("skier", empty)
+
+
+@pytest.mark.parametrize("sport", sorted(MAPPINGS))
+def test_channels_are_what_blender_reads(sport):
+    """Connected bones never get a location (Blender ignores it); quaternions are unit and
+    sign-continuous; only the documented helper/equipment bones move their heads."""
+    traj = run(sport, seconds=2.0)
+    track = map_trajectory(sport, traj)
+    spec = load_rig(sport)
+    for name, ch in track.bones.items():
+        if ch.location is not None:
+            assert not spec.bone(name).connected, name
+        if ch.rotation is not None:
+            assert np.allclose(np.linalg.norm(ch.rotation, axis=1), 1.0)
+            assert np.all(np.sum(ch.rotation[1:] * ch.rotation[:-1], axis=1) >= 0), name
+    moved = {n for n, ch in track.bones.items() if ch.location is not None}
+    assert moved <= {"spine", "ski.L", "ski.R", "pole.L", "pole.R", "board", "wheel.F"}
