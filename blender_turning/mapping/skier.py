@@ -24,6 +24,13 @@ from .snow import (bend_waist, carry_vec, hip_drop, knee_flexion, legs_to, level
 
 SIDES = (("L", -1.0), ("R", 1.0))
 
+# Hand (wrist) targets from the shoulder in the chest's axes (outwards, forwards, up), m: held in
+# front of the hips, reaching forwards and down for the plant.  The pole's tip points 15 deg out
+# from straight ahead when planted and 150 deg (behind, outwards) when trailing.
+HAND_NEUTRAL = (0.06, 0.30, -0.36)
+HAND_PLANT = (0.10, 0.40, -0.33)
+POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
+
 
 @dataclass(frozen=True)
 class SkierOptions:
@@ -168,16 +175,16 @@ class SkierMapping(Mapping):
         for s, sx in SIDES:
             plant = o.pole_plant_L if s == "L" else o.pole_plant_R
             w = phase_window(traj.phi, plant, o.pole_hold, o.pole_swing)[:, None]
-            neutral = sx * 0.06 * right + 0.30 * fwd - 0.36 * up
-            planted = sx * 0.10 * right + 0.40 * fwd - 0.33 * up
+            neutral = sx * HAND_NEUTRAL[0] * right + HAND_NEUTRAL[1] * fwd + HAND_NEUTRAL[2] * up
+            planted = sx * HAND_PLANT[0] * right + HAND_PLANT[1] * fwd + HAND_PLANT[2] * up
             shoulder = b.unposed(B.side("upper_arm", s))[:, :3, 3]
             target = shoulder + np.einsum("nij,nj->ni", chest, (1 - w) * neutral + w * planted)
-            elbow_dir = chest @ (sx * 0.4 * right - fwd - 0.3 * up)
+            elbow_dir = chest @ (sx * 0.4 * right - fwd - 0.3 * up)     # elbows back and out
             ik_limb(b, B.side("upper_arm", s), B.side("forearm", s), target, elbow_dir)
             pole = B.side("pole", s)
             grip = b.unposed(pole)[:, :3, 3]
             length = skel.length(pole)
-            beta = math.radians(150.0) + w[:, 0] * (math.radians(15.0) - math.radians(150.0))
+            beta = POLE_AIM_TRAIL + w[:, 0] * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
             horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
             dz = o.pole_lift * (1.0 - w[:, 0]) - grip[:, 2]
             rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
