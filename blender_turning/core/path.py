@@ -133,7 +133,7 @@ class PathDistance:
 
     Default: the paper's nearest-sample distance (Section 6, ``per_segment`` samples per spline
     segment).  ``exact=True``: distance to the spline's nearest point (a Newton refinement on every
-    sample interval, started from the projection on its chord).
+    sample interval, started from the best of nine points on it).
     """
 
     def __init__(self, path: HermitePath, per_segment: int = 12, exact: bool = False,
@@ -181,20 +181,29 @@ class PathDistance:
     def _refined(self, P):
         pts, seg, u = self._all
         idx = self._idx
-        # Sample intervals [j, j+1] with both ends present and in the same segment.
+        # Sample intervals [j, j+1] with both ends present (u from u[j] to u[j] + du on the
+        # segment of sample j; the last interval of a segment ends on the next knot).
         j = idx[:-1][(np.diff(idx) == 1)]
-        j = j[seg[j] == seg[np.minimum(j + 1, len(seg) - 1)]]
         if len(j) == 0:
             return np.full(P.shape[:-1], np.inf)
         s = seg[j]
         u0 = u[j]
         du = 1.0 / self.per_segment
-        a, b = pts[j], pts[j + 1]
-        ab = b - a
         flat = P.reshape(-1, 2)[:, None, :]
-        w = np.clip(np.einsum("mjk,jk->mj", flat - a, ab) / np.maximum(
-            np.einsum("jk,jk->j", ab, ab), 1e-300), 0.0, 1.0)
-        uu = u0 + w * du
+        # Start from the best of 9 points on each interval, then Newton within its eighth:
+        # a short arc's squared distance has one minimum per eighth of the interval.
+        k = np.linspace(0.0, 1.0, 9)
+        best_w = np.zeros((len(flat), len(j)))
+        best_d = np.full((len(flat), len(j)), np.inf)
+        for w in k:
+            r = self.path.evaluate(s, u0 + w * du) - flat
+            d2 = np.einsum("mjk,mjk->mj", r, r)
+            better = d2 < best_d
+            best_d = np.where(better, d2, best_d)
+            best_w = np.where(better, w, best_w)
+        lo = u0 + np.maximum(best_w - 0.125, 0.0) * du
+        hi = u0 + np.minimum(best_w + 0.125, 1.0) * du
+        uu = u0 + best_w * du
         for _ in range(4):      # Newton on g(u) = (S(u) - P) . S'(u)
             S = self.path.evaluate(s, uu)
             S1 = self.path.evaluate(s, uu, 1)
@@ -203,7 +212,7 @@ class PathDistance:
             g = np.einsum("mjk,mjk->mj", r, S1)
             h = np.einsum("mjk,mjk->mj", S1, S1) + np.einsum("mjk,mjk->mj", r, S2)
             step = np.where(h > 0, g / np.where(h > 0, h, 1.0), 0.0)
-            uu = np.clip(uu - step, u0, u0 + du)
+            uu = np.clip(uu - step, lo, hi)
         r = self.path.evaluate(s, uu) - flat
         d = np.sqrt(np.einsum("mjk,mjk->mj", r, r).min(axis=1))
         return d.reshape(P.shape[:-1])

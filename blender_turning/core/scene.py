@@ -67,8 +67,9 @@ class _Field:
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             self.fail(key, f"= {v!r} is not a number")
         try:
-            return check_range(f"scene field {self.name(key)}", v, lo, hi, lo_open=lo_open,
-                               hi_open=hi_open)
+            return check_range(f"scene field {self.name(key)}", v, lo, hi,
+                               lo_open=lo_open or lo == -math.inf,
+                               hi_open=hi_open or hi == math.inf)
         except ValueError as exc:
             raise ValueError(str(exc)) from None
 

@@ -1,0 +1,115 @@
+"""The path of Section 6: Hermite spline (C1), polyline, exact Bezier conversion, distances."""
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from blender_turning.core.path import HermitePath, PathDistance
+
+coord = st.floats(-50, 50, allow_nan=False)
+pts4 = st.lists(st.tuples(coord, coord), min_size=4, max_size=4)
+
+
+def bezier(P, u):
+    u = np.asarray(u)[:, None]
+    return ((1 - u) ** 3 * P[0] + 3 * (1 - u) ** 2 * u * P[1] + 3 * (1 - u) * u ** 2 * P[2]
+            + u ** 3 * P[3])
+
+
+@settings(max_examples=50, deadline=None)
+@given(pts4, pts4)
+def test_bezier_conversion_is_exact(a, b):
+    P = np.array(a + b[1:], float)                 # two segments sharing a knot
+    path = HermitePath.from_bezier(P)
+    u = np.linspace(0, 1, 17)
+    np.testing.assert_allclose(path.evaluate(np.zeros(17, int), u), bezier(P[:4], u), atol=1e-9)
+    np.testing.assert_allclose(path.evaluate(np.ones(17, int), u), bezier(P[3:], u), atol=1e-9)
+
+
+def test_hermite_interpolates_points_and_tangents_and_is_c1():
+    pts = np.array([[0, 0], [10, 3], [20, -2], [35, 0]], float)
+    tan = np.array([[10, 0], [8, 2], [12, -1], [10, 0]], float)
+    path = HermitePath.from_points(pts, tan)
+    for i in range(3):
+        np.testing.assert_allclose(path.evaluate(i, 0.0), pts[i])
+        np.testing.assert_allclose(path.evaluate(i, 1.0), pts[i + 1])
+        np.testing.assert_allclose(path.evaluate(i, 0.0, 1), tan[i])
+        np.testing.assert_allclose(path.evaluate(i, 1.0, 1), tan[i + 1])
+    # C1 at the inner knots: value and first derivative agree from both sides.
+    for i in range(2):
+        np.testing.assert_allclose(path.evaluate(i, 1.0, 1), path.evaluate(i + 1, 0.0, 1))
+
+
+def test_polyline_is_straight_chords():
+    path = HermitePath.from_polyline([[0, 0], [10, 0], [10, 10]])
+    p = path.evaluate(np.zeros(5, int), np.linspace(0, 1, 5))
+    np.testing.assert_allclose(p, np.column_stack([np.linspace(0, 10, 5), np.zeros(5)]))
+    assert path.length() == pytest.approx(20.0)
+
+
+def test_sampling_twelve_per_segment():
+    path = HermitePath.from_polyline([[0, 0], [12, 0], [24, 0]])
+    s = path.sample()
+    assert s.shape == (25, 2)
+    np.testing.assert_allclose(s[:, 0], np.arange(25))
+
+
+def test_sample_distance_is_the_papers_nearest_sample():
+    path = HermitePath.from_polyline([[0, 0], [12, 0]])
+    d = PathDistance(path)
+    np.testing.assert_allclose(d(np.array([[0.5, 2.0], [3.0, -1.0]])),
+                               [np.hypot(0.5, 2.0), 1.0])
+
+
+def test_exact_distance_matches_dense_sampling():
+    rng = np.random.default_rng(3)
+    path = HermitePath.from_points([[0, 0], [10, 5], [20, -5], [30, 0]],
+                                   [[15, 0], [10, 0], [10, 0], [15, 5]])
+    dense = path.sample(4000)
+    exact = PathDistance(path, exact=True)
+    coarse = PathDistance(path)
+    P = rng.uniform([-5, -10], [35, 10], (300, 2))
+    ref = np.sqrt(((P[:, None] - dense[None]) ** 2).sum(-1)).min(1)
+    # Never above the densely sampled distance, and below it only by the sampling's own error.
+    assert np.all(exact(P) <= ref + 1e-9)
+    assert np.all(exact(P) >= ref - 3e-4)
+    assert np.all(coarse(P) >= exact(P) - 1e-12)
+
+
+def test_near_keeps_the_distance_exact():
+    rng = np.random.default_rng(4)
+    path = HermitePath.from_points([[0, 0], [40, 10], [80, -10], [120, 0]],
+                                   [[40, 0], [40, 0], [40, 0], [40, 0]])
+    for exact in (False, True):
+        full = PathDistance(path, exact=exact)
+        c = np.array([50.0, 3.0])
+        local = full.near(c, 15.0)
+        assert len(local.samples) < len(full.samples)
+        ang = rng.uniform(0, 2 * np.pi, 500)
+        P = c + rng.uniform(0, 15, 500)[:, None] * np.column_stack([np.cos(ang), np.sin(ang)])
+        np.testing.assert_allclose(local(P), full(P), atol=1e-12)
+
+
+def test_distance_is_1_lipschitz():
+    rng = np.random.default_rng(5)
+    path = HermitePath.from_bezier([[0, 0], [5, 8], [15, -8], [20, 0]])
+    for exact in (False, True):
+        d = PathDistance(path, exact=exact)
+        P = rng.uniform(-10, 30, (400, 2))
+        Q = P + rng.normal(0, 1, (400, 2))
+        assert np.all(np.abs(d(P) - d(Q)) <= np.linalg.norm(P - Q, axis=1) + 1e-9)
+
+
+def test_extension_runs_straight_out_of_the_end():
+    path = HermitePath.from_points([[0, 0], [10, 0]], [[0, 10], [10, 0]])
+    ext = path.extended(5.0)
+    np.testing.assert_allclose(ext.knots[-1], [15, 0])
+    np.testing.assert_allclose(ext.evaluate(1, 0.5), [12.5, 0])
+
+
+def test_bad_inputs_name_the_problem():
+    with pytest.raises(ValueError, match="3 n \\+ 1"):
+        HermitePath.from_bezier(np.zeros((5, 2)))
+    with pytest.raises(ValueError, match="tangents"):
+        HermitePath.from_points([[0, 0], [1, 0]], [[1, 0]])
+    with pytest.raises(ValueError, match="finite"):
+        HermitePath.from_polyline([[0, 0], [np.nan, 1]])
