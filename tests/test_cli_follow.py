@@ -1,0 +1,89 @@
+"""``python -m blender_turning follow``: outputs, one-line errors, exit codes."""
+import csv
+import json
+import subprocess
+import sys
+
+import pytest
+
+from blender_turning.cli import main
+from blender_turning.core.trajectory import COLUMNS
+
+
+def small_scene(tmp_path, wall=False, **extra):
+    doc = {
+        "name": "short road",
+        "figure": {"preset": "cyclist", "limits": {"dC_f_max": 0.4}},
+        "path": {"polyline": [[0, 0], [25, 0]]},
+        "clearance": 0.3,
+        "obstacles": [{"type": "segment", "from": [-5, -3], "to": [60, -3]},
+                      {"type": "segment", "from": [-5, 3], "to": [60, 3]},
+                      {"type": "circle", "center": [14, 1.6], "radius": 0.4}],
+        "planner": {"stages": 5, "choices": 3},
+        **extra,
+    }
+    if wall:
+        doc["obstacles"].append({"type": "segment", "from": [20, -3], "to": [20, 3]})
+    p = tmp_path / "scene.json"
+    p.write_text(json.dumps(doc))
+    return p
+
+
+def test_follow_writes_track_stats_and_plot(tmp_path, capsys):
+    scene = small_scene(tmp_path)
+    out, stats, plot = tmp_path / "t.csv", tmp_path / "s.json", tmp_path / "p.png"
+    rc = main(["follow", str(scene), "--stages", "6", "--choices", "5", "--stage-time", "0.3",
+               "--out", str(out), "--stats", str(stats), "--plot", str(plot)])
+    assert rc == 0
+    with open(out) as fh:
+        rows = list(csv.reader(fh))
+    assert tuple(rows[0]) == COLUMNS and len(rows) > 20
+    doc = json.loads(stats.read_text())
+    assert doc["settings"]["n_stages"] == 6 and doc["settings"]["q"] == 5
+    r0 = doc["replans"][0]
+    for key in ("expanded", "clipped_collision", "clipped_fall", "clipped_bound", "wall_time"):
+        assert key in r0
+    assert doc["totals"]["replans"] == len(doc["replans"])
+    assert doc["totals"]["expanded"] == sum(r["expanded"] for r in doc["replans"])
+    assert plot.stat().st_size > 1000
+    assert "follow: short road" in capsys.readouterr().out
+
+
+def test_closed_corridor_is_one_line_with_the_position(tmp_path):
+    scene = small_scene(tmp_path, wall=True)
+    r = subprocess.run([sys.executable, "-m", "blender_turning", "follow", str(scene),
+                        "--out", str(tmp_path / "t.csv")], capture_output=True, text=True)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert "no feasible plan at t = " in lines[0] and "position (" in lines[0]
+    assert not (tmp_path / "t.csv").exists()
+
+
+@pytest.mark.parametrize("doc_change, field", [
+    ({"clearance": -1}, "scene field clearance = -1"),
+    ({"planner": {"choices": 1}}, "scene field planner.choices = 1"),
+    ({"start": {"lean_deg": 100}}, "scene field start.lean_deg = 100"),
+])
+def test_bad_scene_is_one_line_naming_the_field(tmp_path, capsys, doc_change, field):
+    scene = small_scene(tmp_path, **doc_change)
+    assert main(["follow", str(scene)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and field in err[0]
+
+
+def test_missing_file_and_bad_json(tmp_path, capsys):
+    assert main(["follow", str(tmp_path / "nope.json")]) == 2
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    assert main(["follow", str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 2 and "not valid JSON" in err[1]
+
+
+def test_bad_flags(tmp_path, capsys):
+    scene = small_scene(tmp_path)
+    assert main(["follow", str(scene), "--stages", "0"]) == 2
+    assert main(["follow", str(scene), "--stage-time", "0.33"]) == 2
+    err = capsys.readouterr().err
+    assert "--stages = 0" in err and "t_stage = 0.33" in err
