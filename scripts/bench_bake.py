@@ -85,8 +85,17 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     sports = args.sports.split(",")
 
-    if not hasattr(bpy.types.Object, "turning"):
+    registered = not hasattr(bpy.types.Object, "turning")
+    if registered:
         props_mod.register()
+    try:
+        return _bench(args, sports)
+    finally:
+        if registered:                 # bpy 4.2 crashes at exit on a registered PointerProperty
+            props_mod.unregister()
+
+
+def _bench(args, sports) -> int:
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps, scene.frame_start = args.fps, 1

@@ -347,8 +347,18 @@ def setup_render(bpy, cfg):
 def run(cfg, render: bool = True) -> dict:
     import bpy
     from blender_turning import blender as addon
-    if not hasattr(bpy.types.Object, "turning"):
-        addon.register()
+    if hasattr(bpy.types.Object, "turning"):     # the installed extension is enabled: use it
+        return _run(bpy, cfg, render)
+    addon.register()
+    try:
+        return _run(bpy, cfg, render)
+    finally:
+        # Unregister what the job registered (bpy 4.2 crashes at exit on a registered
+        # PointerProperty otherwise).
+        addon.unregister()
+
+
+def _run(bpy, cfg, render):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
     scene.render.fps, scene.render.fps_base = cfg["fps"], 1.0
