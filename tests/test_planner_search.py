@@ -43,9 +43,10 @@ def random_problem(rng, N, q, **settings):
 
 VARIANTS = [dict(warm_start=w, lower_bound=lb, batch=b)
             for w in (False, True) for lb in (False, True) for b in (1, 8)]
+VARIANTS += [dict(lookahead=0), dict(lookahead=1, batch=3), dict(lookahead=30, warm_start=False)]
 
 
-@pytest.mark.parametrize("seed", range(40))
+@pytest.mark.parametrize("seed", range(48))
 def test_same_optimum_as_exhaustive(seed):
     rng = np.random.default_rng(seed)
     N = int(rng.integers(1, 6))
@@ -67,9 +68,16 @@ def test_same_optimum_as_exhaustive(seed):
         assert len(plan.choices) == N
 
 
+def feasible_problem(seed, N, q):
+    while True:
+        problem, state, cf = random_problem(np.random.default_rng(seed), N, q)
+        if exhaustive(problem, state, cf)[1] is not None:
+            return problem, state, cf
+        seed += 1000
+
+
 def test_vectorised_children_change_nothing():
-    rng = np.random.default_rng(123)
-    problem, state, cf = random_problem(rng, 4, 4)
+    problem, state, cf = feasible_problem(123, 4, 4)
     a = branch_and_bound(problem, state, cf)
     pb = Problem(problem.figure, problem.distance, problem.obstacles,
                  replace(problem.settings, vectorize_children=False, batch=1, warm_start=False,
@@ -96,15 +104,15 @@ def test_warm_start_from_the_previous_optimum_is_exact():
         state, cf, t, previous = r.state[:, 0], float(r.C_f[0]), t + 0.3, plan.choices
 
 
-def test_lower_bound_is_admissible():
-    """Along every surviving branch the cost still to come is at least the lower bound."""
-    rng = np.random.default_rng(5)
-    problem, state, cf = random_problem(rng, 4, 3)
+@pytest.mark.parametrize("seed", range(6))
+def test_lower_bound_is_admissible(seed):
+    """Along every surviving branch the cost still to come is at least the lower bound (both
+    the Lipschitz bound and the arc bound over the next samples)."""
+    problem, state, cf = feasible_problem(seed, 4, 4)
     st = problem.settings
     q = st.q
     x, c, f = state[:, None], np.array([cf]), np.zeros(1)
-    t, s = np.zeros(1), np.zeros(1)
-    lbs, fs, owners = [], [], np.zeros(1, int)
+    t, s, alive = np.zeros(1), np.zeros(1), np.ones(1, bool)
     hist = []
     for depth in range(1, st.n_stages + 1):
         m = x.shape[1]
@@ -112,13 +120,17 @@ def test_lower_bound_is_admissible():
         ch = np.tile(np.arange(q), m)
         r = problem.simulate_stage(x[:, par], c[par], problem.u_values[ch], t[par], s[par])
         f = f[par] + r.cost
-        hist.append((par, f.copy(), problem.lower_bound(r.d_last, depth)))
+        alive = alive[par] & ~(r.collided | r.fell)
+        hist.append((par, f.copy(), problem.lower_bound(r.d_last, depth, r.state, r.C_f),
+                     problem.lower_bound(r.d_last, depth)))
         x, c, t, s = r.state, r.C_f, t[par] + 0.3, r.s
-    # Walk back: final cost of each leaf minus cost at each depth >= lower bound at that depth.
     final = hist[-1][1]
-    idx = np.arange(len(final))
-    for par, f_d, lb_d in reversed(hist):
-        assert np.all(final - f_d[idx] >= lb_d[idx] - 1e-9)
+    idx = np.flatnonzero(alive)
+    assert len(idx)
+    for par, f_d, lb_arc, lb_lip in reversed(hist):
+        togo = final[alive] - f_d[idx]
+        assert np.all(togo >= lb_arc[idx] - 1e-9)
+        assert np.all(lb_arc[idx] >= lb_lip[idx] - 1e-12)
         idx = par[idx]
 
 

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics import (PHYSICAL_MARGIN, THETA_DIR, THETA_V, OMEGA_V, X, Y, bound_cf,
-                        forward_alpha, foot_speed, rk4_step)
+from ..dynamics import (OMEGA_V, PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, forward_alpha,
+                        foot_speed)
 from ..obstacles import Obstacles
 from ..params import Figure
 from ..path import PathDistance
@@ -84,6 +84,17 @@ class Problem:
         lean = min(settings.theta_bound + _LEAN_MARGIN, math.pi / 2)
         slip = min(PHYSICAL_MARGIN, self.limits.C_f_max * self.body.l * math.sin(lean))
         self.v_max = self.speed.max / (1.0 - slip)
+        self._sin_lean = math.sin(lean)
+        # The arc bound of lower_bound: for a constant speed, over the next `lookahead` samples.
+        self._lookahead = None
+        if settings.lookahead and self.speed.is_constant:
+            per = 16
+            ds = settings.sample_dt / per
+            self._lookahead = ds * np.arange(1, settings.lookahead * per + 1).reshape(
+                settings.lookahead, per)
+            self._lookahead_ds = ds
+        # Section 3's physical limit 0.9 / (l |sin theta_v|) can only bind when C_f_max l > 0.9.
+        self._physical_binds = self.limits.C_f_max * self.body.l > PHYSICAL_MARGIN
 
     def reach(self) -> float:
         """How far the foot can get within one horizon, m."""
@@ -99,15 +110,66 @@ class Problem:
         p.obstacles = self.obstacles.near(center, r)
         return p
 
-    def lower_bound(self, d_last, depth):
-        """Admissible bound on the cost still to come after a node at ``depth`` whose last sample
-        was ``d_last`` from the path: d can shrink by at most ``v_max sample_dt`` per sample
-        (d is 1-Lipschitz), so ``sum_k max(0, d_last - k v_max sample_dt)``."""
+    def lower_bound(self, d_last, depth, state=None, C_f=None):
+        """Admissible bound on the cost still to come after nodes at ``depth`` whose last sample
+        was ``d_last`` from the path.
+
+        Everywhere: d is 1-Lipschitz and the foot moves at most ``v_max sample_dt`` per sample,
+        so the k-th sample still to come is at least ``d_last - k v_max sample_dt``.
+        Given the nodes' ``state`` and ``C_f`` (and a constant speed), the first
+        ``lookahead`` samples are bounded more tightly: the foot stays within ``r(tau)`` of the
+        arc of curvature ``C_f`` through its position and heading, because ``C_f`` changes no
+        faster than ``dC_f_max`` and ``V_f`` (Eq. 21) stays within the lean bound's range; so the
+        sample is at least ``d(arc point) - r(tau)``.
+        """
         st = self.settings
+        d_last = np.asarray(d_last, float)
         K = (st.n_stages - np.asarray(depth)) * st.samples_per_stage
         b = self.v_max * st.sample_dt
-        M = np.minimum(K, np.floor(np.asarray(d_last) / b))
-        return np.maximum(M * d_last - b * M * (M + 1) * 0.5, 0.0)
+        if state is None or self._lookahead is None:
+            M = np.minimum(K, np.floor(d_last / b))
+            return np.maximum(M * d_last - b * M * (M + 1) * 0.5, 0.0)
+        kh = self._lookahead.shape[0]
+        k = np.arange(1, int(np.max(K, initial=0)) + 1)
+        terms = np.maximum(d_last[:, None] - b * k[None, :], 0.0)
+        terms = np.where(k[None, :] <= np.broadcast_to(K, d_last.shape)[:, None], terms, 0.0)
+        n = min(kh, terms.shape[1])
+        if n:
+            strong = self._arc_bound(state, np.asarray(C_f, float), n)
+            strong = np.where(k[None, :n] <= np.broadcast_to(K, d_last.shape)[:, None], strong,
+                              0.0)
+            terms[:, :n] = np.maximum(terms[:, :n], strong)
+        return terms.sum(axis=1)
+
+    def _arc_bound(self, state, C0, n):
+        """``d(arc point) - r(tau)`` for the next ``n`` samples, shape ``(m, n)``."""
+        st = self.settings
+        V = float(self.speed.V[0])
+        tau = st.sample_dt * np.arange(1, n + 1)
+        x, y, th = state[X], state[Y], state[THETA_DIR]
+        turn = V * C0[:, None] * tau[None, :]
+        chord = V * tau[None, :] * np.sinc(turn / (2 * np.pi))       # sin(turn/2) / (turn/2)
+        ang = th[:, None] + 0.5 * turn
+        pts = np.stack([x[:, None] + chord * np.cos(ang), y[:, None] + chord * np.sin(ang)], -1)
+        return self.distance(pts) - self._radius(np.abs(C0), n)
+
+    def _radius(self, absC0, n):
+        """``r(tau_k)``, k = 1..n: how far the foot can be from the nominal arc (Section 6.1's
+        bounds on C_f and dC_f/dt, Eq. 21's speed), by right Riemann sums of non-decreasing
+        integrands (over-estimates), evaluated one integration step late for RK4's inner stages."""
+        st, lim, b = self.settings, self.limits, self.body
+        V = float(self.speed.V[0])
+        G = self._lookahead                      # (n_total, G) fine time grid per sample
+        ds = self._lookahead_ds
+        s = G[:n].reshape(-1)[None, :] + st.dt   # one step late
+        cb = np.minimum(lim.C_f_max, absC0[:, None] + lim.dC_f_max * s)
+        eps = np.minimum(cb * b.l * self._sin_lean, PHYSICAL_MARGIN)
+        dv = V / (1.0 - eps) - V                                  # >= V - V / (1 + eps)
+        vhi = V + dv
+        eta = np.cumsum((dv * cb + V * lim.dC_f_max * s) * ds, axis=1)   # heading deviation
+        r = np.cumsum((dv + vhi * eta) * ds, axis=1)
+        per = G.shape[1]
+        return r[:, per - 1::per] * (1 + 1e-6) + 1e-9
 
     def _body_at(self, t, s):
         if self.speed.is_constant and self.speed.V[0] == self.body.V_cm:
@@ -115,18 +177,52 @@ class Problem:
         b = self.body
         return _BatchBody(b.m, b.l, b.I_v, self.speed(t, s), b.g, b.J)
 
+    def _speed_at(self, t, s):
+        if self.speed.is_constant:
+            return float(self.speed.V[0])
+        return self.speed(t, s)
+
+    def _rhs(self, x, V, tau, C0, u, anchor, rate_step, out):
+        """Right-hand side under the stage's steering law, written into ``out`` (shape (5, m)).
+
+        The same formulas and bounding as :func:`..dynamics.stage` (Eqs. 2 and 21, Section 3's
+        bound relative to ``anchor``), fused into one pass for batches: the planner evaluates it
+        millions of times.  Tests check it against the core's RK4 to 1e-9.
+        Returns ``(C_f, alpha_v, V_f)``.
+        """
+        b, lim = self.body, self.limits
+        cmax = lim.C_f_max
+        th = x[THETA_V]
+        sn, cs = np.sin(th), np.cos(th)
+        cf = np.minimum(np.maximum(C0 + u * tau, -cmax), cmax)       # C0 + u t, |C_f| <= max
+        if self._physical_binds:
+            phys = np.minimum(cmax, PHYSICAL_MARGIN / np.maximum(b.l * np.abs(sn), 1e-300))
+            cf = np.minimum(np.maximum(cf, np.where(sn < 0, -phys, -cmax)),
+                            np.where(sn > 0, phys, cmax))
+        if anchor is not None:
+            step = lim.dC_f_max * rate_step
+            cf = np.minimum(np.maximum(cf, anchor - step), anchor + step)
+        ratio = 1.0 / (1.0 - cf * b.l * sn)                       # Eq. (21): V_f / V_cm
+        V_f = V * ratio
+        alpha = (b.g * sn - cf * V * V * cs * ratio) / b.J       # Eq. (2)
+        d = x[THETA_DIR]
+        np.multiply(V_f, np.cos(d), out=out[X])
+        np.multiply(V_f, np.sin(d), out=out[Y])
+        np.multiply(V_f, cf, out=out[THETA_DIR])
+        out[THETA_V] = x[OMEGA_V]
+        out[OMEGA_V] = alpha
+        return cf, alpha, V_f
+
     def simulate_stage(self, state, C_f0, u, t0, s0, record: bool = False) -> StageResult:
         """Simulate every column of ``state`` (shape ``(5, m)``) for one stage with
-        ``dC_f/dt = u``; ``t0``, ``s0`` are the columns' start time and distance travelled."""
+        ``dC_f/dt = u``; ``t0``, ``s0`` are the columns' start time and distance travelled.
+
+        Classical RK4 with step ``dt``; at the start of each step the curvature is bounded
+        relative to the previous step's (the rate bound), and inside the step relative to the
+        step's start, exactly as :func:`..dynamics.rk4_step` does."""
         st = self.settings
-        body0, lim = self.body, self.limits
-        cmax = lim.C_f_max
         u = np.asarray(u, float)
         C_f0 = np.asarray(C_f0, float)
-
-        def desired(tau, _state):
-            return np.clip(C_f0 + u * tau, -cmax, cmax)
-
         x = np.array(state, float)
         s = np.array(s0, float)
         m = x.shape[1]
@@ -137,19 +233,22 @@ class Problem:
         seg_a, seg_b = [], []
         rec = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")} if record else None
         h = st.dt
+        half = 0.5 * h
+        k1, k2, k3, k4 = (np.empty_like(x) for _ in range(4))
         for k in range(st.steps_per_stage):
             tau = k * h
-            body = self._body_at(t0 + tau, s)
-            sin_t, cos_t = np.sin(x[THETA_V]), np.cos(x[THETA_V])
-            cf = bound_cf(body, lim, desired(tau, x), sin_t, anchor, h)
-            k1, alpha, V_f = start_derivative(body, x, cf, sin_t, cos_t)
+            V = self._speed_at(t0 + tau, s)
+            cf, alpha, V_f = self._rhs(x, V, tau, C_f0, u, anchor, h, k1)
             if record:
                 rec["state"].append(x.copy())
                 rec["C_f"].append(cf)
                 rec["alpha_v"].append(alpha)
                 rec["V_f"].append(V_f)
                 rec["t"].append(np.asarray(t0, float) + tau)
-            new = rk4_step(body, lim, x, tau, h, desired, cf, k1)
+            self._rhs(x + half * k1, V, tau + half, C_f0, u, cf, half, k2)
+            self._rhs(x + half * k2, V, tau + half, C_f0, u, cf, half, k3)
+            self._rhs(x + h * k3, V, tau + h, C_f0, u, cf, h, k4)
+            new = x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
             seg_a.append(x[:2].T)
             seg_b.append(new[:2].T)
             s = s + np.hypot(new[X] - x[X], new[Y] - x[Y])
@@ -159,8 +258,8 @@ class Problem:
                 d = self.distance(x[:2].T)
                 cost = cost + d
         # The curvature in force at the end of the stage (the next stage's C0).
-        cf_end = bound_cf(self._body_at(t0 + st.t_stage, s), lim, desired(st.t_stage, x),
-                          np.sin(x[THETA_V]), anchor, h)
+        cf_end = self._rhs(x, self._speed_at(t0 + st.t_stage, s), st.t_stage, C_f0, u, anchor,
+                           h, k1)[0]
         collided = self.obstacles.collides(np.concatenate(seg_a), np.concatenate(seg_b))
         collided = collided.reshape(st.steps_per_stage, m).any(axis=0) if len(self.obstacles) \
             else np.zeros(m, bool)

@@ -152,7 +152,7 @@ def _greedy_dive(problem, state, C_f, t0, s0):
     for depth in range(1, st.n_stages + 1):
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
-        key = f + r.cost + problem.lower_bound(r.d_last, depth)
+        key = f + r.cost + problem.lower_bound(r.d_last, depth, r.state, r.C_f)
         key = np.where(r.collided | r.fell, np.inf, key)
         j = int(np.argmin(key))
         if not np.isfinite(key[j]):
@@ -217,7 +217,8 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                 ub = float(f[j])
                 best = nodes.choices(int(par[j])) + [int(ch[j])]
         inner = alive & (depth < N)
-        prio = f + problem.lower_bound(r.d_last, depth) if st.lower_bound else f
+        prio = f + problem.lower_bound(r.d_last, depth, r.state, r.C_f) if st.lower_bound \
+            else f
         keep = inner & ~(prio > ub + tol())
         clip_bound += int(np.count_nonzero(inner & ~keep))
         if keep.any():

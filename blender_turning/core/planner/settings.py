@@ -33,6 +33,9 @@ class PlannerSettings:
     lower_bound: bool = True
     """Add an admissible bound on the cost still to come (the foot closes on the path no faster
     than its largest speed) when clipping and ordering."""
+    lookahead: int = 6
+    """With ``lower_bound``: how many of the next samples get the tighter arc bound (the foot
+    stays near the arc of its current curvature for a short while); 0 turns it off."""
     batch: int = 64
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
     one node at a time).  Any value returns the same optimum."""
@@ -50,8 +53,9 @@ class PlannerSettings:
         check_range("sample_dt", self.sample_dt, 0.0, 60.0, lo_open=True)
         check_range("dt", self.dt, 1e-4, 1.0)
         check_range("batch", self.batch, 1, 4096)
+        check_range("lookahead", self.lookahead, 0, 1000)
         check_range("max_expansions", self.max_expansions, 0, 1e12)
-        for name in ("n_stages", "q", "batch", "max_expansions"):
+        for name in ("n_stages", "q", "batch", "lookahead", "max_expansions"):
             if int(getattr(self, name)) != getattr(self, name):
                 raise ValueError(f"{name} = {getattr(self, name)!r} is not a whole number")
         for name in ("t_stage", "sample_dt"):
