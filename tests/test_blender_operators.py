@@ -251,3 +251,43 @@ def test_follow_path_bakes_and_fits_the_frame_range(scene):
     assert scene.frame_end == scene.frame_start + len(track) - 1
     fc = next(f for f in compat.channels(obj).fcurves if f.data_path == "location")
     assert len(fc.keyframe_points) == len(track)
+
+
+class LayoutStub:
+    """Stands in for ``UILayout`` (no windows in background mode): records every call."""
+
+    def __init__(self, calls):
+        self.calls = calls
+
+    def __getattr__(self, name):
+        def call(*args, **kwargs):
+            self.calls.append((name, args, kwargs))
+            return LayoutStub(self.calls)
+        return call
+
+    def __setattr__(self, name, value):
+        if name != "calls":
+            return
+        object.__setattr__(self, name, value)
+
+
+def test_panels_draw_every_setting(scene):
+    from blender_turning.blender import panel
+    obj = add("SKIER")
+    ctx = bpy.context
+    drawn = []
+    for cls in panel.classes:
+        if hasattr(cls, "poll"):
+            assert cls.poll(ctx)
+        calls = []
+        mixins = tuple(b for b in cls.__mro__[1:] if b.__module__ == panel.__name__)
+        fake = type("P", mixins, {"layout": LayoutStub(calls)})()
+        cls.draw(fake, ctx)
+        drawn += [c[1][1] for c in calls if c[0] == "prop" and len(c[1]) > 1]
+        drawn += [c[1][0] for c in calls if c[0] == "operator"]
+    for name in ("period", "lean", "heading", "use_heading", "mass", "speed", "curvature_max",
+                 "path", "obstacles"):
+        assert name in drawn, name
+    for op in ("turning.bake_turns", "turning.clear_bake", "turning.follow_path"):
+        assert op in drawn, op
+    assert obj.turning.is_figure
