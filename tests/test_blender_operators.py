@@ -239,15 +239,23 @@ def test_cancelled_follow_path_leaves_scene_unchanged(scene):
 
 @needs_mapping
 def test_follow_path_bakes_and_fits_the_frame_range(scene):
-    obj = add("SKIER")
+    obj = add("TELEMARK")
     obj.turning.path = make_path([(0, 0), (3, -12), (-3, -24), (0, -36)])
+    obj.turning.plan_curvature_rate = 0.3
     assert bpy.ops.turning.follow_path() == {"FINISHED"}
     action = obj.animation_data.action
     assert action.name == obj.name
-    # The run ends past the end of the path; the scene's range fits the run exactly.
+    # The foot follows the curve (within 2.5 m) to its end; the scene's range fits the run.
     track = obj.turning.foot_track.data.splines[0].points
-    end = np.array(track[len(track) - 1].co[:2])
-    assert end[1] < -30.0
+    co = np.empty(4 * len(track))
+    track.foreach_get("co", co)
+    xy = co.reshape(-1, 4)[:, :2]
+    curve = ops_path.bezier_control_points(obj.turning.path)
+    from blender_turning.core.path import HermitePath
+    samples = HermitePath.from_bezier(curve).sample(64)
+    dist = np.min(np.linalg.norm(xy[:, None, :] - samples[None, :, :], axis=2), axis=1)
+    assert dist.max() < 2.5, dist.max()
+    assert np.linalg.norm(xy[-1] - (0, -36)) < 3.0
     assert scene.frame_end == scene.frame_start + len(track) - 1
     fc = next(f for f in compat.channels(obj).fcurves if f.data_path == "location")
     assert len(fc.keyframe_points) == len(track)

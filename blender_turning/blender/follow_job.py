@@ -50,8 +50,9 @@ class FollowJob:
         runout = figure.body.V_cm * 3.0
         self.samples = self.path.sample(16)
         self.obstacles = Obstacles(polygons=[p for _, p in footprints], clearance=clearance)
+        settings = settings or PlannerSettings(batch=64)
         self.problem = _WatchedProblem(figure, PathDistance(self.path.extended(runout)),
-                                       self.obstacles, settings or PlannerSettings()).watch(self)
+                                       self.obstacles, settings).watch(self)
         start = self.path.knots[0]
         d = self.path.evaluate(0, 0.0, 1)
         self.state0 = (float(start[0]), float(start[1]), math.atan2(d[1], d[0]), 0.0, 0.0)

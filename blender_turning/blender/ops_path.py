@@ -4,6 +4,7 @@ the scene exactly as it was (nothing is written until the plan is complete)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import bpy
 
@@ -23,7 +24,10 @@ def prepare(context, fig) -> FollowJob:
         raise SceneInputError("no path curve set (Follow Path > Path)")
     control = bezier_control_points(s.path)
     footprints = obstacle_footprints(s.obstacles, context.evaluated_depsgraph_get())
-    return FollowJob(figure_from_settings(s), control, footprints)
+    figure = figure_from_settings(s)
+    if s.plan_curvature_rate > 0:
+        figure = replace(figure, limits=replace(figure.limits, dC_f_max=s.plan_curvature_rate))
+    return FollowJob(figure, control, footprints)
 
 
 def finish(context, fig, job, result):

@@ -99,6 +99,7 @@ class VIEW3D_PT_turning_path(_FigurePanel, bpy.types.Panel):
         layout = self.layout
         layout.prop(s, "path")
         layout.prop(s, "obstacles")
+        layout.prop(s, "plan_curvature_rate")
         layout.operator("turning.follow_path", icon="CURVE_PATH")
 
 
