@@ -148,6 +148,8 @@ class PathDistance:
         idx = np.arange(len(pts)) if _subset is None else np.asarray(_subset)
         self.samples = pts[idx]
         self._idx = idx
+        self._key_p = -2.0 * self.samples.T                       # (2, n)
+        self._key_s = np.einsum("nk,nk->n", self.samples, self.samples)
 
     def near(self, center, radius: float) -> "PathDistance":
         """The same distance function for points within ``radius`` of ``center``, on fewer samples.
@@ -165,18 +167,27 @@ class PathDistance:
 
     def __call__(self, P) -> np.ndarray:
         P = np.asarray(P, float)
-        diff = P[..., None, :] - self.samples
-        d2 = np.einsum("...k,...k->...", diff, diff)
-        d = np.sqrt(d2.min(axis=-1))
+        flat = P.reshape(-1, 2)
+        j = self._nearest(flat)
+        r = flat - self.samples[j]
+        d = np.sqrt(r[:, 0] * r[:, 0] + r[:, 1] * r[:, 1]).reshape(P.shape[:-1])
         if self.exact:
             d = np.minimum(d, self._refined(P))
         return d
 
+    def _nearest(self, flat):
+        """Index of the nearest sample to each row of ``flat`` (shape ``(m, 2)``).
+
+        ``|P - S|^2 = |P|^2 - 2 P.S + |S|^2``: one matrix product finds the nearest sample; the
+        distance itself is then computed directly (so it has full precision near the path).
+        """
+        key = flat @ self._key_p + self._key_s         # (m, n): |S|^2 - 2 P.S
+        return np.argmin(key, axis=1)
+
     def nearest_index(self, P) -> np.ndarray:
         """Index (into the full sample list) of the nearest sample to each point."""
         P = np.asarray(P, float)
-        diff = P[..., None, :] - self.samples
-        return self._idx[np.argmin(np.einsum("...k,...k->...", diff, diff), axis=-1)]
+        return self._idx[self._nearest(P.reshape(-1, 2))].reshape(P.shape[:-1])
 
     def _refined(self, P):
         pts, seg, u = self._all

@@ -93,6 +93,8 @@ class Problem:
             self._lookahead = ds * np.arange(1, settings.lookahead * per + 1).reshape(
                 settings.lookahead, per)
             self._lookahead_ds = ds
+            grid = np.linspace(0.0, self.limits.C_f_max, 257)
+            self._radius_table = self._radius(grid, settings.lookahead)
         # Section 3's physical limit 0.9 / (l |sin theta_v|) can only bind when C_f_max l > 0.9.
         self._physical_binds = self.limits.C_f_max * self.body.l > PHYSICAL_MARGIN
 
@@ -139,6 +141,12 @@ class Problem:
             strong = np.where(k[None, :n] <= np.broadcast_to(K, d_last.shape)[:, None], strong,
                               0.0)
             terms[:, :n] = np.maximum(terms[:, :n], strong)
+            # Each bound also holds, less b per sample, for every later sample (Lipschitz again).
+            run = terms[:, 0].copy()
+            for j in range(1, terms.shape[1]):
+                run = np.maximum(run - b, terms[:, j])
+                terms[:, j] = run
+            terms = np.where(k[None, :] <= np.broadcast_to(K, d_last.shape)[:, None], terms, 0.0)
         return terms.sum(axis=1)
 
     def _arc_bound(self, state, C0, n):
@@ -151,7 +159,10 @@ class Problem:
         chord = V * tau[None, :] * np.sinc(turn / (2 * np.pi))       # sin(turn/2) / (turn/2)
         ang = th[:, None] + 0.5 * turn
         pts = np.stack([x[:, None] + chord * np.cos(ang), y[:, None] + chord * np.sin(ang)], -1)
-        return self.distance(pts) - self._radius(np.abs(C0), n)
+        # r grows with |C0|: take the tabulated value at the next grid point up (an over-estimate).
+        cells = self._radius_table.shape[0] - 1
+        i = np.minimum(np.ceil(np.abs(C0) / self.limits.C_f_max * cells), cells).astype(np.intp)
+        return self.distance(pts) - self._radius_table[i, :n]
 
     def _radius(self, absC0, n):
         """``r(tau_k)``, k = 1..n: how far the foot can be from the nominal arc (Section 6.1's
