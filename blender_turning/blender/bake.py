@@ -109,7 +109,8 @@ def _figure_action(obj):
     if current is not None:
         # The user's action: keep it (muted, on its own NLA track) and remember it for Clear Bake.
         bag = compat.channels(obj)
-        params = [fc for fc in (bag.fcurves if bag else ()) if fc.data_path.startswith(PARAM_PREFIX)]
+        params = [fc for fc in (bag.fcurves if bag else ())
+                  if fc.data_path.startswith(PARAM_PREFIX)]
         track = adt.nla_tracks.new()
         track.name = STASH_TRACK
         compat.nla_strip_new(track, current.name, int(current.frame_range[0]), current)

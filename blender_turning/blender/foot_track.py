@@ -1,4 +1,4 @@
-"""The foot track drawn as a curve object: a poly spline through the foot positions on the ground."""
+"""The foot track drawn as a curve object: a poly spline through the foot's ground positions."""
 from __future__ import annotations
 
 import bpy
