@@ -1,0 +1,119 @@
+"""Benchmark the path-following planner (issue 3) against the paper's plain best-first search.
+
+For each scene: one receding-horizon run with the planner as shipped (warm start, lower bounds,
+children and queue nodes simulated in batches); per replanning its wall time and nodes expanded.
+Then, on a few of the same replanning states, the paper's plain best-first search (Fig. 14: no
+warm start, no lower bound, one node at a time):
+
+- node count: the identical search with each node's q children simulated as one array (same
+  expansion sequence, same counts), stopped at 20x our count + 1 (so "capped" proves >= 20x);
+- wall time per expansion: measured literally one child at a time over its first expansions;
+  the baseline's wall time is count x that (a lower bound when the count is capped).
+
+Usage: python scripts/bench_planner.py [--quick] [--json out.json]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import platform
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from blender_turning.core.planner import Problem, branch_and_bound  # noqa: E402
+from blender_turning.core.scene import load_scene  # noqa: E402
+
+CASES = [  # scene, N, q, baseline samples
+    ("slalom", 12, 7, 4),
+    ("tree_skiing", 10, 5, 3),
+    ("tree_skiing", 12, 5, 3),
+    ("cyclist_corner", 10, 5, 3),
+    ("potholes", 10, 5, 3),
+]
+
+
+def baseline(scene, problem, state, cf, t, ours_expanded, literal_cap):
+    """Plain best-first from one replanning state: (expanded, capped, per-expansion s, f_opt)."""
+    local = problem.local(state[:2])
+    plain = replace(problem.settings, warm_start=False, lower_bound=False, batch=1,
+                    max_expansions=20 * ours_expanded + 1)
+    pb = Problem(problem.figure, local.distance, local.obstacles, plain, problem.speed)
+    plan = branch_and_bound(pb, state, cf, t)
+    stats = branch_and_bound.last_stats
+    literal = replace(plain, vectorize_children=False, max_expansions=literal_cap)
+    pl = Problem(problem.figure, local.distance, local.obstacles, literal, problem.speed)
+    clock = time.perf_counter()
+    branch_and_bound(pl, state, cf, t)
+    lit = branch_and_bound.last_stats
+    per = (time.perf_counter() - clock) / max(lit.expanded, 1)
+    return stats.expanded, not stats.proven, per, (plan.f_opt if plan else math.inf)
+
+
+def run_case(name, N, q, n_base, literal_cap):
+    scene = load_scene(ROOT / "scenes" / f"{name}.json").with_settings(n_stages=N, q=q)
+    clock = time.perf_counter()
+    result = scene.run()
+    wall = time.perf_counter() - clock
+    tr = result.trajectory
+    reps = result.replans
+    ex = np.array([r.stats.expanded for r in reps])
+    wt = np.array([r.stats.wall_time for r in reps])
+    out = {"scene": name, "N": N, "q": q, "q^N": q ** N, "replans": len(reps),
+           "course_s": float(tr.duration), "wall_total_s": wall,
+           "expanded_median": float(np.median(ex)), "expanded_max": int(ex.max()),
+           "expanded_total": int(ex.sum()), "wall_median_s": float(np.median(wt)),
+           "wall_max_s": float(wt.max()), "real_time_factor": wall / float(tr.duration)}
+    problem = scene.problem()
+    steps = scene.settings.steps_per_stage
+    picks = np.unique(np.linspace(0, len(reps) - 1, n_base).round().astype(int))
+    base = []
+    for j in picks:
+        k = j * steps
+        state, cf = tr.data[1:6, k].copy(), float(tr.C_f[k])
+        n, capped, per, f = baseline(scene, problem, state, cf, float(tr.t[k]),
+                                     int(ex[j]), literal_cap)
+        same = (not capped) and abs(f - reps[j].f_opt) <= 1e-9 * max(1.0, abs(f))
+        base.append({"replan": int(j), "t": float(tr.t[k]), "ours_expanded": int(ex[j]),
+                     "ours_wall_s": float(wt[j]), "plain_expanded": n, "plain_capped": capped,
+                     "plain_s_per_expansion": per, "plain_wall_s_estimate": n * per,
+                     "same_f_opt": same if not capped else None})
+        print(f"  {name} N={N} q={q} replan {j}: ours {ex[j]} nodes {wt[j]:.3f} s; plain "
+              f"{'>=' if capped else ''}{n} nodes, {per * 1e3:.1f} ms/expansion", flush=True)
+    out["baseline"] = base
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="one baseline sample per scene")
+    ap.add_argument("--json", help="write the results here")
+    ap.add_argument("--literal-cap", type=int, default=200,
+                    help="expansions timed for the one-child-at-a-time baseline")
+    args = ap.parse_args(argv)
+    info = {"date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+            "python": platform.python_version(), "numpy": np.__version__,
+            "machine": platform.machine(), "cpus": __import__("os").cpu_count()}
+    print(json.dumps(info), flush=True)
+    results = []
+    for name, N, q, nb in CASES:
+        r = run_case(name, N, q, 1 if args.quick else nb, args.literal_cap)
+        results.append(r)
+        print(f"{name} N={N} q={q}: course {r['course_s']:.1f} s, planning {r['wall_total_s']:.1f} s"
+              f" (x{r['real_time_factor']:.2f} real time); per replan median "
+              f"{r['wall_median_s'] * 1e3:.0f} ms, worst {r['wall_max_s'] * 1e3:.0f} ms; nodes "
+              f"median {r['expanded_median']:.0f}, worst {r['expanded_max']}", flush=True)
+    if args.json:
+        Path(args.json).write_text(json.dumps({"info": info, "results": results}, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
