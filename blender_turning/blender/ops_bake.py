@@ -2,6 +2,8 @@
 scene's frame range, and its removal."""
 from __future__ import annotations
 
+import math
+
 import bpy
 
 from ..core.errors import TurningError
@@ -16,6 +18,16 @@ def apply_bake(fig, traj, track):
     result = bake.bake_pose_track(fig, track)
     foot_track.write_foot_track(fig, traj.x, traj.y)
     return result
+
+
+def reset_pose(fig):
+    """Put a figure without baked keys back at its start, in its rest pose."""
+    s = fig.turning
+    fig.location = s.start
+    fig.rotation_euler = (0.0, 0.0, s.start_heading - math.pi / 2)
+    for pb in fig.pose.bones:
+        pb.location = (0.0, 0.0, 0.0)
+        pb.rotation_quaternion = (1.0, 0.0, 0.0, 0.0)
 
 
 class TURNING_OT_bake_turns(bpy.types.Operator):
@@ -68,6 +80,7 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
         fig = context_figure(context)
         bake.clear_bake(fig)
         foot_track.remove_foot_track(fig)
+        reset_pose(fig)
         self.report({"INFO"}, f"Cleared the bake of {fig.name}")
         return {"FINISHED"}
 
