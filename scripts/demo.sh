@@ -15,5 +15,5 @@ echo "demo: trajectory $out/slalom.csv, plot $out/slalom.png, figures in $out/fi
 # The Blender demo (bpy wheel, background): skier, snowboarder, telemark on the slalom path and a
 # cyclist round a corner, 4 s at 320x180.  Prints its progress, then where the frames and .blend are.
 "$py" "$root/scripts/render_job.py" --config "$root/scripts/configs/demo.toml" \
-  --output "$out/blender_demo" | grep -v "| Saved:"
+  --output "$out/blender_demo" | grep --line-buffered -v "| Saved:"
 echo "demo: Blender frames in $out/blender_demo/frames, scene in $out/blender_demo/demo.blend"
