@@ -151,6 +151,10 @@ def load_config(path: Path, overrides) -> dict:
     cfg["paths"], cfg["obstacles"] = paths, obstacles
     if overrides.seconds:
         cfg["seconds"] = overrides.seconds
+    if overrides.frame_step:
+        if overrides.frame_step < 1:
+            raise ConfigError("--frame-step must be at least 1")
+        cfg["frame_step"] = overrides.frame_step
     return cfg
 
 
@@ -274,7 +278,10 @@ def make_camera(bpy, cfg, figures):
     d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-6 else np.array([0.0, 1.0])
     side = np.array([-d[1], d[0]])
     dist, h = cfg["camera"]["distance"], cfg["camera"]["height"]
-    offset = -0.55 * dist * d + 0.85 * dist * side
+    # One figure: a three-quarter view from its side; all: from behind, so that figures side by
+    # side spread across the picture.
+    offset = (-0.9 * dist * d + 0.35 * dist * side) if len(chosen) > 1 else \
+        (-0.55 * dist * d + 0.85 * dist * side)
     cam_data = bpy.data.cameras.new("Camera")
     cam_data.lens = cfg["camera"]["lens"]
     cam = bpy.data.objects.new("Camera", cam_data)
@@ -413,6 +420,8 @@ def parse_args(argv):
     p.add_argument("--engine", help="WORKBENCH, EEVEE or CYCLES (overrides render.engine)")
     p.add_argument("--resolution", help="WIDTHxHEIGHT in pixels (overrides render.resolution)")
     p.add_argument("--seconds", type=float, help="length of the animation (overrides job.seconds)")
+    p.add_argument("--frame-step", type=int, help="render every n-th frame (overrides "
+                   "job.frame_step)")
     p.add_argument("--no-render", action="store_true", help="build, bake and save only")
     return p.parse_args(argv)
 
