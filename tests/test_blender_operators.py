@@ -300,3 +300,75 @@ def test_panels_draw_every_setting(scene):
     for op in ("turning.bake_turns", "turning.clear_bake", "turning.follow_path"):
         assert op in drawn, op
     assert obj.turning.is_figure
+
+
+class _WM:
+    """The window manager calls the modal operator makes (no windows in background mode)."""
+
+    def __init__(self):
+        self.progress = []
+
+    def progress_begin(self, lo, hi):
+        self.progress.append(("begin", lo, hi))
+
+    def progress_update(self, value):
+        self.progress.append(value)
+
+    def progress_end(self):
+        self.progress.append("end")
+
+    def event_timer_remove(self, timer):
+        pass
+
+
+class _Ctx:
+    def __init__(self, wm):
+        self.window_manager = wm
+        self.workspace = type("W", (), {"status_text_set": lambda self, text: None})()
+
+    def __getattr__(self, name):
+        return getattr(bpy.context, name)
+
+
+def modal_operator(obj):
+    """A stand-in ``self`` for ``TURNING_OT_follow_path.modal`` with the job running."""
+    op_cls = bpy.types.TURNING_OT_follow_path
+    reports = []
+    fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),
+                           "_cleanup": op_cls._cleanup, "_complete": op_cls._complete})()
+    fake._job = ops_path.prepare(bpy.context, obj)
+    fake._fig_name, fake._timer = obj.name, object()
+    fake._job.start()
+    return op_cls, fake, reports
+
+
+def test_esc_in_the_modal_follow_path_leaves_the_scene_unchanged(scene):
+    obj = add("TELEMARK")
+    obj.turning.path = make_path([(0, 0), (3, -12), (-3, -24), (0, -36), (0, -60)])
+    obj.turning.plan_curvature_rate = 0.3
+    before = snapshot()
+    op_cls, fake, reports = modal_operator(obj)
+    wm = _WM()
+    esc = type("E", (), {"type": "ESC"})()
+    assert op_cls.modal(fake, _Ctx(wm), esc) == {"CANCELLED"}
+    assert fake._job.done() and "end" in wm.progress
+    assert reports and "cancelled" in reports[0][1]
+    assert snapshot() == before
+
+
+@needs_mapping
+def test_modal_follow_path_reports_progress_then_bakes(scene):
+    obj = add("TELEMARK")
+    obj.turning.path = make_path([(0, 0), (3, -12), (-3, -24), (0, -36)])
+    obj.turning.plan_curvature_rate = 0.3
+    op_cls, fake, reports = modal_operator(obj)
+    wm = _WM()
+    timer = type("E", (), {"type": "TIMER"})()
+    while True:
+        ret = op_cls.modal(fake, _Ctx(wm), timer)
+        if ret != {"RUNNING_MODAL"}:
+            break
+    assert ret == {"FINISHED"}, reports
+    values = [v for v in wm.progress if isinstance(v, int)]
+    assert values and values == sorted(values) and values[-1] == 100
+    assert obj.animation_data.action.name == obj.name

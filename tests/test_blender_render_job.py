@@ -66,3 +66,12 @@ def test_bad_config_exits_with_one_line(tmp_path, text, reason):
     assert len(lines) == 1 and lines[0].startswith("render_job: error:") and reason in lines[0], \
         r.stderr
     assert not (tmp_path / "out").exists()
+
+
+def test_cycles_renders_too(tmp_path):
+    r = run_job("--config", CONFIGS / "skier_slalom.toml", "--engine", "CYCLES",
+                "--resolution", "32x24", "--seconds", "0.05", "--output", tmp_path)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    frames = sorted((tmp_path / "frames").glob("frame_*.png"))
+    assert len(frames) == 2 and all(png_size(f) == (32, 24) for f in frames)
+    assert "with CYCLES" in r.stdout
