@@ -72,7 +72,8 @@ class Problem:
         self.limits = figure.limits
         if not math.isfinite(self.limits.dC_f_max) or not math.isfinite(self.limits.C_f_max):
             raise ValueError(f"the planner needs finite C_f_max and dC_f_max; preset "
-                             f"{figure.name!r} has {self.limits.C_f_max!r}, {self.limits.dC_f_max!r}")
+                             f"{figure.name!r} has {self.limits.C_f_max!r}, "
+                             f"{self.limits.dC_f_max!r}")
         self.distance = distance
         self.obstacles = obstacles
         self.settings = settings
@@ -104,7 +105,8 @@ class Problem:
 
     def local(self, center) -> "Problem":
         """The same problem with the path samples and obstacles that cannot matter within one
-        horizon of ``center`` dropped (exact: see :meth:`PathDistance.near`, :meth:`Obstacles.near`)."""
+        horizon of ``center`` dropped (exact: see :meth:`PathDistance.near` and
+        :meth:`Obstacles.near`)."""
         r = self.reach()
         p = Problem.__new__(Problem)
         p.__dict__.update(self.__dict__)

@@ -54,7 +54,8 @@ class FollowResult:
         return out
 
 
-def _past_end(problem: Problem, end, end_dir, xy) -> bool:
+def _past_end(end, end_dir, xy) -> bool:
+    """Has the foot crossed the plane through the path's end, normal to its end direction?"""
     return float(np.dot(np.asarray(xy) - end, end_dir)) >= 0.0
 
 
@@ -93,7 +94,7 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
             rows[k].extend(r.record[k])
         x, cf, s, t = r.state, float(r.C_f[0]), float(r.s[0]), t + st.t_stage
         previous = plan.choices
-        if end is not None and _past_end(problem, end, end_dir, x[:2, 0]):
+        if end is not None and _past_end(end, end_dir, x[:2, 0]):
             reached = True
             break
     return FollowResult(_trajectory(problem, rows, x, cf, t, s, meta), tuple(replans), reached)

@@ -126,7 +126,7 @@ def _follow_choices(problem, state, C_f, t0, s0, choices):
     """Simulate one fixed plan (all q choices at its last stage when ``choices`` is one short).
     Returns ``(cost, full choices)`` of its best feasible completion, or ``(inf, None)``."""
     st = problem.settings
-    x, cf, t, s, f = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0]), 0.0
+    x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
     f = np.zeros(1)
     for k, c in enumerate(choices):
         r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
@@ -147,7 +147,8 @@ def _greedy_dive(problem, state, C_f, t0, s0):
     """A first complete plan: at each stage take the child with the least ``f + lower bound``."""
     st = problem.settings
     q = st.q
-    x, cf, t, s, f = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0]), 0.0
+    x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
+    f = 0.0
     choices = []
     for depth in range(1, st.n_stages + 1):
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
@@ -189,7 +190,10 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     tol = lambda: _REL_TOL * max(1.0, abs(ub))     # noqa: E731
     while heap:
         ids = []
-        while heap and len(ids) < st.batch:
+        # Until a first complete plan bounds the search, the queue order (best first) is all that
+        # keeps it small: start with small batches and let them grow with the search.
+        limit = st.batch if ub < np.inf else min(st.batch, max(8, expanded // 4))
+        while heap and len(ids) < limit:
             prio, _, i = heapq.heappop(heap)
             if prio > ub + tol():          # everything left in the queue is worse
                 clip_bound += 1 + len(heap)
