@@ -372,3 +372,14 @@ def test_modal_follow_path_reports_progress_then_bakes(scene):
     values = [v for v in wm.progress if isinstance(v, int)]
     assert values and values == sorted(values) and values[-1] == 100
     assert obj.animation_data.action.name == obj.name
+
+
+@needs_mapping
+def test_first_bake_starts_where_the_figure_was_moved(scene):
+    obj = add("SKIER")
+    obj.location = (5.0, -3.0, 0.0)
+    obj.rotation_euler = (0.0, 0.0, 0.4)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    first = obj.turning.foot_track.data.splines[0].points[0].co
+    assert (first[0], first[1]) == pytest.approx((5.0, -3.0), abs=1e-5)
+    assert obj.turning.start_heading == pytest.approx(0.4 + np.pi / 2, abs=1e-6)

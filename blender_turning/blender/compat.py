@@ -151,11 +151,6 @@ def set_output_format(scene, kind: str) -> None:
         image.file_format = "PNG"
 
 
-def poll_message(cls, message: str) -> None:
-    """``Operator.poll_message_set`` (present since 3.0; kept here so poll code reads the same)."""
-    cls.poll_message_set(message)
-
-
 def temp_override(context, **kwargs):
     """``Context.temp_override`` (3.2+), for the one edit-mode switch of the rig builder."""
     return context.temp_override(**kwargs)

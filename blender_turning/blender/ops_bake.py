@@ -10,7 +10,7 @@ from ..core.errors import TurningError
 from . import bake, foot_track
 from .ops_common import context_figure, poll_figure
 from .pipeline import figure_pose_track
-from .scene_adapters import FrameRange
+from .scene_adapters import FrameRange, start_from_object
 
 
 def apply_bake(fig, traj, track):
@@ -48,12 +48,17 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
 
     def execute(self, context):
         fig = context_figure(context)
+        # Not baked yet: start where the user put the figure; baked: from its Start settings.
+        start = start_from_object(fig) if bake.figure_action(fig) is None else None
         try:
             frames = FrameRange.of_scene(context.scene)
-            traj, track = figure_pose_track(fig, frames)      # nothing written yet
+            traj, track = figure_pose_track(fig, frames, start=start)   # nothing written yet
         except (ValueError, TurningError) as exc:
             self.report({"ERROR"}, f"Bake Turns: {fig.name}: {exc}")
             return {"CANCELLED"}
+        if start is not None:
+            fig.turning.start = (start[0], start[1], 0.0)
+            fig.turning.start_heading = start[2]
         result = apply_bake(fig, traj, track)
         self.report({"INFO"}, f"Baked {fig.name}: {result.fcurves} F-curves x {result.frames} "
                               f"frames ({frames.start}-{frames.end})")

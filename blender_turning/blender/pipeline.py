@@ -26,17 +26,18 @@ def resampled(traj, frames: FrameRange):
     return type(out)(out.data[:, :n], out.meta)
 
 
-def simulate_figure(obj, frames: FrameRange):
-    """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames``; the trajectory at
-    every frame.  Raises ``ValueError`` or the core's ``FellOver``."""
+def simulate_figure(obj, frames: FrameRange, start=None):
+    """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames`` from ``start``
+    (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.  Raises
+    ``ValueError`` or the core's ``FellOver``."""
     figure = figure_from_settings(obj.turning)
     controller = controller_from_settings(obj, figure, frames)
     traj = simulate(figure, controller, frames.duration + 2 * DEFAULT_DT,
-                    state0=start_state(obj, controller), meta={"figure": obj.name})
+                    state0=start_state(obj, controller, start), meta={"figure": obj.name})
     return resampled(traj, frames)
 
 
-def figure_pose_track(obj, frames: FrameRange, options=None):
+def figure_pose_track(obj, frames: FrameRange, options=None, start=None):
     """``(trajectory, pose track)`` of the figure ``obj`` over ``frames``."""
-    traj = simulate_figure(obj, frames)
+    traj = simulate_figure(obj, frames, start)
     return traj, map_track(obj.turning.sport, traj, frames, options)

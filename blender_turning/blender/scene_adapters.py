@@ -88,12 +88,22 @@ def controller_from_settings(obj, figure: Figure, frames: FrameRange) -> PhaseEl
                         schedule(values["lean"]), heading)
 
 
-def start_state(obj, controller) -> tuple:
-    """The simulation's initial state ``(x, y, theta_dir, theta_v, omega_v)``: upright at the
-    figure's start, on the target ellipse (``omega_v = omega0 theta_max``)."""
+def start_state(obj, controller, start=None) -> tuple:
+    """The simulation's initial state ``(x, y, theta_dir, theta_v, omega_v)``: upright at
+    ``start = (x, y, theta_dir)`` (default: the figure's Start settings), on the target ellipse
+    (``omega_v = omega0 theta_max``)."""
     s = obj.turning
+    if start is None:
+        start = (s.start[0], s.start[1], s.start_heading)
     w, tm = controller.target(0.0)
-    return (float(s.start[0]), float(s.start[1]), float(s.start_heading), 0.0, w * tm)
+    return (float(start[0]), float(start[1]), float(start[2]), 0.0, w * tm)
+
+
+def start_from_object(obj):
+    """``(x, y, theta_dir)`` of where the figure's armature stands now (the rest pose faces +Y),
+    rounded as the Start settings store them (float32), so a re-bake from those is identical."""
+    x, y, heading = obj.location[0], obj.location[1], obj.rotation_euler[2] + math.pi / 2
+    return tuple(float(v) for v in np.float32([x, y, heading]))
 
 
 # -- Follow Path ----------------------------------------------------------------------------
