@@ -106,7 +106,8 @@ def main(argv=None):
     for name, N, q, nb in CASES:
         r = run_case(name, N, q, 1 if args.quick else nb, args.literal_cap)
         results.append(r)
-        print(f"{name} N={N} q={q}: course {r['course_s']:.1f} s, planning {r['wall_total_s']:.1f} s"
+        print(f"{name} N={N} q={q}: course {r['course_s']:.1f} s, planning "
+              f"{r['wall_total_s']:.1f} s"
               f" (x{r['real_time_factor']:.2f} real time); per replan median "
               f"{r['wall_median_s'] * 1e3:.0f} ms, worst {r['wall_max_s'] * 1e3:.0f} ms; nodes "
               f"median {r['expanded_median']:.0f}, worst {r['expanded_max']}", flush=True)

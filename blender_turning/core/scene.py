@@ -295,7 +295,8 @@ def scene_from_dict(doc) -> Scene:
                                                  hi_open=True)),
               sample_dt=pl.number("sample_dt", 0.1, 0.0, 60.0, lo_open=True),
               dt=pl.number("dt", 0.05, 1e-4, 1.0),
-              warm_start=pl.boolean("warm_start", True), lower_bound=pl.boolean("lower_bound", True),
+              warm_start=pl.boolean("warm_start", True),
+              lower_bound=pl.boolean("lower_bound", True),
               batch=pl.integer("batch", 128, 1, 4096))
     try:
         settings = PlannerSettings(**kw)
