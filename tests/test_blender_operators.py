@@ -383,3 +383,22 @@ def test_first_bake_starts_where_the_figure_was_moved(scene):
     first = obj.turning.foot_track.data.splines[0].points[0].co
     assert (first[0], first[1]) == pytest.approx((5.0, -3.0), abs=1e-5)
     assert obj.turning.start_heading == pytest.approx(0.4 + np.pi / 2, abs=1e-6)
+
+
+@needs_mapping
+def test_keyed_lean_is_followed_over_time(scene):
+    """Section 5: parameters specified over time.  Lean keyed from 8 to 28 deg over 10 s."""
+    scene.frame_end = 241
+    obj = add("SNOWBOARDER")
+    obj.turning.lean = np.radians(8.0)
+    obj.keyframe_insert("turning.lean", frame=1)
+    obj.turning.lean = np.radians(28.0)
+    obj.keyframe_insert("turning.lean", frame=241)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    fc = next(f for f in compat.channels(obj).fcurves if f.data_path == '["turn_lean"]')
+    co = np.empty(2 * len(fc.keyframe_points), np.float32)
+    fc.keyframe_points.foreach_get("co", co)
+    lean = np.abs(co[1::2])
+    early, late = lean[:72].max(), lean[-72:].max()
+    assert np.degrees(early) < 14.0 and np.degrees(late) > 20.0, (np.degrees(early),
+                                                                  np.degrees(late))
