@@ -106,7 +106,7 @@ def test_closed_corridor_raises_plan_infeasible_with_the_position():
     assert 0.0 < x < 30.0 and abs(y) < 3.0
     assert f"({x:.2f}, {y:.2f})" in str(e) and f"t = {e.t:.2f} s" in str(e)
     assert e.trajectory is not None and e.trajectory.t[-1] == pytest.approx(e.t)
-    # The wall is further than one horizon at the time of the error? No: it is within reach.
+    # It gave up only once the wall was within one horizon's reach.
     assert 30.0 - x <= scene.problem().reach()
 
 
