@@ -20,6 +20,7 @@ EXT_TOOL = Path(bpy.utils.resource_path("LOCAL")) / "scripts/addons_core/bl_pkg/
 INSTALL = textwrap.dedent("""
     import os, sys, tempfile
     os.environ["BLENDER_USER_RESOURCES"] = tempfile.mkdtemp(prefix="turning-ext-")
+    sys.modules["blender_turning"] = None     # the installed copy must not reach the dev one
     import bpy, addon_utils
     MOD = "bl_ext.user_default.blender_turning"
 
@@ -77,3 +78,20 @@ def test_install_enable_run_disable(built_zip, tmp_path):
     r = subprocess.run([sys.executable, str(script), str(built_zip)], capture_output=True,
                        text=True, timeout=300, cwd=tmp_path)
     assert "EXTENSION-OK" in r.stdout, r.stdout[-3000:] + r.stderr[-3000:]
+
+
+def test_inner_package_imports_itself_only_relatively():
+    """Inside Blender the package is ``bl_ext.<repo>.blender_turning``: an absolute
+    ``blender_turning`` import would miss it (or pick up another copy)."""
+    import ast
+    bad = []
+    for path in (ROOT / "blender_turning").rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                names = [node.module or ""]
+            bad += [f"{path.relative_to(ROOT)}: {n}" for n in names
+                    if n.split(".")[0] == "blender_turning"]
+    assert not bad, bad
