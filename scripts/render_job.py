@@ -142,7 +142,7 @@ def load_config(path: Path, overrides) -> dict:
                "heading_deg": _get(f, "heading_deg", float, None, w),
                "path": _get(f, "path", str, None, w),
                "obstacles": _get(f, "obstacles", str, None, w),
-               "plan_curvature_rate": _get(f, "plan_curvature_rate", float, 0.0, w)}
+               "plan_curvature_rate": _get(f, "plan_curvature_rate", float, None, w)}
         if control == "path" and fig["path"] not in paths:
             raise ConfigError(f"{w}path = {fig['path']!r} is not a [paths.<name>] of the config")
         if fig["obstacles"] and not any(o["group"] == fig["obstacles"] for o in obstacles):
@@ -234,7 +234,8 @@ def add_figure(bpy, fig, cfg, paths, groups):
     if fig["control"] == "path":
         s.path = paths[fig["path"]]
         s.obstacles = groups.get(fig["obstacles"]) if fig["obstacles"] else None
-        s.plan_curvature_rate = fig["plan_curvature_rate"]
+        if fig["plan_curvature_rate"] is not None:    # else the sport preset's
+            s.plan_curvature_rate = fig["plan_curvature_rate"]
     return obj
 
 

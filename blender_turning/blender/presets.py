@@ -17,7 +17,7 @@ PRESET_ROOT = str(Path(__file__).resolve().parents[2])
 PRESET_SUBDIR = "turning_figure"
 PRESET_VALUES = ["settings.sport", "settings.mass", "settings.com_height", "settings.inertia",
                  "settings.speed", "settings.curvature_max", "settings.curvature_rate_max",
-                 "settings.fall_angle"]
+                 "settings.fall_angle", "settings.plan_curvature_rate"]
 
 
 class TURNING_MT_figure_presets(bpy.types.Menu):

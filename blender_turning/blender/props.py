@@ -78,7 +78,7 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
     plan_curvature_rate: FloatProperty(
         name="Planner Curvature Rate", default=0.0, min=0.0, max=100.0, options=_STATIC,
         description="Largest |dC_f/dt| the path planner tries (1/(m s)); 0 uses Max Curvature "
-                    "Rate.  A gentler rate than the figure's limit often plans smoother runs")
+                    "Rate.  The sport presets set a gentler rate than the figure's limit")
     foot_track: PointerProperty(name="Foot Track", type=bpy.types.Object, options=_STATIC,
                                 description="Curve object drawn along the foot's path")
 

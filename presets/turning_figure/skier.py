@@ -9,3 +9,4 @@ settings.speed = 10.0
 settings.curvature_max = 0.16666666666666666
 settings.curvature_rate_max = 0.67
 settings.fall_angle = 1.0471975511965976
+settings.plan_curvature_rate = 0.2
