@@ -403,3 +403,22 @@ def test_keyed_lean_is_followed_over_time(scene):
     early, late = lean[:72].max(), lean[-72:].max()
     assert np.degrees(early) < 14.0 and np.degrees(late) > 20.0, (np.degrees(early),
                                                                   np.degrees(late))
+
+
+def test_obstacle_footprints_and_path_points_in_world_space(scene):
+    from blender_turning.blender.scene_adapters import bezier_control_points, obstacle_footprints
+    coll = bpy.data.collections.new("Obs")
+    scene.collection.children.link(coll)
+    wall = make_wall("W", (10.0, 5.0), (4.0, 2.0))
+    wall.rotation_euler = (0.0, 0.0, np.pi / 2)            # its 4 m side now along y
+    coll.objects.link(wall)
+    ((name, hull),) = obstacle_footprints(coll, bpy.context.evaluated_depsgraph_get())
+    assert name == "W" and len(hull) == 4
+    np.testing.assert_allclose(hull.min(axis=0), (9.0, 3.0), atol=1e-5)
+    np.testing.assert_allclose(hull.max(axis=0), (11.0, 7.0), atol=1e-5)
+    path = make_path([(0, 0), (0, -10), (5, -20)])
+    path.location = (1.0, 2.0, 0.0)
+    bpy.context.evaluated_depsgraph_get()                  # as Follow Path does before reading
+    ctrl = bezier_control_points(path)
+    assert ctrl.shape == (7, 2)
+    np.testing.assert_allclose(ctrl[::3], [(1, 2), (1, -8), (6, -18)], atol=1e-5)

@@ -22,8 +22,9 @@ def prepare(context, fig) -> FollowJob:
     s = fig.turning
     if s.path is None:
         raise SceneInputError("no path curve set (Follow Path > Path)")
+    depsgraph = context.evaluated_depsgraph_get()      # also brings world matrices up to date
     control = bezier_control_points(s.path)
-    footprints = obstacle_footprints(s.obstacles, context.evaluated_depsgraph_get())
+    footprints = obstacle_footprints(s.obstacles, depsgraph)
     figure = figure_from_settings(s)
     if s.plan_curvature_rate > 0:
         figure = replace(figure, limits=replace(figure.limits, dC_f_max=s.plan_curvature_rate))
