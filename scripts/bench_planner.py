@@ -91,10 +91,48 @@ def run_case(name, N, q, n_base, literal_cap):
     return out
 
 
+def doomed_share(name="slalom", N=12, q=7):
+    """Of the nodes our search expands at the first replanning, how many can never reach depth N
+    without falling (whatever the obstacles and the path): a depth-first probe of the lean
+    alone (theta_v, omega_v, C_f evolve independently of position at constant speed)."""
+    from blender_turning.core.obstacles import Obstacles
+    from blender_turning.core.path import HermitePath, PathDistance
+    from blender_turning.core.planner import search
+
+    scene = load_scene(ROOT / "scenes" / f"{name}.json").with_settings(n_stages=N, q=q)
+    problem = scene.problem().local(scene.state0[:2])
+    seen = []
+    expand = search._expand
+
+    def recording(pb, nodes, ids):
+        for i in np.asarray(ids):
+            seen.append((nodes.state[:, i].copy(), float(nodes.cols["cf"][i]), int(nodes.depth[i])))
+        return expand(pb, nodes, ids)
+    search._expand = recording
+    try:
+        branch_and_bound(problem, scene.state0, scene.C_f0)
+    finally:
+        search._expand = expand
+    lean = Problem(problem.figure, PathDistance(HermitePath.from_polyline([[0, 0], [1, 0]]), 1),
+                   Obstacles(), problem.settings)
+
+    def viable(x, cf, r):
+        if r == 0:
+            return True
+        res = lean.simulate_stage(np.repeat(x[:, None], q, 1), np.full(q, cf), lean.u_values,
+                                  np.zeros(q), np.zeros(q))
+        return any(not res.fell[j] and viable(res.state[:, j], res.C_f[j], r - 1)
+                   for j in np.argsort(np.abs(res.state[3])))
+    doomed = sum(not viable(x, cf, N - d) for x, cf, d in seen)
+    return {"scene": name, "N": N, "q": q, "expanded": len(seen), "lean_doomed": doomed}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="one baseline sample per scene")
     ap.add_argument("--json", help="write the results here")
+    ap.add_argument("--doomed", action="store_true",
+                    help="only: how many expanded nodes are doomed to fall (slalom, first plan)")
     ap.add_argument("--literal-cap", type=int, default=200,
                     help="expansions timed for the one-child-at-a-time baseline")
     args = ap.parse_args(argv)
@@ -102,6 +140,9 @@ def main(argv=None):
             "python": platform.python_version(), "numpy": np.__version__,
             "machine": platform.machine(), "cpus": __import__("os").cpu_count()}
     print(json.dumps(info), flush=True)
+    if args.doomed:
+        print(json.dumps(doomed_share()))
+        return 0
     results = []
     for name, N, q, nb in CASES:
         r = run_case(name, N, q, 1 if args.quick else nb, args.literal_cap)

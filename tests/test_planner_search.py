@@ -15,6 +15,8 @@ def random_problem(rng, N, q, **settings):
     """A small random scene near the start: a wiggly path, a few trees, poles and a polygon."""
     fig = preset(str(rng.choice(["skier", "cyclist", "snowboarder"])))
     fig = replace(fig, limits=replace(fig.limits, dC_f_max=float(rng.uniform(0.05, 0.4))))
+    if fig.name != "cyclist" and rng.random() < 0.6:   # slower: the fall table applies (mostly)
+        fig = replace(fig, body=replace(fig.body, V_cm=float(rng.uniform(5.0, 8.0))))
     v = fig.body.V_cm
     span = v * N * 0.3
     xs = np.linspace(0.0, span * 1.5, 4)
@@ -43,7 +45,8 @@ def random_problem(rng, N, q, **settings):
 
 VARIANTS = [dict(warm_start=w, lower_bound=lb, batch=b)
             for w in (False, True) for lb in (False, True) for b in (1, 8)]
-VARIANTS += [dict(lookahead=0), dict(lookahead=1, batch=3), dict(lookahead=30, warm_start=False)]
+VARIANTS += [dict(lookahead=0), dict(lookahead=1, batch=3), dict(lookahead=30, warm_start=False),
+             dict(fall_table=False), dict(fall_table=False, lower_bound=False, warm_start=False)]
 
 
 @pytest.mark.parametrize("seed", range(48))

@@ -96,8 +96,19 @@ class Problem:
             self._lookahead_ds = ds
             grid = np.linspace(0.0, self.limits.C_f_max, 257)
             self._radius_table = self._radius(grid, settings.lookahead)
+        #: Lean range (rad) on which the fall table's monotonicity is checked.
+        self._lean_checked = min(settings.theta_bound + 0.1, 1.5)
         # Section 3's physical limit 0.9 / (l |sin theta_v|) can only bind when C_f_max l > 0.9.
         self._physical_binds = self.limits.C_f_max * self.body.l > PHYSICAL_MARGIN
+        self._fall_table = False                  # built on first use (fall_table.py)
+
+    def fall_table(self):
+        """The :class:`.fall_table.FallTable` of this problem, or ``None`` where it does not
+        apply (varying speed, or a figure for which the lean is not monotone)."""
+        if self._fall_table is False:
+            from .fall_table import FallTable
+            self._fall_table = FallTable.for_problem(self) if self.settings.fall_table else None
+        return self._fall_table
 
     def reach(self) -> float:
         """How far the foot can get within one horizon, m."""
@@ -108,6 +119,7 @@ class Problem:
         horizon of ``center`` dropped (exact: see :meth:`PathDistance.near` and
         :meth:`Obstacles.near`)."""
         r = self.reach()
+        self.fall_table()                       # built once, shared by the local copies
         p = Problem.__new__(Problem)
         p.__dict__.update(self.__dict__)
         p.distance = self.distance.near(center, r)

@@ -46,7 +46,7 @@ class FollowResult:
 
     def totals(self) -> dict:
         keys = ("expanded", "generated", "clipped_collision", "clipped_fall", "clipped_bound",
-                "leaves", "wall_time")
+                "clipped_doomed", "leaves", "wall_time")
         out = {k: sum(getattr(r.stats, k) for r in self.replans) for k in keys}
         out["replans"] = len(self.replans)
         out["proven"] = all(r.stats.proven for r in self.replans)

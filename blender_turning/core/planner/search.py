@@ -32,13 +32,16 @@ _REL_TOL = 1e-9
 
 @dataclass(frozen=True)
 class SearchStats:
-    """What one search did.  Clipped counts are children (or queued nodes) dropped, by reason."""
+    """What one search did.  Clipped counts are children (or queued nodes) dropped, by reason:
+    collision, fall (the lean passed its bound), bound (cannot beat the best plan) and doomed
+    (will fall within the horizon whatever it does, ``fall_table.py``)."""
 
     expanded: int
     generated: int
     clipped_collision: int
     clipped_fall: int
     clipped_bound: int
+    clipped_doomed: int
     leaves: int
     wall_time: float
     proven: bool
@@ -185,7 +188,8 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     nodes = _root(state, C_f, t0, s0)
     heap = [(0.0, 0, 0)]
     expanded = generated = leaves = 0
-    clip_col = clip_fall = clip_bound = 0
+    clip_col = clip_fall = clip_bound = clip_doom = 0
+    table = problem.fall_table() if st.fall_table else None
     proven = True
     tol = lambda: _REL_TOL * max(1.0, abs(ub))     # noqa: E731
     while heap:
@@ -221,6 +225,10 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                 ub = float(f[j])
                 best = nodes.choices(int(par[j])) + [int(ch[j])]
         inner = alive & (depth < N)
+        if table is not None and inner.any():
+            doomed = inner & table.doomed(r.state, r.C_f, (N - depth) * st.steps_per_stage)
+            clip_doom += int(np.count_nonzero(doomed))
+            inner &= ~doomed
         prio = f + problem.lower_bound(r.d_last, depth, r.state, r.C_f) if st.lower_bound \
             else f
         keep = inner & ~(prio > ub + tol())
@@ -232,7 +240,7 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
             seq = new.tolist()
             for p, dd, i in zip(prio[k].tolist(), depth[k].tolist(), seq):
                 heapq.heappush(heap, (p, -dd, i))
-    stats = SearchStats(expanded, generated, clip_col, clip_fall, clip_bound, leaves,
+    stats = SearchStats(expanded, generated, clip_col, clip_fall, clip_bound, clip_doom, leaves,
                         time.perf_counter() - clock, proven, float(warm_cost))
     branch_and_bound.last_stats = stats
     if best is None:

@@ -36,6 +36,9 @@ class PlannerSettings:
     lookahead: int = 6
     """With ``lower_bound``: how many of the next samples get the tighter arc bound (the foot
     stays near the arc of its current curvature for a short while); 0 turns it off."""
+    fall_table: bool = True
+    """Also clip nodes that provably fall within their remaining stages whatever they do
+    (``fall_table.py``; exact).  Off: only the paper's clip of a branch that has fallen."""
     batch: int = 128
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
     one node at a time).  Any value returns the same optimum."""
