@@ -288,7 +288,8 @@ def scene_from_dict(doc) -> Scene:
 
     # Planner settings (Section 6.1).
     pl = top.obj("planner", allowed={"stages", "choices", "stage_time", "lean_bound_deg",
-                                     "sample_dt", "dt", "warm_start", "lower_bound", "batch"})
+                                     "sample_dt", "dt", "warm_start", "lower_bound", "fall_table",
+                                     "batch"})
     kw = dict(n_stages=pl.integer("stages", 10, 1, 64), q=pl.integer("choices", 5, 2, 64),
               t_stage=pl.number("stage_time", 0.3, 0.0, 60.0, lo_open=True),
               theta_bound=math.radians(pl.number("lean_bound_deg", 30.0, 0.0, 90.0, lo_open=True,
@@ -297,6 +298,7 @@ def scene_from_dict(doc) -> Scene:
               dt=pl.number("dt", 0.05, 1e-4, 1.0),
               warm_start=pl.boolean("warm_start", True),
               lower_bound=pl.boolean("lower_bound", True),
+              fall_table=pl.boolean("fall_table", True),
               batch=pl.integer("batch", 128, 1, 4096))
     try:
         settings = PlannerSettings(**kw)
