@@ -3,7 +3,7 @@
 For each scene: one receding-horizon run with the planner as shipped (warm start, lower bounds,
 children and queue nodes simulated in batches); per replanning its wall time and nodes expanded.
 Then, on a few of the same replanning states, the paper's plain best-first search (Fig. 14: no
-warm start, no lower bound, one node at a time):
+warm start, no lower bound, no fall table, one node at a time):
 
 - node count: the identical search with each node's q children simulated as one array (same
   expansion sequence, same counts), stopped at 20x our count + 1 (so "capped" proves >= 20x);
@@ -43,8 +43,8 @@ CASES = [  # scene, N, q, baseline samples
 def baseline(scene, problem, state, cf, t, ours_expanded, literal_cap):
     """Plain best-first from one replanning state: (expanded, capped, per-expansion s, f_opt)."""
     local = problem.local(state[:2])
-    plain = replace(problem.settings, warm_start=False, lower_bound=False, batch=1,
-                    max_expansions=20 * ours_expanded + 1)
+    plain = replace(problem.settings, warm_start=False, lower_bound=False, fall_table=False,
+                    batch=1, max_expansions=20 * ours_expanded + 1)
     pb = Problem(problem.figure, local.distance, local.obstacles, plain, problem.speed)
     plan = branch_and_bound(pb, state, cf, t)
     stats = branch_and_bound.last_stats

@@ -81,7 +81,8 @@ def run(args) -> int:
 def _settings(st) -> dict:
     return {"t_stage": st.t_stage, "n_stages": st.n_stages, "q": st.q,
             "theta_bound": st.theta_bound, "sample_dt": st.sample_dt, "dt": st.dt,
-            "warm_start": st.warm_start, "lower_bound": st.lower_bound, "batch": st.batch}
+            "warm_start": st.warm_start, "lower_bound": st.lower_bound,
+            "lookahead": st.lookahead, "fall_table": st.fall_table, "batch": st.batch}
 
 
 def _plot(path, scene, traj, failed_at=None):
