@@ -12,6 +12,8 @@ Beyond the paper (each switchable, for the benchmarks and the exactness tests):
 - warm start: the previous plan shifted by one stage (all q choices for the new last stage) is
   simulated first and gives the first upper bound; without a previous plan, a greedy dive does;
 - lower bound: ``Problem.lower_bound``, added to ``f`` both for ordering (A*) and for clipping;
+- fall table (``fall_table.py``): a child that will fall within the horizon whatever it does is
+  clipped at once instead of through its subtree;
 - batches: ``batch`` queue nodes are expanded together, their ``batch * q`` children simulated as
   one array operation.
 """
