@@ -20,7 +20,7 @@ from .common import (body_axes, carried, ik_limb, lean, leg_lengths, phase_windo
                      rot_y, rot_z)
 from .kinematics import frame_from_yx
 from .snow import (bend_waist, carry_vec, hip_drop, knee_flexion, legs_to, level_head,
-                   set_pelvis, spring_length, tilt_gain, twist_upper_body)
+                   SpringLegOptions, set_pelvis, spring_length, tilt_gain, twist_upper_body)
 
 SIDES = (("L", -1.0), ("R", 1.0))
 
@@ -33,29 +33,15 @@ POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
 
 
 @dataclass(frozen=True)
-class SkierOptions:
+class SkierOptions(SpringLegOptions):
     """Parameters of the skier mapping (SI units, angles in radians)."""
 
-    k_s: float = 3000.0
-    """Leg spring stiffness, N/m: the legs shorten by (F_leg - m g) / k_s."""
-    stance: float = 0.94
-    """Hip-to-ankle length at the static force m g, as a fraction of the full leg length."""
-    leg_min: float = 0.62
-    """Shortest hip-to-ankle length, fraction of the full leg length."""
-    leg_max: float = 0.985
-    """Longest hip-to-ankle length, fraction of the full leg length."""
-    tilt_gain: float | None = None
-    """Ski tilt per unit curvature, rad m (tilt = tilt_gain C_f); None fits theta_v ~ C_f."""
     outside_extra: float = 0.15
     """Extra tilt of the outside (weight-bearing) ski, fraction of the tilt."""
-    tilt_max: float = math.radians(70.0)
-    """Largest ski tilt, rad."""
     leg_twist_gain: float = 0.8
     """Leg twist per radian of (ski tilt - theta_v), rad/rad (knee towards the turn)."""
     leg_twist_max: float = math.radians(25.0)
     """Largest leg twist, rad."""
-    waist_ratio: float = 0.6
-    """Forward bend at the waist per radian of knee bend, rad/rad."""
     pole_plant_L: float = math.radians(30.0)
     """Phase of the left pole plant (before the left turn), rad."""
     pole_plant_R: float = math.radians(210.0)
@@ -70,21 +56,12 @@ class SkierOptions:
     """Amplitude of the upper-body counter-twist (against the turn), rad."""
     twist_phase: float = 0.0
     """Phase offset of the upper-body twist relative to phi, rad."""
-    head_level: float = 0.5
-    """Fraction of the lean the neck takes back to keep the eyes level."""
 
     def __post_init__(self):
-        check_range("k_s", self.k_s, 0.0, 1e7, lo_open=True)
-        check_range("leg_min", self.leg_min, 0.2, 1.0)
-        check_range("leg_max", self.leg_max, self.leg_min, 0.999)
-        check_range("stance", self.stance, self.leg_min, self.leg_max)
-        if self.tilt_gain is not None:
-            check_range("tilt_gain", self.tilt_gain, 0.0, 1e3)
+        super().__post_init__()
         check_range("outside_extra", self.outside_extra, 0.0, 1.0)
-        check_range("tilt_max", self.tilt_max, 0.0, math.pi / 2, hi_open=True)
         check_range("leg_twist_gain", self.leg_twist_gain, 0.0, 5.0)
         check_range("leg_twist_max", self.leg_twist_max, 0.0, math.pi / 2)
-        check_range("waist_ratio", self.waist_ratio, 0.0, 3.0)
         check_range("pole_plant_L", self.pole_plant_L, 0.0, 2 * math.pi)
         check_range("pole_plant_R", self.pole_plant_R, 0.0, 2 * math.pi)
         check_range("pole_hold", self.pole_hold, 0.0, math.pi / 2)
@@ -92,7 +69,6 @@ class SkierOptions:
         check_range("pole_lift", self.pole_lift, 0.0, 1.0)
         check_range("twist_amp", self.twist_amp, -math.pi / 2, math.pi / 2)
         check_range("twist_phase", self.twist_phase, -2 * math.pi, 2 * math.pi)
-        check_range("head_level", self.head_level, 0.0, 1.0)
 
 
 def ski_tilts(traj, o) -> dict:

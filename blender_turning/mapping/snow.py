@@ -10,13 +10,51 @@
 """
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
+from ..core.params import check_range
 from . import bones as B
 from .common import add_local_rotation, carried, ik_limb, leg_lengths, static_force
 
-__all__ = ["spring_length", "tilt_gain", "set_pelvis", "hip_drop", "knee_flexion",
+__all__ = ["SpringLegOptions", "spring_length", "tilt_gain", "set_pelvis", "hip_drop",
+           "knee_flexion",
            "carry_vec", "bend_waist", "twist_upper_body", "level_head"]
+
+
+@dataclass(frozen=True)
+class SpringLegOptions:
+    """Options every snow sport shares: spring legs, edge tilt, waist and head (SI, radians)."""
+
+    k_s: float = 3000.0
+    """Leg spring stiffness, N/m: the legs shorten by (F_leg - m g) / k_s."""
+    stance: float = 0.94
+    """Hip-to-ankle length at the static force m g, as a fraction of the full leg length."""
+    leg_min: float = 0.62
+    """Shortest hip-to-ankle length, fraction of the full leg length."""
+    leg_max: float = 0.985
+    """Longest hip-to-ankle length, fraction of the full leg length."""
+    tilt_gain: float | None = None
+    """Edge tilt per unit curvature, rad m (tilt = tilt_gain C_f); None fits theta_v ~ C_f."""
+    tilt_max: float = math.radians(70.0)
+    """Largest edge tilt, rad."""
+    waist_ratio: float = 0.6
+    """Forward bend at the waist per radian of knee bend, rad/rad."""
+    head_level: float = 0.5
+    """Fraction of the lean the neck takes back to keep the eyes level."""
+
+    def __post_init__(self):
+        check_range("k_s", self.k_s, 0.0, 1e7, lo_open=True)
+        check_range("leg_min", self.leg_min, 0.2, 1.0)
+        check_range("leg_max", self.leg_max, self.leg_min, 0.999)
+        check_range("stance", self.stance, self.leg_min, self.leg_max)
+        if self.tilt_gain is not None:
+            check_range("tilt_gain", self.tilt_gain, 0.0, 1e3)
+        check_range("tilt_max", self.tilt_max, 0.0, math.pi / 2, hi_open=True)
+        check_range("waist_ratio", self.waist_ratio, 0.0, 3.0)
+        check_range("head_level", self.head_level, 0.0, 1.0)
 
 
 def spring_length(traj, k_s: float, static: float, lo: float, hi: float) -> np.ndarray:

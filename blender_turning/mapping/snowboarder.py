@@ -21,27 +21,17 @@ from .base import Mapping
 from .common import (add_local_rotation, body_axes, carried, lean, leg_lengths, place_on_ground,
                      rot_y)
 from .snow import (bend_waist, carry_vec, hip_drop, knee_flexion, legs_to, level_head,
-                   set_pelvis, spring_length, tilt_gain, twist_upper_body)
+                   SpringLegOptions, set_pelvis, spring_length, tilt_gain, twist_upper_body)
 
 SIDES = ("L", "R")
 
 
 @dataclass(frozen=True)
-class SnowboarderOptions:
+class SnowboarderOptions(SpringLegOptions):
     """Parameters of the snowboarder mapping (SI units, angles in radians)."""
 
-    k_s: float = 3000.0
-    """Leg spring stiffness, N/m: the legs shorten by (F_leg - m g) / k_s."""
     stance: float = 0.92
     """Hip-to-ankle length at the static force m g, fraction of the full leg length."""
-    leg_min: float = 0.62
-    """Shortest hip-to-ankle length, fraction of the full leg length."""
-    leg_max: float = 0.985
-    """Longest hip-to-ankle length, fraction of the full leg length."""
-    tilt_gain: float | None = None
-    """Board tilt per unit curvature, rad m (tilt = tilt_gain C_f); None fits theta_v ~ C_f."""
-    tilt_max: float = math.radians(70.0)
-    """Largest board tilt, rad."""
     waist_ratio: float = 0.3
     """Forward bend at the waist per radian of knee bend, rad/rad (less than the skier's: the
     lean already pitches a side-on rider forwards or back)."""
@@ -56,24 +46,14 @@ class SnowboarderOptions:
     (twist ``arm_lead`` later minus twist now), rad/rad."""
     arm_spread: float = math.radians(35.0)
     """How far the arms are held out from the body, rad."""
-    head_level: float = 0.5
-    """Fraction of the lean the neck takes back to keep the eyes level."""
 
     def __post_init__(self):
-        check_range("k_s", self.k_s, 0.0, 1e7, lo_open=True)
-        check_range("leg_min", self.leg_min, 0.2, 1.0)
-        check_range("leg_max", self.leg_max, self.leg_min, 0.999)
-        check_range("stance", self.stance, self.leg_min, self.leg_max)
-        if self.tilt_gain is not None:
-            check_range("tilt_gain", self.tilt_gain, 0.0, 1e3)
-        check_range("tilt_max", self.tilt_max, 0.0, math.pi / 2, hi_open=True)
-        check_range("waist_ratio", self.waist_ratio, 0.0, 3.0)
+        super().__post_init__()
         check_range("twist_gain", self.twist_gain, -100.0, 100.0)
         check_range("twist_max", self.twist_max, 0.0, math.pi / 2)
         check_range("arm_lead", self.arm_lead, 0.0, 2.0)
         check_range("arm_gain", self.arm_gain, 0.0, 5.0)
         check_range("arm_spread", self.arm_spread, 0.0, math.pi / 2)
-        check_range("head_level", self.head_level, 0.0, 1.0)
 
 
 class SnowboarderMapping(Mapping):
