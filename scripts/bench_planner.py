@@ -91,7 +91,7 @@ def run_case(name, N, q, n_base, literal_cap):
     return out
 
 
-def doomed_share(name="slalom", N=12, q=7):
+def doomed_share(name="slalom", N=12, q=7, fall_table=False):
     """Of the nodes our search expands at the first replanning, how many can never reach depth N
     without falling (whatever the obstacles and the path): a depth-first probe of the lean
     alone (theta_v, omega_v, C_f evolve independently of position at constant speed)."""
@@ -99,7 +99,8 @@ def doomed_share(name="slalom", N=12, q=7):
     from blender_turning.core.path import HermitePath, PathDistance
     from blender_turning.core.planner import search
 
-    scene = load_scene(ROOT / "scenes" / f"{name}.json").with_settings(n_stages=N, q=q)
+    scene = load_scene(ROOT / "scenes" / f"{name}.json").with_settings(n_stages=N, q=q,
+                                                                          fall_table=fall_table)
     problem = scene.problem().local(scene.state0[:2])
     seen = []
     expand = search._expand
@@ -124,7 +125,8 @@ def doomed_share(name="slalom", N=12, q=7):
         return any(not res.fell[j] and viable(res.state[:, j], res.C_f[j], r - 1)
                    for j in np.argsort(np.abs(res.state[3])))
     doomed = sum(not viable(x, cf, N - d) for x, cf, d in seen)
-    return {"scene": name, "N": N, "q": q, "expanded": len(seen), "lean_doomed": doomed}
+    return {"scene": name, "N": N, "q": q, "fall_table": fall_table, "expanded": len(seen),
+            "lean_doomed": doomed}
 
 
 def main(argv=None):
@@ -141,7 +143,8 @@ def main(argv=None):
             "machine": platform.machine(), "cpus": __import__("os").cpu_count()}
     print(json.dumps(info), flush=True)
     if args.doomed:
-        print(json.dumps(doomed_share()))
+        print(json.dumps(doomed_share(fall_table=False)))
+        print(json.dumps(doomed_share(fall_table=True)))
         return 0
     results = []
     for name, N, q, nb in CASES:
