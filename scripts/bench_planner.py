@@ -70,7 +70,8 @@ def run_case(name, N, q, n_base, literal_cap):
            "course_s": float(tr.duration), "wall_total_s": wall,
            "expanded_median": float(np.median(ex)), "expanded_max": int(ex.max()),
            "expanded_total": int(ex.sum()), "wall_median_s": float(np.median(wt)),
-           "wall_max_s": float(wt.max()), "real_time_factor": wall / float(tr.duration)}
+           "wall_max_s": float(wt.max()), "real_time_factor": wall / float(tr.duration),
+           "per_replan_wall_s": wt.tolist(), "per_replan_expanded": ex.tolist()}
     problem = scene.problem()
     steps = scene.settings.steps_per_stage
     picks = np.unique(np.linspace(0, len(reps) - 1, n_base).round().astype(int))
