@@ -3,7 +3,8 @@ settings; and the simulation of one stage for a batch of nodes (Section 6.1).
 
 Within a stage the control ``u = dC_f/dt`` is constant: the demanded curvature is
 ``C0 + u (t - t_stage_start)``, clipped to ``|C_f| <= C_f_max`` (Section 6.1), and bounded by
-:func:`..dynamics.bound_cf` at every RK4 stage relative to the curvature at the step's start.
+the same rule as :func:`..dynamics.bound_cf` at every RK4 stage, relative to the curvature at the
+step's start (fused into :meth:`Problem._rhs`; tests hold it to the core's RK4).
 """
 from __future__ import annotations
 
