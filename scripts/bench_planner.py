@@ -47,14 +47,13 @@ def baseline(scene, problem, state, cf, t, ours_expanded, literal_cap):
                     batch=1, max_expansions=20 * ours_expanded + 1)
     pb = Problem(problem.figure, local.distance, local.obstacles, plain, problem.speed)
     plan = branch_and_bound(pb, state, cf, t)
-    stats = branch_and_bound.last_stats
+    stats = plan.stats
     literal = replace(plain, vectorize_children=False, max_expansions=literal_cap)
     pl = Problem(problem.figure, local.distance, local.obstacles, literal, problem.speed)
     clock = time.perf_counter()
-    branch_and_bound(pl, state, cf, t)
-    lit = branch_and_bound.last_stats
+    lit = branch_and_bound(pl, state, cf, t).stats
     per = (time.perf_counter() - clock) / max(lit.expanded, 1)
-    return stats.expanded, not stats.proven, per, (plan.f_opt if plan else math.inf)
+    return stats.expanded, not stats.proven, per, plan.f_opt
 
 
 def run_case(name, N, q, n_base, literal_cap):

@@ -81,10 +81,9 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
         clock = time.perf_counter()
         local = problem.local(x[:2, 0])
         plan = branch_and_bound(local, x[:, 0], cf, t, s, previous)
-        if plan is None:
+        if not plan.feasible:
             traj = _trajectory(problem, rows, x, cf, t, s, meta)
-            raise PlanInfeasible(t, (float(x[0, 0]), float(x[1, 0])), traj,
-                                 branch_and_bound.last_stats)
+            raise PlanInfeasible(t, (float(x[0, 0]), float(x[1, 0])), traj, plan.stats)
         stats = plan.stats
         stats = SearchStats(**{**stats.as_dict(), "wall_time": time.perf_counter() - clock})
         replans.append(Replan(t, float(x[0, 0]), float(x[1, 0]), plan.f_opt, plan.u[0], stats))

@@ -20,6 +20,7 @@ Beyond the paper (each switchable, for the benchmarks and the exactness tests):
 from __future__ import annotations
 
 import heapq
+import math
 import time
 from dataclasses import dataclass
 
@@ -61,6 +62,11 @@ class Plan:
     u: tuple
     f_opt: float
     stats: SearchStats
+
+    @property
+    def feasible(self) -> bool:
+        """False when every branch was clipped by a collision or a fall (no choices, f_opt inf)."""
+        return bool(self.choices)
 
 
 class _Nodes:
@@ -169,12 +175,12 @@ def _greedy_dive(problem, state, C_f, t0, s0):
 
 
 def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
-                     previous: tuple | None = None) -> Plan | None:
+                     previous: tuple | None = None) -> Plan:
     """Fig. 14 from ``state`` (shape ``(5,)``) with curvature ``C_f`` at time ``t0``.
 
-    ``previous``: the last plan's choices (warm start).  Returns the optimal :class:`Plan`, or
-    ``None`` with statistics in ``branch_and_bound.last_stats`` when every branch is clipped by a
-    collision or a fall (the caller raises ``PlanInfeasible``).
+    ``previous``: the last plan's choices (warm start).  Returns the optimal :class:`Plan`, with
+    its statistics; when every branch is clipped by a collision or a fall the plan is not
+    ``feasible`` (the caller raises ``PlanInfeasible``).
     """
     st = problem.settings
     clock = time.perf_counter()
@@ -244,13 +250,10 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                 heapq.heappush(heap, (p, -dd, i))
     stats = SearchStats(expanded, generated, clip_col, clip_fall, clip_bound, clip_doom, leaves,
                         time.perf_counter() - clock, proven, float(warm_cost))
-    branch_and_bound.last_stats = stats
     if best is None:
-        return None
+        return Plan((), (), math.inf, stats)
     return Plan(tuple(best), tuple(float(problem.u_values[c]) for c in best), float(ub), stats)
 
-
-branch_and_bound.last_stats = None
 
 
 def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0):
