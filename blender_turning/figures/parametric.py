@@ -7,7 +7,6 @@ from pathlib import Path
 import numpy as np
 
 from ..core import OpenLoop, PhaseEllipse, Schedule, preset, simulate
-from ..core.phase import phase
 from .plots import pyplot
 
 TWO_PI = 2 * math.pi

@@ -16,11 +16,11 @@ import numpy as np
 from ..core.params import check_range
 from . import bones as B
 from .base import Mapping
-from .common import (body_axes, carried, ik_limb, lean, leg_lengths, phase_window, place_on_ground,
-                     rot_y, rot_z)
+from .common import carried, ik_limb, phase_window, place_on_ground, rot_y, rot_z
 from .kinematics import frame_from_yx
-from .snow import (bend_waist, carry_vec, hip_drop, knee_flexion, legs_to, level_head,
-                   SpringLegOptions, set_pelvis, spring_length, tilt_gain, twist_upper_body)
+from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
+                   lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
+                   twist_upper_body)
 
 SIDES = (("L", -1.0), ("R", 1.0))
 
@@ -92,11 +92,7 @@ class SkierMapping(Mapping):
 
     def pose(self, b, traj, o, spec):
         skel = b.skel
-        th = np.asarray(traj.theta_v, float)
-        right, fwd, up = body_axes(skel)
-        lean(b, th)
-        full = sum(leg_lengths(skel, "thigh.L", "shin.L"))
-        length = spring_length(traj, o.k_s, o.stance * full, o.leg_min * full, o.leg_max * full)
+        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
         ankle_z = float(skel.rest_of("foot.L")[2, 3])
         tilts = ski_tilts(traj, o)
         layout = self.ski_layout(traj, o)

@@ -17,9 +17,10 @@ import numpy as np
 
 from ..core.params import check_range
 from . import bones as B
-from .common import add_local_rotation, carried, ik_limb, leg_lengths, static_force
+from .common import (add_local_rotation, body_axes, carried, ik_limb, lean, leg_lengths,
+                     static_force)
 
-__all__ = ["SpringLegOptions", "spring_length", "tilt_gain", "set_pelvis", "hip_drop",
+__all__ = ["SpringLegOptions", "lean_on_spring_legs", "spring_length", "tilt_gain", "set_pelvis", "hip_drop",
            "knee_flexion",
            "carry_vec", "bend_waist", "twist_upper_body", "level_head"]
 
@@ -61,6 +62,20 @@ def spring_length(traj, k_s: float, static: float, lo: float, hi: float) -> np.n
     """Hip-to-ankle length (n,), m: a spring of stiffness ``k_s`` (N/m) about ``static``."""
     return np.clip(static - (traj.F_leg - static_force(traj)) / k_s, lo, hi)
 
+
+
+def lean_on_spring_legs(b, traj, o):
+    """Lean the body by ``theta_v`` and size the spring legs (Section 7).
+
+    Returns ``(theta_v, (right, fwd, up) body axes, full leg length, hip-to-ankle length (n,))``.
+    """
+    skel = b.skel
+    th = np.asarray(traj.theta_v, float)
+    axes = body_axes(skel)
+    lean(b, th)
+    full = sum(leg_lengths(skel, "thigh.L", "shin.L"))
+    length = spring_length(traj, o.k_s, o.stance * full, o.leg_min * full, o.leg_max * full)
+    return th, axes, full, length
 
 def tilt_gain(traj, gain) -> float:
     """``gain`` or, if None, the least-squares slope of ``theta_v`` on ``C_f`` (rad m).

@@ -18,10 +18,10 @@ import numpy as np
 from ..core.params import check_range
 from . import bones as B
 from .base import Mapping
-from .common import (add_local_rotation, body_axes, carried, lean, leg_lengths, place_on_ground,
-                     rot_y)
-from .snow import (bend_waist, carry_vec, hip_drop, knee_flexion, legs_to, level_head,
-                   SpringLegOptions, set_pelvis, spring_length, tilt_gain, twist_upper_body)
+from .common import add_local_rotation, carried, place_on_ground, rot_y
+from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
+                   lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
+                   twist_upper_body)
 
 SIDES = ("L", "R")
 
@@ -62,11 +62,7 @@ class SnowboarderMapping(Mapping):
 
     def pose(self, b, traj, o, spec):
         skel = b.skel
-        th = np.asarray(traj.theta_v, float)
-        right, fwd, up = body_axes(skel)
-        lean(b, th)
-        full = sum(leg_lengths(skel, "thigh.L", "shin.L"))
-        length = spring_length(traj, o.k_s, o.stance * full, o.leg_min * full, o.leg_max * full)
+        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
         ankle_rest = {s: skel.rest_of(B.side("foot", s))[:3, 3] for s in SIDES}
         anchor = 0.5 * (ankle_rest["L"] + ankle_rest["R"])
         tilt = np.clip(tilt_gain(traj, o.tilt_gain) * traj.C_f, -o.tilt_max, o.tilt_max)

@@ -31,7 +31,7 @@ class FallTable:
     """Built once per (body, limits, settings); ``doomed(state, C_f, steps_left)``."""
 
     def __init__(self, problem, n_theta=41, n_omega=41, n_cf=17, omega_max=3.0):
-        st, lim, b = problem.settings, problem.limits, problem.body
+        st, lim = problem.settings, problem.limits
         V = float(problem.speed.V[0])
         self.bound = st.theta_bound + 1e-9
         self.theta = np.linspace(-st.theta_bound, st.theta_bound, n_theta)

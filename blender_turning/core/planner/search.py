@@ -184,7 +184,7 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     """
     st = problem.settings
     clock = time.perf_counter()
-    N, q = st.n_stages, st.q
+    N = st.n_stages
     ub, best = np.inf, None
     warm_cost = np.inf
     if st.warm_start:
