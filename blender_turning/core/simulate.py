@@ -49,7 +49,9 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     batch = arr.ndim == 2
     state = arr if batch else [float(v) for v in arr]
     anchor = None if C_f0 is None else (np.asarray(C_f0, float) if batch else float(C_f0))
-    rec = np.empty((n, 10) + arr.shape[1:])   # state, alpha_v, C_f, V_f, omega0, theta_max
+    # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.  A batch fills a preallocated
+    # array; one figure appends tuples (cheaper than numpy item assignment per float).
+    rec = np.empty((n, 10) + arr.shape[1:]) if batch else []
     fell_at = None
     desired = controller.desired_cf
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -57,18 +59,22 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
             t = i * dt
             controller.begin_step(t, state)
             k1, cf, alpha, V_f = stage(body, limits, desired, t, state, anchor, dt)
-            rec[i, :5] = state
-            rec[i, 5], rec[i, 6], rec[i, 7] = alpha, cf, V_f
-            rec[i, 8], rec[i, 9] = controller.target(t)
+            w, tm = controller.target(t)
             th = state[THETA_V]
-            if stop_on_fall and (np.any(np.abs(th) > limits.theta_fall) if batch
-                                 else abs(th) > limits.theta_fall):
+            if batch:
+                rec[i, :5] = state
+                rec[i, 5], rec[i, 6], rec[i, 7], rec[i, 8], rec[i, 9] = alpha, cf, V_f, w, tm
+                fell = np.any(np.abs(th) > limits.theta_fall)
+            else:
+                rec.append((*state, alpha, cf, V_f, w, tm))
+                fell = abs(th) > limits.theta_fall
+            if stop_on_fall and fell:
                 fell_at, n = t, i + 1
-                rec = rec[:n]
                 break
             if i + 1 < n:
                 state = rk4_step(body, limits, state, t, dt, desired, cf, k1)
                 anchor = cf
+    rec = rec[:n] if batch else np.array(rec, float)
     cols = {"t": np.broadcast_to((np.arange(n) * dt).reshape((n,) + (1,) * (rec.ndim - 2)),
                                  rec.shape[:1] + rec.shape[2:]).copy()}
     for j, name in enumerate(("x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f",
