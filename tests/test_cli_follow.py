@@ -79,6 +79,7 @@ def test_missing_file_and_bad_json(tmp_path, capsys):
     assert main(["follow", str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "not valid JSON" in err[1]
+    assert "nope.json" in err[0] and "cannot be read" in err[0]
 
 
 def test_bad_flags(tmp_path, capsys):

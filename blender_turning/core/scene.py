@@ -167,11 +167,13 @@ class Scene:
 
 def load_scene(path) -> Scene:
     """Read and validate a scene file."""
-    with open(path) as fh:
-        try:
+    try:
+        with open(path) as fh:
             doc = json.load(fh)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON ({exc})") from None
+    except OSError as exc:
+        raise ValueError(f"scene file {str(path)!r} cannot be read: {exc.strerror}") from None
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"scene file {str(path)!r} is not valid JSON ({exc})") from None
     return scene_from_dict(doc)
 
 
