@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import OpenLoop, PhaseEllipse, Schedule, preset, simulate
-from .plots import pyplot
+from .plots import pyplot, save_figure
 
 TWO_PI = 2 * math.pi
 
@@ -40,9 +40,7 @@ def fig03(out: Path) -> None:
     ax.set(xlabel="omega_v (deg/s)", ylabel="theta_v (deg)",
            title="Fig. 3: phase diagram of a turn (2 s, 23 deg)")
     ax.legend(fontsize=7, loc="lower right")
-    f.tight_layout()
-    f.savefig(out / "fig03_phase_diagram.png", dpi=90)
-    plt.close(f)
+    save_figure(f, out / "fig03_phase_diagram.png", dpi=90)
 
 
 def fig05(out: Path) -> None:
@@ -62,9 +60,7 @@ def fig05(out: Path) -> None:
     ax.axhline(0, color="k", lw=0.5)
     ax.set(xlabel="phase (deg)", ylabel="scaled", title="Fig. 5: a typical turn")
     ax.legend(fontsize=8)
-    f.tight_layout()
-    f.savefig(out / "fig05_typical_turn.png", dpi=90)
-    plt.close(f)
+    save_figure(f, out / "fig05_typical_turn.png", dpi=90)
 
 
 def fig06(out: Path) -> None:
@@ -80,9 +76,7 @@ def fig06(out: Path) -> None:
     ax.set_aspect("equal", adjustable="datalim")
     ax.set(xlabel="x (m)", ylabel="y (m)", title="Fig. 6: tracks of three phase ellipses")
     ax.legend(fontsize=8)
-    f.tight_layout()
-    f.savefig(out / "fig06_tracks.png", dpi=90)
-    plt.close(f)
+    save_figure(f, out / "fig06_tracks.png", dpi=90)
 
 
 def fig10(out: Path) -> None:
@@ -121,6 +115,4 @@ def fig10(out: Path) -> None:
         ax.set_aspect("equal", adjustable="datalim")
         ax.set(xlabel="x (m)", ylabel="y (m)")
     f.suptitle("Fig. 10: tracks under parameterized control")
-    f.tight_layout()
-    f.savefig(out / "fig10_parametric_tracks.png", dpi=80)
-    plt.close(f)
+    save_figure(f, out / "fig10_parametric_tracks.png", dpi=80)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.scene import Scene, load_scene
-from .plots import pyplot
+from .plots import pyplot, save_figure
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"
 
@@ -43,9 +43,7 @@ def plot_scene(scene: Scene, tracks, out, title: str = "", failed_at=None) -> No
     ax.set_aspect("equal")
     ax.set(xlabel="x (m)", ylabel="y (m)", title=title or scene.name)
     ax.legend(loc="best", fontsize=8)
-    f.tight_layout()
-    f.savefig(out, dpi=90)
-    plt.close(f)
+    save_figure(f, out)
 
 
 def _figure(out: Path, stem: str, scene_file: str, runs, title: str) -> None:

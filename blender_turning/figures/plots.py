@@ -1,8 +1,6 @@
 """Plotting helpers shared by the figures and the CLI (matplotlib, Agg backend)."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 
@@ -11,6 +9,13 @@ def pyplot():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     return plt
+
+
+def save_figure(fig, path, dpi: int = 90) -> None:
+    """Lay out, write as PNG and close a matplotlib figure."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi, format="png")
+    pyplot().close(fig)
 
 
 def plot_trajectory(traj, path, title: str = "") -> None:
@@ -28,10 +33,4 @@ def plot_trajectory(traj, path, title: str = "") -> None:
     ax[2].plot(np.degrees(traj.omega_v), np.degrees(traj.theta_v), lw=1)
     ax[2].set(xlabel="omega_v (deg/s)", ylabel="theta_v (deg)", title="phase diagram")
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=90, format="png")
-    plt.close(fig)
-
-
-def deg(x):
-    return np.degrees(x) if not isinstance(x, float) else math.degrees(x)
+    save_figure(fig, path)
