@@ -3,7 +3,8 @@
     .venv/bin/python scripts/bench_core.py [--repeat 5]
 
 - One figure: 60 s of a 2 s / 23 deg slalom under the phase-ellipse controller with heading
-  control, at the default step (the accuracy the tests demand): simulated seconds per wall second.
+  control, at the default step (the accuracy the tests demand): simulated seconds per wall second;
+  also the open-loop slalom of Section 4 (no feedback), for scale.
   Baseline in the same run: the same figure stepped by the numpy backend (a batch of one).
 - A batch of 1,000 figures stepped together: figure-steps per second.  Baseline in the same run:
   the 1,000 figures one after another on the scalar backend.
@@ -19,7 +20,7 @@ import time
 
 import numpy as np
 
-from blender_turning.core import PhaseEllipse, preset, run
+from blender_turning.core import OpenLoop, PhaseEllipse, preset, run
 from blender_turning.core.heading_table import heading_table
 from blender_turning.core.simulate import DEFAULT_DT
 
@@ -48,6 +49,8 @@ def main():
                            state, 60.0, DEFAULT_DT)
 
     t_scalar = best(one(s0), args.repeat)
+    t_open = best(lambda: run(fig.body, fig.limits, OpenLoop(fig.body, w, tm), s0, 60.0,
+                              DEFAULT_DT), args.repeat)
     t_numpy1 = best(one(s0[:, None]), max(1, args.repeat // 2))
     n = args.batch
     rng = np.random.default_rng(0)
@@ -65,9 +68,11 @@ def main():
     print()
     print("| case | wall time | rate | goal |")
     print("|---|---|---|---|")
-    print(f"| one figure, 60 s slalom, scalar backend | {t_scalar * 1e3:.0f} ms | "
+    print(f"| one figure, 60 s phase-ellipse slalom with heading control, scalar backend | {t_scalar * 1e3:.0f} ms | "
           f"{60 / t_scalar:.0f}x real time | 1000x |")
-    print(f"| baseline: same, numpy backend (batch of one) | {t_numpy1 * 1e3:.0f} ms | "
+    print(f"| one figure, 60 s open-loop slalom (Section 4), scalar | {t_open * 1e3:.0f} ms | "
+          f"{60 / t_open:.0f}x real time | 1000x |")
+    print(f"| baseline: the phase-ellipse run on the numpy backend (batch of one) | {t_numpy1 * 1e3:.0f} ms | "
           f"{60 / t_numpy1:.0f}x real time | |")
     print(f"| batch of {n}, {dur:g} s ({steps} steps) | {t_batch * 1e3:.0f} ms | "
           f"{n * steps / t_batch / 1e6:.2f} M figure-steps/s | 10 M |")
