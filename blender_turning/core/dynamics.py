@@ -76,37 +76,46 @@ def foot_speed(body: BodyParams, theta_v, C_f, sin_t=None):
     return body.V_cm / (1.0 - C_f * body.l * s)
 
 
-def leg_force(body: BodyParams, theta_v, omega_v, alpha_v, C_f):
+def leg_force(body: BodyParams, theta_v, omega_v, alpha_v, C_f, V_cm=None):
     """Appendix A, Eqs. (14)-(18): the ground force on the foot, N.
 
     Returns ``(F_leg, F_along)``: the magnitude and its component along the leg (what the knees
     feel).  ``F_along = m (g cos th + V_cm V_f C_f sin th - l omega_v^2)``; the component across the
-    leg is ``I_v alpha_v / l`` (the torque about the centre of mass, Eq. 13).
+    leg is ``I_v alpha_v / l`` (the torque about the centre of mass, Eq. 13).  ``V_cm`` overrides
+    ``body.V_cm`` (per sample, for a speed that varies).
     """
     xp = backend(theta_v, omega_v, alpha_v, C_f)
     s, c = xp.sin(theta_v), xp.cos(theta_v)
-    V_f = foot_speed(body, theta_v, C_f, s)
-    along = body.m * (body.g * c + body.V_cm * V_f * C_f * s - body.l * omega_v * omega_v)
+    V = body.V_cm if V_cm is None else V_cm
+    V_f = V / (1.0 - C_f * body.l * s)                           # Eq. (21)
+    along = body.m * (body.g * c + V * V_f * C_f * s - body.l * omega_v * omega_v)
     across = body.I_v * alpha_v / body.l
     return xp.hypot(along, across), along
 
 
-def stage(body: BodyParams, limits: Limits, desired_cf, t, state, anchor, tau):
-    """One evaluation of the right-hand side under a steering law (Fig. 4's loop body).
+def steer(body: BodyParams, limits: Limits, C_f, state, anchor, tau, V_cm=None):
+    """The right-hand side under a demanded curvature (Fig. 4's loop body).
 
-    ``desired_cf(t, state)`` is bounded by :func:`bound_cf` relative to ``anchor`` (the curvature
-    ``tau`` seconds earlier) and ``alpha_v`` is recomputed from the bounded value (Section 3).
+    ``C_f`` is bounded by :func:`bound_cf` relative to ``anchor`` (the curvature ``tau`` seconds
+    earlier) and ``alpha_v`` is recomputed from the bounded value (Section 3).  ``V_cm``
+    overrides ``body.V_cm`` (one value per column for a speed that varies, Section 6).
     Returns ``(derivative tuple, C_f, alpha_v, V_f)``.
     """
     th = state[THETA_V]
     xp = Scalar if type(th) is float else Numpy
+    V = body.V_cm if V_cm is None else V_cm
     s, c = xp.sin(th), xp.cos(th)
-    cf = bound_cf(body, limits, desired_cf(t, state), s, anchor, tau, xp)
+    cf = bound_cf(body, limits, C_f, s, anchor, tau, xp)
     ratio = 1.0 / (1.0 - cf * body.l * s)                       # Eq. (21): V_f / V_cm
-    V_f = body.V_cm * ratio
-    alpha = (body.g * s - cf * body.V_cm * body.V_cm * c * ratio) / body.J       # Eq. (2)
+    V_f = V * ratio
+    alpha = (body.g * s - cf * V * V * c * ratio) / body.J       # Eq. (2)
     d = state[THETA_DIR]
     return (V_f * xp.cos(d), V_f * xp.sin(d), V_f * cf, state[OMEGA_V], alpha), cf, alpha, V_f
+
+
+def stage(body: BodyParams, limits: Limits, desired_cf, t, state, anchor, tau):
+    """:func:`steer` under a steering law: ``desired_cf(t, state)`` is the demanded curvature."""
+    return steer(body, limits, desired_cf(t, state), state, anchor, tau)
 
 
 def rk4_step(body: BodyParams, limits: Limits, state, t, dt, desired_cf, anchor, k1=None):
@@ -142,4 +151,4 @@ def rk4_step(body: BodyParams, limits: Limits, state, t, dt, desired_cf, anchor,
 
 __all__ = ["STATE", "X", "Y", "THETA_DIR", "THETA_V", "OMEGA_V", "PHYSICAL_MARGIN",
            "forward_alpha", "inverse_cf", "physical_cf_limit", "bound_cf", "foot_speed",
-           "leg_force", "stage", "rk4_step", "Numpy", "Scalar"]
+           "leg_force", "steer", "stage", "rk4_step"]

@@ -13,8 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics import (OMEGA_V, PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, forward_alpha,
-                        foot_speed)
+from ..dynamics import PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, steer
 from ..obstacles import Obstacles
 from ..params import Figure
 from ..path import PathDistance
@@ -25,18 +24,6 @@ __all__ = ["Problem", "StageResult"]
 #: Lean margin (rad) over the fall bound used for the largest foot speed: RK4's inner stages of a
 #: step whose ends are within the bound can poke slightly beyond it.
 _LEAN_MARGIN = 0.1
-
-
-@dataclass(frozen=True)
-class _BatchBody:
-    """A :class:`..params.BodyParams` look-alike whose ``V_cm`` may be one value per column."""
-
-    m: float
-    l: float
-    I_v: float
-    V_cm: object
-    g: float
-    J: float
 
 
 @dataclass(frozen=True)
@@ -51,15 +38,6 @@ class StageResult:
     collided: np.ndarray     # bool
     fell: np.ndarray         # bool
     record: dict | None = None   # per-step columns when asked for
-
-
-def start_derivative(body, x, cf, sin_t, cos_t):
-    """The state's time derivative under curvature ``cf`` (Eqs. 2 and 21), with alpha_v, V_f."""
-    V_f = foot_speed(body, x[THETA_V], cf, sin_t)
-    alpha = forward_alpha(body, x[THETA_V], cf, sin_t, cos_t)
-    d = x[THETA_DIR]
-    k1 = np.stack([V_f * np.cos(d), V_f * np.sin(d), V_f * cf, x[OMEGA_V], alpha])
-    return k1, alpha, V_f
 
 
 class Problem:
@@ -197,46 +175,17 @@ class Problem:
         per = G.shape[1]
         return r[:, per - 1::per] * (1 + 1e-6) + 1e-9
 
-    def _body_at(self, t, s):
-        if self.speed.is_constant and self.speed.V[0] == self.body.V_cm:
-            return self.body
-        b = self.body
-        return _BatchBody(b.m, b.l, b.I_v, self.speed(t, s), b.g, b.J)
-
     def _speed_at(self, t, s):
         if self.speed.is_constant:
             return float(self.speed.V[0])
         return self.speed(t, s)
 
     def _rhs(self, x, V, tau, C0, u, anchor, rate_step, out):
-        """Right-hand side under the stage's steering law, written into ``out`` (shape (5, m)).
-
-        The same formulas and bounding as :func:`..dynamics.stage` (Eqs. 2 and 21, Section 3's
-        bound relative to ``anchor``), fused into one pass for batches: the planner evaluates it
-        millions of times.  Tests check it against the core's RK4 to 1e-9.
-        Returns ``(C_f, alpha_v, V_f)``.
-        """
-        b, lim = self.body, self.limits
-        cmax = lim.C_f_max
-        th = x[THETA_V]
-        sn, cs = np.sin(th), np.cos(th)
-        cf = np.minimum(np.maximum(C0 + u * tau, -cmax), cmax)       # C0 + u t, |C_f| <= max
-        if self._physical_binds:
-            phys = np.minimum(cmax, PHYSICAL_MARGIN / np.maximum(b.l * np.abs(sn), 1e-300))
-            cf = np.minimum(np.maximum(cf, np.where(sn < 0, -phys, -cmax)),
-                            np.where(sn > 0, phys, cmax))
-        if anchor is not None:
-            step = lim.dC_f_max * rate_step
-            cf = np.minimum(np.maximum(cf, anchor - step), anchor + step)
-        ratio = 1.0 / (1.0 - cf * b.l * sn)                       # Eq. (21): V_f / V_cm
-        V_f = V * ratio
-        alpha = (b.g * sn - cf * V * V * cs * ratio) / b.J       # Eq. (2)
-        d = x[THETA_DIR]
-        np.multiply(V_f, np.cos(d), out=out[X])
-        np.multiply(V_f, np.sin(d), out=out[Y])
-        np.multiply(V_f, cf, out=out[THETA_DIR])
-        out[THETA_V] = x[OMEGA_V]
-        out[OMEGA_V] = alpha
+        """:func:`..dynamics.steer` under the stage's law ``C_f = C0 + u tau`` (Section 6.1),
+        written into ``out`` (shape (5, m)).  Returns ``(C_f, alpha_v, V_f)``."""
+        d, cf, alpha, V_f = steer(self.body, self.limits, C0 + u * tau, x, anchor, rate_step, V)
+        for row, v in enumerate(d):
+            out[row] = v
         return cf, alpha, V_f
 
     def simulate_stage(self, state, C_f0, u, t0, s0, record: bool = False) -> StageResult:

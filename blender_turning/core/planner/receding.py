@@ -12,11 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics import leg_force
+from ..dynamics import leg_force, steer
 from ..errors import PlanInfeasible
 from ..phase_estimate import estimate_phase
 from ..trajectory import Trajectory
-from .problem import Problem, _BatchBody, start_derivative
+from .problem import Problem
 from .search import SearchStats, branch_and_bound
 
 __all__ = ["Replan", "FollowResult", "follow"]
@@ -109,15 +109,14 @@ def _trajectory(problem: Problem, rows, x, cf, t, s, meta) -> Trajectory:
     V = np.array([float(np.ravel(v)[0]) for v in rows["V_f"]] + [np.nan])
     A = np.array([float(np.ravel(v)[0]) for v in rows["alpha_v"]] + [np.nan])
     # The final sample's alpha_v and V_f: from its own state and curvature.
-    body_end = problem._body_at(np.array([t]), np.array([s]))
-    _, a_end, v_end = start_derivative(body_end, x, np.array([cf]), np.sin(x[3]), np.cos(x[3]))
+    V_end = problem._speed_at(np.array([t]), np.array([s]))
+    _, _, a_end, v_end = steer(body, problem.limits, np.array([cf]), x, None, 0.0, V_end)
     A[-1], V[-1] = float(np.ravel(a_end)[0]), float(np.ravel(v_end)[0])
     cols = {"t": T, "x": S[0], "y": S[1], "theta_dir": S[2], "theta_v": S[3], "omega_v": S[4],
             "alpha_v": A, "C_f": C, "V_f": V}
     # V_cm recovered from V_f (Eq. 21), so a varying speed profile is honoured.
     v_cm = V * (1.0 - C * body.l * np.sin(S[3]))
-    cols["F_leg"] = leg_force(_BatchBody(body.m, body.l, body.I_v, v_cm, body.g, body.J),
-                              S[3], S[4], A, C)[0]
+    cols["F_leg"] = leg_force(body, S[3], S[4], A, C, v_cm)[0]
     ds = 0.5 * (V[1:] + V[:-1]) * np.diff(T)
     cols["s"] = np.concatenate([[0.0], np.cumsum(ds)])
     cols["phi"] = estimate_phase(T, S[3], S[4]).phi if len(T) > 1 else np.zeros(len(T))
