@@ -6,17 +6,12 @@ import numpy as np
 import pytest
 
 from blender_turning.core import (Limits, OpenLoop, PhaseEllipse, Schedule, preset, run,
-                                  simulate)
+                                  simulate, slalom_start)
 from blender_turning.core.heading_table import heading_table, simulate_half_turns
 from blender_turning.core.phase import ellipse_radius
 
 TWO_PI = 2 * math.pi
 FIG6 = [(2.0, 23.0), (3.0, 23.0), (2.0, 7.0)]        # the three ellipses of Fig. 6
-
-
-def centred(fig, w, tm, heading=0.0):
-    swing = PhaseEllipse(fig.body, w, tm).half_turn_change(tm, w)
-    return (0.0, 0.0, heading - 0.5 * swing, 0.0, w * tm)
 
 
 def chord_headings(tr):
@@ -44,7 +39,8 @@ def test_open_loop_tracks_the_sinusoid(skier_unbounded, period, lean):
 def test_symmetric_slalom_does_not_drift(skier_unbounded, period, lean):
     w, tm = TWO_PI / period, math.radians(lean)
     fig = skier_unbounded
-    tr = simulate(fig, OpenLoop(fig.body, w, tm), 10 * period, state0=centred(fig, w, tm))
+    tr = simulate(fig, OpenLoop(fig.body, w, tm), 10 * period,
+                  state0=slalom_start(fig.body, w, tm))
     _, heads = chord_headings(tr)
     drift = np.degrees(heads[-1] - heads[0]) / (len(heads) - 1)
     assert abs(drift) < 0.05
@@ -85,7 +81,8 @@ def test_controller_follows_a_mid_run_change_of_ellipse(skier):
     w1, tm1, w2, tm2 = TWO_PI / 2, math.radians(23), TWO_PI / 3, math.radians(15)
     w = Schedule(lambda t: w1 if t < 6 else w2)
     tm = Schedule(lambda t: tm1 if t < 6 else tm2)
-    tr = simulate(skier, PhaseEllipse(skier.body, w, tm), 14.0, state0=centred(skier, w1, tm1))
+    tr = simulate(skier, PhaseEllipse(skier.body, w, tm), 14.0,
+                  state0=slalom_start(skier.body, w1, tm1))
     before = (tr.t > 2) & (tr.t < 6)
     after = tr.t > 6 + 2 * 3.0
     assert np.abs(ellipse_radius(tr.theta_v, tr.omega_v, tm1, w1)[before] - 1).max() < 0.02
@@ -97,7 +94,7 @@ def test_heading_change_is_met(skier, change_deg):
     w, tm = TWO_PI / 2, math.radians(23)
     head = Schedule(lambda t: 0.0 if t < 4 else math.radians(change_deg))
     tr = simulate(skier, PhaseEllipse(skier.body, w, tm, heading=head), 14.0,
-                  state0=centred(skier, w, tm))
+                  state0=slalom_start(skier.body, w, tm))
     t, h = chord_headings(tr)
     assert np.abs(np.degrees(h[t < 4])).max() < 0.5
     # The modified half-turn starts at the first crossing after 4 s; from the turn after that
@@ -110,7 +107,7 @@ def test_heading_change_is_met(skier, change_deg):
 def test_unreachable_heading_change_is_spread_over_turns(skier):
     w, tm = TWO_PI / 2, math.radians(23)
     tr = simulate(skier, PhaseEllipse(skier.body, w, tm, heading=math.radians(60)), 30.0,
-                  state0=centred(skier, w, tm))
+                  state0=slalom_start(skier.body, w, tm))
     assert np.all(np.isfinite(tr.data))
     t, h = chord_headings(tr)
     assert abs(math.degrees(h[-1]) - 60) < 0.5

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from blender_turning.core import COLUMNS, PhaseEllipse, Trajectory, simulate
+from blender_turning.core import COLUMNS, PhaseEllipse, Trajectory, simulate, slalom_start
 
 
 @pytest.fixture(scope="module")
@@ -12,9 +12,8 @@ def traj():
     from blender_turning.core import preset
     fig = preset("skier")
     w, tm = 2 * math.pi / 2, math.radians(23)
-    swing = PhaseEllipse(fig.body, w, tm).half_turn_change(tm, w)
     return simulate(fig, PhaseEllipse(fig.body, w, tm, heading=0.0), 8.0, dt=0.005,
-                    state0=(0, 0, -swing / 2, 0, w * tm))
+                    state0=slalom_start(fig.body, w, tm))
 
 
 def test_columns_are_the_contract(traj):

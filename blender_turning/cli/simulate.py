@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import math
 
-from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate
+from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, slalom_start
 from ..core.controllers import PhaseEllipse
 from ..core.params import check_range
 from ..core.schedule import Schedule
@@ -95,11 +95,8 @@ def run(args) -> int:
         ctl = PhaseEllipse(fig.body, omega0, theta_max, heading)
     else:
         ctl = CONTROLLERS[args.controller](fig.body, omega0, theta_max)
-    # Start so that the slalom is centred on the heading: at phase 0 the heading is at the
-    # bottom of its swing, half a half-turn's change (Eq. 6) below the mean.
-    h0 = heading(0.0) if heading is not None else 0.0
-    swing = PhaseEllipse(fig.body, w0, tm0).half_turn_change(tm0, w0)
-    state0 = (0.0, 0.0, h0 - 0.5 * swing, theta0, omega_v0)
+    # Start so that the slalom is centred on the heading (with the lean and rate asked for).
+    state0 = slalom_start(fig.body, w0, tm0, heading(0.0))[:3] + (theta0, omega_v0)
     traj = simulate(fig, ctl, duration, dt, state0,
                     meta={"controller": args.controller})
     if args.fps:

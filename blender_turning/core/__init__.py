@@ -3,9 +3,10 @@ from .controllers import CONTROLLERS, OpenLoop, PhaseEllipse
 from .errors import FellOver, TurningError
 from .params import PRESETS, BodyParams, Figure, Limits, preset
 from .schedule import Schedule, TurnSchedule, read_schedule_csv
-from .simulate import DEFAULT_DT, run, simulate
+from .simulate import DEFAULT_DT, run, simulate, slalom_start
 from .trajectory import COLUMNS, Trajectory
 
 __all__ = ["CONTROLLERS", "OpenLoop", "PhaseEllipse", "FellOver", "TurningError", "PRESETS",
            "BodyParams", "Figure", "Limits", "preset", "Schedule", "TurnSchedule",
-           "read_schedule_csv", "DEFAULT_DT", "run", "simulate", "COLUMNS", "Trajectory"]
+           "read_schedule_csv", "DEFAULT_DT", "run", "simulate", "slalom_start", "COLUMNS",
+           "Trajectory"]

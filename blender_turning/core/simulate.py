@@ -15,6 +15,7 @@ import numpy as np
 from .controllers import Controller
 from .dynamics import THETA_V, leg_force, rk4_step, stage
 from .errors import FellOver
+from .heading_table import heading_table
 from .params import BodyParams, Figure, Limits, check_range
 from .phase import phase
 from .trajectory import COLUMNS, Trajectory
@@ -89,6 +90,15 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     return Run(cols, fell_at)
 
 
+def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: float = 0.0,
+                 x: float = 0.0, y: float = 0.0) -> tuple:
+    """The state at phase 0 of a slalom centred on ``heading``: upright, leaning out at the
+    ellipse's rate ``omega0 theta_max``, the heading at the bottom of its swing, half a
+    half-turn's change (Eq. 6) below the mean."""
+    swing = float(heading_table(body)(theta_max, omega0))
+    return (x, y, heading - 0.5 * swing, 0.0, omega0 * theta_max)
+
+
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
              state0=None, C_f0=None, meta: dict | None = None) -> Trajectory:
     """Simulate one figure; raise :class:`FellOver` (with the trajectory so far) if it falls."""
@@ -104,4 +114,4 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
     return traj
 
 
-__all__ = ["run", "simulate", "Run", "DEFAULT_DT", "COLUMNS"]
+__all__ = ["run", "simulate", "slalom_start", "Run", "DEFAULT_DT", "COLUMNS"]

@@ -6,16 +6,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core import OpenLoop, PhaseEllipse, Schedule, preset, simulate
+from ..core import OpenLoop, PhaseEllipse, Schedule, preset, simulate, slalom_start
 from .plots import pyplot, save_figure
 
 TWO_PI = 2 * math.pi
-
-
-def _centred(fig, w, tm, heading=0.0, y0=0.0):
-    """State at phase 0 with the slalom centred on ``heading`` (Eq. 6 half-turn change)."""
-    swing = PhaseEllipse(fig.body, w, tm).half_turn_change(tm, w)
-    return (0.0, y0, heading - 0.5 * swing, 0.0, w * tm)
 
 
 def fig03(out: Path) -> None:
@@ -71,7 +65,7 @@ def fig06(out: Path) -> None:
     for i, (period, lean) in enumerate(((2.0, 23), (3.0, 23), (2.0, 7))):
         w, tm = TWO_PI / period, math.radians(lean)
         tr = simulate(fig, OpenLoop(fig.body, w, tm), 3 * period,
-                      state0=_centred(fig, w, tm, y0=-8.0 * i))
+                      state0=slalom_start(fig.body, w, tm, y=-8.0 * i))
         ax.plot(tr.x, tr.y, label=f"ellipse {i + 1}: {period:g} s, {lean} deg")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set(xlabel="x (m)", ylabel="y (m)", title="Fig. 6: tracks of three phase ellipses")
@@ -87,7 +81,7 @@ def fig10(out: Path) -> None:
     f, axes = plt.subplots(4, 1, figsize=(10, 11))
     # 1: two figures turning out of phase on the same line: a figure-8 pattern.
     for sign, c in ((1, "C0"), (-1, "C3")):
-        s0 = list(_centred(fig, w, tm))
+        s0 = list(slalom_start(fig.body, w, tm))
         s0[2], s0[4] = sign * s0[2], sign * s0[4]
         tr = simulate(fig, PhaseEllipse(fig.body, w, tm, heading=0.0), 12.0, state0=s0)
         axes[0].plot(tr.x, tr.y, c)
@@ -96,19 +90,19 @@ def fig10(out: Path) -> None:
     period = Schedule.sampled([0.0, 20.0], [1.6, 3.2])
     om = Schedule(lambda t: TWO_PI / period(t))
     tr = simulate(fig, PhaseEllipse(fig.body, om, tm, heading=0.0), 20.0,
-                  state0=_centred(fig, om(0.0), tm))
+                  state0=slalom_start(fig.body, om(0.0), tm))
     axes[1].plot(tr.x, tr.y, "C1")
     axes[1].set_title("2: decreasing frequency (period 1.6 -> 3.2 s)")
     # 3: increasing sharpness: lean 8 -> 30 deg.
     lean = Schedule.sampled([0.0, 16.0], np.radians([8.0, 30.0]))
     tr = simulate(fig, PhaseEllipse(fig.body, w, lean, heading=0.0), 16.0,
-                  state0=_centred(fig, w, lean(0.0)))
+                  state0=slalom_start(fig.body, w, lean(0.0)))
     axes[2].plot(tr.x, tr.y, "C2")
     axes[2].set_title("3: increasing sharpness (lean 8 -> 30 deg)")
     # 4: heading control: 0 -> +10 deg at 6 s -> -10 deg at 14 s.
     head = Schedule(lambda t: math.radians(0 if t < 6 else (10 if t < 14 else -10)))
     tr = simulate(fig, PhaseEllipse(fig.body, w, tm, heading=head), 24.0,
-                  state0=_centred(fig, w, tm))
+                  state0=slalom_start(fig.body, w, tm))
     axes[3].plot(tr.x, tr.y, "C4")
     axes[3].set_title("4: heading control (0, +10 deg at 6 s, -10 deg at 14 s)")
     for ax in axes:
