@@ -57,9 +57,9 @@ def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=
     on_b = (xp.abs(x) < 1.0) & (th != 0.0)     # |x| < 1: a Fig. 7b ellipse passes through
     slow = (w13_sq * SLOW_FACTOR ** 2 < omega0 * omega0) & (th != 0.0) & on_a
     # Preferred family: Fig. 7a in quadrants 1, 3 (and on the axes) unless slow, else Fig. 7b.
-    # (No ``~``: on Python bools it is integer negation.)
+    # (Complements without ``~``: on Python bools it is integer negation.)
     prefer_b = (th * om < 0.0) | slow
-    prefer_a = (th * om >= 0.0) & (slow == False)  # noqa: E712 (elementwise on arrays)
+    prefer_a = prefer_b == False  # noqa: E712 (elementwise on arrays)
     a13 = -w13_sq * th
     a24 = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / xp.where(th != 0.0, th, 1.0)
     # The other family only for states near the target (within NEAR on the preferred family's
@@ -115,7 +115,7 @@ class PhaseEllipse(Controller):
         xp = backend(th)
         side = xp.where(th > 0, 1.0, xp.where(th < 0, -1.0, xp.where(om >= 0, 1.0, -1.0)))
         if self._beta is None:
-            self._beta = xp.where(th == th, 1.0, 1.0)          # ones of th's shape
+            self._beta = 1.0 if xp is Scalar else np.ones_like(th)
             near_axis = xp.abs(th) < 0.05 * self.theta_max(t)
             self._side = xp.where(near_axis, -side, side)     # a start on the axis is a crossing
         crossed = side != self._side
