@@ -133,8 +133,9 @@ class TURNING_OT_follow_path(bpy.types.Operator):
             return {"CANCELLED"}
         if event.type != "TIMER":
             return {"PASS_THROUGH"}
-        context.window_manager.progress_update(int(100 * job.progress))
-        if not job.done():
+        finished = job.done()           # read first: the thread may end between the two reads
+        context.window_manager.progress_update(100 if finished else int(100 * job.progress))
+        if not finished:
             return {"RUNNING_MODAL"}
         self._cleanup(context)
         fig = bpy.data.objects.get(self._fig_name)
