@@ -119,34 +119,21 @@ def stage(body: BodyParams, limits: Limits, desired_cf, t, state, anchor, tau):
 
 
 def rk4_step(body: BodyParams, limits: Limits, state, t, dt, desired_cf, anchor, k1=None):
-    """One classical Runge-Kutta step; ``state`` is a 5-sequence of floats or a ``(5, n)`` array.
+    """One classical Runge-Kutta step of a ``(5, n)`` array (one figure on floats:
+    :func:`.one_figure.integrate`, the same step fused).
 
     ``C_f`` is evaluated and bounded at every stage relative to ``anchor``, the curvature at the
     start of the step, so it is continuous and its rate bounded.  ``k1`` is the start derivative
-    when the caller has it.  Returns the new state (a tuple for floats, an array for arrays).
+    when the caller has it.  Returns the new state.
     """
     h = 0.5 * dt
     if k1 is None:
         k1 = stage(body, limits, desired_cf, t, state, anchor, 0.0)[0]
-    if isinstance(state, np.ndarray):
-        k1 = np.asarray(k1)
-        k2 = np.asarray(stage(body, limits, desired_cf, t + h, state + h * k1, anchor, h)[0])
-        k3 = np.asarray(stage(body, limits, desired_cf, t + h, state + h * k2, anchor, h)[0])
-        k4 = np.asarray(stage(body, limits, desired_cf, t + dt, state + dt * k3, anchor, dt)[0])
-        return state + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
-    # One figure: the same step unrolled on 5 floats (no per-element loop overhead).
-    x0, x1, x2, x3, x4 = state
-    a0, a1, a2, a3, a4 = k1
-    b0, b1, b2, b3, b4 = stage(body, limits, desired_cf, t + h, (
-        x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4), anchor, h)[0]
-    c0, c1, c2, c3, c4 = stage(body, limits, desired_cf, t + h, (
-        x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4), anchor, h)[0]
-    d0, d1, d2, d3, d4 = stage(body, limits, desired_cf, t + dt, (
-        x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4), anchor, dt)[0]
-    w = dt / 6.0
-    return (x0 + w * (a0 + 2.0 * (b0 + c0) + d0), x1 + w * (a1 + 2.0 * (b1 + c1) + d1),
-            x2 + w * (a2 + 2.0 * (b2 + c2) + d2), x3 + w * (a3 + 2.0 * (b3 + c3) + d3),
-            x4 + w * (a4 + 2.0 * (b4 + c4) + d4))
+    k1 = np.asarray(k1)
+    k2 = np.asarray(stage(body, limits, desired_cf, t + h, state + h * k1, anchor, h)[0])
+    k3 = np.asarray(stage(body, limits, desired_cf, t + h, state + h * k2, anchor, h)[0])
+    k4 = np.asarray(stage(body, limits, desired_cf, t + dt, state + dt * k3, anchor, dt)[0])
+    return state + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
 
 
 __all__ = ["STATE", "X", "Y", "THETA_DIR", "THETA_V", "OMEGA_V", "PHYSICAL_MARGIN",

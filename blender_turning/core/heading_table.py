@@ -60,6 +60,12 @@ class HeadingTable:
         T, W = np.meshgrid(self.theta, np.exp(self.log_w), indexing="ij")
         self.values = simulate_half_turns(body, T, W)
         self._curves = {}
+        # Plain floats for value_one.
+        self._rows = self.values.tolist()
+        self._t0, self._t1 = float(self.theta[0]), float(self.theta[-1])
+        self._lw0, self._lw1 = float(self.log_w[0]), float(self.log_w[-1])
+        self._dth = float(self.theta[1] - self.theta[0])
+        self._dlw = float(self.log_w[1] - self.log_w[0])
 
     def __call__(self, theta_max, omega0):
         """Bilinear interpolation (clamped to the grid) of ``dtheta_dir``."""
@@ -74,6 +80,20 @@ class HeadingTable:
         v = self.values
         return ((1 - a) * (1 - b) * v[i, j] + a * (1 - b) * v[i + 1, j]
                 + (1 - a) * b * v[i, j + 1] + a * b * v[i + 1, j + 1])
+
+    def value_one(self, theta_max: float, omega0: float) -> float:
+        """:meth:`__call__` for one point on Python floats (the one-figure controller solves
+        Eq. 8 at every half-turn; numpy's per-call cost would dominate)."""
+        t, lw = self.theta, self.log_w
+        th = min(max(theta_max, self._t0), self._t1)
+        lg = min(max(math.log(omega0), self._lw0), self._lw1)
+        fi = min((th - self._t0) / self._dth, len(t) - 1 - 1e-9)
+        fj = min((lg - self._lw0) / self._dlw, len(lw) - 1 - 1e-9)
+        i, j = int(fi), int(fj)
+        a, b = fi - i, fj - j
+        r0, r1 = self._rows[i], self._rows[i + 1]
+        return ((1 - a) * (1 - b) * r0[j] + a * (1 - b) * r1[j]
+                + (1 - a) * b * r0[j + 1] + a * b * r1[j + 1])
 
     def beta_range(self, theta_max, omega0):
         """The betas whose modified ellipse stays on the grid and in [BETA_MIN, BETA_MAX]."""
@@ -100,6 +120,8 @@ class HeadingTable:
 
         An unreachable ``wanted`` gives the end of the range closest to it (never NaN).
         """
+        if all(isinstance(v, (float, int)) for v in (theta_max, omega0, wanted)):
+            return self._solve_one(float(theta_max), float(omega0), float(wanted), iterations)
         theta_max, omega0, wanted = np.broadcast_arrays(
             np.asarray(theta_max, float), np.asarray(omega0, float), np.asarray(wanted, float))
         lo, hi = self.beta_range(theta_max, omega0)
@@ -130,6 +152,38 @@ class HeadingTable:
             bad = ~np.isfinite(nb) | (nb < a) | (nb > c)
             beta = np.where(done, beta, np.where(bad, 0.5 * (a + c), nb))
         beta = np.where(f_lo >= 0, lo, np.where(f_hi <= 0, hi, beta))
+        return beta
+
+
+    def _solve_one(self, theta_max, omega0, wanted, iterations):
+        """:meth:`solve_beta` for one ellipse on floats: the same steps, without numpy."""
+        lo = max(BETA_MIN, self._t0 / theta_max, omega0 / math.exp(self._lw1))
+        hi = max(min(BETA_MAX, self._t1 / theta_max, omega0 / math.exp(self._lw0)), lo)
+        value = self.value_one
+
+        def F(b):
+            return value(b * theta_max, omega0 / b) - wanted
+
+        f_lo, f_hi = F(lo), F(hi)
+        if f_lo >= 0:
+            return lo
+        if f_hi <= 0:
+            return hi
+        b, v = self._curve(theta_max, omega0)
+        beta = min(max(float(np.interp(wanted, v, b)), lo), hi)
+        a, c = lo, hi
+        for _ in range(iterations):
+            f = F(beta)
+            if abs(f) < 1e-9:
+                break
+            if f <= 0:
+                a = beta
+            else:
+                c = beta
+            h = 1e-4 * beta
+            df = (F(beta + h) - F(beta - h)) / (2 * h)
+            nb = beta - f / df if df != 0.0 else math.nan
+            beta = 0.5 * (a + c) if not (a <= nb <= c) else nb
         return beta
 
 

@@ -16,6 +16,7 @@ from .controllers import Controller
 from .dynamics import THETA_V, leg_force, rk4_step, stage
 from .errors import FellOver
 from .heading_table import heading_table
+from .one_figure import integrate
 from .params import BodyParams, Figure, Limits, check_range
 from .phase import phase
 from .trajectory import COLUMNS, Trajectory
@@ -36,8 +37,8 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
         dt: float = DEFAULT_DT, C_f0=None, stop_on_fall: bool = True) -> Run:
     """Integrate ``state0`` (shape ``(5,)`` for one figure, ``(5, n)`` for a batch).
 
-    One figure is stepped on Python floats, a batch on numpy arrays (see :mod:`.xp`); the
-    formulas are the same.  ``C_f0`` is the curvature just before the start (for the rate
+    One figure is stepped on Python floats (:mod:`.one_figure`), a batch on numpy arrays; the
+    formulas are the same and tests hold the two to round-off.  ``C_f0`` is the curvature just before the start (for the rate
     bound); ``None`` lets the first demand through unrated.  With ``stop_on_fall`` the run ends at
     the first sample where any ``|theta_v|`` exceeds ``limits.theta_fall`` (``fell_at``).
     """
@@ -47,12 +48,15 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     arr = np.array(state0, float)
     if arr.shape[0] != 5 or arr.ndim > 2 or not np.all(np.isfinite(arr)):
         raise ValueError("state0 must be finite with shape (5,) or (5, n)")
-    batch = arr.ndim == 2
-    state = arr if batch else [float(v) for v in arr]
-    anchor = None if C_f0 is None else (np.asarray(C_f0, float) if batch else float(C_f0))
-    # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.  A batch fills a preallocated
-    # array; one figure appends tuples (cheaper than numpy item assignment per float).
-    rec = np.empty((n, 10) + arr.shape[1:]) if batch else []
+    if arr.ndim == 1:
+        rows, fell_at = integrate(body, limits, controller, arr, n, dt,
+                                  None if C_f0 is None else float(C_f0),
+                                  limits.theta_fall if stop_on_fall else None)
+        return _columns(body, np.array(rows, float), dt, fell_at)
+    state = arr
+    anchor = None if C_f0 is None else np.asarray(C_f0, float)
+    # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.
+    rec = np.empty((n, 10) + arr.shape[1:])
     fell_at = None
     desired = controller.desired_cf
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -60,22 +64,21 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
             t = i * dt
             controller.begin_step(t, state)
             k1, cf, alpha, V_f = stage(body, limits, desired, t, state, anchor, dt)
-            w, tm = controller.target(t)
-            th = state[THETA_V]
-            if batch:
-                rec[i, :5] = state
-                rec[i, 5], rec[i, 6], rec[i, 7], rec[i, 8], rec[i, 9] = alpha, cf, V_f, w, tm
-                fell = np.any(np.abs(th) > limits.theta_fall)
-            else:
-                rec.append((*state, alpha, cf, V_f, w, tm))
-                fell = abs(th) > limits.theta_fall
-            if stop_on_fall and fell:
+            rec[i, :5] = state
+            rec[i, 5], rec[i, 6], rec[i, 7], rec[i, 8], rec[i, 9] = alpha, cf, V_f, \
+                *controller.target(t)
+            if stop_on_fall and np.any(np.abs(state[THETA_V]) > limits.theta_fall):
                 fell_at, n = t, i + 1
                 break
             if i + 1 < n:
                 state = rk4_step(body, limits, state, t, dt, desired, cf, k1)
                 anchor = cf
-    rec = rec[:n] if batch else np.array(rec, float)
+    return _columns(body, rec[:n], dt, fell_at)
+
+
+def _columns(body: BodyParams, rec: np.ndarray, dt: float, fell_at) -> Run:
+    """The DESIGN.md columns from the per-sample records ``(n, 10, ...)``."""
+    n = rec.shape[0]
     cols = {"t": np.broadcast_to((np.arange(n) * dt).reshape((n,) + (1,) * (rec.ndim - 2)),
                                  rec.shape[:1] + rec.shape[2:]).copy()}
     for j, name in enumerate(("x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f",

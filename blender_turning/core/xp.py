@@ -1,10 +1,10 @@
-"""Two array backends for the same formulas: numpy for batches, ``math`` for one figure.
+"""Two array backends for the same formulas: numpy for arrays, ``math`` for Python floats.
 
 The equations in :mod:`dynamics` and the controllers are written once against this small
-namespace (``xp.sin``, ``xp.where``, ``xp.clip`` ...).  One figure is simulated on plain Python
-floats because numpy's per-call overhead (about 1 us) dwarfs the arithmetic on 1-element arrays;
-a batch uses numpy arrays of shape ``(n,)``.  Both backends evaluate both branches of ``where``,
-so formulas guard their own denominators instead of relying on ``inf`` results.
+namespace (``xp.sin``, ``xp.where``, ``xp.clip`` ...), so each accepts a float or an array.  (The
+simulation loop of one figure is :mod:`.one_figure`, fused on floats for speed.)  Both backends
+evaluate both branches of ``where``, so formulas guard their own denominators instead of relying
+on ``inf`` results.
 """
 from __future__ import annotations
 

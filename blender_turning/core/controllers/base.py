@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..dynamics import THETA_V, inverse_cf
+from ..one_figure import scalar_inverse_cf
 from ..params import BodyParams
 
 
@@ -29,6 +30,14 @@ class Controller:
     def desired_cf(self, t: float, state: np.ndarray):
         """The curvature that produces :meth:`desired_alpha` (Eq. 1, physical root)."""
         return inverse_cf(self.body, state[THETA_V], self.desired_alpha(t, state))
+
+    def scalar_cf_law(self):
+        """``f(t, state) -> C_f`` for one figure on floats (:mod:`..one_figure`): the same
+        demand as :meth:`desired_cf`, which a subclass may specialise for speed."""
+        if type(self).desired_cf is not Controller.desired_cf:
+            return self.desired_cf
+        inverse, alpha = scalar_inverse_cf(self.body), self.desired_alpha
+        return lambda t, state: inverse(state[THETA_V], alpha(t, state))
 
     def target(self, t: float):
         """``(omega0, theta_max)`` of the ellipse the motion is following now (for the phase)."""

@@ -1,0 +1,97 @@
+"""The one-figure fast path (core/one_figure.py and the controllers' float laws) against the
+array formulas it must equal.  Both evaluate the same expressions in the same order, so they agree
+to round-off; 1e-12 relative leaves room for libm differences between numpy and math."""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from blender_turning.core import preset
+from blender_turning.core.controllers.ellipse import ellipse_alpha, ellipse_alpha_one
+from blender_turning.core.dynamics import steer
+from blender_turning.core.heading_table import heading_table
+from blender_turning.core.one_figure import rhs, scalar_inverse_cf
+from blender_turning.core.dynamics import inverse_cf
+
+TWO_PI = 2 * math.pi
+
+
+@pytest.mark.parametrize("name,C_f_max", [("skier", None), ("cyclist", 2.0)])
+def test_fused_right_hand_side_equals_steer(name, C_f_max):
+    """Every bound in play: demands beyond C_f_max, infinite (unreachable) demands, leans where
+    the physical branch binds (a cyclist with a 0.5 m turning radius: C_f_max l > 0.9), and rate
+    bounds with and without an anchor."""
+    fig = preset(name)
+    if C_f_max is not None:
+        fig = replace(fig, limits=replace(fig.limits, C_f_max=C_f_max))
+    rng = np.random.default_rng(3)
+    n = 600
+    states = np.stack([rng.uniform(-5, 5, n), rng.uniform(-5, 5, n), rng.uniform(-4, 4, n),
+                       rng.uniform(-1.2, 1.2, n), rng.uniform(-3, 3, n)])
+    cmax = fig.limits.C_f_max
+    demand = rng.uniform(-3 * cmax, 3 * cmax, n)
+    demand[::17] = np.inf
+    demand[1::17] = -np.inf
+    anchor = rng.uniform(-cmax, cmax, n)
+    tau = rng.choice([0.0, 0.01, 0.02], n)
+    for with_anchor in (True, False):
+        want_d, want_cf, want_a, want_v = steer(fig.body, fig.limits, demand, states,
+                                                anchor if with_anchor else None, tau)
+        for j in range(n):
+            stage = rhs(fig.body, fig.limits, lambda t, s, c=float(demand[j]): c)
+            got = stage(0.0, *states[:, j].tolist(), float(anchor[j]) if with_anchor else None,
+                        float(tau[j]))
+            want = [float(np.asarray(d)[j]) if np.ndim(d) else float(d) for d in want_d] + [
+                float(want_cf[j]), float(want_a[j]), float(want_v[j])]
+            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+
+
+def test_float_inverse_equals_eq_1():
+    body = preset("snowboarder").body
+    rng = np.random.default_rng(4)
+    th, alpha = rng.uniform(-1.4, 1.4, 500), rng.uniform(-60, 60, 500)
+    want = inverse_cf(body, th, alpha)
+    inverse = scalar_inverse_cf(body)
+    got = [inverse(float(a), float(b)) for a, b in zip(th, alpha)]
+    assert np.isinf(want).any()                          # unreachable demands are exercised
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=0)
+
+
+def test_ellipse_law_on_floats_equals_the_array_law():
+    """Random states plus the special ones where the branches meet: the axes, the target ellipse,
+    the lines |x| = 1 and |y| = 1 (with ulps either side), the origin disc and slow states."""
+    w, tm = TWO_PI / 2, math.radians(23)
+    amax = 2 * w * w * tm
+    rng = np.random.default_rng(5)
+    th = list(rng.uniform(-0.8, 0.8, 400))
+    om = list(rng.uniform(-3, 3, 400))
+    edges_th = [0.0, tm, -tm, tm * (1 + 1e-15), -tm * (1 - 1e-15), 0.5 * tm, 1.2 * tm, 1e-4]
+    edges_om = [0.0, w * tm, -w * tm, w * tm * (1 - 1e-15), 0.3 * w * tm, 0.01, -1.5 * w * tm,
+                1e-4]
+    for a in edges_th:
+        for b in edges_om:
+            th.append(a), om.append(b)
+            th.append(-a), om.append(b)
+    th, om = np.array(th), np.array(om)
+    for tmax, w0 in ((tm, w), (1.3 * tm, 0.8 * w)):
+        vec = ellipse_alpha(th, om, tmax, w0, amax)
+        one = [ellipse_alpha_one(float(a), float(b), tmax, w0, amax) for a, b in zip(th, om)]
+        np.testing.assert_allclose(one, vec, rtol=0, atol=1e-12 * amax)
+
+
+def test_table_value_and_beta_solve_on_floats_equal_the_array_versions():
+    table = heading_table(preset("skier").body)
+    rng = np.random.default_rng(6)
+    # Inside the grid and beyond it on every side (clamped).
+    tms = np.concatenate([rng.uniform(0.005, 1.1, 60), [0.001, 1.2, 0.3]])
+    ws = np.concatenate([rng.uniform(0.4, 16.0, 60), [0.3, 3.0, 20.0]])
+    np.testing.assert_allclose([table.value_one(float(a), float(b)) for a, b in zip(tms, ws)],
+                               table(tms, ws), rtol=1e-13, atol=1e-15)
+    for tm, w in zip(tms[::3], ws[::3]):
+        base = table.value_one(float(tm), float(w))
+        for wanted in (0.5 * base, base, 1.3 * base, 10.0 * base, -1.0):   # last two unreachable
+            one = table.solve_beta(float(tm), float(w), float(wanted))
+            arr = table.solve_beta(np.array([tm]), np.array([w]), np.array([wanted]))[0]
+            assert isinstance(one, float)
+            assert one == pytest.approx(arr, abs=1e-9)
