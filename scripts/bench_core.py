@@ -7,7 +7,8 @@
   also the open-loop slalom of Section 4 (no feedback), for scale.
   Baseline in the same run: the same figure stepped by the numpy backend (a batch of one).
 - A batch of 1,000 figures stepped together: figure-steps per second.  Baseline in the same run:
-  the 1,000 figures one after another on the scalar backend.
+  50 of the figures one after another on floats.  Also the numpy floor: the cheapest RK4 step
+  numpy can take for the batch (no controller, no bounds), and its sines and cosines alone.
 """
 from __future__ import annotations
 
@@ -32,6 +33,43 @@ def best(fn, repeat):
         fn()
         times.append(time.perf_counter() - t0)
     return min(times)
+
+
+def numpy_floor(n, repeat, dt=DEFAULT_DT):
+    """The cheapest RK4 step numpy can take for ``n`` figures: Eqs. 2 and 21 under a fixed
+    curvature (no controller, no bounds), in place where numpy allows.  Any real step does this
+    and more, so its rate caps what the batch can reach.  Also the cap from the 16 sines and
+    cosines alone (sin/cos of theta_v and theta_dir at each of the four stages).
+    Returns ``(step seconds, trig-only seconds)``."""
+    b = preset("skier").body
+    rng = np.random.default_rng(0)
+    x = np.zeros((5, n))
+    x[3] = rng.uniform(-0.3, 0.3, n)
+    cf = np.full(n, 0.05)
+    ks = [np.empty((5, n)) for _ in range(4)]
+
+    def rhs(s, out):
+        sn, cs = np.sin(s[3]), np.cos(s[3])
+        r = 1.0 / (1.0 - cf * b.l * sn)
+        vf = b.V_cm * r
+        out[0], out[1], out[2], out[3] = vf * np.cos(s[2]), vf * np.sin(s[2]), vf * cf, s[4]
+        out[4] = (b.g * sn - cf * b.V_cm ** 2 * cs * r) / b.J
+        return out
+
+    def step():
+        h = 0.5 * dt
+        k1 = rhs(x, ks[0])
+        k2 = rhs(x + h * k1, ks[1])
+        k3 = rhs(x + h * k2, ks[2])
+        k4 = rhs(x + dt * k3, ks[3])
+        return x + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
+
+    def trig():
+        for _ in range(4):
+            np.sin(x[3]), np.cos(x[3]), np.sin(x[2]), np.cos(x[2])
+
+    return (best(lambda: [step() for _ in range(100)], repeat) / 100,
+            best(lambda: [trig() for _ in range(100)], repeat) / 100)
 
 
 def main():
@@ -63,21 +101,27 @@ def main():
     k = 50                                                # sequential baseline on 50 figures
     t_seq = best(lambda: [run(fig.body, fig.limits, PhaseEllipse(fig.body, w, tm, heading=0.0),
                               starts[:, j], dur, DEFAULT_DT) for j in range(k)], 1)
+    t_floor, t_trig = numpy_floor(n, args.repeat)
     print(f"date: {datetime.date.today()}, machine: {os.cpu_count()} cores, "
           f"Python {platform.python_version()}, numpy {np.__version__}, dt = {DEFAULT_DT} s")
     print()
     print("| case | wall time | rate | goal |")
     print("|---|---|---|---|")
-    print(f"| one figure, 60 s phase-ellipse slalom with heading control, scalar backend | {t_scalar * 1e3:.0f} ms | "
+    print(f"| one figure, 60 s phase-ellipse slalom with heading control, on floats | {t_scalar * 1e3:.0f} ms | "
           f"{60 / t_scalar:.0f}x real time | 1000x |")
-    print(f"| one figure, 60 s open-loop slalom (Section 4), scalar | {t_open * 1e3:.0f} ms | "
+    print(f"| one figure, 60 s open-loop slalom (Section 4), on floats | {t_open * 1e3:.0f} ms | "
           f"{60 / t_open:.0f}x real time | 1000x |")
-    print(f"| baseline: the phase-ellipse run on the numpy backend (batch of one) | {t_numpy1 * 1e3:.0f} ms | "
+    print(f"| baseline: the phase-ellipse run as a numpy batch of one | {t_numpy1 * 1e3:.0f} ms | "
           f"{60 / t_numpy1:.0f}x real time | |")
     print(f"| batch of {n}, {dur:g} s ({steps} steps) | {t_batch * 1e3:.0f} ms | "
           f"{n * steps / t_batch / 1e6:.2f} M figure-steps/s | 10 M |")
-    print(f"| baseline: {k} figures one at a time (scalar) | {t_seq * 1e3:.0f} ms | "
+    print(f"| baseline: {k} figures one at a time (on floats) | {t_seq * 1e3:.0f} ms | "
           f"{k * steps / t_seq / 1e6:.3f} M figure-steps/s | |")
+
+    print(f"| floor: the cheapest numpy RK4 step of {n} figures (Eqs. 2, 21; no controller, no "
+          f"bounds) | {t_floor * 1e6:.0f} us/step | {n / t_floor / 1e6:.2f} M figure-steps/s | |")
+    print(f"| floor: its 16 sines and cosines alone | {t_trig * 1e6:.0f} us/step | "
+          f"{n / t_trig / 1e6:.2f} M figure-steps/s | |")
 
 
 if __name__ == "__main__":

@@ -24,6 +24,7 @@ from .phase import open_loop_alpha
 BETA_MIN, BETA_MAX = 0.2, 3.0
 SMALL_OMEGA0 = 2 * math.pi / 2.0
 SMALL_THETA = math.radians(10.0)
+_FEW = 64          # below this many ellipses, solve_beta solves each on floats
 
 
 def simulate_half_turns(body: BodyParams, theta_max, omega0, steps: int = 96):
@@ -122,6 +123,12 @@ class HeadingTable:
         """
         if all(isinstance(v, (float, int)) for v in (theta_max, omega0, wanted)):
             return self._solve_one(float(theta_max), float(omega0), float(wanted), iterations)
+        if np.ndim(theta_max) == 0 and np.ndim(omega0) == 0 and np.size(wanted) <= _FEW:
+            # A few figures of a batch crossing at once: a float solve each is ~100x cheaper
+            # than numpy iterations on a handful of elements.
+            tm, w = float(theta_max), float(omega0)
+            return np.array([self._solve_one(tm, w, float(v), iterations)
+                             for v in np.ravel(wanted)]).reshape(np.shape(wanted))
         theta_max, omega0, wanted = np.broadcast_arrays(
             np.asarray(theta_max, float), np.asarray(omega0, float), np.asarray(wanted, float))
         lo, hi = self.beta_range(theta_max, omega0)
