@@ -90,13 +90,16 @@ def test_vectorised_children_change_nothing():
     assert a.f_opt == pytest.approx(f_ref, rel=1e-9) and b.f_opt == pytest.approx(f_ref, rel=1e-9)
 
 
-def test_warm_start_from_the_previous_optimum_is_exact():
-    """Receding horizon: plan, apply a stage, plan again with the shifted plan as first bound."""
-    rng = np.random.default_rng(7)
+@pytest.mark.parametrize("seed", [7, 11, 12, 13, 14, 15])
+def test_warm_start_and_proof_from_the_previous_search_are_exact(seed):
+    """Receding horizon: plan, apply a stage, plan again with the shifted plan as first bound
+    and the previous search's proven bounds (proof.py)."""
+    rng = np.random.default_rng(seed)
     problem, state, cf = random_problem(rng, 4, 5)
-    previous, t = None, 0.0
+    previous = proof = None
+    t = 0.0
     for _ in range(3):
-        plan = branch_and_bound(problem, state, cf, t, previous=previous)
+        plan = branch_and_bound(problem, state, cf, t, previous=previous, proof=proof)
         f_ref, _ = exhaustive(problem, state, cf, t)
         if not plan.feasible:
             assert f_ref == math.inf
@@ -105,6 +108,33 @@ def test_warm_start_from_the_previous_optimum_is_exact():
         r = problem.simulate_stage(state[:, None], np.array([cf]), np.array([plan.u[0]]),
                                    np.array([t]), np.zeros(1))
         state, cf, t, previous = r.state[:, 0], float(r.C_f[0]), t + 0.3, plan.choices
+        proof = plan.proof.after(plan.choices[0])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_proven_bounds_are_admissible(seed):
+    """Below the applied child, each child's proven cost still to come is at most the true
+    optimum of the rest of the old horizon (inf only where no completion exists)."""
+    problem, state, cf = feasible_problem(seed, 4, 4)
+    st = problem.settings
+    plan = branch_and_bound(problem, state, cf)
+    proof = plan.proof.after(plan.choices[0])
+    r = problem.simulate_stage(state[:, None], np.array([cf]), np.array([plan.u[0]]),
+                               np.zeros(1), np.zeros(1))
+    q = st.q
+    kids = problem.simulate_stage(np.repeat(r.state, q, 1), np.repeat(r.C_f, q),
+                                  problem.u_values, np.full(q, 0.3), np.repeat(r.s, q))
+    rest = Problem(problem.figure, problem.distance, problem.obstacles,
+                   replace(st, n_stages=st.n_stages - 2))
+    checked = 0
+    for c in range(q):
+        togo = proof.togo[proof.root, c]
+        if kids.collided[c] or kids.fell[c]:
+            continue
+        f_ref, _ = exhaustive(rest, kids.state[:, c], float(kids.C_f[c]), 0.6, float(kids.s[c]))
+        assert togo <= f_ref * (1 + 1e-9) + 1e-9
+        checked += np.isfinite(togo) and togo > 0
+    assert checked
 
 
 @pytest.mark.parametrize("seed", range(6))

@@ -74,13 +74,13 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
     cf, t, s = float(C_f0), 0.0, 0.0
     rows = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")}
     replans = []
-    previous = None
+    previous = proof = None
     reached = False
     end = None if end is None else np.asarray(end, float)
     while t < limit - 1e-9:
         clock = time.perf_counter()
         local = problem.local(x[:2, 0])
-        plan = branch_and_bound(local, x[:, 0], cf, t, s, previous)
+        plan = branch_and_bound(local, x[:, 0], cf, t, s, previous, proof)
         if not plan.feasible:
             traj = _trajectory(problem, rows, x, cf, t, s, meta)
             raise PlanInfeasible(t, (float(x[0, 0]), float(x[1, 0])), traj, plan.stats)
@@ -93,6 +93,7 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
             rows[k].extend(r.record[k])
         x, cf, s, t = r.state, float(r.C_f[0]), float(r.s[0]), t + st.t_stage
         previous = plan.choices
+        proof = plan.proof.after(plan.choices[0])
         if end is not None and _past_end(end, end_dir, x[:2, 0]):
             reached = True
             break

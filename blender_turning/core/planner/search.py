@@ -14,6 +14,9 @@ Beyond the paper (each switchable, for the benchmarks and the exactness tests):
 - lower bound: ``Problem.lower_bound``, added to ``f`` both for ordering (A*) and for clipping;
 - fall table (``fall_table.py``): a child that will fall within the horizon whatever it does is
   clipped at once instead of through its subtree;
+- proof reuse (``proof.py``): in the receding horizon, a node's cost still to come is also
+  bounded by what the previous search proved about the same subtree (``f + h`` of the nodes it
+  clipped, backed up through the nodes it expanded);
 - batches: ``batch`` queue nodes are expanded together, their ``batch * q`` children simulated as
   one array operation.
 """
@@ -27,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .problem import Problem
+from .proof import ProvenBounds, back_up
 
 __all__ = ["SearchStats", "Plan", "branch_and_bound", "exhaustive"]
 
@@ -62,6 +66,8 @@ class Plan:
     u: tuple
     f_opt: float
     stats: SearchStats
+    proof: ProvenBounds | None = None
+    """What the search proved about its subtrees, for the next replanning (``proof.py``)."""
 
     @property
     def feasible(self) -> bool:
@@ -70,30 +76,45 @@ class Plan:
 
 
 class _Nodes:
-    """Growable column store of search nodes."""
+    """Growable column store of search nodes.  Besides each node's state and ``f``: whether it
+    was expanded and, per child, the bound recorded when the child was generated (``proof.py``)."""
 
-    def __init__(self, cap=1024):
+    def __init__(self, q, cap=1024):
         self.n = 0
         self.state = np.empty((5, cap))
         self.cols = {k: np.empty(cap) for k in ("cf", "f", "d", "t", "s")}
-        self.depth = np.empty(cap, np.int64)
-        self.parent = np.empty(cap, np.int64)
-        self.choice = np.empty(cap, np.int64)
+        self.ints = {k: np.empty(cap, np.int64) for k in ("depth", "parent", "choice", "old")}
+        self.expanded = np.zeros(cap, bool)
+        self.child_total = np.empty((cap, q))
+        self.child_f = np.empty((cap, q))
 
-    def add(self, state, depth, parent, choice, **cols):
+    def __getattr__(self, name):
+        try:
+            return self.__dict__["ints"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def add(self, state, depth, parent, choice, old, **cols):
         m = state.shape[1]
         need = self.n + m
         if need > self.state.shape[1]:
             cap = max(need, 2 * self.state.shape[1])
+
+            def grow(a, fill=None):
+                extra = np.empty((cap - a.shape[-1],) if a.ndim == 1 else (cap - len(a),) +
+                                 a.shape[1:], a.dtype)
+                if fill is not None:
+                    extra[...] = fill
+                return np.concatenate([a, extra])
             self.state = np.concatenate([self.state, np.empty((5, cap - self.state.shape[1]))], 1)
-            for k, v in self.cols.items():
-                self.cols[k] = np.concatenate([v, np.empty(cap - len(v))])
-            for k in ("depth", "parent", "choice"):
-                v = getattr(self, k)
-                setattr(self, k, np.concatenate([v, np.empty(cap - len(v), np.int64)]))
+            self.cols = {k: grow(v) for k, v in self.cols.items()}
+            self.ints = {k: grow(v) for k, v in self.ints.items()}
+            self.expanded = grow(self.expanded, False)
+            self.child_total, self.child_f = grow(self.child_total), grow(self.child_f)
         sl = slice(self.n, need)
         self.state[:, sl] = state
-        self.depth[sl], self.parent[sl], self.choice[sl] = depth, parent, choice
+        for k, v in (("depth", depth), ("parent", parent), ("choice", choice), ("old", old)):
+            self.ints[k][sl] = v
         for k, v in cols.items():
             self.cols[k][sl] = v
         self.n = need
@@ -105,6 +126,11 @@ class _Nodes:
             out.append(int(self.choice[i]))
             i = int(self.parent[i])
         return out[::-1]
+
+    def proof(self) -> ProvenBounds:
+        n = self.n
+        return back_up(self.parent[:n], self.choice[:n], self.depth[:n], self.expanded[:n],
+                       self.child_total[:n], self.child_f[:n])
 
 
 def _expand(problem: Problem, nodes: _Nodes, ids):
@@ -126,9 +152,9 @@ def _expand(problem: Problem, nodes: _Nodes, ids):
     return r, par, ch
 
 
-def _root(state, C_f, t0, s0):
-    nodes = _Nodes()
-    nodes.add(np.asarray(state, float).reshape(5, 1), 0, -1, -1, cf=C_f, f=0.0, d=0.0, t=t0,
+def _root(q, state, C_f, t0, s0, old):
+    nodes = _Nodes(q)
+    nodes.add(np.asarray(state, float).reshape(5, 1), 0, -1, -1, old, cf=C_f, f=0.0, d=0.0, t=t0,
               s=s0)
     return nodes
 
@@ -175,10 +201,13 @@ def _greedy_dive(problem, state, C_f, t0, s0):
 
 
 def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
-                     previous: tuple | None = None) -> Plan:
+                     previous: tuple | None = None,
+                     proof: ProvenBounds | None = None) -> Plan:
     """Fig. 14 from ``state`` (shape ``(5,)``) with curvature ``C_f`` at time ``t0``.
 
-    ``previous``: the last plan's choices (warm start).  Returns the optimal :class:`Plan`, with
+    ``previous``: the last plan's choices (warm start).  ``proof``: what the last search proved
+    below the node it applied (``last_plan.proof.after(last_plan.choices[0])``, ``proof.py``);
+    only valid when ``state`` is that node's state.  Returns the optimal :class:`Plan`, with
     its statistics; when every branch is clipped by a collision or a fall the plan is not
     ``feasible`` (the caller raises ``PlanInfeasible``).
     """
@@ -193,7 +222,9 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         if best is None:
             ub, best = _greedy_dive(problem, state, C_f, t0, s0)
         warm_cost = ub
-    nodes = _root(state, C_f, t0, s0)
+    if not st.reuse_proof:
+        proof = None
+    nodes = _root(st.q, state, C_f, t0, s0, -1 if proof is None else proof.root)
     heap = [(0.0, 0, 0)]
     expanded = generated = leaves = 0
     clip_col = clip_fall = clip_bound = clip_doom = 0
@@ -218,6 +249,7 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
             proven = False
             break
         expanded += len(ids)
+        nodes.expanded[ids] = True
         r, par, ch = _expand(problem, nodes, ids)
         generated += len(par)
         depth = nodes.depth[par] + 1
@@ -238,12 +270,19 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
             clip_doom += int(np.count_nonzero(doomed))
             inner &= ~doomed
         prio = f + problem.lower_bound(r.d_last, depth, r.state, r.C_f) if st.lower_bound \
-            else f
+            else f.copy()
+        old = np.full(len(par), -1)
+        if proof is not None:
+            old, togo = proof.children(nodes.old[par], ch)
+            prio = np.maximum(prio, f + togo)
+        # What this search proves about each child (proof.py): f + h, f for a leaf, inf if none.
+        nodes.child_f[par, ch] = f
+        nodes.child_total[par, ch] = np.where(leaf, f, np.where(inner, prio, np.inf))
         keep = inner & ~(prio > ub + tol())
         clip_bound += int(np.count_nonzero(inner & ~keep))
         if keep.any():
             k = np.flatnonzero(keep)
-            new = nodes.add(r.state[:, k], depth[k], par[k], ch[k], cf=r.C_f[k], f=f[k],
+            new = nodes.add(r.state[:, k], depth[k], par[k], ch[k], old[k], cf=r.C_f[k], f=f[k],
                             d=r.d_last[k], t=nodes.cols["t"][par[k]] + st.t_stage, s=r.s[k])
             seq = new.tolist()
             for p, dd, i in zip(prio[k].tolist(), depth[k].tolist(), seq):
@@ -252,7 +291,8 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                         time.perf_counter() - clock, proven, float(warm_cost))
     if best is None:
         return Plan((), (), math.inf, stats)
-    return Plan(tuple(best), tuple(float(problem.u_values[c]) for c in best), float(ub), stats)
+    return Plan(tuple(best), tuple(float(problem.u_values[c]) for c in best), float(ub), stats,
+                nodes.proof())
 
 
 

@@ -39,6 +39,9 @@ class PlannerSettings:
     fall_table: bool = True
     """Also clip nodes that provably fall within their remaining stages whatever they do
     (``fall_table.py``; exact).  Off: only the paper's clip of a branch that has fallen."""
+    reuse_proof: bool = True
+    """Receding horizon: bound the cost still to come by what the previous search proved about
+    the same subtree (``proof.py``; exact)."""
     batch: int = 128
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
     one node at a time).  Any value returns the same optimum."""
