@@ -16,7 +16,8 @@ import numpy as np
 from ..core.params import check_range
 from . import bones as B
 from .base import Mapping
-from .common import carried, ik_limb, phase_window, place_on_ground, rot_y, rot_z
+from .common import (carried, ik_limb, phase_window, place_on_ground, rot_y, rot_z,
+                     smoothstep)
 from .kinematics import frame_from_yx
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
@@ -47,7 +48,8 @@ class SkierOptions(SpringLegOptions):
     pole_plant_R: float = math.radians(210.0)
     """Phase of the right pole plant (before the right turn), rad."""
     pole_hold: float = math.radians(20.0)
-    """Half-width in phase of the pole's ground contact, rad."""
+    """Half-width in phase of the pole's plant, rad: the tip touches down before the plant phase
+    and stays in its hole (world space) within this of it, for as long as the arm can follow."""
     pole_swing: float = math.radians(70.0)
     """Phase over which the pole swings between planted and trailing, rad."""
     pole_lift: float = 0.35
@@ -141,25 +143,158 @@ class SkierMapping(Mapping):
 
     def arms_and_poles(self, b, traj, o, right, fwd, up):
         """Arm IK to a hand target that swings forward for the plant; the pole aims from the
-        grip to a tip that touches the ground within ``pole_hold`` of the plant phase."""
+        grip to a tip that touches the ground within ``pole_hold`` of the plant phase.
+
+        Once planted the tip stays where it went in on the snow (world space) while the figure
+        moves past it: the pole pivots about its tip and the hand follows, on the sphere of the
+        pole's length about the tip, for as long as the arm reaches; then the pole lifts and
+        swings back to trailing over ``pole_swing`` of phase.
+        """
         skel = b.skel
         chest = b.pose(B.CHEST)[:, :3, :3] @ skel.rest_of(B.CHEST)[:3, :3].T
+        reach = 0.98 * (skel.length(B.side("upper_arm", "L")) + skel.length(B.side("forearm", "L")))
+        place = _Placement(traj)
         for s, sx in SIDES:
             plant = o.pole_plant_L if s == "L" else o.pole_plant_R
-            w = phase_window(traj.phi, plant, o.pole_hold, o.pole_swing)[:, None]
+            d = (traj.phi - plant + math.pi) % (2.0 * math.pi) - math.pi   # signed, wrapped
+            w = phase_window(traj.phi, plant, o.pole_hold, o.pole_swing)
             neutral = sx * HAND_NEUTRAL[0] * right + HAND_NEUTRAL[1] * fwd + HAND_NEUTRAL[2] * up
             planted = sx * HAND_PLANT[0] * right + HAND_PLANT[1] * fwd + HAND_PLANT[2] * up
             shoulder = b.unposed(B.side("upper_arm", s))[:, :3, 3]
-            target = shoulder + np.einsum("nij,nj->ni", chest, (1 - w) * neutral + w * planted)
+            hand = shoulder + np.einsum("nij,nj->ni", chest,
+                                        (1 - w)[:, None] * neutral + w[:, None] * planted)
             elbow_dir = chest @ (sx * 0.4 * right - fwd - 0.3 * up)     # elbows back and out
-            ik_limb(b, B.side("upper_arm", s), B.side("forearm", s), target, elbow_dir)
             pole = B.side("pole", s)
-            grip = b.unposed(pole)[:, :3, 3]
             length = skel.length(pole)
-            beta = POLE_AIM_TRAIL + w[:, 0] * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
-            horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
-            dz = o.pole_lift * (1.0 - w[:, 0]) - grip[:, 2]
-            rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
-            axis = (rho[:, None] * horiz + dz[:, None] * up) / length
-            b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
+            arm = (b, B.side("upper_arm", s), B.side("forearm", s), elbow_dir, pole)
 
+            def free_axis(grip):
+                beta = POLE_AIM_TRAIL + w * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
+                horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
+                dz = o.pole_lift * (1.0 - w) - grip[:, 2]
+                rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
+                return (rho[:, None] * horiz + dz[:, None] * up) / length
+
+            # Free swing first; its grip sits `offset` from the wrist the IK aims.
+            grip = _reach(*arm, hand)
+            offset = grip - _wrist(b, s)
+            free = hand + offset
+            plan = _plan_plants(place, d, o.pole_hold, o.pole_swing, grip + length * free_axis(grip),
+                                free, shoulder + offset, length, reach)
+            lift = plan.u[plan.after, None]
+            target = free.copy()
+            target[plan.held] = plan.grip_at[plan.held]
+            target[plan.after] = (1 - lift) * plan.grip_at[plan.after] + lift * free[plan.after]
+            # ... never nearer the hole than the pole is long, or the tip would go into the snow.
+            out = target[plan.after] - plan.tip_at[plan.after]
+            r = np.linalg.norm(out, axis=1, keepdims=True)
+            target[plan.after] = plan.tip_at[plan.after] + out * np.maximum(r, length) / r
+            for _ in range(12):      # the offset turns with the hand: aim again with the new one
+                grip = _reach(*arm, target - offset)
+                offset = grip - _wrist(b, s)
+                if np.max(np.abs(grip - target), initial=0.0) < 2e-4:    # ~10x per two passes
+                    break
+            axis = free_axis(grip)
+            # Held: aim at the hole.  Lifting off: at a point moving from the hole to the free
+            # swing's tip (both on or above the snow, so the tip stays out of it).
+            aim = plan.tip_at.copy()
+            aim[plan.after] = (1 - lift) * aim[plan.after] + lift * (grip + length * axis)[plan.after]
+            moving = plan.held | plan.after
+            to = aim[moving] - grip[moving]
+            axis[moving] = to / np.linalg.norm(to, axis=1, keepdims=True)
+            # Where that would still dip the tip into the snow, it stays on the line to the hole.
+            dip = plan.after & (grip[:, 2] + length * axis[:, 2] < 0.0)
+            to = plan.tip_at[dip] - grip[dip]
+            axis[dip] = to / np.linalg.norm(to, axis=1, keepdims=True)
+            b.set_pose(pole, frame_from_yx(_above_snow(axis, grip, length), np.cross(axis, up)),
+                       grip)
+
+
+def _above_snow(axis, grip, length):
+    """Tilt pole axes whose tip would go below the snow (z < 0) up until it touches it, keeping
+    their heading (a pole leaving its hole early, before the figure has moved away from it)."""
+    low = grip[:, 2] + length * axis[:, 2] < 0.0
+    if not low.any():
+        return axis
+    axis = axis.copy()
+    az = np.clip(-grip[low, 2] / length, -1.0, 1.0)
+    h = axis[low, :2]
+    h = h / np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-12)
+    axis[low, :2] = h * np.sqrt(1.0 - az * az)[:, None]
+    axis[low, 2] = az
+    return axis
+
+
+def _wrist(b, s):
+    """Armature-space tail of the forearm (where the arm's IK puts its target)."""
+    m = b.pose(B.side("forearm", s))
+    return m[:, :3, 3] + b.skel.length(B.side("forearm", s)) * m[:, :3, 1]
+
+
+class _Placement:
+    """Armature space <-> world for every frame: the object sits on the foot point ``(x, y)``
+    turned by ``theta_dir - 90 deg`` (the rig faces +Y; :meth:`.base.Mapping.map`)."""
+
+    def __init__(self, traj):
+        self.origin = np.stack([traj.x, traj.y, np.zeros(len(traj))], 1)
+        self.R = rot_z(np.asarray(traj.theta_dir) - math.pi / 2)
+
+    def to_world(self, p, i):
+        return self.origin[i] + self.R[i] @ p
+
+    def to_local(self, p_world, idx):
+        return np.einsum("nji,nj->ni", self.R[idx], p_world - self.origin[idx])
+
+
+@dataclass
+class _Plants:
+    held: np.ndarray      # (n,) bool: the tip is in the snow
+    after: np.ndarray     # (n,) bool: lifting off after a plant
+    u: np.ndarray         # (n,) 0 at lift-off -> 1 when the pole swings free again
+    tip_at: np.ndarray    # (n, 3) armature-space hole in the snow while held and lifting off
+    grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
+
+
+def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> _Plants:
+    """Where each plant goes into the snow and how long it can stay (see arms_and_poles).
+
+    ``d`` is the signed phase from the plant, ``tips`` and ``free`` the free swing's tip and grip
+    (armature space), ``shoulder`` the shoulder shifted by the grip's offset from the wrist, so
+    that ``|grip - shoulder| <= reach`` says the arm reaches."""
+    n = len(d)
+    held, after = np.zeros(n, bool), np.zeros(n, bool)
+    u = np.ones(n)
+    tip_at, grip_at = tips.copy(), free.copy()
+    # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
+    inside = (np.abs(d) <= hold) | ((d < 0) & (d > -hold - swing) & (tips[:, 2] < 1e-3))
+    starts = np.nonzero(inside & ~np.concatenate([[False], inside[:-1]]))[0]
+    for i0 in starts:
+        i1 = i0
+        while i1 + 1 < n and inside[i1 + 1]:
+            i1 += 1
+        idx = np.arange(i0, i1 + 1)
+        P = place.to_world(tips[i0], i0)
+        local = place.to_local(np.broadcast_to(P, (len(idx), 3)), idx)
+        away = free[idx] - local
+        grip = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
+        ok = np.linalg.norm(grip - shoulder[idx], axis=1) <= reach
+        k = len(idx) if ok.all() else max(int(np.argmin(ok)), 1)
+        idx, local, grip = idx[:k], local[:k], grip[:k]
+        held[idx], tip_at[idx], grip_at[idx] = True, local, grip
+        # Lift off: from the last held pose to the free swing over `swing` of phase.
+        r = idx[-1]
+        j = r + 1
+        while j < n and 0.0 <= d[j] - d[r] < swing:
+            u[j] = float(smoothstep((d[j] - d[r]) / swing))
+            after[j], grip_at[j] = True, grip[-1]
+            j += 1
+        # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
+        # rises off the snow along that line) while it swings free.
+        tip_at[r + 1:j] = place.to_local(np.broadcast_to(P, (j - r - 1, 3)), np.arange(r + 1, j))
+    return _Plants(held, after, u, tip_at, grip_at)
+
+
+def _reach(b, upper, lower, elbow_dir, pole, wrist):
+    """Arm IK to the ``wrist`` target; returns where that puts the pole's grip."""
+    ik_limb(b, upper, lower, wrist, elbow_dir)
+    return b.unposed(pole)[:, :3, 3]
