@@ -19,18 +19,15 @@ visit that creates the bones.
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-from pathlib import Path
 
 import bpy
 import numpy as np
 from mathutils import Matrix, Quaternion, Vector
 
+from ..mapping.rig_spec import load_rig
 from . import compat
 
-#: Where the shipped rig specs live (the repo root's ``rigs/``).
-RIGS_DIR = Path(__file__).resolve().parents[2] / "rigs"
 RIG_TAG = "turning_rig"
 
 #: Material kind -> (RGBA viewport colour, roughness, metallic).
@@ -49,18 +46,9 @@ class RigSpecError(ValueError):
 
 
 def load_spec(sport: str) -> dict:
-    """The shipped spec of ``sport``, validated by the mapping layer's loader, as a dict."""
-    try:
-        from ..mapping.rig_spec import load_rig
-    except ImportError:                    # the mapping layer's loader is not there: read the JSON
-        load_rig = None
-    if load_rig is not None:
-        return as_dict(load_rig(sport.lower()))
-    path = RIGS_DIR / f"{sport.lower()}.json"
-    if not path.is_file():
-        raise RigSpecError(f"no rig spec for sport {sport!r} (looked for {path})")
-    with path.open() as fh:
-        return json.load(fh)
+    """The shipped spec of ``sport`` (``rigs/``), validated by the mapping layer's loader, as a
+    dict."""
+    return as_dict(load_rig(sport.lower()))
 
 
 def as_dict(spec) -> dict:
