@@ -3,6 +3,7 @@ half-written, Bake Turns reading back equal to the mapping, baking twice = once,
 Follow Path (infeasible plan, cancel) leaving the scene as it was (issue 4)."""
 import os
 import tempfile
+import time
 
 import numpy as np
 import pytest
@@ -369,6 +370,7 @@ def test_modal_follow_path_reports_progress_then_bakes(scene):
         ret = op_cls.modal(fake, _Ctx(wm), timer)
         if ret != {"RUNNING_MODAL"}:
             break
+        time.sleep(0.02)                   # Blender's timer ticks; leave the planner the GIL
     assert ret == {"FINISHED"}, reports
     values = [v for v in wm.progress if isinstance(v, int)]
     assert values and values == sorted(values) and values[-1] == 100
