@@ -46,7 +46,8 @@ def random_problem(rng, N, q, **settings):
 VARIANTS = [dict(warm_start=w, lower_bound=lb, batch=b)
             for w in (False, True) for lb in (False, True) for b in (1, 8)]
 VARIANTS += [dict(lookahead=0), dict(lookahead=1, batch=3), dict(lookahead=30, warm_start=False),
-             dict(fall_table=False), dict(fall_table=False, lower_bound=False, warm_start=False)]
+             dict(fall_table=False), dict(fall_table=False, lower_bound=False, warm_start=False),
+             dict(reach_directions=0), dict(reach_directions=3, warm_start=False)]
 
 
 @pytest.mark.parametrize("seed", range(48))
@@ -139,8 +140,8 @@ def test_proven_bounds_are_admissible(seed):
 
 @pytest.mark.parametrize("seed", range(6))
 def test_lower_bound_is_admissible(seed):
-    """Along every surviving branch the cost still to come is at least the lower bound (both
-    the Lipschitz bound and the arc bound over the next samples)."""
+    """Along every surviving branch the cost still to come is at least the lower bound (the
+    Lipschitz bound, the arc bound and the reachable-set bound over the next samples)."""
     problem, state, cf = feasible_problem(seed, 4, 4)
     st = problem.settings
     q = st.q
@@ -154,7 +155,8 @@ def test_lower_bound_is_admissible(seed):
         r = problem.simulate_stage(x[:, par], c[par], problem.u_values[ch], t[par], s[par])
         f = f[par] + r.cost
         alive = alive[par] & ~(r.collided | r.fell)
-        hist.append((par, f.copy(), problem.lower_bound(r.d_last, depth, r.state, r.C_f),
+        hist.append((par, f.copy(), problem.lower_bound(r.d_last, depth, r.state, r.C_f,
+                                                        reach=True),
                      problem.lower_bound(r.d_last, depth)))
         x, c, t, s = r.state, r.C_f, t[par] + 0.3, r.s
     final = hist[-1][1]
@@ -174,3 +176,34 @@ def test_settings_are_validated():
         PlannerSettings(t_stage=0.33)
     with pytest.raises(ValueError, match="q = 1"):
         PlannerSettings(q=1)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_reach_bound_holds_at_every_sample(seed):
+    """reach.py: on every branch that does not fall, the distance at each of the next samples is
+    at least the reachable-set bound from the root (all q^N plans, per sample)."""
+    problem, state, cf = feasible_problem(seed + 50, 3, 4)
+    problem = Problem(problem.figure, PathDistance(problem.distance.path), problem.obstacles,
+                      problem.settings)
+    rb = problem.reach_bound()
+    assert rb is not None and rb.samples > 0
+    st = problem.settings
+    q, per = st.q, st.steps_per_sample
+    x, c, s = state[:, None], np.array([cf]), np.zeros(1)
+    alive = np.ones(1, bool)
+    track = np.zeros((1, 0, 2))
+    for _ in range(st.n_stages):
+        m = x.shape[1]
+        par = np.repeat(np.arange(m), q)
+        r = problem.simulate_stage(x[:, par], c[par], np.tile(problem.u_values, m),
+                                   np.zeros(len(par)), s[par], record=True)
+        steps = np.array(r.record["state"][1:] + [r.state])[:, :2, :].transpose(2, 0, 1)
+        track = np.concatenate([track[par], steps[:, per - 1::per]], axis=1)
+        alive = alive[par] & ~r.fell
+        x, c, s = r.state, r.C_f, r.s
+    n = min(rb.samples, track.shape[1])
+    k = np.arange(1, n + 1)
+    bound = rb.sample_bounds(problem.distance.samples, state[:, None], np.array([cf]), k)[0]
+    d = problem.distance(track[alive][:, :n])
+    assert np.all(d >= bound[None, :] - 1e-9)
+    assert bound.max() > 0 and np.any(d.min(axis=0) < bound + 0.5)    # it bites, and is tight

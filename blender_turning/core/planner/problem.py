@@ -80,6 +80,7 @@ class Problem:
         # Section 3's physical limit 0.9 / (l |sin theta_v|) can only bind when C_f_max l > 0.9.
         self._physical_binds = self.limits.C_f_max * self.body.l > PHYSICAL_MARGIN
         self._fall_table = False                  # built on first use (fall_table.py)
+        self._reach = False                       # built on first use (reach.py)
 
     def fall_table(self):
         """The :class:`.fall_table.FallTable` of this problem, or ``None`` where it does not
@@ -105,17 +106,19 @@ class Problem:
         p.obstacles = self.obstacles.near(center, r)
         return p
 
-    def lower_bound(self, d_last, depth, state=None, C_f=None):
+    def lower_bound(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Admissible bound on the cost still to come after nodes at ``depth`` whose last sample
         was ``d_last`` from the path.
 
-        Everywhere: d is 1-Lipschitz and the foot moves at most ``v_max sample_dt`` per sample,
-        so the k-th sample still to come is at least ``d_last - k v_max sample_dt``.
-        Given the nodes' ``state`` and ``C_f`` (and a constant speed), the first
-        ``lookahead`` samples are bounded more tightly: the foot stays within ``r(tau)`` of the
-        arc of curvature ``C_f`` through its position and heading, because ``C_f`` changes no
-        faster than ``dC_f_max`` and ``V_f`` (Eq. 21) stays within the lean bound's range; so the
-        sample is at least ``d(arc point) - r(tau)``.
+        Everywhere: d is 1-Lipschitz and the foot moves at most ``b = v_max sample_dt`` per
+        sample, so a sample at least ``x`` from the path makes the next at least ``x - b``, and
+        the one before at least ``x - b``.  Given the nodes' ``state`` and ``C_f`` (and a constant
+        speed), the first ``lookahead`` samples are bounded more tightly: the foot stays within
+        ``r(tau)`` of the arc of curvature ``C_f`` through its position and heading, because
+        ``C_f`` changes no faster than ``dC_f_max`` and ``V_f`` (Eq. 21) stays within the lean
+        bound's range; so the sample is at least ``d(arc point) - r(tau)``.  With ``reach``, the
+        samples are also bounded by the distance from the path samples to where the foot can be
+        then (``reach.py``; while the heading can still turn through less than pi).
         """
         st = self.settings
         d_last = np.asarray(d_last, float)
@@ -124,23 +127,37 @@ class Problem:
         if state is None or self._lookahead is None:
             M = np.minimum(K, np.floor(d_last / b))
             return np.maximum(M * d_last - b * M * (M + 1) * 0.5, 0.0)
-        kh = self._lookahead.shape[0]
+        K = np.broadcast_to(K, d_last.shape)
         k = np.arange(1, int(np.max(K, initial=0)) + 1)
         terms = np.maximum(d_last[:, None] - b * k[None, :], 0.0)
-        terms = np.where(k[None, :] <= np.broadcast_to(K, d_last.shape)[:, None], terms, 0.0)
-        n = min(kh, terms.shape[1])
+        if not len(k):
+            return np.zeros(d_last.shape)
+        n = min(self._lookahead.shape[0], terms.shape[1])
         if n:
-            strong = self._arc_bound(state, np.asarray(C_f, float), n)
-            strong = np.where(k[None, :n] <= np.broadcast_to(K, d_last.shape)[:, None], strong,
-                              0.0)
-            terms[:, :n] = np.maximum(terms[:, :n], strong)
-            # Each bound also holds, less b per sample, for every later sample (Lipschitz again).
-            run = terms[:, 0].copy()
-            for j in range(1, terms.shape[1]):
-                run = np.maximum(run - b, terms[:, j])
-                terms[:, j] = run
-            terms = np.where(k[None, :] <= np.broadcast_to(K, d_last.shape)[:, None], terms, 0.0)
+            terms[:, :n] = np.maximum(terms[:, :n], self._arc_bound(state, np.asarray(C_f, float),
+                                                                    n))
+        rb = self.reach_bound() if reach else None
+        if rb is not None and len(d_last):
+            j = k[k <= rb.samples]
+            if len(j):
+                terms[:, j - 1] = np.maximum(terms[:, j - 1], rb.sample_bounds(
+                    self.distance.samples, state, np.asarray(C_f, float), j))
+        # Each bound also holds, less b per sample, for the samples after and before it.
+        run = terms[:, 0].copy()
+        for j in range(1, terms.shape[1]):
+            run = np.maximum(run - b, terms[:, j])
+            terms[:, j] = run
+        terms = np.where(k[None, :] <= K[:, None], terms, 0.0)
+        for j in range(terms.shape[1] - 2, -1, -1):
+            terms[:, j] = np.maximum(terms[:, j], terms[:, j + 1] - b)
         return terms.sum(axis=1)
+
+    def reach_bound(self):
+        """The :class:`.reach.ReachBound` of this problem, or ``None`` where it does not apply."""
+        if self._reach is False:
+            from .reach import ReachBound
+            self._reach = ReachBound.for_problem(self)
+        return self._reach
 
     def _arc_bound(self, state, C0, n):
         """``d(arc point) - r(tau)`` for the next ``n`` samples, shape ``(m, n)``."""

@@ -5,7 +5,9 @@ samples so far (Section 6); ``f`` never decreases along a branch, so a node whos
 admissible lower bound on the cost still to come) exceeds the best complete plan found so far
 cannot lead to a better one and is clipped.  Clipping uses a strict ``>`` (with a 1e-9 relative
 tolerance for rounding), so the search returns the same optimal ``f_opt`` as the exhaustive search
-of all ``q^N`` plans, whatever the order in which it expands nodes.
+of all ``q^N`` plans, whatever the order in which it expands nodes; of plans with exactly the
+same ``f_opt`` it returns the one with the lexicographically smallest choices, so the plan does
+not depend on the order either (mirror-image plans tie on a straight path).
 
 Beyond the paper (each switchable, for the benchmarks and the exactness tests):
 
@@ -260,10 +262,12 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         leaf = alive & (depth == N)
         leaves += int(np.count_nonzero(leaf))
         if leaf.any():
-            j = np.flatnonzero(leaf)[np.argmin(f[leaf])]
-            if f[j] < ub:
-                ub = float(f[j])
-                best = nodes.choices(int(par[j])) + [int(ch[j])]
+            f_min = f[leaf].min()
+            if f_min <= ub:
+                tied = np.flatnonzero(leaf & (f == f_min))
+                plan = min(nodes.choices(int(par[j])) + [int(ch[j])] for j in tied)
+                if f_min < ub or best is None or plan < list(best):
+                    ub, best = float(f_min), plan
         inner = alive & (depth < N)
         if table is not None and inner.any():
             doomed = inner & table.doomed(r.state, r.C_f, (N - depth) * st.steps_per_stage)
@@ -277,8 +281,13 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
             prio = np.maximum(prio, f + togo)
         # What this search proves about each child (proof.py): f + h, f for a leaf, inf if none.
         nodes.child_f[par, ch] = f
-        nodes.child_total[par, ch] = np.where(leaf, f, np.where(inner, prio, np.inf))
         keep = inner & ~(prio > ub + tol())
+        if st.lower_bound and keep.any() and problem.reach_bound() is not None:
+            k = np.flatnonzero(keep)        # the costlier bound only where the cheap one passes
+            prio[k] = np.maximum(prio[k], f[k] + problem.lower_bound(
+                r.d_last[k], depth[k], r.state[:, k], r.C_f[k], reach=True))
+            keep[k] = ~(prio[k] > ub + tol())
+        nodes.child_total[par, ch] = np.where(leaf, f, np.where(inner, prio, np.inf))
         clip_bound += int(np.count_nonzero(inner & ~keep))
         if keep.any():
             k = np.flatnonzero(keep)

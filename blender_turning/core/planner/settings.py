@@ -36,6 +36,9 @@ class PlannerSettings:
     lookahead: int = 6
     """With ``lower_bound``: how many of the next samples get the tighter arc bound (the foot
     stays near the arc of its current curvature for a short while); 0 turns it off."""
+    reach_directions: int = 8
+    """With ``lower_bound``: directions in which the reachable set's support is tabulated for the
+    bound on later samples (``reach.py``); 0 turns it off."""
     fall_table: bool = True
     """Also clip nodes that provably fall within their remaining stages whatever they do
     (``fall_table.py``; exact).  Off: only the paper's clip of a branch that has fallen."""
@@ -60,8 +63,9 @@ class PlannerSettings:
         check_range("dt", self.dt, 1e-4, 1.0)
         check_range("batch", self.batch, 1, 4096)
         check_range("lookahead", self.lookahead, 0, 1000)
+        check_range("reach_directions", self.reach_directions, 0, 1000)
         check_range("max_expansions", self.max_expansions, 0, 1e12)
-        for name in ("n_stages", "q", "batch", "lookahead", "max_expansions"):
+        for name in ("n_stages", "q", "batch", "lookahead", "reach_directions", "max_expansions"):
             if int(getattr(self, name)) != getattr(self, name):
                 raise ValueError(f"{name} = {getattr(self, name)!r} is not a whole number")
         for name in ("t_stage", "sample_dt"):
