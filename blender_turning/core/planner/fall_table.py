@@ -30,7 +30,7 @@ _CACHE: dict = {}
 class FallTable:
     """Built once per (body, limits, settings); ``doomed(state, C_f, steps_left)``."""
 
-    def __init__(self, problem, n_theta=41, n_omega=41, n_cf=17, omega_max=3.0):
+    def __init__(self, problem, n_theta=41, n_omega=41, n_cf=25, omega_max=2.0):
         st, lim = problem.settings, problem.limits
         V = float(problem.speed.V[0])
         self.bound = st.theta_bound + 1e-9

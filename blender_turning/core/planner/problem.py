@@ -108,7 +108,14 @@ class Problem:
 
     def lower_bound(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Admissible bound on the cost still to come after nodes at ``depth`` whose last sample
-        was ``d_last`` from the path.
+        was ``d_last`` from the path: the sum of :meth:`sample_bounds`."""
+        d_last = np.asarray(d_last, float)
+        return self.sample_bounds(d_last, depth, state, C_f, reach).sum(axis=-1).reshape(
+            d_last.shape)
+
+    def sample_bounds(self, d_last, depth, state=None, C_f=None, reach: bool = False):
+        """Lower bounds on ``d`` at each sample still to come after nodes at ``depth`` whose last
+        sample was ``d_last`` from the path, shape ``(m, K)`` (0 past a node's horizon).
 
         Everywhere: d is 1-Lipschitz and the foot moves at most ``b = v_max sample_dt`` per
         sample, so a sample at least ``x`` from the path makes the next at least ``x - b``, and
@@ -121,27 +128,24 @@ class Problem:
         then (``reach.py``; while the heading can still turn through less than pi).
         """
         st = self.settings
-        d_last = np.asarray(d_last, float)
-        K = (st.n_stages - np.asarray(depth)) * st.samples_per_stage
+        d_last = np.atleast_1d(np.asarray(d_last, float))
+        K = np.broadcast_to((st.n_stages - np.asarray(depth)) * st.samples_per_stage,
+                            d_last.shape)
         b = self.v_max * st.sample_dt
-        if state is None or self._lookahead is None:
-            M = np.minimum(K, np.floor(d_last / b))
-            return np.maximum(M * d_last - b * M * (M + 1) * 0.5, 0.0)
-        K = np.broadcast_to(K, d_last.shape)
         k = np.arange(1, int(np.max(K, initial=0)) + 1)
         terms = np.maximum(d_last[:, None] - b * k[None, :], 0.0)
-        if not len(k):
-            return np.zeros(d_last.shape)
-        n = min(self._lookahead.shape[0], terms.shape[1])
+        if state is None or not len(k) or not len(d_last):
+            return np.where(k[None, :] <= K[:, None], terms, 0.0)
+        C_f = np.asarray(C_f, float)
+        n = min(self._lookahead.shape[0], len(k)) if self._lookahead is not None else 0
         if n:
-            terms[:, :n] = np.maximum(terms[:, :n], self._arc_bound(state, np.asarray(C_f, float),
-                                                                    n))
+            terms[:, :n] = np.maximum(terms[:, :n], self._arc_bound(state, C_f, n))
         rb = self.reach_bound() if reach else None
-        if rb is not None and len(d_last):
+        if rb is not None:
             j = k[k <= rb.samples]
             if len(j):
                 terms[:, j - 1] = np.maximum(terms[:, j - 1], rb.sample_bounds(
-                    self.distance.samples, state, np.asarray(C_f, float), j))
+                    self.distance.samples, state, C_f, j))
         # Each bound also holds, less b per sample, for the samples after and before it.
         run = terms[:, 0].copy()
         for j in range(1, terms.shape[1]):
@@ -150,7 +154,7 @@ class Problem:
         terms = np.where(k[None, :] <= K[:, None], terms, 0.0)
         for j in range(terms.shape[1] - 2, -1, -1):
             terms[:, j] = np.maximum(terms[:, j], terms[:, j + 1] - b)
-        return terms.sum(axis=1)
+        return terms
 
     def reach_bound(self):
         """The :class:`.reach.ReachBound` of this problem, or ``None`` where it does not apply."""

@@ -154,6 +154,24 @@ def _expand(problem: Problem, nodes: _Nodes, ids):
     return r, par, ch
 
 
+def _bound(problem, r, depth, togo, reach, cols=slice(None)):
+    """Lower bound on the cost still to come after children ``cols`` of a stage result: the
+    sum of ``Problem.sample_bounds`` and, given the previous search's ``togo`` (proof.py, which
+    covers all stages but the last), ``togo`` plus the bounds on the last stage's samples."""
+    st = problem.settings
+    if not st.lower_bound:
+        return np.zeros(len(depth[cols])) if togo is None else togo
+    depth = depth[cols]
+    terms = problem.sample_bounds(r.d_last[cols], depth, r.state[:, cols], r.C_f[cols], reach)
+    h = terms.sum(axis=1)
+    if togo is None or not terms.shape[1]:
+        return h if togo is None else np.maximum(h, togo)
+    per = st.samples_per_stage
+    K = (st.n_stages - depth) * per
+    last = np.take_along_axis(terms, np.maximum(K[:, None] - per + np.arange(per), 0), 1)
+    return np.maximum(h, togo + np.where(K[:, None] >= per, last, 0.0).sum(axis=1))
+
+
 def _root(q, state, C_f, t0, s0, old):
     nodes = _Nodes(q)
     nodes.add(np.asarray(state, float).reshape(5, 1), 0, -1, -1, old, cf=C_f, f=0.0, d=0.0, t=t0,
@@ -273,19 +291,18 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
             doomed = inner & table.doomed(r.state, r.C_f, (N - depth) * st.steps_per_stage)
             clip_doom += int(np.count_nonzero(doomed))
             inner &= ~doomed
-        prio = f + problem.lower_bound(r.d_last, depth, r.state, r.C_f) if st.lower_bound \
-            else f.copy()
         old = np.full(len(par), -1)
+        togo = None
         if proof is not None:
             old, togo = proof.children(nodes.old[par], ch)
-            prio = np.maximum(prio, f + togo)
+        prio = f + _bound(problem, r, depth, togo, reach=False)
         # What this search proves about each child (proof.py): f + h, f for a leaf, inf if none.
         nodes.child_f[par, ch] = f
         keep = inner & ~(prio > ub + tol())
         if st.lower_bound and keep.any() and problem.reach_bound() is not None:
             k = np.flatnonzero(keep)        # the costlier bound only where the cheap one passes
-            prio[k] = np.maximum(prio[k], f[k] + problem.lower_bound(
-                r.d_last[k], depth[k], r.state[:, k], r.C_f[k], reach=True))
+            prio[k] = np.maximum(prio[k], f[k] + _bound(
+                problem, r, depth, None if togo is None else togo[k], reach=True, cols=k))
             keep[k] = ~(prio[k] > ub + tol())
         nodes.child_total[par, ch] = np.where(leaf, f, np.where(inner, prio, np.inf))
         clip_bound += int(np.count_nonzero(inner & ~keep))
