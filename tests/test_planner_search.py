@@ -9,6 +9,7 @@ from blender_turning.core import preset
 from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
+from blender_turning.core.planner.spacing import PairFloor
 
 
 def random_problem(rng, N, q, **settings):
@@ -207,3 +208,37 @@ def test_reach_bound_holds_at_every_sample(seed):
     d = problem.distance(track[alive][:, :n])
     assert np.all(d >= bound[None, :] - 1e-9)
     assert bound.max() > 0 and np.any(d.min(axis=0) < bound + 0.5)    # it bites, and is tight
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("spacing", [1.5, 3.0])
+def test_pair_floor_holds_on_every_branch(seed, spacing):
+    """spacing.py: on every branch that does not fall, each two consecutive samples (the first
+    with the root's own) are together at least their pair's floor, and the floor bites.  Path
+    samples about ``spacing`` times the foot's travel per sample apart."""
+    problem, state, cf = feasible_problem(seed + 80, 3, 4)
+    st = problem.settings
+    path = problem.distance.path
+    per_segment = max(1, round(path.length() / path.n_segments / (spacing * problem.v_max *
+                                                                   st.sample_dt)))
+    coarse = PathDistance(path, per_segment=per_segment)
+    problem = Problem(problem.figure, coarse, problem.obstacles, st)
+    pf = PairFloor(problem)
+    q, per = st.q, st.steps_per_sample
+    x, c, s = state[:, None], np.array([cf]), np.zeros(1)
+    alive = np.ones(1, bool)
+    track = np.zeros((1, 0, 2))
+    for _ in range(st.n_stages):
+        m = x.shape[1]
+        par = np.repeat(np.arange(m), q)
+        r = problem.simulate_stage(x[:, par], c[par], np.tile(problem.u_values, m),
+                                   np.zeros(len(par)), s[par], record=True)
+        steps = np.array(r.record["state"][1:] + [r.state])[:, :2, :].transpose(2, 0, 1)
+        track = np.concatenate([track[par], steps[:, per - 1::per]], axis=1)
+        alive = alive[par] & ~r.fell
+        x, c, s = r.state, r.C_f, r.s
+    d0 = float(coarse(state[:2]))
+    d = np.concatenate([np.full((int(alive.sum()), 1), d0), coarse(track[alive])], axis=1)
+    floor = pf.floor(state[:, None], np.array([d0]), track.shape[1])[0]
+    assert np.all(d[:, :-1] + d[:, 1:] >= floor[None, :] - 1e-9)
+    assert floor.max() > 0

@@ -81,6 +81,7 @@ class Problem:
         self._physical_binds = self.limits.C_f_max * self.body.l > PHYSICAL_MARGIN
         self._fall_table = False                  # built on first use (fall_table.py)
         self._reach = False                       # built on first use (reach.py)
+        self._pairs = False                       # built on first use (spacing.py)
 
     def fall_table(self):
         """The :class:`.fall_table.FallTable` of this problem, or ``None`` where it does not
@@ -104,14 +105,31 @@ class Problem:
         p.__dict__.update(self.__dict__)
         p.distance = self.distance.near(center, r)
         p.obstacles = self.obstacles.near(center, r)
+        p._pairs = False                        # its own path samples
         return p
 
     def lower_bound(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Admissible bound on the cost still to come after nodes at ``depth`` whose last sample
         was ``d_last`` from the path: the sum of :meth:`sample_bounds`."""
         d_last = np.asarray(d_last, float)
-        return self.sample_bounds(d_last, depth, state, C_f, reach).sum(axis=-1).reshape(
-            d_last.shape)
+        terms = self.sample_bounds(d_last, depth, state, C_f, reach)
+        return self.total_bound(terms, d_last, depth, state).reshape(d_last.shape)
+
+    def total_bound(self, terms, d_last, depth, state=None):
+        """The cost still to come from the per-sample bounds ``terms`` (:meth:`sample_bounds`):
+        their sum, or with the nodes' ``state``, at least as much from pairs of consecutive
+        samples (``spacing.py``)."""
+        if self._pairs is False:
+            from .spacing import PairFloor
+            self._pairs = PairFloor.for_problem(self) if self.settings.pair_floor else None
+        if state is None or self._pairs is None or not terms.shape[1]:
+            return terms.sum(axis=-1)
+        st = self.settings
+        d_last = np.atleast_1d(np.asarray(d_last, float))
+        K = np.broadcast_to((st.n_stages - np.asarray(depth)) * st.samples_per_stage,
+                            d_last.shape)
+        c = self._pairs.floor(state, d_last, terms.shape[1])
+        return self._pairs.total(terms, K, c, d_last)
 
     def sample_bounds(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Lower bounds on ``d`` at each sample still to come after nodes at ``depth`` whose last

@@ -162,8 +162,9 @@ def _bound(problem, r, depth, togo, reach, cols=slice(None)):
     if not st.lower_bound:
         return np.zeros(len(depth[cols])) if togo is None else togo
     depth = depth[cols]
-    terms = problem.sample_bounds(r.d_last[cols], depth, r.state[:, cols], r.C_f[cols], reach)
-    h = terms.sum(axis=1)
+    state = r.state[:, cols]
+    terms = problem.sample_bounds(r.d_last[cols], depth, state, r.C_f[cols], reach)
+    h = problem.total_bound(terms, r.d_last[cols], depth, state)
     if togo is None or not terms.shape[1]:
         return h if togo is None else np.maximum(h, togo)
     per = st.samples_per_stage

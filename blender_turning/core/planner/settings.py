@@ -39,6 +39,9 @@ class PlannerSettings:
     reach_directions: int = 8
     """With ``lower_bound``: directions in which the reachable set's support is tabulated for the
     bound on later samples (``reach.py``); 0 turns it off."""
+    pair_floor: bool = True
+    """With ``lower_bound``: two consecutive samples cannot both be close to the path's samples
+    (``spacing.py``)."""
     fall_table: bool = True
     """Also clip nodes that provably fall within their remaining stages whatever they do
     (``fall_table.py``; exact).  Off: only the paper's clip of a branch that has fallen."""

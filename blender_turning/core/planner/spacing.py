@@ -1,0 +1,89 @@
+"""Two consecutive track samples cannot both be close to the path's samples (Section 6's
+``d_i``, the distance to the nearest path sample).
+
+Let ``p, p'`` be the foot at two consecutive samples and ``s, s'`` their nearest path samples.
+
+- If ``s = s'``: ``d + d' = |p - s| + |p' - s| >= |p' - p| >= a``, where ``a`` is the least the
+  foot moves in one sample interval: every RK4 stage velocity of the interval has ``V_f >=
+  v_min = V_min / (1 + eps)`` (Eq. 21, ``eps = min(0.9, C_f_max l sin_lean)``) and a heading
+  within ``w = v_max C_f_max sample_dt`` of the heading at ``p`` (the heading rate is ``V_f C_f``),
+  so the displacement's component along that heading is at least
+  ``a = sample_dt v_min cos(w)`` (for ``w < pi / 2``).
+- If ``s != s'``: ``d + d' >= |s - s'| - |p' - p| >= delta - b``, ``b = v_max sample_dt`` the most
+  the foot moves, ``delta`` the least distance between distinct path samples that can be nearest
+  to a sample of this node: within ``d_last + 2 L`` of the node's foot, ``L`` the farthest it can
+  go within its horizon (``d`` is 1-Lipschitz, so ``d(p) <= d_last + |p - p0|``).
+
+So each pair costs at least ``c = min(a, delta - b)``.  The cost still to come is then at least
+the best split of its samples into singles (each at least its own bound ``t_k``) and consecutive
+pairs (each at least ``max(t_k + t_k+1, c)``), found by a dynamic programme; and the first sample
+pairs with the node's own last one: ``d_1 >= c - d_last``.  Not used with the exact (spline)
+distance, which lets both be small.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..dynamics import PHYSICAL_MARGIN, X, Y
+
+__all__ = ["PairFloor"]
+
+
+class PairFloor:
+    """For one problem's path samples: ``apart[i]``, the distance from sample ``i`` to the
+    nearest distinct other sample, and the interval's least and largest foot travel ``a, b``."""
+
+    def __init__(self, problem):
+        st, lim = problem.settings, problem.limits
+        slip = min(PHYSICAL_MARGIN, lim.C_f_max * problem.body.l * problem._sin_lean)
+        v_min = float(np.min(problem.speed.V)) / (1.0 + slip)
+        w = problem.v_max * lim.C_f_max * st.sample_dt
+        self.a = st.sample_dt * v_min * math.cos(w) * (1 - 1e-9) if w < math.pi / 2 else 0.0
+        self.b = problem.v_max * st.sample_dt * (1 + 1e-9)
+        S = problem.distance.samples
+        self.samples = S
+        r = np.hypot(S[:, None, 0] - S[None, :, 0], S[:, None, 1] - S[None, :, 1])
+        r[r == 0.0] = np.inf                           # the same point counts as one sample
+        self.apart = r.min(axis=1) * (1 - 1e-9) if len(S) > 1 else np.full(len(S), np.inf)
+
+    @staticmethod
+    def for_problem(problem) -> "PairFloor | None":
+        if problem.distance.exact or not len(problem.distance.samples):
+            return None
+        return PairFloor(problem)
+
+    def floor(self, state, d_last, n):
+        """``c`` for the pairs ending at samples ``2..n`` (shape ``(m, n)``; column ``k`` is the
+        pair ending at sample ``k + 1``, column 0 the node's last sample with the first) of nodes
+        at ``state``: ``delta`` over the path samples within ``d_last + 2 k b`` of the foot."""
+        m = len(d_last)
+        if self.a <= 0.0 or n == 0:
+            return np.zeros((m, n))
+        r = np.hypot(self.samples[None, :, 0] - state[X][:, None],
+                     self.samples[None, :, 1] - state[Y][:, None])
+        # The first sample k at which each path sample can be nearest (r <= d_last + 2 k b),
+        # which ends pair (column) k - 1; column n: never within the horizon.
+        first = np.ceil(np.maximum(r - d_last[:, None], 0.0) / (2.0 * self.b) * (1 - 1e-9))
+        first = np.clip(first - 1, 0, n).astype(np.intp)
+        delta = np.full((m, n + 1), np.inf)
+        np.minimum.at(delta, (np.repeat(np.arange(m), r.shape[1]), first.ravel()),
+                      np.tile(self.apart, m))
+        delta = np.minimum.accumulate(delta[:, :n], axis=1)
+        return np.clip(delta - self.b, 0.0, self.a)
+    @staticmethod
+    def total(terms, K, c, d_last):
+        """The best split of each row's first ``K`` samples into singles and pairs (see the module
+        docstring); ``terms`` (shape ``(m, Kmax)``) are the per-sample bounds, ``c`` the pairs'
+        floors from :meth:`floor`."""
+        m, n = terms.shape
+        if n == 0:
+            return np.zeros(m)
+        t = terms.copy()
+        t[:, 0] = np.maximum(t[:, 0], np.where(K >= 1, c[:, 0] - d_last, 0.0))
+        prev2, prev = np.zeros(m), t[:, 0].copy()
+        for k in range(1, n):
+            pair = np.maximum(t[:, k - 1] + t[:, k], np.where(K > k, c[:, k], 0.0))
+            prev2, prev = prev, np.maximum(prev + t[:, k], prev2 + pair)
+        return prev
