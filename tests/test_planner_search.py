@@ -239,6 +239,6 @@ def test_pair_floor_holds_on_every_branch(seed, spacing):
         x, c, s = r.state, r.C_f, r.s
     d0 = float(coarse(state[:2]))
     d = np.concatenate([np.full((int(alive.sum()), 1), d0), coarse(track[alive])], axis=1)
-    floor = pf.floor(state[:, None], np.array([d0]), track.shape[1])[0]
+    floor = pf.floor(state[:, None], track.shape[1])[0]
     assert np.all(d[:, :-1] + d[:, 1:] >= floor[None, :] - 1e-9)
     assert floor.max() > 0

@@ -115,21 +115,31 @@ class Problem:
         terms = self.sample_bounds(d_last, depth, state, C_f, reach)
         return self.total_bound(terms, d_last, depth, state).reshape(d_last.shape)
 
-    def total_bound(self, terms, d_last, depth, state=None):
+    def total_bound(self, terms, d_last, depth, state=None, pairs=None):
         """The cost still to come from the per-sample bounds ``terms`` (:meth:`sample_bounds`):
         their sum, or with the nodes' ``state``, at least as much from pairs of consecutive
-        samples (``spacing.py``)."""
-        if self._pairs is False:
-            from .spacing import PairFloor
-            self._pairs = PairFloor.for_problem(self) if self.settings.pair_floor else None
-        if state is None or self._pairs is None or not terms.shape[1]:
+        samples (``spacing.py``; ``pairs``: :meth:`pair_floors`, when already known)."""
+        if state is None or not terms.shape[1]:
             return terms.sum(axis=-1)
         st = self.settings
         d_last = np.atleast_1d(np.asarray(d_last, float))
         K = np.broadcast_to((st.n_stages - np.asarray(depth)) * st.samples_per_stage,
                             d_last.shape)
-        c = self._pairs.floor(state, d_last, terms.shape[1])
-        return self._pairs.total(terms, K, c, d_last)
+        if pairs is None:
+            pairs = self.pair_floors(state, K)
+        if pairs is None:
+            return terms.sum(axis=-1)
+        return self._pairs.total(terms, K, pairs[:, :terms.shape[1]], d_last)
+
+    def pair_floors(self, state, K):
+        """:meth:`.spacing.PairFloor.floor` for nodes at ``state`` with ``K`` samples to come,
+        or ``None`` where the pair floor does not apply."""
+        if self._pairs is False:
+            from .spacing import PairFloor
+            self._pairs = PairFloor.for_problem(self) if self.settings.pair_floor else None
+        if self._pairs is None:
+            return None
+        return self._pairs.floor(state, int(np.max(K, initial=0)))
 
     def sample_bounds(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Lower bounds on ``d`` at each sample still to come after nodes at ``depth`` whose last

@@ -154,17 +154,18 @@ def _expand(problem: Problem, nodes: _Nodes, ids):
     return r, par, ch
 
 
-def _bound(problem, r, depth, togo, reach, cols=slice(None)):
+def _bound(problem, r, depth, togo, reach, cols, pairs=None):
     """Lower bound on the cost still to come after children ``cols`` of a stage result: the
-    sum of ``Problem.sample_bounds`` and, given the previous search's ``togo`` (proof.py, which
-    covers all stages but the last), ``togo`` plus the bounds on the last stage's samples."""
+    per-sample bounds (``Problem.sample_bounds``) combined by ``Problem.total_bound`` and, given
+    the previous search's ``togo`` (proof.py, which covers all stages but the last), ``togo`` plus
+    the bounds on the last stage's samples.  ``pairs``: the pair floors, when already known."""
     st = problem.settings
     if not st.lower_bound:
-        return np.zeros(len(depth[cols])) if togo is None else togo
+        return np.zeros(len(cols)) if togo is None else togo
     depth = depth[cols]
     state = r.state[:, cols]
     terms = problem.sample_bounds(r.d_last[cols], depth, state, r.C_f[cols], reach)
-    h = problem.total_bound(terms, r.d_last[cols], depth, state)
+    h = problem.total_bound(terms, r.d_last[cols], depth, state, pairs)
     if togo is None or not terms.shape[1]:
         return h if togo is None else np.maximum(h, togo)
     per = st.samples_per_stage
@@ -296,14 +297,23 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         togo = None
         if proof is not None:
             old, togo = proof.children(nodes.old[par], ch)
-        prio = f + _bound(problem, r, depth, togo, reach=False)
+        # Bounds for the children still in play; the costlier reach bound only where the cheap
+        # ones pass.
+        prio = np.full(len(par), np.inf)
+        i = np.flatnonzero(inner)
+        pairs = problem.pair_floors(r.state[:, i], (N - depth[i]) * st.samples_per_stage) \
+            if st.lower_bound and len(i) else None
+        prio[i] = f[i] + _bound(problem, r, depth, None if togo is None else togo[i], False, i,
+                                pairs)
         # What this search proves about each child (proof.py): f + h, f for a leaf, inf if none.
         nodes.child_f[par, ch] = f
         keep = inner & ~(prio > ub + tol())
         if st.lower_bound and keep.any() and problem.reach_bound() is not None:
-            k = np.flatnonzero(keep)        # the costlier bound only where the cheap one passes
+            sub = np.flatnonzero(keep[i])
+            k = i[sub]
             prio[k] = np.maximum(prio[k], f[k] + _bound(
-                problem, r, depth, None if togo is None else togo[k], reach=True, cols=k))
+                problem, r, depth, None if togo is None else togo[k], True, k,
+                None if pairs is None else pairs[sub]))
             keep[k] = ~(prio[k] > ub + tol())
         nodes.child_total[par, ch] = np.where(leaf, f, np.where(inner, prio, np.inf))
         clip_bound += int(np.count_nonzero(inner & ~keep))

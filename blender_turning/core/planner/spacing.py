@@ -10,11 +10,13 @@ Let ``p, p'`` be the foot at two consecutive samples and ``s, s'`` their nearest
   so the displacement's component along that heading is at least
   ``a = sample_dt v_min cos(w)`` (for ``w < pi / 2``).
 - If ``s != s'``: ``d + d' >= |s - s'| - |p' - p| >= delta - b``, ``b = v_max sample_dt`` the most
-  the foot moves, ``delta`` the least distance between distinct path samples that can be nearest
-  to a sample of this node: within ``d_last + 2 L`` of the node's foot, ``L`` the farthest it can
-  go within its horizon (``d`` is 1-Lipschitz, so ``d(p) <= d_last + |p - p0|``).
+  the foot moves, ``delta`` the least distance between distinct path samples in the ring where
+  ``s, s'`` must lie if ``d + d' < a``: both within ``a`` of the foot, which at sample ``k`` is
+  at most ``k b`` from the node's foot and at least ``near[k]`` (each step's component along the
+  node's heading, the heading turning no faster than ``v_max C_f_max``).
 
-So each pair costs at least ``c = min(a, delta - b)``.  The cost still to come is then at least
+So each pair costs at least ``c = min(a, delta - b)`` (if it cost less than ``c <= a``, both
+nearest samples would be in the ring, and either case above gives at least ``c``).  The cost still to come is then at least
 the best split of its samples into singles (each at least its own bound ``t_k``) and consecutive
 pairs (each at least ``max(t_k + t_k+1, c)``), found by a dynamic programme; and the first sample
 pairs with the node's own last one: ``d_1 >= c - d_last``.  Not used with the exact (spline)
@@ -42,6 +44,12 @@ class PairFloor:
         w = problem.v_max * lim.C_f_max * st.sample_dt
         self.a = st.sample_dt * v_min * math.cos(w) * (1 - 1e-9) if w < math.pi / 2 else 0.0
         self.b = problem.v_max * st.sample_dt * (1 + 1e-9)
+        # The least distance from the start after k samples: the component along the first
+        # heading of each step, whose headings are within v_max C_f_max t of it.
+        h, steps = st.dt, st.n_stages * st.steps_per_stage
+        turn = np.minimum(problem.v_max * lim.C_f_max * h * np.arange(1, steps + 1), math.pi / 2)
+        along = np.concatenate([[0.0], np.cumsum(h * v_min * np.cos(turn))])
+        self.near = along[::st.steps_per_sample] * (1 - 1e-9)
         S = problem.distance.samples
         self.samples = S
         r = np.hypot(S[:, None, 0] - S[None, :, 0], S[:, None, 1] - S[None, :, 1])
@@ -54,24 +62,30 @@ class PairFloor:
             return None
         return PairFloor(problem)
 
-    def floor(self, state, d_last, n):
-        """``c`` for the pairs ending at samples ``2..n`` (shape ``(m, n)``; column ``k`` is the
-        pair ending at sample ``k + 1``, column 0 the node's last sample with the first) of nodes
-        at ``state``: ``delta`` over the path samples within ``d_last + 2 k b`` of the foot."""
-        m = len(d_last)
+    def floor(self, state, n):
+        """``c`` for the pairs ending at samples ``1..n`` (shape ``(m, n)``; column ``k`` is the
+        pair of samples ``k`` and ``k + 1``, sample 0 the node's own) of nodes at ``state``."""
+        m = state.shape[1]
         if self.a <= 0.0 or n == 0:
             return np.zeros((m, n))
         r = np.hypot(self.samples[None, :, 0] - state[X][:, None],
                      self.samples[None, :, 1] - state[Y][:, None])
-        # The first sample k at which each path sample can be nearest (r <= d_last + 2 k b),
-        # which ends pair (column) k - 1; column n: never within the horizon.
-        first = np.ceil(np.maximum(r - d_last[:, None], 0.0) / (2.0 * self.b) * (1 - 1e-9))
-        first = np.clip(first - 1, 0, n).astype(np.intp)
-        delta = np.full((m, n + 1), np.inf)
-        np.minimum.at(delta, (np.repeat(np.arange(m), r.shape[1]), first.ravel()),
-                      np.tile(self.apart, m))
-        delta = np.minimum.accumulate(delta[:, :n], axis=1)
-        return np.clip(delta - self.b, 0.0, self.a)
+        lo, hi = self._ring(n)
+        used = np.flatnonzero((r <= hi[-1]).any(axis=0))      # samples in some node's rings
+        r, apart = r[:, used], self.apart[used]
+        c = np.empty((m, n))
+        for k in range(n):
+            inside = (r >= lo[k]) & (r <= hi[k])
+            c[:, k] = np.where(inside, apart, np.inf).min(axis=1, initial=np.inf)
+        return np.clip(c - self.b, 0.0, self.a)
+
+    def _ring(self, n):
+        """Where the nearest path samples of a pair below ``a`` can be: both within ``a`` of the
+        foot, which at sample ``k`` is between ``near[k]`` and ``k b`` from where it started."""
+        if n > len(self.near) - 1:
+            raise ValueError("more samples than the horizon")
+        k = np.arange(n)
+        return self.near[k] - self.a, (k + 1) * self.b + self.a
     @staticmethod
     def total(terms, K, c, d_last):
         """The best split of each row's first ``K`` samples into singles and pairs (see the module
