@@ -16,11 +16,11 @@ Let ``p, p'`` be the foot at two consecutive samples and ``s, s'`` their nearest
   node's heading, the heading turning no faster than ``v_max C_f_max``).
 
 So each pair costs at least ``c = min(a, delta - b)`` (if it cost less than ``c <= a``, both
-nearest samples would be in the ring, and either case above gives at least ``c``).  The cost still to come is then at least
-the best split of its samples into singles (each at least its own bound ``t_k``) and consecutive
-pairs (each at least ``max(t_k + t_k+1, c)``), found by a dynamic programme; and the first sample
-pairs with the node's own last one: ``d_1 >= c - d_last``.  Not used with the exact (spline)
-distance, which lets both be small.
+nearest samples would be in the ring, and either case above gives at least ``c``).  The cost
+still to come is then at least the best split of its samples into singles (each at least its
+own bound ``t_k``) and consecutive pairs (each at least ``max(t_k + t_k+1, c)``), found by a
+dynamic programme; and the first sample pairs with the node's own last one:
+``d_1 >= c - d_last``.  Not used with the exact (spline) distance, which lets both be small.
 """
 from __future__ import annotations
 
@@ -44,12 +44,15 @@ class PairFloor:
         w = problem.v_max * lim.C_f_max * st.sample_dt
         self.a = st.sample_dt * v_min * math.cos(w) * (1 - 1e-9) if w < math.pi / 2 else 0.0
         self.b = problem.v_max * st.sample_dt * (1 + 1e-9)
-        # The least distance from the start after k samples: the component along the first
-        # heading of each step, whose headings are within v_max C_f_max t of it.
+        # The least distance from the start after k samples: the sum of each step's least
+        # component along the first heading, the headings within v_max C_f_max t of it (a
+        # component can be negative once they may have turned through more than pi / 2).
         h, steps = st.dt, st.n_stages * st.steps_per_stage
-        turn = np.minimum(problem.v_max * lim.C_f_max * h * np.arange(1, steps + 1), math.pi / 2)
-        along = np.concatenate([[0.0], np.cumsum(h * v_min * np.cos(turn))])
-        self.near = along[::st.steps_per_sample] * (1 - 1e-9)
+        turn = np.minimum(problem.v_max * lim.C_f_max * h * np.arange(1, steps + 1), math.pi)
+        cos = np.cos(turn)
+        along = np.cumsum(h * np.where(cos >= 0.0, v_min, problem.v_max) * cos)
+        near = np.concatenate([[0.0], along])[::st.steps_per_sample]
+        self.near = near - 1e-9 * (1.0 + np.abs(near))
         S = problem.distance.samples
         self.samples = S
         r = np.hypot(S[:, None, 0] - S[None, :, 0], S[:, None, 1] - S[None, :, 1])
@@ -85,7 +88,7 @@ class PairFloor:
         if n > len(self.near) - 1:
             raise ValueError("more samples than the horizon")
         k = np.arange(n)
-        return self.near[k] - self.a, (k + 1) * self.b + self.a
+        return np.minimum(self.near[k], self.near[k + 1]) - self.a, (k + 1) * self.b + self.a
     @staticmethod
     def total(terms, K, c, d_last):
         """The best split of each row's first ``K`` samples into singles and pairs (see the module
