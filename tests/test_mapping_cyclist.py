@@ -121,3 +121,18 @@ def test_options_are_validated():
         CyclistOptions(gear_ratio=0.0)
     with pytest.raises(ValueError, match="wheel_radius"):
         CyclistOptions(wheel_radius=-1.0)
+
+
+def test_the_fork_is_raked_with_trail():
+    """A bicycle's steering axis leans back (head angle ~72 deg) and meets the ground ahead of the
+    front tyre's contact (trail, which makes a real bike self-steer into its lean)."""
+    spec = load_rig("cyclist")
+    fork = spec.bone("fork")
+    k = np.subtract(fork.tail, fork.head)
+    k = k / np.linalg.norm(k)
+    head_angle = math.degrees(math.atan2(k[2], -k[1]))
+    assert 68.0 < head_angle < 76.0
+    hub = np.asarray(spec.bone("wheel.F").head)
+    ground = np.asarray(fork.head) - fork.head[2] / k[2] * k          # the axis at z = 0
+    trail = ground[1] - hub[1]
+    assert 0.03 < trail < 0.10

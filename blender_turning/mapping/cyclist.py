@@ -4,10 +4,10 @@ to keep the hands on the handlebars.  The pedals move as a function of the dista
 Inverse kinematics is used to keep the feet on the pedals."
 
 Bike and rider lean together by ``theta_v`` about the line through the wheels' contact points
-(the rig's Y axis at z = 0).  The rig's steering axis is vertical in the bike's frame and passes
-through the front hub, so steering keeps the front contact under the hub; the small drop of a
-steered *and* leaned wheel's lowest point is taken up by sliding the wheel along the steering
-axis (under 3 mm at 23 deg of lean and 17 deg of steer).
+(the rig's Y axis at z = 0).  The rig's steering axis (the fork bone) is raked like a real
+bicycle's: a 72 deg head angle and a 45 mm fork offset, so 6 cm of trail.  Steering turns the fork
+about that axis; the front wheel's rise or drop as it steers and leans is taken up by sliding it
+along the axis, so its lowest point stays on the ground.
 """
 from __future__ import annotations
 
@@ -55,16 +55,23 @@ def tyre_radius(spec) -> float:
     return float(max(radii))
 
 
-def steer_angle(C_f, theta_v, wheelbase: float, steer_max: float):
-    """Fork angle (rad, positive = left) for the curvature ``C_f`` at lean ``theta_v``.
+def steer_angle(C_f, theta_v, wheelbase: float, steer_max: float, caster: float = 0.0):
+    """Fork angle (rad, positive = left) for the curvature ``C_f`` at lean ``theta_v``, about a
+    steering axis tilted back from the bike's vertical by ``caster`` (90 deg - head angle).
 
     A bicycle whose front wheel rolls ``delta_g`` off the frame's heading follows
     ``C = tan(delta_g) / wheelbase`` (the rear axle's curvature; the foot point is close to it).
-    The wheel rolls along the line where its plane meets the ground; steered by ``delta`` about
-    an axis leaned with the bike by ``theta_v``, that line is ``tan(delta_g) = tan(delta) /
-    cos(theta_v)`` off the frame.  Hence ``tan(delta) = wheelbase C_f cos(theta_v)``.
+    The wheel rolls along the line where its plane meets the ground, ``atan(a_y / a_x)`` off the
+    frame for the axle ``a``.  Steering by ``delta`` about the raked axis turns the axle ``(1, 0,
+    0)`` into ``(cos delta, cos(caster) sin delta, sin(caster) sin delta)``; leaning by
+    ``theta_v`` makes ``a_x = cos delta cos theta_v - sin(caster) sin delta sin theta_v``.  Hence
+    ``tan(delta) = wheelbase C_f cos(theta_v) / (cos(caster) + wheelbase C_f sin(caster)
+    sin(theta_v))`` (with no caster: ``wheelbase C_f cos(theta_v)``).
     """
-    return np.clip(np.arctan(wheelbase * np.asarray(C_f) * np.cos(theta_v)), -steer_max, steer_max)
+    k = wheelbase * np.asarray(C_f)
+    return np.clip(np.arctan2(k * np.cos(theta_v),
+                              math.cos(caster) + k * math.sin(caster) * np.sin(theta_v)),
+                   -steer_max, steer_max)
 
 
 class CyclistMapping(Mapping):
@@ -81,9 +88,10 @@ class CyclistMapping(Mapping):
         radius = o.wheel_radius or r_tyre
         up = np.array([0.0, 0.0, 1.0])
 
-        # Steering: a rotation about the fork's own axis (vertical in the bike's frame).
-        delta = steer_angle(traj.C_f, th, wheelbase, o.steer_max)
+        # Steering: a rotation about the fork's own (raked) axis.
         fork_axis = skel.rest_of(B.FORK)[:3, 1]
+        caster = math.atan2(-fork_axis[1], fork_axis[2])
+        delta = steer_angle(traj.C_f, th, wheelbase, o.steer_max, caster)
         add_local_rotation(b, B.FORK, fork_axis, delta)
 
         # Wheels and crank turn with the distance travelled (rolling without slip): forward
