@@ -10,7 +10,7 @@ from blender_turning.mapping.base import BoneChannels
 from blender_turning.mapping.kinematics import (PoseBuilder, Skeleton, quat_continuous,
                                                 quat_from_axis_angle, quat_from_matrix,
                                                 quat_mul, quat_to_matrix, rest_matrix,
-                                                two_bone_ik, vec_roll_to_mat3)
+                                                rigid_inverse, two_bone_ik, vec_roll_to_mat3)
 
 unit = st.tuples(*[st.floats(-1, 1)] * 3).filter(lambda v: np.linalg.norm(v) > 0.1)
 
@@ -125,6 +125,39 @@ def test_set_pose_inverts_fk():
     assert np.allclose(b.pose("b")[:, :3, :3], want)
     ch = {k: BoneChannels(b.loc.get(k), b.rot.get(k)) for k in "ab"}
     assert np.allclose(sk.fk(ch, n)["b"], b.pose("b"))
+
+
+def test_cached_poses_follow_every_change_of_an_ancestor():
+    """PoseBuilder caches poses: a change of a bone's (or an ancestor's) channels must reach
+    every descendant's pose, and read-outs must not alias the cache."""
+    sk = chain()
+    n = 3
+    rng = np.random.default_rng(2)
+    b = PoseBuilder(sk, n)
+    b.pose("c")
+    b.pose("c")[:] = 0.0                      # a caller scribbling on what the cache handed out
+    np.testing.assert_allclose(b.pose("c"), sk.fk({}, n)["c"], atol=1e-12)
+    for step in range(3):
+        bone = "abc"[step]
+        b.set_local(bone, quat_from_axis_angle(rng.normal(size=(n, 3)), rng.normal(size=n)))
+        ch = {k: BoneChannels(b.loc.get(k), b.rot.get(k)) for k in "abc"}
+        want = sk.fk(ch, n)
+        for k in "abc":
+            np.testing.assert_allclose(b.pose(k), want[k], atol=1e-12)
+    b.set_pose("b", quat_to_matrix(quat_from_axis_angle(rng.normal(size=(n, 3)),
+                                                        rng.normal(size=n))))
+    ch = {k: BoneChannels(b.loc.get(k), b.rot.get(k)) for k in "abc"}
+    np.testing.assert_allclose(b.pose("c"), sk.fk(ch, n)["c"], atol=1e-12)
+
+
+def test_rigid_inverse_equals_the_general_inverse():
+    rng = np.random.default_rng(3)
+    m = np.zeros((50, 4, 4))
+    m[:, :3, :3] = quat_to_matrix(quat_from_axis_angle(rng.normal(size=(50, 3)),
+                                                       rng.normal(size=50)))
+    m[:, :3, 3] = rng.normal(size=(50, 3))
+    m[:, 3, 3] = 1.0
+    np.testing.assert_allclose(rigid_inverse(m), np.linalg.inv(m), atol=1e-12)
 
 
 def test_missing_bone_is_named():

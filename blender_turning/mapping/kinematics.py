@@ -173,6 +173,17 @@ def rotation4(r):
     return m
 
 
+def rigid_inverse(m):
+    """Inverse of rigid transforms (..., 4, 4) (a rotation and a translation, as every pose here
+    is): ``[R^T, -R^T t]``, exact where a general 4x4 inverse is ~20x slower per frame."""
+    r = np.swapaxes(m[..., :3, :3], -1, -2)
+    out = np.zeros(m.shape)
+    out[..., :3, :3] = r
+    out[..., :3, 3] = -np.einsum("...ij,...j->...i", r, m[..., :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
+
+
 def _unit(v):
     v = np.asarray(v, float)
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
@@ -287,6 +298,17 @@ class PoseBuilder:
         self.n = n
         self.loc = {}
         self.rot = {}
+        self._poses = {}          # bone -> pose (n, 4, 4), dropped when it or an ancestor changes
+
+    def _changed(self, name):
+        """Forget the cached poses of ``name`` and its descendants."""
+        skel = self.skel
+        gone = {name}
+        for child, parent in zip(skel.names[skel.i(name) + 1:], skel.parents[skel.i(name) + 1:]):
+            if parent in gone:
+                gone.add(child)
+        for bone in gone:
+            self._poses.pop(bone, None)
 
     def set_local(self, name, rotation=None, location=None):
         self.skel.i(name)
@@ -294,9 +316,13 @@ class PoseBuilder:
             self.rot[name] = np.broadcast_to(np.asarray(rotation, float), (self.n, 4)).copy()
         if location is not None:
             self.loc[name] = np.broadcast_to(np.asarray(location, float), (self.n, 3)).copy()
+        self._changed(name)
 
     def pose(self, name) -> np.ndarray:
         """Current armature-space pose (n, 4, 4) of ``name``, from its ancestors' channels."""
+        cached = self._poses.get(name)
+        if cached is not None:
+            return cached.copy()
         i = self.skel.i(name)
         p = self.skel.parents[i]
         m = np.broadcast_to(self.skel.rest_relative(name), (self.n, 4, 4))
@@ -306,7 +332,9 @@ class PoseBuilder:
             m = m @ translation(self.loc[name])
         if name in self.rot:
             m = m @ rotation4(quat_to_matrix(self.rot[name]))
-        return np.array(m)
+        m = np.array(m)
+        self._poses[name] = m
+        return m.copy()
 
     def unposed(self, name) -> np.ndarray:
         """The pose ``name`` would have with identity channels (its parent as now posed)."""
@@ -323,13 +351,14 @@ class PoseBuilder:
         base = self.unposed(name)
         target = rotation4(rotation)
         target[:, :3, 3] = base[:, :3, 3] if head is None else head
-        local = np.linalg.inv(base) @ target
+        local = rigid_inverse(base) @ target
         i = self.skel.i(name)
         if head is not None and self.skel.connected[i]:
             raise ValueError(f"bone {name!r} is connected: its head follows its parent's tail")
         if head is not None:
             self.loc[name] = local[:, :3, 3].copy()
         self.rot[name] = quat_from_matrix(local[:, :3, :3])
+        self._changed(name)
 
     def head(self, name) -> np.ndarray:
         return self.pose(name)[:, :3, 3]
