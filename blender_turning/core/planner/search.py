@@ -13,7 +13,10 @@ Beyond the paper (each switchable, for the benchmarks and the exactness tests):
 
 - warm start: the previous plan shifted by one stage (all q choices for the new last stage) is
   simulated first and gives the first upper bound; without a previous plan, a greedy dive does;
-- lower bound: ``Problem.lower_bound``, added to ``f`` both for ordering (A*) and for clipping;
+- lower bound: ``Problem.sample_bounds`` per sample still to come (Lipschitz, the arc of the
+  current curvature, where the foot can be: ``reach.py``) combined by ``Problem.total_bound``
+  (consecutive samples cannot both be near the path's samples: ``spacing.py``), added to ``f``
+  both for ordering (A*) and for clipping;
 - fall table (``fall_table.py``): a child that will fall within the horizon whatever it does is
   clipped at once instead of through its subtree;
 - proof reuse (``proof.py``): in the receding horizon, a node's cost still to come is also

@@ -32,7 +32,7 @@ class PlannerSettings:
     """Use the previous plan, shifted by one stage, as the first upper bound."""
     lower_bound: bool = True
     """Add an admissible bound on the cost still to come (the foot closes on the path no faster
-    than its largest speed) when clipping and ordering."""
+    than its largest speed, and the refinements below) when clipping and ordering."""
     lookahead: int = 6
     """With ``lower_bound``: how many of the next samples get the tighter arc bound (the foot
     stays near the arc of its current curvature for a short while); 0 turns it off."""

@@ -10,13 +10,14 @@ Let ``p, p'`` be the foot at two consecutive samples and ``s, s'`` their nearest
   so the displacement's component along that heading is at least
   ``a = sample_dt v_min cos(w)`` (for ``w < pi / 2``).
 - If ``s != s'``: ``d + d' >= |s - s'| - |p' - p| >= delta - b``, ``b = v_max sample_dt`` the most
-  the foot moves, ``delta`` the least distance between distinct path samples in the ring where
+  the foot moves, ``delta`` the least distance between distinct path samples in the region where
   ``s, s'`` must lie if ``d + d' < a``: both within ``a`` of the foot, which at sample ``k`` is
-  at most ``k b`` from the node's foot and at least ``near[k]`` (each step's component along the
-  node's heading, the heading turning no faster than ``v_max C_f_max``).
+  at most ``k b`` from the node's foot and at least ``near[k]`` ahead of it along the node's
+  heading (the sum of each step's least component along it, the heading turning no faster than
+  ``v_max C_f_max``).
 
 So each pair costs at least ``c = min(a, delta - b)`` (if it cost less than ``c <= a``, both
-nearest samples would be in the ring, and either case above gives at least ``c``).  The cost
+nearest samples would be in the region, and either case above gives at least ``c``).  The cost
 still to come is then at least the best split of its samples into singles (each at least its
 own bound ``t_k``) and consecutive pairs (each at least ``max(t_k + t_k+1, c)``), found by a
 dynamic programme; and the first sample pairs with the node's own last one:
@@ -28,7 +29,7 @@ import math
 
 import numpy as np
 
-from ..dynamics import PHYSICAL_MARGIN, X, Y
+from ..dynamics import PHYSICAL_MARGIN, THETA_DIR, X, Y
 
 __all__ = ["PairFloor"]
 
@@ -71,20 +72,23 @@ class PairFloor:
         m = state.shape[1]
         if self.a <= 0.0 or n == 0:
             return np.zeros((m, n))
-        r = np.hypot(self.samples[None, :, 0] - state[X][:, None],
-                     self.samples[None, :, 1] - state[Y][:, None])
-        lo, hi = self._ring(n)
-        used = np.flatnonzero((r <= hi[-1]).any(axis=0))      # samples in some node's rings
-        r, apart = r[:, used], self.apart[used]
+        dx = self.samples[None, :, 0] - state[X][:, None]
+        dy = self.samples[None, :, 1] - state[Y][:, None]
+        r = np.hypot(dx, dy)
+        ahead = dx * np.cos(state[THETA_DIR])[:, None] + dy * np.sin(state[THETA_DIR])[:, None]
+        lo, hi = self._region(n)
+        used = np.flatnonzero((r <= hi[-1]).any(axis=0))      # samples in some node's region
+        r, ahead, apart = r[:, used], ahead[:, used], self.apart[used]
         c = np.empty((m, n))
         for k in range(n):
-            inside = (r >= lo[k]) & (r <= hi[k])
+            inside = (ahead >= lo[k]) & (r <= hi[k])
             c[:, k] = np.where(inside, apart, np.inf).min(axis=1, initial=np.inf)
         return np.clip(c - self.b, 0.0, self.a)
 
-    def _ring(self, n):
+    def _region(self, n):
         """Where the nearest path samples of a pair below ``a`` can be: both within ``a`` of the
-        foot, which at sample ``k`` is between ``near[k]`` and ``k b`` from where it started."""
+        foot, which at sample ``k`` is at most ``k b`` from where it started and at least
+        ``near[k]`` ahead of it along its first heading."""
         if n > len(self.near) - 1:
             raise ValueError("more samples than the horizon")
         k = np.arange(n)
