@@ -33,7 +33,7 @@ from blender_turning.core.planner import Problem, branch_and_bound  # noqa: E402
 from blender_turning.core.scene import load_scene  # noqa: E402
 
 CASES = [  # scene, N, q, baseline samples
-    ("slalom", 12, 7, 4),
+    ("slalom", 12, 7, 7),
     ("tree_skiing", 10, 5, 3),
     ("tree_skiing", 12, 5, 3),
     ("cyclist_corner", 10, 5, 3),

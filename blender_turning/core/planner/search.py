@@ -44,7 +44,8 @@ _REL_TOL = 1e-9
 
 @dataclass(frozen=True)
 class SearchStats:
-    """What one search did.  Clipped counts are children (or queued nodes) dropped, by reason:
+    """What one search did.  ``expanded``: nodes whose children were simulated, those of the
+    warm start's plans included.  Clipped counts are children (or queued nodes) dropped, by reason:
     collision, fall (the lean passed its bound), bound (cannot beat the best plan) and doomed
     (will fall within the horizon whatever it does, ``fall_table.py``)."""
 
@@ -186,14 +187,15 @@ def _root(q, state, C_f, t0, s0, old):
 
 def _follow_choices(problem, state, C_f, t0, s0, choices):
     """Simulate one fixed plan (all q choices at its last stage when ``choices`` is one short).
-    Returns ``(cost, full choices)`` of its best feasible completion, or ``(inf, None)``."""
+    Returns ``(cost, full choices, nodes whose children were simulated)`` of its best feasible
+    completion, or ``(inf, None, nodes)``."""
     st = problem.settings
     x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
     f = np.zeros(1)
     for k, c in enumerate(choices):
         r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
         if r.collided[0] or r.fell[0]:
-            return np.inf, None
+            return np.inf, None, k + 1
         x, cf, s, f, t = r.state, r.C_f, r.s, f + r.cost, t + st.t_stage
     if len(choices) < st.n_stages:
         q = st.q
@@ -201,12 +203,14 @@ def _follow_choices(problem, state, C_f, t0, s0, choices):
                                    np.full(q, t), np.repeat(s, q))
         fc = np.where(r.collided | r.fell, np.inf, f[0] + r.cost)
         j = int(np.argmin(fc))
-        return (float(fc[j]), list(choices) + [j]) if np.isfinite(fc[j]) else (np.inf, None)
-    return float(f[0]), list(choices)
+        n = len(choices) + 1
+        return (float(fc[j]), list(choices) + [j], n) if np.isfinite(fc[j]) else (np.inf, None, n)
+    return float(f[0]), list(choices), len(choices)
 
 
 def _greedy_dive(problem, state, C_f, t0, s0):
-    """A first complete plan: at each stage take the child with the least ``f + lower bound``."""
+    """A first complete plan: at each stage take the child with the least ``f + lower bound``.
+    Returns ``(cost, choices, nodes expanded)``, or ``(inf, None, nodes expanded)``."""
     st = problem.settings
     q = st.q
     x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
@@ -219,10 +223,10 @@ def _greedy_dive(problem, state, C_f, t0, s0):
         key = np.where(r.collided | r.fell, np.inf, key)
         j = int(np.argmin(key))
         if not np.isfinite(key[j]):
-            return np.inf, None
+            return np.inf, None, depth
         choices.append(j)
         x, cf, s, f, t = r.state[:, [j]], r.C_f[[j]], r.s[[j]], f + r.cost[j], t + st.t_stage
-    return float(f), choices
+    return float(f), choices, st.n_stages
 
 
 def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
@@ -241,26 +245,34 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     N = st.n_stages
     ub, best = np.inf, None
     warm_cost = np.inf
+    expanded = 0              # every node whose children are simulated, the warm start's too
+    hot = False               # the first bound is the previous plan (usually the optimum)
     if st.warm_start:
         if previous is not None and len(previous) == N:
-            ub, best = _follow_choices(problem, state, C_f, t0, s0, list(previous[1:]))
+            ub, best, n = _follow_choices(problem, state, C_f, t0, s0, list(previous[1:]))
+            expanded += n
+            hot = best is not None
         if best is None:
-            ub, best = _greedy_dive(problem, state, C_f, t0, s0)
+            ub, best, n = _greedy_dive(problem, state, C_f, t0, s0)
+            expanded += n
         warm_cost = ub
     if not st.reuse_proof:
         proof = None
     nodes = _root(st.q, state, C_f, t0, s0, -1 if proof is None else proof.root)
     heap = [(0.0, 0, 0)]
-    expanded = generated = leaves = 0
+    generated = leaves = 0
     clip_col = clip_fall = clip_bound = clip_doom = 0
     table = problem.fall_table() if st.fall_table else None
     proven = True
     tol = lambda: _REL_TOL * max(1.0, abs(ub))     # noqa: E731
     while heap:
         ids = []
-        # Until a first complete plan bounds the search, the queue order (best first) is all that
-        # keeps it small: start with small batches and let them grow with the search.
-        limit = st.batch if ub < np.inf else min(st.batch, max(8, expanded // 4))
+        # Batches expand nodes past the optimum when the bound is not yet tight: take whole
+        # batches only from the previous plan's bound; else a quarter, and until a first complete
+        # plan, batches growing with the search.
+        limit = st.batch if hot else max(1, st.batch // 4)
+        if ub == np.inf:
+            limit = min(limit, max(8, expanded // 4))
         while heap and len(ids) < limit:
             prio, _, i = heapq.heappop(heap)
             if prio > ub + tol():          # everything left in the queue is worse
