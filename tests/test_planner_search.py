@@ -179,15 +179,9 @@ def test_settings_are_validated():
         PlannerSettings(q=1)
 
 
-@pytest.mark.parametrize("seed", range(6))
-def test_reach_bound_holds_at_every_sample(seed):
-    """reach.py: on every branch that does not fall, the distance at each of the next samples is
-    at least the reachable-set bound from the root (all q^N plans, per sample)."""
-    problem, state, cf = feasible_problem(seed + 50, 3, 4)
-    problem = Problem(problem.figure, PathDistance(problem.distance.path), problem.obstacles,
-                      problem.settings)
-    rb = problem.reach_bound()
-    assert rb is not None and rb.samples > 0
+def branch_tracks(problem, state, cf):
+    """The foot's samples (branches, samples, 2) on all q^N branches from ``state``, and which
+    branches never fall."""
     st = problem.settings
     q, per = st.q, st.steps_per_sample
     x, c, s = state[:, None], np.array([cf]), np.zeros(1)
@@ -202,6 +196,19 @@ def test_reach_bound_holds_at_every_sample(seed):
         track = np.concatenate([track[par], steps[:, per - 1::per]], axis=1)
         alive = alive[par] & ~r.fell
         x, c, s = r.state, r.C_f, r.s
+    return track, alive
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_reach_bound_holds_at_every_sample(seed):
+    """reach.py: on every branch that does not fall, the distance at each of the next samples is
+    at least the reachable-set bound from the root (all q^N plans, per sample)."""
+    problem, state, cf = feasible_problem(seed + 50, 3, 4)
+    problem = Problem(problem.figure, PathDistance(problem.distance.path), problem.obstacles,
+                      problem.settings)
+    rb = problem.reach_bound()
+    assert rb is not None and rb.samples > 0
+    track, alive = branch_tracks(problem, state, cf)
     n = min(rb.samples, track.shape[1])
     k = np.arange(1, n + 1)
     bound = rb.sample_bounds(problem.distance.samples, state[:, None], np.array([cf]), k)[0]
@@ -224,19 +231,7 @@ def test_pair_floor_holds_on_every_branch(seed, spacing):
     coarse = PathDistance(path, per_segment=per_segment)
     problem = Problem(problem.figure, coarse, problem.obstacles, st)
     pf = PairFloor(problem)
-    q, per = st.q, st.steps_per_sample
-    x, c, s = state[:, None], np.array([cf]), np.zeros(1)
-    alive = np.ones(1, bool)
-    track = np.zeros((1, 0, 2))
-    for _ in range(st.n_stages):
-        m = x.shape[1]
-        par = np.repeat(np.arange(m), q)
-        r = problem.simulate_stage(x[:, par], c[par], np.tile(problem.u_values, m),
-                                   np.zeros(len(par)), s[par], record=True)
-        steps = np.array(r.record["state"][1:] + [r.state])[:, :2, :].transpose(2, 0, 1)
-        track = np.concatenate([track[par], steps[:, per - 1::per]], axis=1)
-        alive = alive[par] & ~r.fell
-        x, c, s = r.state, r.C_f, r.s
+    track, alive = branch_tracks(problem, state, cf)
     d0 = float(coarse(state[:2]))
     d = np.concatenate([np.full((int(alive.sum()), 1), d0), coarse(track[alive])], axis=1)
     floor = pf.floor(state[:, None], track.shape[1])[0]
