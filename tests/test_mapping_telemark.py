@@ -1,5 +1,4 @@
 """The telemark mapping (Section 7), checked with numpy forward kinematics."""
-import math
 
 import numpy as np
 import pytest
@@ -49,13 +48,10 @@ def test_trailing_heel_lifts(tele):
     assert np.all(heel_L[behind_L] > 0.03)
 
 
-def test_knees_follow_leg_force_and_poles_plant(tele):
+def test_knees_follow_leg_force(tele):
+    """(Its poles plant as the skier's: tests/test_mapping_skier.py runs the pole tests on both.)"""
     traj, track, spec, sk, P = tele
     assert np.corrcoef(knee(P, "L") + knee(P, "R"), traj.F_leg)[0, 1] > 0.9
-    for s, plant in (("L", 30.0), ("R", 210.0)):
-        tip = sk.carry(P, f"pole.{s}", spec.bone(f"pole.{s}").tail)
-        d = np.degrees(np.abs((traj.phi - math.radians(plant) + math.pi) % (2 * math.pi) - math.pi))
-        assert np.all(np.abs(tip[d < 15.0, 2]) < 0.01)
 
 
 def test_options_are_validated():

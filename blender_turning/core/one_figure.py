@@ -82,8 +82,7 @@ def integrate(body: BodyParams, limits: Limits, controller, state, n: int, dt: f
     for i in range(n):
         t = i * dt
         begin(t, (x0, x1, x2, x3, x4))
-        a0, a1, a2, a3, a4, cf, alpha, V_f = stage(t, x0, x1, x2, x3, x4, anchor, 0.0 if
-                                                   anchor is None else dt)
+        a0, a1, a2, a3, a4, cf, alpha, V_f = stage(t, x0, x1, x2, x3, x4, anchor, dt)
         append((x0, x1, x2, x3, x4, alpha, cf, V_f, *target(t)))
         if theta_fall is not None and abs(x3) > theta_fall:
             return rows, t

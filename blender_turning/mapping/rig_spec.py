@@ -50,9 +50,8 @@ __all__ = ["BoneSpec", "MeshSpec", "RigSpec", "RIGS_DIR", "RIG_NAMES", "MATERIAL
 
 # The repository's and the Blender extension's top-level rigs/, or blender_turning/rigs in a pip
 # install (pyproject.toml maps one onto the other).
-RIGS_DIR = next((d for d in (Path(__file__).resolve().parents[1] / "rigs",
-                             Path(__file__).resolve().parents[2] / "rigs") if d.is_dir()),
-                Path(__file__).resolve().parents[2] / "rigs")
+_PACKAGE, _TOP = Path(__file__).resolve().parents[1], Path(__file__).resolve().parents[2]
+RIGS_DIR = _PACKAGE / "rigs" if (_PACKAGE / "rigs").is_dir() else _TOP / "rigs"
 RIG_NAMES = ("skier", "snowboarder", "telemark", "cyclist")
 MATERIALS = ("skin", "suit", "equipment", "metal", "rubber")
 SHAPES = {"box": 3, "cylinder": 2, "capsule": 2}

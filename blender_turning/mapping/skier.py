@@ -206,23 +206,7 @@ class SkierMapping(Mapping):
             dip = plan.after & (grip[:, 2] + length * axis[:, 2] < 0.0)
             to = plan.tip_at[dip] - grip[dip]
             axis[dip] = to / np.linalg.norm(to, axis=1, keepdims=True)
-            b.set_pose(pole, frame_from_yx(_above_snow(axis, grip, length), np.cross(axis, up)),
-                       grip)
-
-
-def _above_snow(axis, grip, length):
-    """Tilt pole axes whose tip would go below the snow (z < 0) up until it touches it, keeping
-    their heading (a pole leaving its hole early, before the figure has moved away from it)."""
-    low = grip[:, 2] + length * axis[:, 2] < 0.0
-    if not low.any():
-        return axis
-    axis = axis.copy()
-    az = np.clip(-grip[low, 2] / length, -1.0, 1.0)
-    h = axis[low, :2]
-    h = h / np.maximum(np.linalg.norm(h, axis=1, keepdims=True), 1e-12)
-    axis[low, :2] = h * np.sqrt(1.0 - az * az)[:, None]
-    axis[low, 2] = az
-    return axis
+            b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
 
 
 def _wrist(b, s):

@@ -177,24 +177,25 @@ class PhaseEllipse(Controller):
     def scalar_cf_law(self):
         """:meth:`desired_cf` for one figure on floats (:func:`ellipse_alpha_one`, Eq. 1),
         with constant schedules read once."""
-        inverse = scalar_inverse_cf(self.body)
-        w_s, tm_s, amax_fixed, r0 = self.omega0, self.theta_max, self.alpha_max, self.origin_radius
+        inverse, ellipse = scalar_inverse_cf(self.body), self._ellipse
+        w_s, tm_s, r0 = self.omega0, self.theta_max, self.origin_radius
         wc, tc = w_s.constant_value, tm_s.constant_value
 
         def law(t, state):
-            w0 = wc if wc is not None else w_s(t)
-            tm0 = tc if tc is not None else tm_s(t)
-            b = 1.0 if self._beta is None else self._beta
-            amax = amax_fixed if amax_fixed is not None else 2.0 * w0 * w0 * tm0
+            tm, w, amax = ellipse(wc if wc is not None else w_s(t),
+                                  tc if tc is not None else tm_s(t))
             th = state[3]
-            return inverse(th, ellipse_alpha_one(th, state[4], b * tm0, w0 / b, amax, r0))
+            return inverse(th, ellipse_alpha_one(th, state[4], tm, w, amax, r0))
 
         return law
 
-    def desired_alpha(self, t, state):
-        w0 = self.omega0(t)
-        tm0 = self.theta_max(t)
+    def _ellipse(self, w0, tm0):
+        """``(theta_max, omega0, alpha_max)`` of the half-turn's ellipse: the target modified
+        by its beta (Section 5.2)."""
         b = 1.0 if self._beta is None else self._beta
         amax = self.alpha_max if self.alpha_max is not None else 2.0 * w0 * w0 * tm0
-        return ellipse_alpha(state[THETA_V], state[OMEGA_V], b * tm0, w0 / b, amax,
-                             self.origin_radius)
+        return b * tm0, w0 / b, amax
+
+    def desired_alpha(self, t, state):
+        tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t))
+        return ellipse_alpha(state[THETA_V], state[OMEGA_V], tm, w, amax, self.origin_radius)
