@@ -47,31 +47,32 @@ NEAR = 1.1
 
 
 def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=0.05):
-    """Section 5.1: the lean acceleration that takes the state onto the target ellipse."""
-    xp = backend(theta_v, omega_v, theta_max, omega0)
+    """Section 5.1: the lean acceleration that takes the state onto the target ellipse (arrays;
+    floats go to :func:`ellipse_alpha_one`, the same law as branches)."""
+    if backend(theta_v, omega_v, theta_max, omega0, alpha_max) is Scalar:
+        return ellipse_alpha_one(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius)
     th, om = theta_v, omega_v
     y = th / theta_max
     x = om / (omega0 * theta_max)
     den = theta_max * theta_max - th * th
-    w13_sq = om * om / xp.where(den > 0.0, den, 1.0)           # omega0'^2 of the Fig. 7a ellipse
+    w13_sq = om * om / np.where(den > 0.0, den, 1.0)           # omega0'^2 of the Fig. 7a ellipse
     on_a = den > 0.0                           # |y| < 1: a Fig. 7a ellipse passes through
-    on_b = (xp.abs(x) < 1.0) & (th != 0.0)     # |x| < 1: a Fig. 7b ellipse passes through
+    on_b = (np.abs(x) < 1.0) & (th != 0.0)     # |x| < 1: a Fig. 7b ellipse passes through
     slow = (w13_sq * SLOW_FACTOR ** 2 < omega0 * omega0) & (th != 0.0) & on_a
     # Preferred family: Fig. 7a in quadrants 1, 3 (and on the axes) unless slow, else Fig. 7b.
-    # (Complements without ``~``: on Python bools it is integer negation.)
     prefer_b = (th * om < 0.0) | slow
-    prefer_a = prefer_b == False  # noqa: E712 (elementwise on arrays)
+    prefer_a = ~prefer_b
     a13 = -w13_sq * th
-    a24 = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / xp.where(th != 0.0, th, 1.0)
+    a24 = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / np.where(th != 0.0, th, 1.0)
     # The other family only for states near the target (within NEAR on the preferred family's
     # axis): far outside, the paper's +-alpha_max is what brings the lean back.
-    near = xp.where(prefer_a, xp.abs(y) < NEAR, xp.abs(x) < NEAR)
+    near = np.where(prefer_a, np.abs(y) < NEAR, np.abs(x) < NEAR)
     use_a = on_a & (prefer_a | near)
     use_b = on_b & (prefer_b | near)
-    away = -alpha_max * xp.where(om != 0.0, xp.sign(om), xp.sign(th))
-    a = xp.where(prefer_a & on_a, a13, xp.where(use_b, a24, xp.where(use_a, a13, away)))
-    a = xp.where(xp.hypot(x, y) < origin_radius, 0.5 * alpha_max, a)
-    return xp.clip(a, -alpha_max, alpha_max)
+    away = -alpha_max * np.where(om != 0.0, np.sign(om), np.sign(th))
+    a = np.where(prefer_a & on_a, a13, np.where(use_b, a24, np.where(use_a, a13, away)))
+    a = np.where(np.hypot(x, y) < origin_radius, 0.5 * alpha_max, a)
+    return np.minimum(np.maximum(a, -alpha_max), alpha_max)
 
 
 def ellipse_alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius=0.05):
