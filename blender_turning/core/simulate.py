@@ -19,7 +19,7 @@ from .heading_table import heading_table
 from .one_figure import integrate
 from .params import BodyParams, Figure, Limits, check_range
 from .phase import phase
-from .trajectory import COLUMNS, Trajectory
+from .trajectory import COLUMNS, Trajectory, body_meta
 
 DEFAULT_DT = 0.02
 """Default integration step, s.  RK4 at 50 Hz tracks a 2 s turn to ~1e-6 rad (tests measure it)."""
@@ -27,10 +27,15 @@ DEFAULT_DT = 0.02
 
 @dataclass(frozen=True)
 class Run:
-    """Raw result of :func:`run`: ``columns[name]`` has shape ``(n_samples,) + batch_shape``."""
+    """Raw result of :func:`run`: ``columns[name]`` has shape ``(n_samples,) + batch_shape``.
+
+    ``falls`` lists ``(index, t)`` for every figure that fell, in the order they fell (index 0
+    for one figure); ``fell_at`` is the first of those times (``None``: nobody fell).  A fallen
+    figure of a batch holds NaN from the sample after its fall on."""
 
     columns: dict
     fell_at: float | None = None
+    falls: tuple = ()
 
 
 def run(body: BodyParams, limits: Limits, controller: Controller, state0, duration: float,
@@ -38,9 +43,12 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     """Integrate ``state0`` (shape ``(5,)`` for one figure, ``(5, n)`` for a batch).
 
     One figure is stepped on Python floats (:mod:`.one_figure`), a batch on numpy arrays; the
-    formulas are the same and tests hold the two to round-off.  ``C_f0`` is the curvature just before the start (for the rate
-    bound); ``None`` lets the first demand through unrated.  With ``stop_on_fall`` the run ends at
-    the first sample where any ``|theta_v|`` exceeds ``limits.theta_fall`` (``fell_at``).
+    formulas are the same and tests hold the two to round-off.  ``C_f0`` is the curvature just
+    before the start (for the rate bound); ``None`` lets the first demand through unrated.  With
+    ``stop_on_fall`` a figure stops at the first sample where its ``|theta_v|`` exceeds
+    ``limits.theta_fall``: one figure ends the run there, a figure of a batch stops alone (its
+    state frozen, its later samples NaN) while the others go on; the run ends early only when
+    every figure has fallen.  :attr:`Run.falls` reports who fell and when.
     """
     check_range("duration", duration, 0.0, 1e6, lo_open=True)
     check_range("dt", dt, 1e-5, 1.0)
@@ -52,12 +60,14 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
         rows, fell_at = integrate(body, limits, controller, arr, n, dt,
                                   None if C_f0 is None else float(C_f0),
                                   limits.theta_fall if stop_on_fall else None)
-        return _columns(body, np.array(rows, float), dt, fell_at)
+        return _columns(body, np.array(rows, float), dt,
+                        () if fell_at is None else ((0, fell_at),))
     state = arr
     anchor = None if C_f0 is None else np.asarray(C_f0, float)
     # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.
     rec = np.empty((n, 10) + arr.shape[1:])
-    fell_at = None
+    fell = np.full(arr.shape[1:], np.inf)              # time of each figure's fall
+    down = None                                        # who has fallen (None: nobody yet)
     desired = controller.desired_cf
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for i in range(n):
@@ -67,16 +77,24 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
             rec[i, :5] = state
             rec[i, 5], rec[i, 6], rec[i, 7], rec[i, 8], rec[i, 9] = alpha, cf, V_f, \
                 *controller.target(t)
-            if stop_on_fall and np.any(np.abs(state[THETA_V]) > limits.theta_fall):
-                fell_at, n = t, i + 1
-                break
+            if stop_on_fall and (down is not None or np.any(
+                    np.abs(state[THETA_V]) > limits.theta_fall)):
+                down = np.abs(state[THETA_V]) > limits.theta_fall    # frozen ones stay down
+                fell[down & (fell == np.inf)] = t
+                rec[i][:, fell < t] = np.nan
+                if np.all(down):
+                    n = i + 1
+                    break
             if i + 1 < n:
-                state = rk4_step(body, limits, state, t, dt, desired, cf, k1)
+                new = rk4_step(body, limits, state, t, dt, desired, cf, k1)
+                state = new if down is None else np.where(down, state, new)
                 anchor = cf
-    return _columns(body, rec[:n], dt, fell_at)
+    order = np.argsort(fell, kind="stable")
+    falls = tuple((int(k), float(fell[k])) for k in order if fell[k] != np.inf)
+    return _columns(body, rec[:n], dt, falls)
 
 
-def _columns(body: BodyParams, rec: np.ndarray, dt: float, fell_at) -> Run:
+def _columns(body: BodyParams, rec: np.ndarray, dt: float, falls: tuple) -> Run:
     """The DESIGN.md columns from the per-sample records ``(n, 10, ...)``."""
     n = rec.shape[0]
     cols = {"t": np.broadcast_to((np.arange(n) * dt).reshape((n,) + (1,) * (rec.ndim - 2)),
@@ -90,7 +108,7 @@ def _columns(body: BodyParams, rec: np.ndarray, dt: float, fell_at) -> Run:
     # Foot distance travelled: trapezoid on V_f (the foot moves at V_f, Eq. 21).
     ds = 0.5 * (cols["V_f"][1:] + cols["V_f"][:-1]) * dt
     cols["s"] = np.concatenate([np.zeros((1,) + ds.shape[1:]), np.cumsum(ds, axis=0)])
-    return Run(cols, fell_at)
+    return Run(cols, falls[0][1] if falls else None, falls)
 
 
 def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: float = 0.0,
@@ -109,8 +127,7 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
         w, tm = controller.target(0.0)
         state0 = (0.0, 0.0, 0.0, 0.0, w * tm)
     r = run(figure.body, figure.limits, controller, state0, duration, dt, C_f0)
-    info = {"preset": figure.name, "dt": dt, **{f"body.{k}": v for k, v in
-                                                figure.body.__dict__.items()}, **(meta or {})}
+    info = {"preset": figure.name, "dt": dt, **body_meta(figure.body), **(meta or {})}
     traj = Trajectory.from_columns(r.columns, info)
     if r.fell_at is not None:
         raise FellOver(r.fell_at, float(traj.theta_v[-1]), traj)
