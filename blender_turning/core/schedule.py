@@ -21,8 +21,13 @@ class Schedule:
         self._const = const
 
     @classmethod
-    def constant(cls, value: float) -> "Schedule":
-        v = float(value)
+    def constant(cls, value) -> "Schedule":
+        """A constant: a number, or an array with one value per figure of a batch."""
+        if np.ndim(value) == 0:
+            v = float(value)
+        else:
+            v = np.array(value, float)
+            v.setflags(write=False)
         return cls(lambda t: v, v)
 
     @classmethod

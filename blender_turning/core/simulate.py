@@ -47,7 +47,7 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     before the start (for the rate bound); ``None`` lets the first demand through unrated.  With
     ``stop_on_fall`` a figure stops at the first sample where its ``|theta_v|`` exceeds
     ``limits.theta_fall``: one figure ends the run there, a figure of a batch stops alone (its
-    state frozen, its later samples NaN) while the others go on; the run ends early only when
+    later samples NaN) while the others go on; the run ends early only when
     every figure has fallen.  :attr:`Run.falls` reports who fell and when.
     """
     check_range("duration", duration, 0.0, 1e6, lo_open=True)
@@ -67,7 +67,7 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.
     rec = np.empty((n, 10) + arr.shape[1:])
     fell = np.full(arr.shape[1:], np.inf)              # time of each figure's fall
-    down = None                                        # who has fallen (None: nobody yet)
+    anyone = False                                     # has any figure fallen yet?
     desired = controller.desired_cf
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for i in range(n):
@@ -77,17 +77,15 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
             rec[i, :5] = state
             rec[i, 5], rec[i, 6], rec[i, 7], rec[i, 8], rec[i, 9] = alpha, cf, V_f, \
                 *controller.target(t)
-            if stop_on_fall and (down is not None or np.any(
-                    np.abs(state[THETA_V]) > limits.theta_fall)):
-                down = np.abs(state[THETA_V]) > limits.theta_fall    # frozen ones stay down
-                fell[down & (fell == np.inf)] = t
-                rec[i][:, fell < t] = np.nan
-                if np.all(down):
+            if stop_on_fall and (anyone or np.any(np.abs(state[THETA_V]) > limits.theta_fall)):
+                anyone = True
+                fell[(np.abs(state[THETA_V]) > limits.theta_fall) & (fell == np.inf)] = t
+                rec[i][:, fell < t] = np.nan    # stepped on (cheaper than masking), not shown
+                if np.all(fell <= t):
                     n = i + 1
                     break
             if i + 1 < n:
-                new = rk4_step(body, limits, state, t, dt, desired, cf, k1)
-                state = new if down is None else np.where(down, state, new)
+                state = rk4_step(body, limits, state, t, dt, desired, cf, k1)
                 anchor = cf
     order = np.argsort(fell, kind="stable")
     falls = tuple((int(k), float(fell[k])) for k in order if fell[k] != np.inf)

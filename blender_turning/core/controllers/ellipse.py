@@ -125,12 +125,19 @@ class PhaseEllipse(Controller):
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):
         """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad."""
+        if np.ndim(theta_max) or np.ndim(omega0):           # per-figure ellipses of a batch
+            return heading_table(self.body)(theta_max, omega0)
         return heading_table(self.body).value_one(float(theta_max), float(omega0))
 
     def _solve_beta(self, theta_max, omega0, wanted):
-        use_linear = self.directional == "linear" or (
-            self.directional == "auto" and omega0 <= SMALL_OMEGA0 + 1e-12
-            and theta_max <= SMALL_THETA + 1e-12)
+        small = (np.asarray(omega0) <= SMALL_OMEGA0 + 1e-12) & (
+            np.asarray(theta_max) <= SMALL_THETA + 1e-12)
+        if self.directional == "auto" and np.ndim(small) and np.any(small) and not np.all(small):
+            # Per-figure ellipses of a batch on both sides of the small-angle range: each its own.
+            return np.where(small, linear_beta(self.body, theta_max, omega0,
+                                               wanted - self.half_turn_change(theta_max, omega0)),
+                            heading_table(self.body).solve_beta(theta_max, omega0, wanted))
+        use_linear = self.directional == "linear" or (self.directional == "auto" and np.all(small))
         if use_linear:
             extra = wanted - self.half_turn_change(theta_max, omega0)
             return linear_beta(self.body, theta_max, omega0, extra)
@@ -159,7 +166,9 @@ class PhaseEllipse(Controller):
         else:                                   # solve only for the figures that crossed
             idx = np.nonzero(crossed)[0]
             beta = np.array(self._beta, float)
-            beta[idx] = self._modifier(state[THETA_DIR][idx], side[idx], t, tm, w, change)
+            mine = (lambda v: v[idx] if np.ndim(v) else v)    # per-figure ellipses: theirs
+            beta[idx] = self._modifier(state[THETA_DIR][idx], side[idx], t, mine(tm), mine(w),
+                                       mine(change))
             self._beta = beta
 
     def _modifier(self, theta_dir, side, t, tm, w, change):

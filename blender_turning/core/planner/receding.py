@@ -15,7 +15,7 @@ import numpy as np
 from ..dynamics import leg_force, steer
 from ..errors import PlanInfeasible
 from ..phase_estimate import estimate_phase
-from ..trajectory import Trajectory
+from ..trajectory import Trajectory, body_meta
 from .problem import Problem
 from .search import SearchStats, branch_and_bound
 
@@ -121,7 +121,7 @@ def _trajectory(problem: Problem, rows, x, cf, t, s, meta) -> Trajectory:
     ds = 0.5 * (V[1:] + V[:-1]) * np.diff(T)
     cols["s"] = np.concatenate([[0.0], np.cumsum(ds)])
     cols["phi"] = estimate_phase(T, S[3], S[4]).phi if len(T) > 1 else np.zeros(len(T))
-    meta = {"preset": problem.figure.name, "dt": problem.settings.dt,
+    meta = {"preset": problem.figure.name, "dt": problem.settings.dt, **body_meta(body),
             "planner": "branch-and-bound (Section 6)", **(meta or {})}
     return Trajectory.from_columns(cols, meta)
 
