@@ -125,20 +125,20 @@ class PhaseEllipse(Controller):
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):
         """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad."""
-        if np.ndim(theta_max) or np.ndim(omega0):           # per-figure ellipses of a batch
+        if isinstance(theta_max, np.ndarray) or isinstance(omega0, np.ndarray):   # per figure
             return heading_table(self.body)(theta_max, omega0)
         return heading_table(self.body).value_one(float(theta_max), float(omega0))
 
     def _solve_beta(self, theta_max, omega0, wanted):
-        small = (np.asarray(omega0) <= SMALL_OMEGA0 + 1e-12) & (
-            np.asarray(theta_max) <= SMALL_THETA + 1e-12)
-        if self.directional == "auto" and np.ndim(small) and np.any(small) and not np.all(small):
-            # Per-figure ellipses of a batch on both sides of the small-angle range: each its own.
-            return np.where(small, linear_beta(self.body, theta_max, omega0,
-                                               wanted - self.half_turn_change(theta_max, omega0)),
-                            heading_table(self.body).solve_beta(theta_max, omega0, wanted))
-        use_linear = self.directional == "linear" or (self.directional == "auto" and np.all(small))
-        if use_linear:
+        small = (omega0 <= SMALL_OMEGA0 + 1e-12) & (theta_max <= SMALL_THETA + 1e-12)
+        if isinstance(small, np.ndarray):        # per-figure ellipses of a batch
+            if self.directional == "auto" and small.any() and not small.all():
+                # On both sides of the small-angle range: each figure by its own rule.
+                extra = wanted - self.half_turn_change(theta_max, omega0)
+                return np.where(small, linear_beta(self.body, theta_max, omega0, extra),
+                                heading_table(self.body).solve_beta(theta_max, omega0, wanted))
+            small = bool(small.all())
+        if self.directional == "linear" or (self.directional == "auto" and small):
             extra = wanted - self.half_turn_change(theta_max, omega0)
             return linear_beta(self.body, theta_max, omega0, extra)
         return heading_table(self.body).solve_beta(theta_max, omega0, wanted)
