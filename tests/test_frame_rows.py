@@ -33,7 +33,13 @@ def assert_rows_obey_the_model(r: Trajectory, body=BODY):
                        ("F_leg", leg_force(body, th, om, r.alpha_v, cf)[0])):
         got = getattr(r, name)
         assert np.abs(got - want).max() <= ROUND_OFF * np.abs(want).max(), name
-    # Quadrant (Section 4: 0..180 deg is theta_v > 0); rows on an axis say nothing.
+    assert_phase_quadrants(r)
+
+
+def assert_phase_quadrants(r: Trajectory):
+    """Section 4: phase 0..90 deg has theta_v > 0, omega_v > 0, and so on; rows on an axis say
+    nothing."""
+    th, om = r.theta_v, r.omega_v
     q = np.floor(r.phi / (math.pi / 2)).astype(int)
     off_axis = (np.abs(th) > 1e-9) & (np.abs(om) > 1e-9)
     want_q = np.where(th > 0, np.where(om > 0, 0, 1), np.where(om < 0, 2, 3))
@@ -152,3 +158,31 @@ def test_resample_needs_a_body_and_increasing_times(open_loop_runs):
         back.resample(24)
     one = Trajectory(traj.data[:, :1], traj.meta).resample(24)
     assert len(one) == 1 and np.array_equal(one.data[:, 0], traj.data[:, 0])
+
+
+def test_a_planned_run_with_varying_speed_resamples_to_states_of_the_model():
+    """The path follower's trajectory (Section 6, phase from Section 6.2's estimate) records its
+    body too; with a speed that varies along the path, each row's ``V_cm`` is the one Eq. (21)
+    gives its own ``V_f``, and Eq. (2) and Appendix A hold with it."""
+    from blender_turning.core.scene import scene_from_dict
+    scene = scene_from_dict({
+        "name": "corridor", "figure": {"preset": "cyclist", "limits": {"dC_f_max": 0.4}},
+        "path": {"polyline": [[0, 0], [40, 0]]}, "clearance": 0.3,
+        "obstacles": [{"type": "segment", "from": [-5, -3], "to": [80, -3]},
+                      {"type": "segment", "from": [-5, 3], "to": [80, 3]}],
+        "speed": {"by": "distance", "at": [0, 20, 40], "V_cm": [6, 4, 7]},
+        "planner": {"stages": 6, "choices": 3}})
+    body = scene.figure.body
+    traj = scene.run().trajectory
+    r = traj.resample(24)
+    th, om, cf = r.theta_v, r.omega_v, r.C_f
+    V = r.V_f * (1.0 - cf * body.l * np.sin(th))
+    # The profile's speed at the row's distance (to the planner's 0.05 m/s, see
+    # test_planner_scenes), which between samples is the chord of the samples' V_cm.
+    np.testing.assert_allclose(V, np.interp(r.s, [0, 20, 40], [6, 4, 7]), atol=0.05)
+    V_samples = traj.V_f * (1.0 - traj.C_f * body.l * np.sin(traj.theta_v))
+    np.testing.assert_allclose(V, np.interp(r.t, traj.t, V_samples), rtol=1e-14)
+    for name, want in (("alpha_v", forward_alpha(body, th, cf, V_cm=V)),
+                       ("F_leg", leg_force(body, th, om, r.alpha_v, cf, V)[0])):
+        assert np.abs(getattr(r, name) - want).max() <= ROUND_OFF * np.abs(want).max(), name
+    assert_phase_quadrants(r)
