@@ -124,8 +124,16 @@ class PhaseEllipse(Controller):
 
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):
-        """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad."""
-        return heading_table(self.body).value_one(float(theta_max), float(omega0))
+        """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad, at the current speed."""
+        return heading_table(self.nominal_body).value_one(float(theta_max), float(omega0)) \
+            * self._speed_scale()
+
+    def _speed_scale(self):
+        """``dtheta_dir(V) / dtheta_dir(V_nominal) = V_nominal / V`` exactly for the table's
+        unbounded half-turn: the open-loop ``theta_v(t)`` does not depend on ``V_cm`` and
+        ``V_f C_f = (g sin th - alpha_v J) / (V_cm cos th)`` (Eqs. 1, 21).  So one table per
+        body serves every speed (exactly 1.0 at the nominal speed: constant runs are unchanged)."""
+        return self.nominal_body.V_cm / self.body.V_cm
 
     def _solve_beta(self, theta_max, omega0, wanted):
         use_linear = self.directional == "linear" or (
@@ -134,7 +142,8 @@ class PhaseEllipse(Controller):
         if use_linear:
             extra = wanted - self.half_turn_change(theta_max, omega0)
             return linear_beta(self.body, theta_max, omega0, extra)
-        return heading_table(self.body).solve_beta(theta_max, omega0, wanted)
+        return heading_table(self.nominal_body).solve_beta(theta_max, omega0,
+                                                           wanted / self._speed_scale())
 
     def begin_step(self, t, state):
         th, om = state[THETA_V], state[OMEGA_V]
