@@ -65,7 +65,8 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
                 check_range(f"speed at t = {i * dt:g} s", V_cm[i], 0.0, 100.0, lo_open=True)
         rows, fell_at = integrate(body, limits, controller, arr, n, dt,
                                   None if C_f0 is None else float(C_f0),
-                                  limits.theta_fall if stop_on_fall else None, speed)
+                                  limits.theta_fall if stop_on_fall else None,
+                                  None if V_cm is None else V_cm.tolist())
         rec = np.array(rows, float)
         return _columns(body, rec, dt, fell_at, None if V_cm is None else V_cm[:len(rec)])
     state = arr
