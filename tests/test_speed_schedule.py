@@ -66,7 +66,8 @@ def test_the_heading_table_serves_every_speed(skier, speed):
 
 
 def test_bad_speed_schedules_are_refused(skier):
-    with pytest.raises(ValueError, match=r"speed at t = 1\.26 s = -0\.08.* allowed range \(0, 100\]"):
+    with pytest.raises(ValueError,
+                       match=r"speed at t = 1\.26 s = -0\.08.* allowed range \(0, 100\]"):
         slalom(skier, Schedule.sampled([0, 1.5, 3], [10, -2, 10]), 3.0)
     ctl = PhaseEllipse(skier.body, W, TM)
     batch = np.zeros((5, 2))

@@ -97,7 +97,8 @@ def apply_bake(fig, traj, track, step: int = 1):
     foot track.  Returns the bake result."""
     if step > 1:
         bake.bake_pose_track(fig, track)            # every frame first: the slopes at the keys
-        slopes = {k: (f, np.gradient(v, f, edge_order=2)) for k, (f, v, _) in _baked_curves(fig).items()}
+        slopes = {k: (f, np.gradient(v, f, edge_order=2))
+                  for k, (f, v, _) in _baked_curves(fig).items()}
     result = bake.bake_pose_track(fig, every_nth(track, step))
     if step > 1:
         set_hermite_handles(fig, slopes)
@@ -162,15 +163,18 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
     bl_label = "Bake Turns"
     bl_options = {"REGISTER", "UNDO"}
 
+    # Range and step are not remembered between bakes (SKIP_SAVE): the button always bakes the
+    # scene's range on every frame, as the panel says; a custom Start/End is remembered.
     frame_range: EnumProperty(name="Frames", items=FRAME_RANGES, default="SCENE",
-                              description="Which frames to bake")
+                              options={"SKIP_SAVE"}, description="Which frames to bake")
     frame_start: IntProperty(name="Start", default=1, min=-1048574, max=1048574,
                              description="First frame of a custom range")
     frame_end: IntProperty(name="End", default=250, min=-1048574, max=1048574,
                            description="Last frame of a custom range")
     step: IntProperty(name="Step", default=1, min=1, max=1000, soft_max=12,
-                      description="Key every n-th frame (and the last); smooth (Bezier) "
-                                  "in between.  1 keys every frame, exactly")
+                      options={"SKIP_SAVE"},
+                      description="Key every n-th frame (and the last); smooth (Bezier) in "
+                                  "between.  1 keys every frame, exactly")
 
     _job = None
     _timer = None
