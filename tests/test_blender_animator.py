@@ -254,7 +254,8 @@ def test_a_keyed_speed_out_of_range_is_reported(scene):
     fc = next(f for f in compat.channels(fig).fcurves if f.data_path == "turning.speed")
     fc.keyframe_points.insert(30, -1.0)
     before = snapshot()
-    with pytest.raises(RuntimeError, match=r"speed = .* m/s at frame \d+ is outside"):
+    with pytest.raises(RuntimeError, match=r"speed = .* m/s at frame \d+ is outside the allowed "
+                                           r"range \[0.5, 60\] m/s"):
         bpy.ops.turning.bake_turns()
     assert snapshot() == before
 

@@ -82,10 +82,11 @@ def speed_schedule(obj, frames: FrameRange) -> Schedule:
     """The figure's forward speed ``V_cm`` over ``frames`` (keyed ``turning.speed``, or its value),
     as a schedule of the time since the first frame (raises ``ValueError`` naming the frame)."""
     v = sampled_setting(obj, "speed", frames)
-    bad = np.nonzero(~((v >= 0.5) & (v <= 60.0)))[0]
+    rna = obj.turning.bl_rna.properties["speed"]          # the setting's own range
+    bad = np.nonzero(~((v >= rna.hard_min) & (v <= rna.hard_max)))[0]
     if len(bad):
         raise ValueError(f"speed = {v[bad[0]]:g} m/s at frame {frames.start + bad[0]} is outside "
-                         "the allowed range [0.5, 60] m/s")
+                         f"the allowed range [{rna.hard_min:g}, {rna.hard_max:g}] m/s")
     return Schedule.constant(v[0]) if np.all(v == v[0]) else Schedule.sampled(frames.times(), v)
 
 
