@@ -12,6 +12,20 @@ def context_figure(context):
     return obj if figure_settings(obj) is not None else None
 
 
+def selected_figures(context) -> list:
+    """Every selected figure (a selected body mesh counts for its armature), the active one
+    first, the others by name; each once."""
+    active = context_figure(context)
+    found = {}
+    for obj in getattr(context, "selected_objects", ()) or ():
+        if figure_settings(obj) is None and obj.parent is not None:
+            obj = obj.parent
+        if figure_settings(obj) is not None:
+            found[obj.name] = obj
+    rest = [found[name] for name in sorted(found) if active is None or name != active.name]
+    return ([active] if active is not None else []) + rest
+
+
 def poll_figure(cls, context) -> bool:
     """Poll for operators acting on the active figure; says why when it cannot."""
     if context.mode != "OBJECT":

@@ -11,7 +11,7 @@ import numpy as np
 from ..core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
 from ..core.params import PRESETS
 from . import compat
-from .props import ANIMATED, BODY_FIELDS, LIMIT_FIELDS
+from .props import BODY_FIELDS, LIMIT_FIELDS
 
 
 @dataclass(frozen=True)
@@ -78,10 +78,22 @@ def sampled_setting(obj, name: str, frames: FrameRange) -> np.ndarray:
     return np.array([fc.evaluate(f) for f in range(frames.start, frames.end + 1)], float)
 
 
+def speed_schedule(obj, frames: FrameRange) -> Schedule:
+    """The figure's forward speed ``V_cm`` over ``frames`` (keyed ``turning.speed``, or its value),
+    as a schedule of the time since the first frame (raises ``ValueError`` naming the frame)."""
+    v = sampled_setting(obj, "speed", frames)
+    rna = obj.turning.bl_rna.properties["speed"]          # the setting's own range
+    bad = np.nonzero(~((v >= rna.hard_min) & (v <= rna.hard_max)))[0]
+    if len(bad):
+        raise ValueError(f"speed = {v[bad[0]]:g} m/s at frame {frames.start + bad[0]} is outside "
+                         f"the allowed range [{rna.hard_min:g}, {rna.hard_max:g}] m/s")
+    return Schedule.constant(v[0]) if np.all(v == v[0]) else Schedule.sampled(frames.times(), v)
+
+
 def controller_from_settings(obj, figure: Figure, frames: FrameRange) -> PhaseEllipse:
     """The phase-ellipse controller (Section 5) following the keyed period, lean and heading."""
     t = frames.times()
-    values = {name: sampled_setting(obj, name, frames) for name in ANIMATED}
+    values = {name: sampled_setting(obj, name, frames) for name in ("period", "lean", "heading")}
     if np.any(values["period"] <= 0):
         raise ValueError("turn period must stay positive over the frame range")
     if np.any(values["lean"] <= 0) or np.any(values["lean"] >= figure.limits.theta_fall):

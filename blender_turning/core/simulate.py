@@ -19,6 +19,7 @@ from .heading_table import heading_table
 from .one_figure import integrate
 from .params import BodyParams, Figure, Limits, check_range
 from .phase import phase
+from .schedule import Schedule
 from .trajectory import COLUMNS, Trajectory, body_meta
 
 DEFAULT_DT = 0.02
@@ -39,7 +40,7 @@ class Run:
 
 
 def run(body: BodyParams, limits: Limits, controller: Controller, state0, duration: float,
-        dt: float = DEFAULT_DT, C_f0=None, stop_on_fall: bool = True) -> Run:
+        dt: float = DEFAULT_DT, C_f0=None, stop_on_fall: bool = True, speed=None) -> Run:
     """Integrate ``state0`` (shape ``(5,)`` for one figure, ``(5, n)`` for a batch).
 
     One figure is stepped on Python floats (:mod:`.one_figure`), a batch on numpy arrays; the
@@ -49,6 +50,9 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     ``limits.theta_fall``: one figure ends the run there, a figure of a batch stops alone (its
     later samples NaN) while the others go on; the run ends early only when
     every figure has fallen.  :attr:`Run.falls` reports who fell and when.
+    ``speed`` (a :class:`~.schedule.Schedule` of ``V_cm`` in m/s, one figure only) makes the
+    forward speed vary over time, held over each step at its value at the step's start (as the
+    planner's speed profile, Section 6); ``None`` or a constant keeps ``body.V_cm``.
     """
     check_range("duration", duration, 0.0, 1e6, lo_open=True)
     check_range("dt", dt, 1e-5, 1.0)
@@ -56,12 +60,24 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     arr = np.array(state0, float)
     if arr.shape[0] != 5 or arr.ndim > 2 or not np.all(np.isfinite(arr)):
         raise ValueError("state0 must be finite with shape (5,) or (5, n)")
+    speed = None if speed is None else Schedule.of(speed)
+    if speed is not None and speed.constant_value is not None:
+        speed = None if speed.constant_value == body.V_cm else speed
+    if speed is not None and arr.ndim != 1:
+        raise ValueError("a speed schedule is for one figure: state0 must have shape (5,)")
     if arr.ndim == 1:
+        V_cm = None
+        if speed is not None:
+            V_cm = np.array([speed(i * dt) for i in range(n)], float)
+            for i in np.nonzero(~(V_cm > 0) | ~(V_cm <= 100.0))[0][:1]:
+                check_range(f"speed at t = {i * dt:g} s", V_cm[i], 0.0, 100.0, lo_open=True)
         rows, fell_at = integrate(body, limits, controller, arr, n, dt,
                                   None if C_f0 is None else float(C_f0),
-                                  limits.theta_fall if stop_on_fall else None)
-        return _columns(body, np.array(rows, float), dt,
-                        () if fell_at is None else ((0, fell_at),))
+                                  limits.theta_fall if stop_on_fall else None,
+                                  None if V_cm is None else V_cm.tolist())
+        rec = np.array(rows, float)
+        return _columns(body, rec, dt, () if fell_at is None else ((0, fell_at),),
+                        None if V_cm is None else V_cm[:len(rec)])
     state = arr
     anchor = None if C_f0 is None else np.asarray(C_f0, float)
     # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.
@@ -92,8 +108,9 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     return _columns(body, rec[:n], dt, falls)
 
 
-def _columns(body: BodyParams, rec: np.ndarray, dt: float, falls: tuple) -> Run:
-    """The DESIGN.md columns from the per-sample records ``(n, 10, ...)``."""
+def _columns(body: BodyParams, rec: np.ndarray, dt: float, falls: tuple, V_cm=None) -> Run:
+    """The DESIGN.md columns from the per-sample records ``(n, 10, ...)``; ``V_cm`` the speed
+    at each sample when it varies."""
     n = rec.shape[0]
     cols = {"t": np.broadcast_to((np.arange(n) * dt).reshape((n,) + (1,) * (rec.ndim - 2)),
                                  rec.shape[:1] + rec.shape[2:]).copy()}
@@ -102,7 +119,7 @@ def _columns(body: BodyParams, rec: np.ndarray, dt: float, falls: tuple) -> Run:
         cols[name] = rec[:, j]
     cols["phi"] = phase(cols["theta_v"], cols["omega_v"], rec[:, 9], rec[:, 8])
     cols["F_leg"] = leg_force(body, cols["theta_v"], cols["omega_v"], cols["alpha_v"],
-                              cols["C_f"])[0]
+                              cols["C_f"], V_cm)[0]
     # Foot distance travelled: trapezoid on V_f (the foot moves at V_f, Eq. 21).
     ds = 0.5 * (cols["V_f"][1:] + cols["V_f"][:-1]) * dt
     cols["s"] = np.concatenate([np.zeros((1,) + ds.shape[1:]), np.cumsum(ds, axis=0)])
@@ -119,12 +136,13 @@ def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: flo
 
 
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
-             state0=None, C_f0=None, meta: dict | None = None) -> Trajectory:
-    """Simulate one figure; raise :class:`FellOver` (with the trajectory so far) if it falls."""
+             state0=None, C_f0=None, meta: dict | None = None, speed=None) -> Trajectory:
+    """Simulate one figure; raise :class:`FellOver` (with the trajectory so far) if it falls.
+    ``speed``: ``V_cm`` over time (see :func:`run`)."""
     if state0 is None:
         w, tm = controller.target(0.0)
         state0 = (0.0, 0.0, 0.0, 0.0, w * tm)
-    r = run(figure.body, figure.limits, controller, state0, duration, dt, C_f0)
+    r = run(figure.body, figure.limits, controller, state0, duration, dt, C_f0, speed=speed)
     info = {"preset": figure.name, "dt": dt, **body_meta(figure.body), **(meta or {})}
     traj = Trajectory.from_columns(r.columns, info)
     if r.fell_at is not None:

@@ -8,6 +8,8 @@ no memory change).  The integrator bounds the demand (``dynamics.bound_cf``).  S
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..dynamics import THETA_V, inverse_cf
@@ -20,6 +22,17 @@ class Controller:
 
     def __init__(self, body: BodyParams):
         self.body = body
+        self.nominal_body = body
+        """The body the controller was made for; :attr:`body` carries the current speed."""
+
+    def follow_speed(self, V_cm: float) -> BodyParams:
+        """Steer at the forward speed ``V_cm`` from now on (a speed that varies over time);
+        returns the body at that speed.
+
+        Eq. (1) is solved with the current ``V_cm``; the paper keeps ``V_cm`` constant in
+        Sections 3-5, and lets it vary along the path in Section 6 (the planner's speed profile)."""
+        self.body = replace(self.nominal_body, V_cm=float(V_cm))
+        return self.body
 
     def begin_step(self, t: float, state: np.ndarray) -> None:
         """Called once at the start of each step with the accepted state."""

@@ -124,10 +124,18 @@ class PhaseEllipse(Controller):
 
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):
-        """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad."""
+        """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad, at the current speed."""
+        table = heading_table(self.nominal_body)
         if isinstance(theta_max, np.ndarray) or isinstance(omega0, np.ndarray):   # per figure
-            return heading_table(self.body)(theta_max, omega0)
-        return heading_table(self.body).value_one(float(theta_max), float(omega0))
+            return table(theta_max, omega0) * self._speed_scale()
+        return table.value_one(float(theta_max), float(omega0)) * self._speed_scale()
+
+    def _speed_scale(self):
+        """``dtheta_dir(V) / dtheta_dir(V_nominal) = V_nominal / V`` exactly for the table's
+        unbounded half-turn: the open-loop ``theta_v(t)`` does not depend on ``V_cm`` and
+        ``V_f C_f = (g sin th - alpha_v J) / (V_cm cos th)`` (Eqs. 1, 21).  So one table per
+        body serves every speed (exactly 1.0 at the nominal speed: constant runs are unchanged)."""
+        return self.nominal_body.V_cm / self.body.V_cm
 
     def _solve_beta(self, theta_max, omega0, wanted):
         small = (omega0 <= SMALL_OMEGA0 + 1e-12) & (theta_max <= SMALL_THETA + 1e-12)
@@ -136,12 +144,14 @@ class PhaseEllipse(Controller):
                 # On both sides of the small-angle range: each figure by its own rule.
                 extra = wanted - self.half_turn_change(theta_max, omega0)
                 return np.where(small, linear_beta(self.body, theta_max, omega0, extra),
-                                heading_table(self.body).solve_beta(theta_max, omega0, wanted))
+                                heading_table(self.nominal_body).solve_beta(
+                                    theta_max, omega0, wanted / self._speed_scale()))
             small = bool(small.all())
         if self.directional == "linear" or (self.directional == "auto" and small):
             extra = wanted - self.half_turn_change(theta_max, omega0)
             return linear_beta(self.body, theta_max, omega0, extra)
-        return heading_table(self.body).solve_beta(theta_max, omega0, wanted)
+        return heading_table(self.nominal_body).solve_beta(theta_max, omega0,
+                                                           wanted / self._speed_scale())
 
     def begin_step(self, t, state):
         th, om = state[THETA_V], state[OMEGA_V]
