@@ -385,7 +385,7 @@ def legacy_files():
 
 
 @pytest.mark.parametrize("name", legacy_files())
-def test_a_file_saved_at_8b11d74_opens_and_rebakes_unchanged(registered, name):
+def test_a_file_saved_at_8b11d74_opens_and_rebakes_the_same_motion(registered, name):
     bpy.ops.wm.open_mainfile(filepath=str(DATA / name), load_ui=False)
     fig = bpy.data.objects["Skier"]
     s = fig.turning
@@ -399,7 +399,18 @@ def test_a_file_saved_at_8b11d74_opens_and_rebakes_unchanged(registered, name):
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     rebaked = all_keys(fig)
     assert rebaked.keys() == saved.keys()
+    # The state channels (the figure's path and heading) re-bake bit for bit.  Since 8b11d74
+    # each frame's algebraic columns are computed from the frame's state (issue 7, item 2)
+    # instead of interpolated: F_leg moves by up to 6e-4 m g (0.42 N measured), the phase by
+    # 1.8e-3 rad, and the poses driven by them (leg spring, poles) by up to 2e-3.
+    mg = s.mass * 9.81
     for key, co in saved.items():
-        np.testing.assert_array_equal(rebaked[key], co, err_msg=str(key))
+        got, co = np.asarray(rebaked[key]), np.asarray(co)
+        if key[0] in ("location", "rotation_euler", '["turn_lean"]', '["turn_curvature"]'):
+            np.testing.assert_array_equal(got, co, err_msg=str(key))
+        elif key[0] == '["turn_leg_force"]':
+            np.testing.assert_allclose(got, co, rtol=0, atol=1e-3 * mg, err_msg=str(key))
+        else:
+            np.testing.assert_allclose(got, co, rtol=0, atol=2.5e-3, err_msg=str(key))
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
     assert set(all_keys(fig)) == {("turning.period", 0), ("turning.lean", 0)}
