@@ -73,6 +73,7 @@ def integrate(body: BodyParams, limits: Limits, controller, state, n: int, dt: f
     relative to the curvature at the step's start.  Returns ``(rows, fell_at)`` where each row is
     ``(x, y, theta_dir, theta_v, omega_v, alpha_v, C_f, V_f, omega0, theta_max)``; the run stops
     at the first sample with ``|theta_v| > theta_fall`` (``None``: never)."""
+    controller.begin_run(limits)
     stage = rhs(body, limits, controller.scalar_cf_law())
     begin, target = controller.begin_step, controller.target
     h, w6 = 0.5 * dt, dt / 6.0

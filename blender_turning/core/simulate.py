@@ -53,6 +53,7 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
                                   None if C_f0 is None else float(C_f0),
                                   limits.theta_fall if stop_on_fall else None)
         return _columns(body, np.array(rows, float), dt, fell_at)
+    controller.begin_run(limits)
     state = arr
     anchor = None if C_f0 is None else np.asarray(C_f0, float)
     # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.

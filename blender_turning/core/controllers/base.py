@@ -21,6 +21,10 @@ class Controller:
     def __init__(self, body: BodyParams):
         self.body = body
 
+    def begin_run(self, limits) -> None:
+        """Called once before the first step with the figure's :class:`..params.Limits` (a
+        controller may keep its demand within them)."""
+
     def begin_step(self, t: float, state: np.ndarray) -> None:
         """Called once at the start of each step with the accepted state."""
 
