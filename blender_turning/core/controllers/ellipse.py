@@ -96,8 +96,8 @@ class PhaseEllipse(Controller):
     """Turn frequency ``omega0(t)``, sharpness ``theta_max(t)`` and optionally heading
     ``theta_h(t)``, each a number, a callable of time or a :class:`Schedule`.
 
-    ``alpha_max`` (rad/s^2) defaults to ``2 omega0^2 theta_max``: twice the peak of the target's own
-    ``alpha_v``.  ``law``: ``"smooth"`` (the module docstring) or ``"paper"`` (Section 5.1 as
+    ``alpha_max`` (rad/s^2) defaults to ``2 omega0^2 theta_max`` of the ellipse followed (after
+    beta): twice the peak of its own ``alpha_v``.  ``law``: ``"smooth"`` (the module docstring) or ``"paper"`` (Section 5.1 as
     written, :mod:`.ellipse_paper`).  ``directional``: how beta is found, ``"exact"`` (the closed
     form of :mod:`..heading_table`) or ``"linear"`` (the paper's Eqs. 11/12).  ``limits``: the
     figure's bounds; the ellipse followed is kept feasible for them (:mod:`.feasible`).  ``None``
@@ -122,8 +122,10 @@ class PhaseEllipse(Controller):
         self._alpha, self._alpha_one = LAWS[law]
         self._limits_given = limits is not None
         self._feasible = None if limits is None else feasible_turns(body, limits)
-        self._beta = None          # modifier of the current half-turn, per figure
-        self._side = None          # +1 during a left half-turn (theta_v >= 0), -1 right
+        self._bp = self._bn = None  # beta of the left (theta_v >= 0) and right half-turns
+        self._side = None           # +1 during a left half-turn, -1 right, per figure
+        self._planned = False       # the coming half-turn's beta was set in this step
+        self._t_prev = None
         self._memo = (None, None)
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
@@ -159,39 +161,77 @@ class PhaseEllipse(Controller):
         return heading_table(self.body).solve_beta(theta_max, omega0, wanted, lo, hi)
 
     def begin_step(self, t, state):
+        """Directional control at the zero crossings of the lean (Section 5.2).  The next
+        half-turn's beta is planned in the step *before* its crossing (from the heading predicted
+        at the crossing), and the law picks beta by the side of the lean at every stage, so the
+        modified ellipse starts exactly at the crossing, not at the next step's start (which left a
+        kink in C_f inside that step)."""
         th, om = state[THETA_V], state[OMEGA_V]
-        if type(th) is float and self._beta is not None:     # one figure, most steps: no crossing
-            if (1.0 if th > 0 else -1.0 if th < 0 else 1.0 if om >= 0 else -1.0) == self._side:
+        dt = 0.0 if self._t_prev is None else t - self._t_prev
+        self._t_prev = t
+        if type(th) is float:
+            side = 1.0 if th > 0 else -1.0 if th < 0 else 1.0 if om >= 0 else -1.0
+            ahead = th + om * dt
+            soon = ahead * side < 0.0                    # a crossing within this step
+            if self._bp is None:
+                self._bp = self._bn = 1.0
+                self._side = -side if abs(th) < 0.05 * self.theta_max(t) else side
+            elif side == self._side and not soon:
+                self._planned = False
                 return
-        xp = backend(th)
-        side = xp.where(th > 0, 1.0, xp.where(th < 0, -1.0, xp.where(om >= 0, 1.0, -1.0)))
-        if self._beta is None:
-            self._beta = 1.0 if xp is Scalar else np.ones_like(th)
-            near_axis = xp.abs(th) < 0.05 * self.theta_max(t)
-            self._side = xp.where(near_axis, -side, side)     # a start on the axis is a crossing
+        else:
+            side = np.where(th > 0, 1.0, np.where(th < 0, -1.0, np.where(om >= 0, 1.0, -1.0)))
+            soon = (th + om * dt) * side < 0.0
+            if self._bp is None:
+                self._bp, self._bn = np.ones_like(th), np.ones_like(th)
+                self._side = np.where(np.abs(th) < 0.05 * self.theta_max(t), -side, side)
+                self._planned = np.zeros(th.shape, bool)
         crossed = side != self._side
         self._side = side
         w, tm = self.omega0(t), self.theta_max(t)
         tmf = self.feasible_lean(w, tm)
-        if self._feasible is not None and xp.any(crossed):
+        if self._feasible is not None and np.any(crossed):
             self._note(t, w, tm, tmf)
-        if self.heading is None or not xp.any(crossed):
-            self._beta = xp.where(crossed, 1.0, self._beta)
+        if self.heading is None:
             return
+        # A crossing not planned in the step before (a start on the axis, a lean that turned
+        # faster than predicted): the half-turn on ``side`` starts now.
+        late = crossed & ~np.asarray(self._planned)
+        self._planned = soon
+        if np.any(late):
+            self._plan(t, state[THETA_DIR], side, late, w, tmf)
+        if np.any(soon):
+            # Heading at the crossing, tau = -th/om ahead: on the ellipse near th = 0,
+            # V_f C_f = k / (V cos th) ~ (g + omega0'^2 J) th / V (module heading_table).
+            b = np.where(th >= 0, self._bp, self._bn)
+            w_now = w / b
+            with np.errstate(divide="ignore", invalid="ignore"):
+                swing = -(self.body.g + w_now * w_now * self.body.J) * th * th / (
+                    2.0 * self.body.V_cm * np.where(om != 0, om, 1.0))
+            self._plan(t, state[THETA_DIR] + swing, -side, soon, w, tmf)
+
+    def _plan(self, t, theta_dir, side, which, w, tmf):
+        """Set beta of the half-turn on ``side`` for the figures ``which`` (Eqs. 7-8), bounded so
+        that the modified half-turn stays feasible (:mod:`.feasible`)."""
         change = self.half_turn_change(tmf, w)
         lo, hi = ((BETA_MIN, BETA_MAX) if self._feasible is None
                   else self._feasible.beta_range(tmf, w))
-        if xp is Scalar:
-            self._beta = float(self._modifier(state[THETA_DIR], side, t, tmf, w, change, lo, hi))
-        else:                                   # solve only for the figures that crossed
-            idx = np.nonzero(crossed)[0]
-            beta = np.array(self._beta, float)
-            beta[idx] = self._modifier(state[THETA_DIR][idx], side[idx], t, tmf, w, change,
-                                       lo, hi)
-            self._beta = beta
+        if type(side) is float:
+            beta = float(self._modifier(theta_dir, side, t, tmf, w, change, lo, hi))
+            if side > 0:
+                self._bp = beta
+            else:
+                self._bn = beta
+            return
+        idx = np.nonzero(which)[0]
+        beta = self._modifier(np.asarray(theta_dir)[idx], side[idx], t, tmf, w, change, lo, hi)
+        left = side[idx] > 0
+        self._bp[idx[left]] = beta[left]
+        self._bn[idx[~left]] = beta[~left]
 
     def _modifier(self, theta_dir, side, t, tm, w, change, lo, hi):
-        """beta of the half-turn starting now on ``side`` (Eqs. 7-8), within ``[lo, hi]``."""
+        """beta of the half-turn starting on ``side`` with heading ``theta_dir`` (Eqs. 7-8),
+        within ``[lo, hi]``."""
         # Mean heading: the heading is at an extreme at a crossing (C_f is in phase with theta_v).
         mean = theta_dir + side * 0.5 * change
         err = (self.heading(t) - mean + math.pi) % (2 * math.pi) - math.pi
@@ -199,39 +239,49 @@ class PhaseEllipse(Controller):
         return self._solve_beta(tm, w, wanted, lo, hi)
 
     # -- Section 5.1 -------------------------------------------------------------------------
-    def _ellipse(self, w0, tm0):
+    def _ellipse(self, w0, tm0, b):
         """``(theta_max, omega0, alpha_max)`` of the half-turn's ellipse: the commanded one made
-        feasible, then modified by its beta (Section 5.2)."""
-        b = 1.0 if self._beta is None else self._beta
+        feasible, then modified by its beta ``b`` (Section 5.2)."""
         key = (w0, tm0, b) if type(b) is float and type(w0) is float else None
         if key is not None and key == self._memo[0]:
             return self._memo[1]
         tmf = self.feasible_lean(w0, tm0)
-        amax = self.alpha_max if self.alpha_max is not None else 2.0 * w0 * w0 * tmf
-        out = (b * tmf, w0 / b, amax)
+        w = w0 / b
+        amax = self.alpha_max if self.alpha_max is not None else 2.0 * w * w * (b * tmf)
+        out = (b * tmf, w, amax)
         if key is not None:
             self._memo = (key, out)
         return out
 
+    def _b(self, theta_v):
+        """beta for a lean: the planned half-turn on its side."""
+        if self._bp is None:
+            return 1.0
+        if type(theta_v) is float:
+            return self._bp if theta_v >= 0.0 else self._bn
+        return np.where(theta_v >= 0, self._bp, self._bn)
+
     def target(self, t):
-        tm, w, _ = self._ellipse(self.omega0(t), self.theta_max(t))
+        b = 1.0 if self._side is None else self._b(self._side)
+        tm, w, _ = self._ellipse(self.omega0(t), self.theta_max(t), b)
         return w, tm
 
     def scalar_cf_law(self):
         """:meth:`desired_cf` for one figure on floats (:func:`ellipse_alpha_one` or the paper's,
         Eq. 1), with constant schedules read once."""
         inverse, ellipse, alpha = scalar_inverse_cf(self.body), self._ellipse, self._alpha_one
-        w_s, tm_s, r0 = self.omega0, self.theta_max, self.origin_radius
+        w_s, tm_s, r0, b = self.omega0, self.theta_max, self.origin_radius, self._b
         wc, tc = w_s.constant_value, tm_s.constant_value
 
         def law(t, state):
-            tm, w, amax = ellipse(wc if wc is not None else w_s(t),
-                                  tc if tc is not None else tm_s(t))
             th = state[3]
+            tm, w, amax = ellipse(wc if wc is not None else w_s(t),
+                                  tc if tc is not None else tm_s(t), b(th))
             return inverse(th, alpha(th, state[4], tm, w, amax, r0))
 
         return law
 
     def desired_alpha(self, t, state):
-        tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t))
-        return self._alpha(state[THETA_V], state[OMEGA_V], tm, w, amax, self.origin_radius)
+        th = state[THETA_V]
+        tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t), self._b(th))
+        return self._alpha(th, state[OMEGA_V], tm, w, amax, self.origin_radius)
