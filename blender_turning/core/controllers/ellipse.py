@@ -61,7 +61,8 @@ from .ellipse_paper import paper_alpha, paper_alpha_one
 from .feasible import FeasibleTurn, feasible_turns
 
 GAIN = 3.0
-SOFT_RADIUS = 0.25
+SOFT_RADIUS = 1.0
+HEADROOM = 0.85
 
 
 def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=0.05):
@@ -137,11 +138,13 @@ class PhaseEllipse(Controller):
 
     # -- the feasible ellipse (items 3, 3b of issue 7) -----------------------------------------
     def feasible_lean(self, omega0: float, theta_max: float) -> float:
-        """The lean followed for a commanded ``(omega0, theta_max)``: at most the largest the
-        body's bounds allow at that period (:mod:`.feasible`)."""
+        """The lean followed for a commanded ``(omega0, theta_max)``: at most ``HEADROOM`` of the
+        largest the body's bounds allow at that period (:mod:`.feasible`).  On the feasible
+        boundary itself no modified half-turn is feasible (a sharper one needs more C_f, a
+        shallower and faster one more C_f rate), so directional control could not steer."""
         if self._feasible is None:
             return theta_max
-        return min(theta_max, self._feasible.max_lean(omega0))
+        return min(theta_max, HEADROOM * self._feasible.max_lean(omega0))
 
     def _note(self, t, w, tm, tmf):
         bound = self._feasible.bound(w) if tmf < tm else None
@@ -231,11 +234,22 @@ class PhaseEllipse(Controller):
 
     def _modifier(self, theta_dir, side, t, tm, w, change, lo, hi):
         """beta of the half-turn starting on ``side`` with heading ``theta_dir`` (Eqs. 7-8),
-        within ``[lo, hi]``."""
+        within ``[lo, hi]``.
+
+        A half-turn that should turn *more* is made sharper (beta > 1, more lean) only by the part
+        of the error beyond ``spare``; the following half-turns, turning the other way, take the
+        rest by being shallower (beta < 1, less lean).  The paper allows either (Section 5.2,
+        Fig. 8).  So a start off the ellipse, whose transient leaves a heading error of at most
+        about one half-turn's change, does not lean past the target; a commanded change of
+        heading larger than that still sharpens the turn."""
         # Mean heading: the heading is at an extreme at a crossing (C_f is in phase with theta_v).
         mean = theta_dir + side * 0.5 * change
         err = (self.heading(t) - mean + math.pi) % (2 * math.pi) - math.pi
-        wanted = change + side * err                                # Eq. (7), in the turn's sense
+        more = side * err
+        # Left to shallow half-turns: what one of them can take, and at least one half-turn's
+        # change (the most a start off the ellipse leaves, its first half-turn being partial).
+        spare = max(change - heading_table(self.body).value_one(lo * tm, w / lo), change)
+        wanted = change + np.where(more > spare, more - spare, np.minimum(more, 0.0))  # Eq. (7)
         return self._solve_beta(tm, w, wanted, lo, hi)
 
     # -- Section 5.1 -------------------------------------------------------------------------
