@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .controllers import Controller
+from .controllers.feasible import fall_cause
 from .dynamics import THETA_V, leg_force, rk4_step, stage
 from .errors import FellOver
 from .heading_table import heading_table
@@ -114,7 +115,8 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
                                                 figure.body.__dict__.items()}, **(meta or {})}
     traj = Trajectory.from_columns(r.columns, info)
     if r.fell_at is not None:
-        raise FellOver(r.fell_at, float(traj.theta_v[-1]), traj)
+        raise FellOver(r.fell_at, float(traj.theta_v[-1]), traj,
+                       fall_cause(figure.limits, traj.C_f, traj.t))
     return traj
 
 

@@ -75,6 +75,24 @@ class FeasibleTurn:
         return text
 
 
+def fall_cause(limits: Limits, C_f, t, window: float = 1.0) -> str:
+    """Why a run fell, from its recorded curvature over the last ``window`` seconds: which of
+    Section 3's bounds held ``C_f`` (a controller that does not keep its demand feasible, like
+    the open-loop law of Section 4, falls when the bounds cut it)."""
+    C_f, t = np.asarray(C_f, float), np.asarray(t, float)
+    last = t >= t[-1] - window
+    causes = []
+    if np.abs(C_f[last]).max() >= limits.C_f_max * (1 - 1e-9):
+        causes.append(f"|C_f| held at C_f_max = {limits.C_f_max:g} 1/m")
+    if last.sum() > 1:
+        rate = np.abs(np.diff(C_f[last])) / np.diff(t[last])
+        if rate.max() >= limits.dC_f_max * (1 - 1e-6):
+            causes.append(f"|dC_f/dt| held at dC_f_max = {limits.dC_f_max:g} 1/(m s)")
+    if not causes:
+        return "no curvature bound was active: the motion commanded leans past theta_fall"
+    return "the turn needs more than the figure can do: " + " and ".join(causes)
+
+
 def ellipse_needs(body: BodyParams, theta_max, omega0):
     """What following the ellipse needs, per bound of ``BOUNDS`` (in that order): peak ``C_f``
     (1/m), peak ``C_f l sin th``, peak ``|dC_f/dt|`` (1/(m s)) and the lean (rad).  Arrays
