@@ -138,13 +138,15 @@ class PhaseEllipse(Controller):
 
     # -- the feasible ellipse (items 3, 3b of issue 7) -----------------------------------------
     def feasible_lean(self, omega0: float, theta_max: float) -> float:
-        """The lean followed for a commanded ``(omega0, theta_max)``: at most ``HEADROOM`` of the
-        largest the body's bounds allow at that period (:mod:`.feasible`).  On the feasible
-        boundary itself no modified half-turn is feasible (a sharper one needs more C_f, a
-        shallower and faster one more C_f rate), so directional control could not steer."""
+        """The lean followed for a commanded ``(omega0, theta_max)``: at most the largest the
+        body's bounds allow at that period (:mod:`.feasible`), and with directional control at
+        most ``HEADROOM`` of it: on the feasible boundary itself no modified half-turn is
+        feasible (a sharper one needs more C_f, a shallower and faster one more C_f rate), so
+        directional control could not steer."""
         if self._feasible is None:
             return theta_max
-        return min(theta_max, HEADROOM * self._feasible.max_lean(omega0))
+        room = 1.0 if self.heading is None else HEADROOM
+        return min(theta_max, room * self._feasible.max_lean(omega0))
 
     def _note(self, t, w, tm, tmf):
         bound = self._feasible.bound(w) if tmf < tm else None

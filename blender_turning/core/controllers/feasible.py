@@ -40,7 +40,7 @@ from ..heading_table import BETA_MAX, BETA_MIN
 from ..params import BodyParams, Limits
 
 CF_SHARE = 0.9
-RATE_SHARE = 0.8
+RATE_SHARE = 0.9
 LEAN_MARGIN = math.radians(8.0)
 BOUNDS = ("C_f_max", "physical branch", "dC_f_max", "theta_fall")
 _PHASES = np.linspace(0.0, 0.5 * math.pi, 65)
