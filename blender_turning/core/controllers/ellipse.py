@@ -176,8 +176,7 @@ class PhaseEllipse(Controller):
         self._t_prev = t
         if type(th) is float:
             side = 1.0 if th > 0 else -1.0 if th < 0 else 1.0 if om >= 0 else -1.0
-            ahead = th + om * dt
-            soon = ahead * side < 0.0                    # a crossing within this step
+            soon = (th + om * dt) * side < 0.0           # a crossing within this step
             if self._bp is None:
                 self._bp = self._bn = 1.0
                 self._side = -side if abs(th) < 0.05 * self.theta_max(t) else side
@@ -286,14 +285,22 @@ class PhaseEllipse(Controller):
         """:meth:`desired_cf` for one figure on floats (:func:`ellipse_alpha_one` or the paper's,
         Eq. 1), with constant schedules read once."""
         inverse, ellipse, alpha = scalar_inverse_cf(self.body), self._ellipse, self._alpha_one
-        w_s, tm_s, r0, b = self.omega0, self.theta_max, self.origin_radius, self._b
+        w_s, tm_s, r0 = self.omega0, self.theta_max, self.origin_radius
         wc, tc = w_s.constant_value, tm_s.constant_value
+        fixed = {}                     # constant schedules: the ellipse per beta, computed once
 
         def law(t, state):
             th = state[3]
-            tm, w, amax = ellipse(wc if wc is not None else w_s(t),
-                                  tc if tc is not None else tm_s(t), b(th))
-            return inverse(th, alpha(th, state[4], tm, w, amax, r0))
+            b = (self._bp if th >= 0.0 else self._bn) if self._bp is not None else 1.0
+            if wc is not None and tc is not None:
+                e = fixed.get(b)
+                if e is None:
+                    if len(fixed) > 8:
+                        fixed.clear()
+                    e = fixed[b] = ellipse(wc, tc, b)
+            else:
+                e = ellipse(wc if wc is not None else w_s(t), tc if tc is not None else tm_s(t), b)
+            return inverse(th, alpha(th, state[4], e[0], e[1], e[2], r0))
 
         return law
 
