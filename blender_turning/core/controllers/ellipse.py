@@ -127,14 +127,14 @@ class PhaseEllipse(Controller):
         self._side = None           # +1 during a left half-turn, -1 right, per figure
         self._planned = False       # the coming half-turn's beta was set in this step
         self._t_prev = None
-        self._memo = (None, None)
+        self._memo = {}
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
 
     def begin_run(self, limits: Limits) -> None:
         if not self._limits_given:
             self._feasible = feasible_turns(self.body, limits)
-            self._memo = (None, None)
+            self._memo = {}
 
     # -- the feasible ellipse (items 3, 3b of issue 7) -----------------------------------------
     def feasible_lean(self, omega0: float, theta_max: float) -> float:
@@ -174,44 +174,48 @@ class PhaseEllipse(Controller):
         th, om = state[THETA_V], state[OMEGA_V]
         dt = 0.0 if self._t_prev is None else t - self._t_prev
         self._t_prev = t
+        first = self._bp is None
         if type(th) is float:
             side = 1.0 if th > 0 else -1.0 if th < 0 else 1.0 if om >= 0 else -1.0
             soon = (th + om * dt) * side < 0.0           # a crossing within this step
-            if self._bp is None:
+            if first:
                 self._bp = self._bn = 1.0
                 self._side = -side if abs(th) < 0.05 * self.theta_max(t) else side
-            elif side == self._side and not soon:
+            elif side == self._side and not soon:        # most steps of one figure
                 self._planned = False
                 return
+            any_crossed = side != self._side
         else:
             side = np.where(th > 0, 1.0, np.where(th < 0, -1.0, np.where(om >= 0, 1.0, -1.0)))
             soon = (th + om * dt) * side < 0.0
-            if self._bp is None:
+            if first:
                 self._bp, self._bn = np.ones_like(th), np.ones_like(th)
                 self._side = np.where(np.abs(th) < 0.05 * self.theta_max(t), -side, side)
                 self._planned = np.zeros(th.shape, bool)
+            any_crossed = bool(np.any(side != self._side))
         crossed = side != self._side
         self._side = side
         w, tm = self.omega0(t), self.theta_max(t)
         tmf = self.feasible_lean(w, tm)
-        if self._feasible is not None and np.any(crossed):
+        if self._feasible is not None and (any_crossed or first):
             self._note(t, w, tm, tmf)
         if self.heading is None:
             return
         # A crossing not planned in the step before (a start on the axis, a lean that turned
         # faster than predicted): the half-turn on ``side`` starts now.
-        late = crossed & ~np.asarray(self._planned)
+        late = crossed & ~np.asarray(self._planned) if any_crossed else False
         self._planned = soon
         if np.any(late):
             self._plan(t, state[THETA_DIR], side, late, w, tmf)
         if np.any(soon):
             # Heading at the crossing, tau = -th/om ahead: on the ellipse near th = 0,
             # V_f C_f = k / (V cos th) ~ (g + omega0'^2 J) th / V (module heading_table).
-            b = np.where(th >= 0, self._bp, self._bn)
-            w_now = w / b
-            with np.errstate(divide="ignore", invalid="ignore"):
-                swing = -(self.body.g + w_now * w_now * self.body.J) * th * th / (
-                    2.0 * self.body.V_cm * np.where(om != 0, om, 1.0))
+            w_now = w / self._b(th)
+            k = (self.body.g + w_now * w_now * self.body.J) * th * th / (2.0 * self.body.V_cm)
+            if type(th) is float:
+                swing = -k / om if om != 0.0 else 0.0
+            else:
+                swing = np.where(om != 0, -k / np.where(om != 0, om, 1.0), 0.0)
             self._plan(t, state[THETA_DIR] + swing, -side, soon, w, tmf)
 
     def _plan(self, t, theta_dir, side, which, w, tmf):
@@ -250,7 +254,11 @@ class PhaseEllipse(Controller):
         # Left to shallow half-turns: what one of them can take, and at least one half-turn's
         # change (the most a start off the ellipse leaves, its first half-turn being partial).
         spare = max(change - heading_table(self.body).value_one(lo * tm, w / lo), change)
-        wanted = change + np.where(more > spare, more - spare, np.minimum(more, 0.0))  # Eq. (7)
+        if type(more) is float:
+            extra = more - spare if more > spare else min(more, 0.0)
+        else:
+            extra = np.where(more > spare, more - spare, np.minimum(more, 0.0))
+        wanted = change + extra                                     # Eq. (7), in the turn's sense
         return self._solve_beta(tm, w, wanted, lo, hi)
 
     # -- Section 5.1 -------------------------------------------------------------------------
@@ -258,14 +266,18 @@ class PhaseEllipse(Controller):
         """``(theta_max, omega0, alpha_max)`` of the half-turn's ellipse: the commanded one made
         feasible, then modified by its beta ``b`` (Section 5.2)."""
         key = (w0, tm0, b) if type(b) is float and type(w0) is float else None
-        if key is not None and key == self._memo[0]:
-            return self._memo[1]
+        if key is not None:
+            out = self._memo.get(key)
+            if out is not None:
+                return out
         tmf = self.feasible_lean(w0, tm0)
         w = w0 / b
         amax = self.alpha_max if self.alpha_max is not None else 2.0 * w * w * (b * tmf)
         out = (b * tmf, w, amax)
         if key is not None:
-            self._memo = (key, out)
+            if len(self._memo) > 16:
+                self._memo.clear()
+            self._memo[key] = out
         return out
 
     def _b(self, theta_v):

@@ -124,6 +124,7 @@ class FeasibleTurns:
         self._lean, self._bound = self._solve(np.exp(self._lw))
         self._leans = self._lean.tolist()
         self._lw0, self._dlw = float(self._lw[0]), float(self._lw[1] - self._lw[0])
+        self._ranges = {}
 
     def _ratio(self, theta_max, omega0):
         """Largest need / allowed over the bounds (<= 1: feasible) and which bound it is."""
@@ -167,6 +168,10 @@ class FeasibleTurns:
         """``(lo, hi)``: the betas around 1 whose modified half-turn ``(beta theta_max,
         omega0 / beta)`` is feasible, within ``[BETA_MIN, BETA_MAX]`` (Section 5.2 with the
         bounds of Sections 3 and 6.1).  ``(theta_max, omega0)`` itself should be feasible."""
+        key = (theta_max, omega0)
+        if key in self._ranges:
+            return self._ranges[key]
+
         def ok(b):
             return b * theta_max <= self.max_lean(omega0 / b) * (1 + 1e-12)
 
@@ -180,6 +185,9 @@ class FeasibleTurns:
                 mid = math.sqrt(good * bad)
                 good, bad = (mid, bad) if ok(mid) else (good, mid)
             ends.append(good)
+        if len(self._ranges) > 64:
+            self._ranges.clear()
+        self._ranges[key] = (ends[0], ends[1])
         return ends[0], ends[1]
 
 
