@@ -2,6 +2,7 @@
 follow never make the figure fall (core/controllers/feasible.py, core/heading_table.py)."""
 import math
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -92,14 +93,22 @@ def test_feasible_lean_is_the_largest_that_keeps_the_bounds():
         assert max(above) > 1.0
 
 
-def test_open_loop_fall_names_the_bound():
+@pytest.mark.parametrize("C_f_max,dC_f_max,named", [
+    (1 / 6, 0.67, ("|C_f| held at C_f_max", "|dC_f/dt| held at dC_f_max")),
+    (0.05, math.inf, ("|C_f| held at C_f_max",)),
+    (math.inf, 0.2, ("|dC_f/dt| held at dC_f_max",))])
+def test_open_loop_fall_names_the_bound(C_f_max, dC_f_max, named):
     """The open-loop controller follows its sinusoid literally and may fall; the error says
-    which bound cut the curvature."""
+    which bound cut the curvature (and only that one)."""
     fig = preset("skier", V_cm=6.0)
+    fig = replace(fig, limits=replace(fig.limits, C_f_max=C_f_max, dC_f_max=dC_f_max))
     with pytest.raises(FellOver) as e:
         simulate(fig, OpenLoop(fig.body, TWO_PI / 2, math.radians(23)), 20.0,
                  state0=(0, 0, 0, 0, math.pi * math.radians(23)))
-    assert "C_f_max" in str(e.value) and "needs more than the figure can do" in str(e.value)
+    text = str(e.value)
+    assert "needs more than the figure can do" in text
+    for bound in ("|C_f| held at C_f_max", "|dC_f/dt| held at dC_f_max"):
+        assert (bound in text) == (bound in named)
 
 
 @pytest.mark.parametrize("lean", [0.2, 0.45, 1.0, 2.0, 3.0])
