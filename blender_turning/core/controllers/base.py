@@ -1,6 +1,7 @@
 """The contract every steering controller meets.
 
-A controller is stepped by :func:`blender_turning.core.simulate.simulate`: once per accepted
+A controller is stepped by :func:`blender_turning.core.simulate.simulate`: once before the first
+step it is given the figure's limits (``begin_run``), once per accepted
 step it is told the time and state (``begin_step``, where it may update its memory), and during
 the step's integrator stages it is asked for the demanded foot curvature (``desired_cf``, pure:
 no memory change).  The integrator bounds the demand (``dynamics.bound_cf``).  States have shape

@@ -11,27 +11,27 @@ correction, ``alpha_v = -omega0^2 theta_v + u``.  Then ``dy/dt = omega0 x``,
     d(r^2)/dt = 2 x u / (omega0 theta_max):
 
 only ``u`` changes the ellipse's "radius" (its energy), and only through ``x``.  Energy shaping
-with ``u = K omega0^2 theta_max (1 - r) x / r`` gives
+with ``u = K omega0^2 theta_max (1 - r) x / max(r, 1)`` (``K = GAIN = 3``) gives
 
-    dr/dt = K omega0 (1 - r) cos^2(phi),      phi = atan2(y, x) (the phase of Section 4),
+    dr/dt = K omega0 (1 - r) cos^2(phi) * min(r, 1),    phi = atan2(y, x) (Section 4's phase),
 
-so ``1 - r`` decays monotonically from any state, by ``exp(-K omega0 t / 2)`` on average (K = 2:
-e^-2pi per period), from inside and outside alike, and ``u = 0`` on the ellipse: there the demand
-is exactly Eq. (5), the open-loop law of the same ellipse.  The demand is a smooth function of the
-state away from the origin: nothing switches at the apex (``phi = 90, 270 deg``, where the
-correction passes through zero with ``cos phi``) or at the axes.  The paper's geometric law
-(Fig. 7, :mod:`.ellipse_paper`) switches between two families of controlling ellipses whose
-``omega0'^2 = omega_v^2 / (theta_max^2 - theta_v^2)`` is 0/0 at the apex; tiny state errors there
-flip it between branches, and C_f and F_leg twitch twice per turn (issue 7).
+so ``r`` moves monotonically toward 1 from any state: outside the ellipse ``1 - r`` decays by
+``exp(-K omega0 t / 2)`` on average (e^-3pi per period), inside ``r`` grows logistically at the
+same rate.  ``u = 0`` on the ellipse: there the demand is exactly Eq. (5), the open-loop law of
+the same ellipse.  The demand is a smooth function of the state (C1 across the ellipse, where
+both forms of ``u`` have slope ``-K omega0^2 theta_max x`` in ``r``): nothing switches at the
+apex (``phi = 90, 270 deg``, where the correction passes through zero with ``cos phi``) or at the
+axes.  The paper's geometric law (Fig. 7, :mod:`.ellipse_paper`) switches between two families
+of controlling ellipses whose ``omega0'^2 = omega_v^2 / (theta_max^2 - theta_v^2)`` is 0/0 at
+the apex; tiny state errors there flip it between branches, and C_f and F_leg twitch twice per
+turn (issue 7).
 
-Two details make it well conditioned everywhere:
-
-- ``x / r`` is ``x / max(r, SOFT_RADIUS)``: near the origin the correction is a finite negative
-  damping (the lean rate grows at ``~K omega0 / SOFT_RADIUS``), not a direction that is undefined
-  at ``r = 0`` and stiff for the integrator.
-- The origin itself is an equilibrium of both terms.  Section 5.1: "a fixed arbitrary value is
-  assigned to alpha_v for a small region around the origin"; here it fades in smoothly,
-  ``+ 0.5 alpha_max (1 - r / origin_radius)^2`` inside ``origin_radius``.
+Inside the ellipse the correction is a negative damping ``K omega0 (1 - r) omega_v`` (``x / r``
+would be a direction undefined at ``r = 0``, and its large gain near the origin asked for faster
+C_f changes than the bounds allow: a snowboarder at 20 m/s fell from the origin).  The origin
+itself is an equilibrium of both terms; Section 5.1: "a fixed arbitrary value is assigned to
+alpha_v for a small region around the origin"; here it fades in smoothly,
+``+ 0.5 alpha_max (1 - r / origin_radius)^2`` inside ``origin_radius``.
 
 The demand is clipped to ``|alpha_v| <= alpha_max`` (a continuous clip), and Section 3's bounds
 on C_f then act on it (in the integrator).  Convergence onto the target from the origin, from half
@@ -61,7 +61,6 @@ from .ellipse_paper import paper_alpha, paper_alpha_one
 from .feasible import FeasibleTurn, feasible_turns
 
 GAIN = 3.0
-SOFT_RADIUS = 1.0
 HEADROOM = 0.85
 
 
@@ -72,7 +71,7 @@ def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=
     w2 = omega0 * omega0
     x = omega_v / (omega0 * theta_max)
     r = np.hypot(x, theta_v / theta_max)
-    a = -w2 * theta_v + (GAIN * w2 * theta_max) * (1.0 - r) * x / np.maximum(r, SOFT_RADIUS)
+    a = -w2 * theta_v + (GAIN * w2 * theta_max) * (1.0 - r) * x / np.maximum(r, 1.0)
     a = a + 0.5 * alpha_max * np.square(np.maximum(1.0 - r / origin_radius, 0.0))
     return np.minimum(np.maximum(a, -alpha_max), alpha_max)
 
@@ -83,7 +82,7 @@ def ellipse_alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius=0.05):
     x = om / (omega0 * theta_max)
     y = th / theta_max
     r = math.sqrt(x * x + y * y)
-    a = -w2 * th + GAIN * w2 * theta_max * (1.0 - r) * x / (r if r > SOFT_RADIUS else SOFT_RADIUS)
+    a = -w2 * th + GAIN * w2 * theta_max * (1.0 - r) * x / (r if r > 1.0 else 1.0)
     if r < origin_radius:
         f = 1.0 - r / origin_radius
         a += 0.5 * alpha_max * f * f

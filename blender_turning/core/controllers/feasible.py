@@ -161,9 +161,6 @@ class FeasibleTurns:
         f = (math.log(omega0) - self._lw0) / self._dlw
         return BOUNDS[int(self._bound[min(max(int(round(f)), 0), _N_OMEGA - 1)])]
 
-    def feasible(self, theta_max: float, omega0: float) -> bool:
-        return theta_max <= self.max_lean(omega0)
-
     def beta_range(self, theta_max: float, omega0: float):
         """``(lo, hi)``: the betas around 1 whose modified half-turn ``(beta theta_max,
         omega0 / beta)`` is feasible, within ``[BETA_MIN, BETA_MAX]`` (Section 5.2 with the
