@@ -33,7 +33,7 @@ def register(sub):
     p.add_argument("--gravity", type=float, help="m/s^2")
     p.add_argument("--controller", default="ellipse", choices=sorted(CONTROLLERS))
     p.add_argument("--law", default="smooth", choices=("smooth", "paper"),
-                   help="phase-ellipse law: smooth (default) or the paper's Section 5.1 as written")
+                   help="phase-ellipse law: smooth (default) or Section 5.1 as written")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--period", type=float, help="turn period 2 pi / omega0, s (default 2)")
     g.add_argument("--omega0", type=float, help="turn frequency, rad/s")

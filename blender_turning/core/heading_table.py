@@ -2,7 +2,8 @@
 
 ``dtheta_dir(theta_max, omega0)`` is the heading change over one half-turn (Eq. 6).  A modified
 half-turn on the ellipse ``(beta theta_max, omega0 / beta)`` changes the heading by
-``dtheta_dir(beta theta_max, omega0 / beta)``; Eq. (8) asks for the ``beta`` giving a wanted change.
+``dtheta_dir(beta theta_max, omega0 / beta)``; Eq. (8) asks for the ``beta`` giving a wanted
+change.
 
 The paper approximates ``dtheta_dir`` under small angles (Eqs. 9-12) and otherwise tabulates it
 from simulation.  It has an exact closed form, so neither is needed.  With the curvature of

@@ -6,4 +6,5 @@ from .open_loop import OpenLoop
 
 CONTROLLERS = {"open-loop": OpenLoop, "ellipse": PhaseEllipse}
 
-__all__ = ["Controller", "OpenLoop", "PhaseEllipse", "ellipse_alpha", "FeasibleTurn", "CONTROLLERS"]
+__all__ = ["Controller", "OpenLoop", "PhaseEllipse", "ellipse_alpha", "FeasibleTurn",
+           "CONTROLLERS"]

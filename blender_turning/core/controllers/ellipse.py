@@ -97,10 +97,10 @@ class PhaseEllipse(Controller):
     ``theta_h(t)``, each a number, a callable of time or a :class:`Schedule`.
 
     ``alpha_max`` (rad/s^2) defaults to ``2 omega0^2 theta_max`` of the ellipse followed (after
-    beta): twice the peak of its own ``alpha_v``.  ``law``: ``"smooth"`` (the module docstring) or ``"paper"`` (Section 5.1 as
-    written, :mod:`.ellipse_paper`).  ``directional``: how beta is found, ``"exact"`` (the closed
-    form of :mod:`..heading_table`) or ``"linear"`` (the paper's Eqs. 11/12).  ``limits``: the
-    figure's bounds; the ellipse followed is kept feasible for them (:mod:`.feasible`).  ``None``
+    beta): twice the peak of its own ``alpha_v``.  ``law``: ``"smooth"`` (the module docstring)
+    or ``"paper"`` (Section 5.1 as written, :mod:`.ellipse_paper`).  ``directional``: how beta is
+    found, ``"exact"`` (the closed form of :mod:`..heading_table`) or ``"linear"`` (the paper's
+    Eqs. 11/12).  ``limits``: the figure's bounds; the ellipse followed is kept feasible for them (:mod:`.feasible`).  ``None``
     takes them from the run (:meth:`begin_run`).  :attr:`achieved` reports the turn followed.
     """
 
@@ -131,9 +131,13 @@ class PhaseEllipse(Controller):
         """The most limited turn followed so far (the first one if none was limited)."""
 
     def begin_run(self, limits: Limits) -> None:
+        """A new run: forget the last run's half-turns; take the figure's limits unless given."""
         if not self._limits_given:
             self._feasible = feasible_turns(self.body, limits)
-            self._memo = {}
+        self._bp = self._bn = self._side = self._t_prev = None
+        self._planned = False
+        self._memo = {}
+        self.achieved = None
 
     # -- the feasible ellipse (items 3, 3b of issue 7) -----------------------------------------
     def feasible_lean(self, omega0: float, theta_max: float) -> float:
