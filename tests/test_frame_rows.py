@@ -121,7 +121,11 @@ def test_phase_under_heading_control_uses_the_step_s_ellipse(fps):
     r = traj.resample(fps)
     assert_rows_obey_the_model(r)
     step = np.minimum(np.floor(r.t / DT + 1e-9).astype(int), len(log) - 1)
-    assert wrapped(r.phi - phase(r.theta_v, r.omega_v, TM, log[step])).max() < 1e-12
+    # A frame on a sample that sits on the omega_v axis (a crossing, where the controller switches
+    # ellipse inside the step) may take either ellipse: their phases differ there by at most
+    # |theta_v| |d omega0| / |omega_v| (measured 7.6e-8 rad at theta_v = 4.9e-8 rad).
+    axis = np.abs(r.theta_v) * np.ptp(log) / np.abs(r.omega_v)
+    assert np.all(wrapped(r.phi - phase(r.theta_v, r.omega_v, TM, log[step])) < 1e-12 + axis)
 
 
 @pytest.mark.parametrize("fps", FPS)

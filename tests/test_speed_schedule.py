@@ -41,13 +41,26 @@ def test_the_dynamics_run_at_the_scheduled_speed(skier):
 
 
 def test_accelerating_and_braking_keep_the_turns_and_the_heading(skier):
-    """The controller solves Eq. (1) at the current speed: the lean keeps its 23 deg peaks and
-    the mean heading stays put while the speed goes 10 -> 14 -> 8 m/s.  (Steering with the
-    nominal 10 m/s instead falls over while braking, at t = 32 s.)"""
+    """The controller solves Eq. (1) at the current speed: the lean keeps its peaks (23 deg, or
+    the most the skis allow at that speed: issue 7 item 3b) and the mean heading stays put while
+    the speed goes 10 -> 14 -> 8 m/s.  (Steering with the nominal 10 m/s instead falls over
+    while braking, at t = 32 s.)"""
     tr = slalom(skier, RAMP)
+    ctl = PhaseEllipse(skier.body, W, TM, heading=math.pi / 2, limits=skier.limits)
+    lean = np.abs(tr.theta_v)
+    apex = np.nonzero((lean[1:-1] > lean[:-2]) & (lean[1:-1] >= lean[2:]))[0] + 1
+    limited = 0
+    for k in apex[apex * 0.02 > 4.0]:                  # after the start's transient
+        ctl.follow_speed(RAMP(tr.t[k]))
+        peak = math.degrees(ctl.feasible_lean(W, TM))
+        limited += peak < 23.0
+        # Never past what the skis allow at the speed (the limit follows the speed within a
+        # half-turn: 0.2 deg); heading control may make a half-turn shallower (beta < 1).
+        assert math.degrees(lean[k]) < peak + 0.2, tr.t[k]
+        assert math.degrees(lean[k]) > 0.85 * peak, tr.t[k]
+    assert limited >= 3                                # braking to 8 m/s does limit the lean
     for a, b in [(5, 10), (12, 18), (22, 28), (32, 38)]:
         m = (tr.t >= a) & (tr.t < b)
-        assert abs(np.degrees(np.abs(tr.theta_v[m]).max()) - 23.0) < 0.1, (a, b)
         assert abs(np.degrees(np.mean(tr.theta_dir[m])) - 90.0) < 2.0, (a, b)
 
 
@@ -55,14 +68,14 @@ def test_accelerating_and_braking_keep_the_turns_and_the_heading(skier):
 def test_the_heading_table_serves_every_speed(skier, speed):
     """Eq. (6)'s half-turn change at another speed is the nominal table's times V_nominal / V
     (exact for the table's unbounded half-turn: V_f C_f = (g sin th - alpha_v J)/(V_cm cos th))."""
-    ctl = PhaseEllipse(skier.body, W, TM, directional="table")
+    ctl = PhaseEllipse(skier.body, W, TM)
     ctl.follow_speed(speed)
     exact = heading_table(replace(skier.body, V_cm=speed))
     for tm, w in [(0.1, 2.0), (TM, W), (0.6, 6.0)]:
         assert ctl.half_turn_change(tm, w) == pytest.approx(exact.value_one(tm, w), rel=1e-12)
         wanted = 1.2 * exact.value_one(tm, w)
-        assert ctl._solve_beta(tm, w, wanted) == pytest.approx(
-            exact.solve_beta(tm, w, wanted), rel=1e-9)
+        assert ctl._solve_beta(tm, w, wanted, 0.2, 5.0) == pytest.approx(
+            exact.solve_beta(tm, w, wanted, 0.2, 5.0), rel=1e-9)
 
 
 def test_bad_speed_schedules_are_refused(skier):

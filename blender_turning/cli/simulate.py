@@ -16,6 +16,11 @@ BODY_FLAGS = {"mass": ("m", 0.0, 1e4), "com_height": ("l", 0.0, 10.0),
               "gravity": ("g", 0.0, 100.0)}
 
 
+#: Steps where the rows obey the model to 1e-3 of scale under the trapezoid rule for a 2 s turn
+#: ((2 pi dt / period)^2 / 12 <= 1e-3 up to 0.034 s; BENCHMARKS.md "Turn control accuracy").
+DT_RANGE = (0.001, 0.03)
+
+
 def register(sub):
     p = sub.add_parser("simulate", help="simulate a slalom and write its trajectory",
                        description="Simulate one figure (Sections 3-5) and write the trajectory "
@@ -27,6 +32,8 @@ def register(sub):
     p.add_argument("--speed", type=float, help="forward speed V_cm, m/s")
     p.add_argument("--gravity", type=float, help="m/s^2")
     p.add_argument("--controller", default="ellipse", choices=sorted(CONTROLLERS))
+    p.add_argument("--law", default="smooth", choices=("smooth", "paper"),
+                   help="phase-ellipse law: smooth (default) or Section 5.1 as written")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--period", type=float, help="turn period 2 pi / omega0, s (default 2)")
     g.add_argument("--omega0", type=float, help="turn frequency, rad/s")
@@ -38,7 +45,9 @@ def register(sub):
     p.add_argument("--omega-v0-deg", type=float,
                    help="initial lean rate, deg/s (default: on the ellipse, omega0 theta_max)")
     p.add_argument("--duration", type=float, default=20.0, help="s")
-    p.add_argument("--dt", type=float, default=DEFAULT_DT, help="integration step, s")
+    p.add_argument("--dt", type=float, default=DEFAULT_DT,
+                   help=f"integration step, s ({DT_RANGE[0]:g}-{DT_RANGE[1]:g}; BENCHMARKS.md: "
+                        "accuracy per step)")
     p.add_argument("--fps", type=float, help="resample to this frame rate (24, 25, 30, 60 ...)")
     p.add_argument("--out", help="trajectory CSV to write")
     p.add_argument("--plot", help="PNG of the track, lean, curvature and phase diagram")
@@ -57,7 +66,7 @@ def run(args) -> int:
             overrides[field] = _flag(flag, v, lo, hi, lo_open=(flag != "inertia"))
     fig = preset(args.preset, **overrides)
     duration = _flag("duration", args.duration, 0.0, 1e5, lo_open=True)
-    dt = _flag("dt", args.dt, 1e-4, 0.1)
+    dt = _flag("dt", args.dt, *DT_RANGE)
     if args.fps is not None:
         _flag("fps", args.fps, 0.0, 1000.0, lo_open=True)
     check_out_path("--out", args.out)
@@ -86,15 +95,15 @@ def run(args) -> int:
         omega0, theta_max = Schedule.constant(w), Schedule.constant(math.radians(lean))
         heading = Schedule.constant(math.radians(head))
 
-    w0, tm0 = omega0(0.0), theta_max(0.0)
+    if args.controller == "ellipse":
+        ctl = PhaseEllipse(fig.body, omega0, theta_max, heading, law=args.law, limits=fig.limits)
+    else:
+        ctl = CONTROLLERS[args.controller](fig.body, omega0, theta_max)
+    w0, tm0 = ctl.target(0.0)           # the ellipse followed (made feasible for the figure)
     theta0 = math.radians(_flag("theta0_deg", args.theta0_deg or 0.0, -90.0, 90.0,
                                 lo_open=True, hi_open=True))
     omega_v0 = (w0 * tm0 if args.omega_v0_deg is None else
                 math.radians(_flag("omega_v0_deg", args.omega_v0_deg, -1e4, 1e4)))
-    if args.controller == "ellipse":
-        ctl = PhaseEllipse(fig.body, omega0, theta_max, heading)
-    else:
-        ctl = CONTROLLERS[args.controller](fig.body, omega0, theta_max)
     # Start so that the slalom is centred on the heading (with the lean and rate asked for).
     state0 = slalom_start(fig.body, w0, tm0, heading(0.0))[:3] + (theta0, omega_v0)
     traj = simulate(fig, ctl, duration, dt, state0,
@@ -111,5 +120,6 @@ def run(args) -> int:
           f"{f' at {args.fps:g} fps' if args.fps else ''}; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg, |C_f| max "
           f"{abs(traj.C_f).max():.3f} 1/m, distance {traj.s[-1]:.1f} m"
+          f"{'; turn ' + ctl.achieved.describe() if getattr(ctl, 'achieved', None) else ''}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0

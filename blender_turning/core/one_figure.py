@@ -79,6 +79,7 @@ def integrate(body: BodyParams, limits: Limits, controller, state, n: int, dt: f
     over each step at its value at the step's start, as the planner's ``SpeedProfile`` does
     (Section 6), and the controller steers with it
     (:meth:`~.controllers.base.Controller.follow_speed`)."""
+    controller.begin_run(limits)
     V_now = body.V_cm
     stage = rhs(body, limits, controller.scalar_cf_law())
     begin, target = controller.begin_step, controller.target

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .controllers import Controller
+from .controllers.feasible import fall_cause
 from .dynamics import THETA_V, leg_force, rk4_step, stage
 from .errors import FellOver
 from .heading_table import heading_table
@@ -78,6 +79,7 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
         rec = np.array(rows, float)
         return _columns(body, rec, dt, () if fell_at is None else ((0, fell_at),),
                         None if V_cm is None else V_cm[:len(rec)])
+    controller.begin_run(limits)
     state = arr
     anchor = None if C_f0 is None else np.asarray(C_f0, float)
     # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.
@@ -146,7 +148,8 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
     info = {"preset": figure.name, "dt": dt, **body_meta(figure.body), **(meta or {})}
     traj = Trajectory.from_columns(r.columns, info)
     if r.fell_at is not None:
-        raise FellOver(r.fell_at, float(traj.theta_v[-1]), traj)
+        raise FellOver(r.fell_at, float(traj.theta_v[-1]), traj,
+                       fall_cause(figure.limits, traj.C_f, traj.t))
     return traj
 
 

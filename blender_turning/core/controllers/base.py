@@ -1,6 +1,7 @@
 """The contract every steering controller meets.
 
-A controller is stepped by :func:`blender_turning.core.simulate.simulate`: once per accepted
+A controller is stepped by :func:`blender_turning.core.simulate.simulate`: once before the first
+step it is given the figure's limits (``begin_run``), once per accepted
 step it is told the time and state (``begin_step``, where it may update its memory), and during
 the step's integrator stages it is asked for the demanded foot curvature (``desired_cf``, pure:
 no memory change).  The integrator bounds the demand (``dynamics.bound_cf``).  States have shape
@@ -33,6 +34,10 @@ class Controller:
         Sections 3-5, and lets it vary along the path in Section 6 (the planner's speed profile)."""
         self.body = replace(self.nominal_body, V_cm=float(V_cm))
         return self.body
+
+    def begin_run(self, limits) -> None:
+        """Called once before the first step with the figure's :class:`..params.Limits` (a
+        controller may keep its demand within them)."""
 
     def begin_step(self, t: float, state: np.ndarray) -> None:
         """Called once at the start of each step with the accepted state."""
