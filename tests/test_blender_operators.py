@@ -339,7 +339,7 @@ def modal_operator(obj):
     fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),
                            "_cleanup": op_cls._cleanup, "_complete": op_cls._complete})()
     fake._job = ops_path.prepare(bpy.context, obj)
-    fake._fig_name, fake._timer = obj.name, object()
+    fake._fig_uid, fake._timer = obj.session_uid, object()
     fake._job.start()
     return op_cls, fake, reports
 

@@ -59,9 +59,14 @@ def channels(id_data, action=None):
         action = adt.action if adt else None
     if action is None:
         return None
+    slot = adt.action_slot if SLOTTED_ACTIONS and adt and adt.action == action else None
+    return channelbag(action, slot)
+
+
+def channelbag(action, slot):
+    """The F-curve container of ``action`` for ``slot`` (an NLA strip's or the assigned one)."""
     if not SLOTTED_ACTIONS:
         return action                     # 4.2/4.3: Action.fcurves and Action.groups
-    slot = adt.action_slot if adt and adt.action == action else None
     if slot is None:
         return None
     for layer in action.layers:           # 4.4+: anim_utils' helper, inlined (not in 4.2)
@@ -70,6 +75,11 @@ def channels(id_data, action=None):
             if bag:
                 return bag
     return None
+
+
+def strip_slot(strip):
+    """The slot an NLA strip animates through (``None`` before 4.4)."""
+    return strip.action_slot if SLOTTED_ACTIONS else None
 
 
 def new_fcurve(bag, data_path: str, index: int, group: str):

@@ -6,9 +6,8 @@ import math
 
 import bpy
 
-from ..core.errors import TurningError
 from . import bake, foot_track
-from .ops_common import context_figure, poll_figure
+from .ops_common import check_figure, context_figure, poll_figure, report_error
 from .pipeline import figure_pose_track
 from .scene_adapters import FrameRange, start_from_object
 
@@ -48,14 +47,15 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
 
     def execute(self, context):
         fig = context_figure(context)
-        # Not baked yet: start where the user put the figure; baked: from its Start settings.
-        start = start_from_object(fig) if bake.figure_action(fig) is None else None
-        try:
+        try:                              # everything that can fail, before anything is written
+            check_figure(fig)
+            # Not baked yet: start where the user put the figure; baked: from its Start settings.
+            start = start_from_object(fig) if bake.figure_action(fig) is None else None
             frames = FrameRange.of_scene(context.scene)
-            traj, track = figure_pose_track(fig, frames, start=start)   # nothing written yet
-        except (ValueError, TurningError) as exc:
-            self.report({"ERROR"}, f"Bake Turns: {fig.name}: {exc}")
-            return {"CANCELLED"}
+            traj, track = figure_pose_track(fig, frames, start=start)
+            bake.check_track(fig, track)
+        except Exception as exc:
+            return report_error(self, "Bake Turns", fig.name, exc)
         if start is not None:
             fig.turning.start = (start[0], start[1], 0.0)
             fig.turning.start_heading = start[2]

@@ -85,6 +85,7 @@ class VIEW3D_PT_turning_bake(_FigurePanel, bpy.types.Panel):
         row = layout.row(align=True)
         row.operator("turning.bake_turns", icon="REC")
         row.operator("turning.clear_bake", text="", icon="TRASH")
+        layout.prop(fig.turning, "show_foot_track")
         action = bake.figure_action(fig)
         if action is not None:
             layout.label(text=f"Action: {action.name}", icon="ACTION")

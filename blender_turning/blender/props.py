@@ -21,6 +21,11 @@ SPORTS = (
 _STATIC = set()            # options: not animatable (the bake reads these once)
 
 
+def _foot_track():
+    from . import foot_track          # imported when used: foot_track is a sibling, not a base
+    return foot_track
+
+
 def _is_curve(self, obj):
     return obj.type == "CURVE"
 
@@ -81,6 +86,10 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                     "Rate.  The sport presets set a gentler rate than the figure's limit")
     foot_track: PointerProperty(name="Foot Track", type=bpy.types.Object, options=_STATIC,
                                 description="Curve object drawn along the foot's path")
+    show_foot_track: BoolProperty(name="Show Foot Track", default=True, options=_STATIC,
+                                  update=lambda s, c: _foot_track().update_visibility(s, c),
+                                  description="Draw the foot's path in the viewport (a guide: it "
+                                              "never renders and is not exported to glTF)")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.

@@ -10,8 +10,13 @@ import numpy as np
 
 from ..core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
 from ..core.params import PRESETS
-from . import compat
+from . import bake, compat
+from .foot_track import OWNER as FOOT_TRACK_OWNER
 from .props import ANIMATED, BODY_FIELDS, LIMIT_FIELDS
+
+
+class SceneInputError(ValueError):
+    """A setting, path or obstacle object that cannot be used (names it)."""
 
 
 @dataclass(frozen=True)
@@ -41,8 +46,39 @@ class FrameRange:
         return (np.arange(self.start, self.end + 1) - self.start) / self.fps
 
 
+def _describe(prop, value) -> str:
+    """``Turn Period (turning.period) = nan``, angles in degrees."""
+    angle = prop.subtype == "ANGLE"
+    vals = [math.degrees(v) if angle else v for v in (value if prop.is_array else [value])]
+    shown = ", ".join(f"{v:g}" for v in vals)
+    shown = f"({shown})" if prop.is_array else shown + (" deg" if angle else "")
+    return f"{prop.name} (turning.{prop.identifier}) = {shown}"
+
+
+def _allowed(prop) -> str:
+    lo, hi = prop.hard_min, prop.hard_max
+    if prop.subtype == "ANGLE":
+        lo, hi = math.degrees(lo), math.degrees(hi)
+    if max(abs(lo), abs(hi)) > 1e30:
+        return "type a number"
+    return f"type a number from {lo:g} to {hi:g}" + (" deg" if prop.subtype == "ANGLE" else "")
+
+
+def check_finite_settings(settings) -> None:
+    """Raise :class:`SceneInputError` naming the first of ``obj.turning``'s numbers that is not
+    finite (NaN or infinity typed into a field, or set from a script)."""
+    for prop in settings.bl_rna.properties:
+        if prop.type != "FLOAT":
+            continue
+        value = getattr(settings, prop.identifier)
+        if not np.all(np.isfinite(np.asarray(value, float))):
+            raise SceneInputError(f"{_describe(prop, value)} is not a finite number; "
+                                  f"{_allowed(prop)}")
+
+
 def figure_from_settings(settings) -> Figure:
     """The frozen core :class:`Figure` of ``obj.turning`` (raises ``ValueError`` naming a field)."""
+    check_finite_settings(settings)
     body = BodyParams(**{f: float(getattr(settings, s)) for s, f in BODY_FIELDS.items()})
     limits = Limits(**{f: float(getattr(settings, s)) for s, f in LIMIT_FIELDS.items()})
     return Figure(settings.sport.lower(), body, limits)
@@ -69,13 +105,23 @@ def settings_from_preset(settings, sport: str) -> None:
 def sampled_setting(obj, name: str, frames: FrameRange) -> np.ndarray:
     """``obj.turning.<name>`` at every frame: its F-curve where keyed, else the static value."""
     bag = compat.channels(obj)
+    if bag is None:                       # the bake pushed down onto an NLA strip keeps the keys
+        action, strip = bake.find_bake(obj)
+        bag = compat.channelbag(action, compat.strip_slot(strip)) if strip is not None else None
     fc = None
     if bag is not None:
         fc = next((c for c in bag.fcurves if c.data_path == f"turning.{name}"), None)
     n = frames.end - frames.start + 1
     if fc is None or fc.mute:
         return np.full(n, float(getattr(obj.turning, name)))
-    return np.array([fc.evaluate(f) for f in range(frames.start, frames.end + 1)], float)
+    values = np.array([fc.evaluate(f) for f in range(frames.start, frames.end + 1)], float)
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        prop = obj.turning.bl_rna.properties[name]
+        raise SceneInputError(f"{prop.name} (turning.{name}) is keyed to {values[bad[0]]:g} at "
+                              f"frame {frames.start + bad[0]}, not a finite number; fix that key "
+                              "in the Graph Editor")
+    return values
 
 
 def controller_from_settings(obj, figure: Figure, frames: FrameRange) -> PhaseEllipse:
@@ -111,14 +157,14 @@ def start_from_object(obj):
     """``(x, y, theta_dir)`` of where the figure's armature stands now (the rest pose faces +Y),
     rounded as the Start settings store them (float32), so a re-bake from those is identical."""
     x, y, heading = obj.location[0], obj.location[1], obj.rotation_euler[2] + math.pi / 2
+    if not np.all(np.isfinite([x, y, heading])):
+        raise SceneInputError(f"{obj.name!r} stands at location ({x:g}, {y:g}), rotation Z "
+                              f"{math.degrees(obj.rotation_euler[2]):g} deg: not finite numbers; "
+                              "type numbers in its Transform panel")
     return tuple(float(v) for v in np.float32([x, y, heading]))
 
 
 # -- Follow Path ----------------------------------------------------------------------------
-
-class SceneInputError(ValueError):
-    """A path or obstacle object that cannot be used (names it)."""
-
 
 def bezier_control_points(curve_obj) -> np.ndarray:
     """World-space ground control points ``(3 k + 1, 2)`` of a Bezier curve object's first spline:
@@ -130,6 +176,13 @@ def bezier_control_points(curve_obj) -> np.ndarray:
     if len(splines) == 0:
         raise SceneInputError(f"path {curve_obj.name!r} has no spline")
     sp = splines[0]
+    if sp.use_cyclic_u:
+        # The planner ends a run when the foot crosses the line through the path's end; on a loop
+        # that line passes through the start, so it would stop at once.  Refuse, do not cut.
+        raise SceneInputError(
+            f"path {curve_obj.name!r} is a closed (cyclic) curve; Follow Path runs from the first "
+            "point to the last: open it where the run should start (Edit Mode, Curve > Toggle "
+            "Cyclic)")
     mw = np.array(curve_obj.matrix_world)
 
     def world(pts):
@@ -145,8 +198,6 @@ def bezier_control_points(curve_obj) -> np.ndarray:
         sp.bezier_points.foreach_get("handle_left", hl)
         sp.bezier_points.foreach_get("handle_right", hr)
         co, hl, hr = world(co), world(hl), world(hr)
-        if sp.use_cyclic_u:
-            co, hl, hr = np.vstack([co, co[:1]]), np.vstack([hl, hl[:1]]), np.vstack([hr, hr[:1]])
         ctrl = [co[0]]
         for i in range(len(co) - 1):
             ctrl += [hr[i], hl[i + 1], co[i + 1]]
@@ -168,14 +219,17 @@ def bezier_control_points(curve_obj) -> np.ndarray:
     return out
 
 
-def obstacle_footprints(collection, depsgraph=None) -> list:
+def obstacle_footprints(collection, depsgraph=None, exclude=()) -> list:
     """Ground footprints of the collection's objects: convex hulls (k, 2) of their world bounding
-    boxes projected to z = 0, one per object (its name kept for reports)."""
+    boxes projected to z = 0, one per object (its name kept for reports).  Objects in ``exclude``
+    (the planning figure's own) and every figure's foot track are skipped."""
     if collection is None:
         return []
     out = []
     for obj in collection.all_objects:
-        if obj.type in {"EMPTY", "CAMERA", "LIGHT", "ARMATURE"}:
+        if obj.type in {"EMPTY", "CAMERA", "LIGHT", "ARMATURE"} or obj in exclude:
+            continue
+        if obj.get(FOOT_TRACK_OWNER) is not None:        # a drawn guide, not a thing in the way
             continue
         ev = obj.evaluated_get(depsgraph) if depsgraph is not None else obj
         bb = np.array([tuple(c) for c in ev.bound_box], float)
