@@ -26,6 +26,8 @@ OWNER = "turning_figure"
 #: renamed action is still found and keeps a user while it is stashed; older files hold its name).
 STASHED = "turning_stashed_action"
 STASH_TRACK = "Turning: user action"
+#: ID property on the armature object: its transform and pose before the bake, for Clear Bake.
+REST = "turning_rest"
 PROP_GROUP = "Turning state"
 #: Parameter F-curves (``Object.turning.*``) the user keys; a bake copies them, never drops them.
 PARAM_PREFIX = "turning."
@@ -174,6 +176,32 @@ def _stash(obj, current):
     obj[STASHED + "_slot"] = compat.slot_identifier(obj) or ""
 
 
+def _record_rest(obj) -> None:
+    """Remember the transform and pose the bake is about to override (Clear Bake restores them
+    bit for bit: recomputing them from the Start settings would not be exact)."""
+    obj[REST] = {
+        "mode": obj.rotation_mode, "location": tuple(obj.location),
+        "rotation_euler": tuple(obj.rotation_euler),
+        "bones": {pb.name: {"mode": pb.rotation_mode, "location": tuple(pb.location),
+                            "rotation_quaternion": tuple(pb.rotation_quaternion),
+                            "rotation_euler": tuple(pb.rotation_euler)}
+                  for pb in obj.pose.bones}}
+
+
+def _restore_rest(obj) -> None:
+    rest = obj[REST].to_dict()
+    del obj[REST]
+    obj.rotation_mode = rest["mode"]
+    obj.location, obj.rotation_euler = rest["location"], rest["rotation_euler"]
+    for name, b in rest["bones"].items():
+        pb = obj.pose.bones.get(name)
+        if pb is not None:
+            pb.rotation_mode = b["mode"]
+            pb.location = b["location"]
+            pb.rotation_quaternion = b["rotation_quaternion"]
+            pb.rotation_euler = b["rotation_euler"]
+
+
 def _figure_action(obj):
     """The figure's own action and strip (see :func:`find_bake`); made and assigned when there is
     none.  A user's action is stashed, not touched."""
@@ -188,6 +216,7 @@ def _figure_action(obj):
         params = [fc for fc in (bag.fcurves if bag else ())
                   if fc.data_path.startswith(PARAM_PREFIX)]
         _stash(obj, current)
+    _record_rest(obj)
     for old in [a for a in bpy.data.actions if a.get(OWNER) == obj and a.users == 0]:
         bpy.data.actions.remove(old)          # an earlier bake the user unassigned: unused, ours
     action = compat.assign_new_action(obj, obj.name)
@@ -230,6 +259,7 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
     pushed it down onto an NLA strip); see the module doc."""
     check_track(obj, track)
     chans = _channel_list(obj, track)
+    action, strip = _figure_action(obj)
     for name, ch in track.bones.items():
         if ch.rotation is not None:
             obj.pose.bones[name].rotation_mode = "QUATERNION"
@@ -237,7 +267,6 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
     for prop, values in track.props.items():
         if prop not in obj.keys():
             obj[prop] = float(values[0])
-    action, strip = _figure_action(obj)
     bag = _bag(obj, action, strip)
     _remove_baked(bag, action)
     count = write_channels(bag, chans, np.asarray(track.frames, float))
@@ -323,4 +352,6 @@ def clear_bake(obj) -> bool:
             del obj[STASHED + "_slot"]
     for prop in [p for p in obj.keys() if p.startswith("turn_")]:
         del obj[prop]
+    if REST in obj:
+        _restore_rest(obj)
     return True

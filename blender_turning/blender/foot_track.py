@@ -92,6 +92,14 @@ def remove_foot_track(fig_obj) -> None:
     if obj is None:
         return
     curve = obj.data
+    mats = [m for m in curve.materials if m is not None] if curve is not None else []
     bpy.data.objects.remove(obj)
     if curve is not None and curve.users == 0:
         bpy.data.curves.remove(curve)
+    for mat in mats:                      # what the first track made goes with the last one
+        if mat.name == MATERIAL and mat.users == 0:
+            bpy.data.materials.remove(mat)
+    skipped = bpy.data.collections.get(GLTF_SKIPPED)
+    if (skipped is not None and len(skipped.all_objects) == 0 and skipped.use_fake_user
+            and skipped.users == 1):            # ours: only the fake user holds it
+        bpy.data.collections.remove(skipped)

@@ -83,9 +83,11 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
 
     def execute(self, context):
         fig = context_figure(context)
+        recorded = bake.REST in fig           # the pose before the bake, put back exactly
         bake.clear_bake(fig)
         foot_track.remove_foot_track(fig)
-        reset_pose(fig)
+        if not recorded:                      # baked before the pose was recorded
+            reset_pose(fig)
         self.report({"INFO"}, f"Cleared the bake of {fig.name}")
         return {"FINISHED"}
 

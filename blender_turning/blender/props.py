@@ -21,9 +21,9 @@ SPORTS = (
 _STATIC = set()            # options: not animatable (the bake reads these once)
 
 
-def _foot_track():
-    from . import foot_track          # imported when used: foot_track is a sibling, not a base
-    return foot_track
+def _show_foot_track(settings, context):
+    from .foot_track import update_visibility   # a sibling module, imported when used
+    update_visibility(settings, context)
 
 
 def _is_curve(self, obj):
@@ -87,7 +87,7 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
     foot_track: PointerProperty(name="Foot Track", type=bpy.types.Object, options=_STATIC,
                                 description="Curve object drawn along the foot's path")
     show_foot_track: BoolProperty(name="Show Foot Track", default=True, options=_STATIC,
-                                  update=lambda s, c: _foot_track().update_visibility(s, c),
+                                  update=_show_foot_track,
                                   description="Draw the foot's path in the viewport (a guide: it "
                                               "never renders and is not exported to glTF)")
 

@@ -48,7 +48,7 @@ class FrameRange:
 
 def _describe(prop, value) -> str:
     """``Turn Period (turning.period) = nan``, angles in degrees."""
-    angle = prop.subtype == "ANGLE"
+    angle = prop.unit == "ROTATION"
     vals = [math.degrees(v) if angle else v for v in (value if prop.is_array else [value])]
     shown = ", ".join(f"{v:g}" for v in vals)
     shown = f"({shown})" if prop.is_array else shown + (" deg" if angle else "")
@@ -57,11 +57,11 @@ def _describe(prop, value) -> str:
 
 def _allowed(prop) -> str:
     lo, hi = prop.hard_min, prop.hard_max
-    if prop.subtype == "ANGLE":
+    if prop.unit == "ROTATION":
         lo, hi = math.degrees(lo), math.degrees(hi)
     if max(abs(lo), abs(hi)) > 1e30:
         return "type a number"
-    return f"type a number from {lo:g} to {hi:g}" + (" deg" if prop.subtype == "ANGLE" else "")
+    return f"type a number from {lo:g} to {hi:g}" + (" deg" if prop.unit == "ROTATION" else "")
 
 
 def check_finite_settings(settings) -> None:
