@@ -65,6 +65,8 @@ def test_lost_bone_every_operator_refuses_and_changes_nothing(scene):
         with pytest.raises(RuntimeError, match=r"no bone 'shin\.R'.*Add Figure > Skier"):
             op()
         assert_unchanged(before)
+    with pytest.raises(ValueError, match="no bone 'shin.R'"):     # before the planner runs
+        ops_path.prepare(bpy.context, obj)
 
 
 def test_lost_bone_after_bake_clear_still_works(scene):
@@ -437,3 +439,43 @@ def test_foot_track_never_renders_nor_exports_to_gltf(scene, tmp_path):
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
     assert "glTF_not_exported" not in bpy.data.collections
     assert np.all([m.name != "Turning Foot Track" for m in bpy.data.materials])
+
+
+def test_nla_tweak_mode_is_refused_by_poll(scene):
+    obj = add("SKIER")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    push_down(obj)
+    obj.animation_data.use_tweak_mode = True          # editing the pushed-down bake's strip
+    before = snapshot()
+    for op in (bpy.ops.turning.bake_turns, bpy.ops.turning.clear_bake):
+        with pytest.raises(RuntimeError, match="NLA is in tweak mode"):
+            op()
+    assert_unchanged(before)
+    obj.animation_data.use_tweak_mode = False
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}
+
+
+def test_linked_figure_is_refused_by_poll(scene, tmp_path):
+    add("SKIER")
+    lib = str(tmp_path / "lib.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=lib)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    with bpy.data.libraries.load(lib, link=True) as (_, dst):
+        dst.objects = ["Skier"]
+    obj = dst.objects[0]
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="linked from another file: make it local"):
+        bpy.ops.turning.bake_turns()
+    assert_unchanged(before)
+
+
+def test_a_frame_range_too_long_to_bake_is_refused(scene):
+    from blender_turning.blender.scene_adapters import MAX_FRAMES
+    add("SKIER")
+    scene.frame_end = scene.frame_start + MAX_FRAMES          # one frame too many
+    before = snapshot()
+    with pytest.raises(RuntimeError, match=f"{MAX_FRAMES + 1} frames; a bake covers at most"):
+        bpy.ops.turning.bake_turns()
+    assert_unchanged(before)

@@ -24,8 +24,19 @@ def poll_figure(cls, context) -> bool:
     if context.mode != "OBJECT":
         cls.poll_message_set("Switch to Object Mode first")
         return False
-    if context_figure(context) is None:
+    fig = context_figure(context)
+    if fig is None:
         cls.poll_message_set("No figure selected: add one with Add Figure, or select one")
+        return False
+    if not fig.is_editable:
+        # Python may still write to linked data; the keys would be lost on save, silently.
+        cls.poll_message_set(f"{fig.name} is linked from another file: make it local "
+                             "(Object > Relations > Make Local) or a library override first")
+        return False
+    adt = fig.animation_data
+    if adt is not None and adt.use_tweak_mode:
+        cls.poll_message_set(f"{fig.name}'s NLA is in tweak mode: leave it first (Tab in the "
+                             "NLA editor)")
         return False
     return True
 

@@ -151,7 +151,8 @@ class TURNING_OT_follow_path(bpy.types.Operator):
             wm.event_timer_remove(self._timer)
             self._timer = None
         wm.progress_end()
-        context.workspace.status_text_set(None)
+        if context.workspace is not None:       # None while a file is being opened
+            context.workspace.status_text_set(None)
 
     def cancel(self, context):
         """Blender ends the operator without an event (a file is opened, or Blender quits): stop

@@ -19,6 +19,12 @@ class SceneInputError(ValueError):
     """A setting, path or obstacle object that cannot be used (names it)."""
 
 
+#: Most frames one bake covers.  A skier's bake keeps about 17 kB of keys per frame and computes
+#: for about 0.3 ms per frame (measured: 24,000 frames, 400 MB, 7 s); Blender allows ranges up
+#: to 1,048,574 frames, which would need some 17 GB.  72,000 is 50 min at 24 fps (1.2 GB).
+MAX_FRAMES = 72_000
+
+
 @dataclass(frozen=True)
 class FrameRange:
     """The frames a bake covers: ``start..end`` inclusive at ``fps`` frames per second."""
@@ -30,6 +36,10 @@ class FrameRange:
     def __post_init__(self):
         if self.end <= self.start:
             raise ValueError(f"frame range {self.start}..{self.end} needs at least two frames")
+        if self.end - self.start + 1 > MAX_FRAMES:
+            raise ValueError(f"frame range {self.start}..{self.end} has "
+                             f"{self.end - self.start + 1} frames; a bake covers at most "
+                             f"{MAX_FRAMES}: shorten the range or bake it in parts")
         if not self.fps > 0:
             raise ValueError(f"fps = {self.fps!r} must be positive")
 
