@@ -436,6 +436,22 @@ def test_foot_track_never_renders_nor_exports_to_gltf(scene, tmp_path):
     with open(out) as fh:
         nodes = [n.get("name") for n in json.load(fh)["nodes"]]
     assert obj.name in nodes and track.name not in nodes
+    # FBX has no per-object exclusion: what the README tells the user to do instead.
+    addon_utils.enable("io_scene_fbx")
+    fbx = str(tmp_path / "figure.fbx")
+    name = track.name.encode()
+    assert bpy.ops.export_scene.fbx(filepath=fbx) == {"FINISHED"}
+    with open(fbx, "rb") as fh:
+        assert name in fh.read()                       # by default it goes out
+    obj.turning.show_foot_track = False
+    assert bpy.ops.export_scene.fbx(filepath=fbx, use_visible=True) == {"FINISHED"}
+    with open(fbx, "rb") as fh:
+        data = fh.read()
+    assert name not in data and obj.name.encode() in data
+    assert bpy.ops.export_scene.fbx(filepath=fbx, object_types={"ARMATURE", "MESH"}) == \
+        {"FINISHED"}
+    with open(fbx, "rb") as fh:
+        assert name not in fh.read()
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
     assert "glTF_not_exported" not in bpy.data.collections
     assert np.all([m.name != "Turning Foot Track" for m in bpy.data.materials])
