@@ -115,15 +115,20 @@ def nla_strip_new(track, name: str, frame: int, action):
     return strip
 
 
+def slot_named(action, identifier: str | None):
+    """The slot of ``action`` with ``identifier`` (``None`` before 4.4 or when there is none)."""
+    if not SLOTTED_ACTIONS or not identifier:
+        return None
+    return next((slot for slot in action.slots if slot.identifier == identifier), None)
+
+
 def restore_action(id_data, action, slot_name: str | None = None):
     """Assign ``action`` back to ``id_data`` (on 4.4+ with the slot named ``slot_name``)."""
     adt = id_data.animation_data or id_data.animation_data_create()
     adt.action = action
-    if SLOTTED_ACTIONS and action is not None and slot_name:
-        for slot in action.slots:
-            if slot.identifier == slot_name:
-                adt.action_slot = slot
-                break
+    slot = slot_named(action, slot_name) if action is not None else None
+    if slot is not None:
+        adt.action_slot = slot
 
 
 def slot_identifier(id_data) -> str | None:
