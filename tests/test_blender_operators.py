@@ -224,7 +224,8 @@ def test_infeasible_plan_is_reported_and_scene_unchanged(scene):
     obj.turning.obstacles = walls
     bpy.context.view_layer.objects.active = obj
     before = snapshot()
-    with pytest.raises(RuntimeError, match=r"no feasible plan at t = [\d.]+ s, position"):
+    with pytest.raises(RuntimeError, match=r"no feasible plan at t = [\d.]+ s, position.*"
+                                           r"\(nearest obstacle: 'Wall', [\d.]+ m away\)"):
         bpy.ops.turning.follow_path()
     assert snapshot() == before
 

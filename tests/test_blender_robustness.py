@@ -495,3 +495,26 @@ def test_a_frame_range_too_long_to_bake_is_refused(scene):
     with pytest.raises(RuntimeError, match=f"{MAX_FRAMES + 1} frames; a bake covers at most"):
         bpy.ops.turning.bake_turns()
     assert_unchanged(before)
+
+
+def test_nan_in_a_path_or_an_obstacle_is_named(scene):
+    obj = add("SKIER")
+    path = make_path([(0, 0), (0, -20)])
+    obj.turning.path = path
+    rocks = bpy.data.collections.new("Rocks")
+    scene.collection.children.link(rocks)
+    rock = make_wall("Rock", (5.0, -10.0), (1.0, 1.0))
+    rocks.objects.link(rock)
+    obj.turning.obstacles = rocks
+    bpy.context.view_layer.objects.active = obj
+    rock.location.x = float("nan")
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="obstacle 'Rock' \\(collection 'Rocks'\\) has a"):
+        bpy.ops.turning.follow_path()
+    assert_unchanged(before)
+    rock.location.x = 5.0
+    path.data.splines[0].bezier_points[1].co.x = float("nan")
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="path 'Path' has a point or handle .* not a finite"):
+        bpy.ops.turning.follow_path()
+    assert_unchanged(before)

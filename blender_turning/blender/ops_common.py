@@ -74,7 +74,7 @@ def check_figure(obj) -> None:
             f"Add Figure > {sport_label(sport)}")
 
 
-def report_error(op, title: str, fig_name: str, exc: BaseException) -> set:
+def report_error(op, title: str, fig_name: str, exc: BaseException, note: str = "") -> set:
     """Report ``exc`` as one line and cancel.  Bad input (``ValueError``, the core's errors) says
     what is wrong; anything else is a bug: its traceback goes to the console, the report says so.
     Callers report only before they write, so either way the scene is unchanged."""
@@ -84,5 +84,5 @@ def report_error(op, title: str, fig_name: str, exc: BaseException) -> set:
         traceback.print_exception(type(exc), exc, exc.__traceback__)
         msg = (f"internal error ({type(exc).__name__}: {exc}); nothing was changed. Please "
                "report it with the traceback from the system console")
-    op.report({"ERROR"}, f"{title}: {fig_name}: {msg}")
+    op.report({"ERROR"}, f"{title}: {fig_name}: {msg}{note}")
     return {"CANCELLED"}

@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import bpy
 
+from ..core.errors import PlanInfeasible
 from ..core.obstacles import Obstacles
 from . import bake
 from .follow_job import Cancelled, FollowJob
@@ -57,7 +58,18 @@ def prepare(context, fig) -> FollowJob:
     figure = figure_from_settings(s)
     if s.plan_curvature_rate > 0:
         figure = replace(figure, limits=replace(figure.limits, dC_f_max=s.plan_curvature_rate))
-    return FollowJob(figure, control, footprints, clearance=CLEARANCE)
+    job = FollowJob(figure, control, footprints, clearance=CLEARANCE)
+    job.footprints = footprints                        # names, for the report of a failed plan
+    return job
+
+
+def nearest_obstacle(exc, footprints) -> str:
+    """`` (nearest obstacle: 'Wall', 0.4 m away)`` for a plan that failed, or ``''``."""
+    if not isinstance(exc, PlanInfeasible) or not footprints:
+        return ""
+    gaps = [float(Obstacles(polygons=[p]).min_distance(exc.position)[0]) for _, p in footprints]
+    k = min(range(len(gaps)), key=gaps.__getitem__)
+    return f" (nearest obstacle: {footprints[k][0]!r}, {max(gaps[k], 0.0):.1f} m away)"
 
 
 def finish(context, fig, job, result):
@@ -108,7 +120,8 @@ class TURNING_OT_follow_path(bpy.types.Operator):
             if isinstance(job.error, Cancelled):
                 self.report({"WARNING"}, "Follow Path cancelled; the scene is unchanged")
                 return {"CANCELLED"}
-            return report_error(self, "Follow Path", fig.name, job.error)
+            note = nearest_obstacle(job.error, getattr(job, "footprints", ()))
+            return report_error(self, "Follow Path", fig.name, job.error, note)
         try:
             frames = finish(context, fig, job, job.result)
         except Exception as exc:

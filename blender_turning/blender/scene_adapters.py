@@ -223,6 +223,10 @@ def bezier_control_points(curve_obj) -> np.ndarray:
         for a, b in zip(p[:-1], p[1:]):
             ctrl += [a + (b - a) / 3, a + 2 * (b - a) / 3, b]
         out = np.array(ctrl)
+    bad = np.flatnonzero(~np.all(np.isfinite(out), axis=1))
+    if bad.size:
+        raise SceneInputError(f"path {curve_obj.name!r} has a point or handle (control point "
+                              f"{bad[0]}) that is not a finite number: fix it in Edit Mode")
     seg = np.linalg.norm(np.diff(out[::3], axis=0), axis=1)
     if np.any(seg < 1e-6):
         raise SceneInputError(f"path {curve_obj.name!r} has two points in the same place")
@@ -245,6 +249,9 @@ def obstacle_footprints(collection, depsgraph=None, exclude=()) -> list:
         bb = np.array([tuple(c) for c in ev.bound_box], float)
         mw = np.array(ev.matrix_world)
         pts = (bb @ mw[:3, :3].T + mw[:3, 3])[:, :2]
+        if not np.all(np.isfinite(pts)):
+            raise SceneInputError(f"obstacle {obj.name!r} (collection {collection.name!r}) has a "
+                                  "location, rotation, scale or size that is not a finite number")
         hull = convex_hull(pts)
         if len(hull) >= 3:
             out.append((obj.name, hull))
