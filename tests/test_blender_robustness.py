@@ -518,3 +518,18 @@ def test_nan_in_a_path_or_an_obstacle_is_named(scene):
     with pytest.raises(RuntimeError, match="path 'Path' has a point or handle .* not a finite"):
         bpy.ops.turning.follow_path()
     assert_unchanged(before)
+
+
+def test_foot_track_of_an_older_file_without_owner(scene):
+    """Tracks drawn before owners were recorded: the figure's own unless a duplicate shares it."""
+    from blender_turning.blender import foot_track
+    orig = add("SKIER")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    track = orig.turning.foot_track
+    del track[foot_track.OWNER]
+    orig.name = "Renamed"                              # its track keeps the old name
+    assert foot_track.owned_track(orig) == track
+    copy = duplicate(orig)
+    assert foot_track.owned_track(copy) is None and foot_track.owned_track(orig) is None
+    copy.name, orig.name = "Other", "Skier"
+    assert foot_track.owned_track(orig) == track and foot_track.owned_track(copy) is None

@@ -27,8 +27,13 @@ def owned_track(fig_obj):
     if obj is None:
         return None
     owner = obj.get(OWNER)
-    if owner is None:                     # drawn before owners were recorded: go by its name
-        return obj if obj.name.startswith(f"{fig_obj.name} Foot Track") else None
+    if owner is None:
+        # Drawn before owners were recorded: the figure's own unless another figure points at it
+        # too (a duplicate), and then the one it is named after.
+        shared = any(o != fig_obj and o.type == "ARMATURE" and o.turning.foot_track == obj
+                     for o in bpy.data.objects)
+        named = obj.name.startswith(f"{fig_obj.name} Foot Track")
+        return obj if named or not shared else None
     return obj if owner == fig_obj else None
 
 
