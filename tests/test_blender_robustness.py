@@ -330,6 +330,13 @@ def test_own_collection_as_obstacles_skips_the_figure_and_its_path(scene):
     names = [n for n, _ in obstacle_footprints(course, bpy.context.evaluated_depsgraph_get(),
                                                exclude=ops_path.own_objects(obj))]
     assert names == ["Cone"]
+    other = add("CYCLIST", at=(30, 0, 0))                  # another figure's path: a guide too
+    other.turning.path = make_path([(30, 0), (30, -40)], name="Other Path")
+    course.objects.link(other.turning.path)
+    bpy.context.view_layer.objects.active = obj
+    names = [n for n, _ in obstacle_footprints(course, bpy.context.evaluated_depsgraph_get(),
+                                               exclude=ops_path.own_objects(obj))]
+    assert sorted(names) == ["Cone", "Cyclist Body"]       # another figure is in the way
     bpy.ops.turning.clear_bake()
     assert bpy.ops.turning.follow_path() == {"FINISHED"}
 
@@ -533,3 +540,22 @@ def test_foot_track_of_an_older_file_without_owner(scene):
     assert foot_track.owned_track(copy) is None and foot_track.owned_track(orig) is None
     copy.name, orig.name = "Other", "Skier"
     assert foot_track.owned_track(orig) == track and foot_track.owned_track(copy) is None
+
+
+def test_path_that_is_not_one_curve_is_refused(scene):
+    obj = add("SKIER")
+    path = make_path([(0, 0), (0, -20)])
+    sp = path.data.splines.new("POLY")
+    sp.points.add(1)
+    sp.points[1].co = (5, -5, 0, 1)
+    obj.turning.path = path
+    bpy.context.view_layer.objects.active = obj
+    before = snapshot()
+    with pytest.raises(RuntimeError, match="'Path' has 2 splines; Follow Path follows one"):
+        bpy.ops.turning.follow_path()
+    assert_unchanged(before)
+    mesh = make_wall("Mesh Path", (0, 0), (1, 1))
+    bpy.context.scene.collection.objects.link(mesh)
+    from blender_turning.blender.scene_adapters import SceneInputError, bezier_control_points
+    with pytest.raises(SceneInputError, match="'Mesh Path' is a mesh object, not a curve"):
+        bezier_control_points(mesh)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import bpy
 import numpy as np
 
 from ..core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
@@ -180,11 +181,17 @@ def bezier_control_points(curve_obj) -> np.ndarray:
     """World-space ground control points ``(3 k + 1, 2)`` of a Bezier curve object's first spline:
     ``P0, P1, P2, P3, P4, ...`` (each cubic segment ``P3i .. P3i+3``); a poly or NURBS spline
     gives its points as a polyline (handles on the chords)."""
-    if curve_obj is None or curve_obj.type != "CURVE":
-        raise SceneInputError("the path must be a curve object")
+    if curve_obj is None:
+        raise SceneInputError("no path curve set (Follow Path > Path)")
+    if curve_obj.type != "CURVE":
+        raise SceneInputError(f"path {curve_obj.name!r} is a {curve_obj.type.lower()} object, not "
+                              "a curve: pick a Bezier curve as Path")
     splines = curve_obj.data.splines
     if len(splines) == 0:
         raise SceneInputError(f"path {curve_obj.name!r} has no spline")
+    if len(splines) > 1:
+        raise SceneInputError(f"path {curve_obj.name!r} has {len(splines)} splines; Follow Path "
+                              "follows one: separate them (Edit Mode, Curve > Separate)")
     sp = splines[0]
     if sp.use_cyclic_u:
         # The planner ends a run when the foot crosses the line through the path's end; on a loop
@@ -236,14 +243,15 @@ def bezier_control_points(curve_obj) -> np.ndarray:
 def obstacle_footprints(collection, depsgraph=None, exclude=()) -> list:
     """Ground footprints of the collection's objects: convex hulls (k, 2) of their world bounding
     boxes projected to z = 0, one per object (its name kept for reports).  Objects in ``exclude``
-    (the planning figure's own) and every figure's foot track are skipped."""
+    (the planning figure's own) and every figure's foot track and path (guides) are skipped."""
     if collection is None:
         return []
+    paths = {o.turning.path for o in bpy.data.objects if o.type == "ARMATURE"} - {None}
     out = []
     for obj in collection.all_objects:
         if obj.type in {"EMPTY", "CAMERA", "LIGHT", "ARMATURE"} or obj in exclude:
             continue
-        if obj.get(FOOT_TRACK_OWNER) is not None:        # a drawn guide, not a thing in the way
+        if obj.get(FOOT_TRACK_OWNER) is not None or obj in paths:   # guides, not things
             continue
         ev = obj.evaluated_get(depsgraph) if depsgraph is not None else obj
         bb = np.array([tuple(c) for c in ev.bound_box], float)
