@@ -559,3 +559,19 @@ def test_path_that_is_not_one_curve_is_refused(scene):
     from blender_turning.blender.scene_adapters import SceneInputError, bezier_control_points
     with pytest.raises(SceneInputError, match="'Mesh Path' is a mesh object, not a curve"):
         bezier_control_points(mesh)
+
+
+def test_keys_set_on_a_bake_without_a_user_action_stay_as_the_users(scene):
+    obj = add("SKIER")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    obj.keyframe_insert("turning.period", frame=1)      # the user's first key, in the bake's action
+    action = obj.animation_data.action
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}
+    assert obj.animation_data.action == action and bake.figure_action(obj) is None
+    assert [fc.data_path for fc in compat.channels(obj).fcurves] == ["turning.period"]
+    with pytest.raises(RuntimeError, match="no baked turns"):
+        bpy.ops.turning.clear_bake()
+    before = settled()
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}
+    assert settled() == before, diff(before, snapshot())

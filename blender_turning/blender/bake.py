@@ -212,8 +212,8 @@ def clear_bake(obj) -> bool:
     user set while baked), and the transform and pose the first bake overrode.  ``False`` if
     nothing was baked.
 
-    The figure's action is deleted unless it holds keys of the user's and there is no user action
-    to give them back to.
+    The figure's action is deleted, unless it holds keys of the user's and there is no user action
+    to give them back to: then it stays, as the user's (no longer tagged as a bake).
     """
     action, strip = find_bake(obj)
     if action is None:
@@ -230,6 +230,9 @@ def clear_bake(obj) -> bool:
         else:
             obj.animation_data.action = None
         bpy.data.actions.remove(action)
+    else:                                 # only the user's keys are left: it is their action now
+        for key in (BAKED_PATHS, OWNER):
+            del action[key]
     if STASHED in obj:
         user_action.unstash(obj, user)
     for prop in [p for p in obj.keys() if p.startswith("turn_")]:
