@@ -239,4 +239,7 @@ def clear_bake(obj) -> bool:
         del obj[prop]
     if REST in obj:
         user_action.restore_rest(obj)
+    adt = obj.animation_data
+    if adt.action is None and len(adt.nla_tracks) == 0 and len(adt.drivers) == 0:
+        obj.animation_data_clear()        # the bake made it; nothing of the user's is in it
     return True
