@@ -20,9 +20,9 @@ class SceneInputError(ValueError):
     """A setting, path or obstacle object that cannot be used (names it)."""
 
 
-#: Most frames one bake covers.  A skier's bake keeps about 17 kB of keys per frame and computes
-#: for about 0.3 ms per frame (measured: 24,000 frames, 400 MB, 7 s); Blender allows ranges up
-#: to 1,048,574 frames, which would need some 17 GB.  72,000 is 50 min at 24 fps (1.2 GB).
+#: Most frames one bake covers.  A skier's bake peaks at about 17.5 kB per frame and computes for
+#: 0.1-0.3 ms per frame (scripts/bench_bake_size.py, BENCHMARKS.md); Blender allows ranges of up
+#: to 1,048,574 frames, which would need some 18 GB.  72,000 is 50 min at 24 fps (about 1.3 GB).
 MAX_FRAMES = 72_000
 
 
