@@ -573,3 +573,25 @@ def test_keys_set_on_a_bake_without_a_user_action_stay_as_the_users(scene):
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
     assert settled() == before, diff(before, snapshot())
+
+
+def test_a_bake_cut_short_is_cleaned_up_by_the_next(scene, monkeypatch):
+    obj = add("SKIER")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    clean = snapshot()[("action", "Skier")]["fcurves"]
+    calls = []
+    real = compat.new_fcurve
+
+    def failing(*args):
+        calls.append(1)
+        if len(calls) > 10:
+            raise RuntimeError("injected")
+        return real(*args)
+    monkeypatch.setattr(compat, "new_fcurve", failing)
+    with pytest.raises(RuntimeError, match="injected"):
+        bpy.ops.turning.bake_turns()                     # ten curves written, then the failure
+    monkeypatch.setattr(compat, "new_fcurve", real)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert snapshot()[("action", "Skier")]["fcurves"] == clean
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}
+    assert bake.figure_action(obj) is None and not bpy.data.actions

@@ -177,8 +177,10 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
             obj[prop] = float(values[0])
     bag = _bag(obj, action, strip)
     _remove_baked(bag, action)
-    count = write_channels(bag, chans, np.asarray(track.frames, float))
+    # Tagged before writing: curves of a bake cut short (an exception, a crash) are still known as
+    # the bake's, so the next bake or Clear Bake removes them instead of colliding with them.
     action[BAKED_PATHS] = "\n".join(sorted({c[0] for c in chans}))
+    count = write_channels(bag, chans, np.asarray(track.frames, float))
     if strip is not None:
         _fit_strip(strip, action)
     return BakeResult(action, count, len(track))
