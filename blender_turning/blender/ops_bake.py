@@ -16,7 +16,7 @@ from bpy.props import EnumProperty, IntProperty
 from ..core.errors import TurningError
 from ..mapping.base import BoneChannels, PoseTrack
 from . import bake, compat, foot_track
-from .ops_common import context_figure, poll_figure, selected_figures
+from .ops_common import check_figure, context_figure, poll_figure, report_error, selected_figures
 from .pipeline import figure_pose_track
 from .scene_adapters import FrameRange, start_from_object
 
@@ -139,9 +139,11 @@ class BakeJob:
         fig = bpy.data.objects.get(name)
         if fig is None:
             raise ValueError("the figure was deleted while baking")
+        check_figure(fig)
         # Not baked yet: start where the user put the figure; baked: from its Start settings.
         start = start_from_object(fig) if bake.figure_action(fig) is None else None
         traj, track = figure_pose_track(fig, self.frames, start=start)
+        bake.check_track(fig, track)
         self.results.append((name, start, traj, track))
 
     def write(self) -> list:
@@ -218,12 +220,11 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         job = self._prepare(context)
         if job is None:
             return {"CANCELLED"}
-        try:
+        try:                              # everything that can fail, before anything is written
             while not job.done:
                 job.compute_next()
-        except (ValueError, TurningError) as exc:
-            self.report({"ERROR"}, f"Bake Turns: {job.current}: {exc}")
-            return {"CANCELLED"}
+        except Exception as exc:
+            return report_error(self, "Bake Turns", job.current, exc)
         return self._finish(job)
 
     def invoke(self, context, event):
@@ -250,7 +251,12 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
             wm.event_timer_remove(self._timer)
             self._timer = None
         wm.progress_end()
-        context.workspace.status_text_set(None)
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+    def cancel(self, context):
+        """Blender ends the operator (a file opened, Blender quits): stop, write nothing."""
+        self._cleanup(context)
 
     def modal(self, context, event):
         if event.type == "ESC":
@@ -262,10 +268,9 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         job = self._job
         try:
             job.compute_next()
-        except (ValueError, TurningError) as exc:
+        except Exception as exc:
             self._cleanup(context)
-            self.report({"ERROR"}, f"Bake Turns: {job.current}: {exc}")
-            return {"CANCELLED"}
+            return report_error(self, "Bake Turns", job.current, exc)
         context.window_manager.progress_update(len(job.results))
         if not job.done:
             self._status(context)
@@ -294,9 +299,11 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
     def execute(self, context):
         figs = [f for f in selected_figures(context) if bake.figure_action(f) is not None]
         for fig in figs:
+            recorded = bake.REST in fig       # the pose before the bake, put back exactly
             bake.clear_bake(fig)
             foot_track.remove_foot_track(fig)
-            reset_pose(fig)
+            if not recorded:                  # baked before the pose was recorded
+                reset_pose(fig)
         self.report({"INFO"}, f"Cleared the bake of {', '.join(f.name for f in figs)}")
         return {"FINISHED"}
 

@@ -92,7 +92,9 @@ class VIEW3D_PT_turning_bake(FigurePanel, bpy.types.Panel):
                      text="Bake Turns" if count < 2 else f"Bake {count} Figures")
         row.operator_menu_enum("turning.bake_turns", "frame_range", text="", icon="PREVIEW_RANGE")
         row.operator("turning.clear_bake", text="", icon="TRASH")
-        action = bake.figure_action(context_figure(context))
+        fig = context_figure(context)
+        layout.prop(fig.turning, "show_foot_track")
+        action = bake.figure_action(fig)
         if action is not None:
             layout.label(text=f"Action: {action.name}", icon="ACTION")
 

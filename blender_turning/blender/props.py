@@ -23,6 +23,11 @@ SPORTS = (
 _STATIC = set()            # options: not animatable (the bake reads these once)
 
 
+def _show_foot_track(settings, context):
+    from .foot_track import update_visibility   # a sibling module, imported when used
+    update_visibility(settings, context)
+
+
 def _is_curve(self, obj):
     return obj.type == "CURVE"
 
@@ -106,6 +111,10 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                     "figure's limit")
     foot_track: PointerProperty(name="Foot Track", type=bpy.types.Object, options=_STATIC,
                                 description="Curve object drawn along the foot's path")
+    show_foot_track: BoolProperty(name="Show Foot Track", default=True, options=_STATIC,
+                                  update=_show_foot_track,
+                                  description="Draw the foot's path in the viewport (a guide: it "
+                                              "never renders and is not exported to glTF)")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.
