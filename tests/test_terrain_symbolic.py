@@ -4,10 +4,9 @@ import math
 
 import numpy as np
 import pytest
+import sympy as sp                     # a pinned test-only dependency (requirements.txt)
 
 from blender_turning.core.terrain import HeightField, Plane, surface_frame
-
-sp = pytest.importorskip("sympy")
 
 
 def _num(expr, subs):
