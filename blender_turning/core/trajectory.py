@@ -11,13 +11,11 @@ import csv
 import io
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
+from .files import atomic_write_text
 from .phase import TWO_PI
 
 COLUMNS = ("t", "x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f", "F_leg", "phi",
@@ -104,7 +102,7 @@ class Trajectory:
         w.writerow(COLUMNS)
         for row in self.data.T:
             w.writerow([repr(float(v)) for v in row])
-        _atomic_write(path, buf.getvalue())
+        atomic_write_text(path, buf.getvalue())
 
     @classmethod
     def from_csv(cls, path) -> "Trajectory":
@@ -121,7 +119,7 @@ class Trajectory:
     def to_json(self, path) -> None:
         doc = {"columns": list(COLUMNS), "meta": self.meta,
                "data": {c: self.data[i].tolist() for i, c in enumerate(COLUMNS)}}
-        _atomic_write(path, json.dumps(doc))
+        atomic_write_text(path, json.dumps(doc))
 
     @classmethod
     def from_json(cls, path) -> "Trajectory":
@@ -138,16 +136,3 @@ def _hermite(t, y, dy, tn):
     u2, u3 = u * u, u * u * u
     return ((2 * u3 - 3 * u2 + 1) * y[i] + (u3 - 2 * u2 + u) * h * dy[i]
             + (-2 * u3 + 3 * u2) * y[i + 1] + (u3 - u2) * h * dy[i + 1])
-
-
-def _atomic_write(path, text: str) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=".tmp-",
-                               suffix=path.suffix)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
