@@ -49,9 +49,8 @@ class Range:
     def __str__(self) -> str:
         text = (f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}"
                 f"{')' if self.hi_open else ']'}")
-        if self.integer:
-            text = f"a whole number in {text}"
-        return f"{text} {self.unit}".rstrip()
+        text = f"{text} {self.unit}".rstrip()
+        return f"{text} (whole numbers)" if self.integer else text
 
 
 def _round(v: float) -> float:
@@ -117,6 +116,19 @@ RANGES: dict[str, Range] = {
     "clearance": Range(0.0, 100.0, "m", "the distance the track keeps from obstacles"),
     "run_out": Range(0.0, 1e4, "m", "the straight added after the path's end"),
     "samples_per_segment": Range(1, 1000, "", "path samples per spline segment", integer=True),
+    # -- the headless render job (scripts/render_job.py) -----------------------------------------
+    "job_seconds": Range(0.0, 600.0, "s", "ten minutes of animation a job", lo_open=True),
+    "job_fps": Range(1, 240, "1/s", "Blender's frame rates", integer=True),
+    "frame_step": Range(1, 1000, "", "render every n-th frame", integer=True),
+    "pixels": Range(4, 8192, "px", "Blender renders 4 to 8192 pixels a side", integer=True),
+    "render_samples": Range(1, 4096, "", "EEVEE/Cycles samples a pixel", integer=True),
+    "camera_distance": Range(0.1, 1e4, "m", "how far behind the figures the camera follows"),
+    "camera_height": Range(-1e4, 1e4, "m", "the camera's height above the ground"),
+    "lens": Range(1.0, 5000.0, "mm", "Blender's focal-length range"),
+    "object_size": Range(0.01, 100.0, "m", "an obstacle object's width"),
+    "object_height": Range(0.01, 1000.0, "m", "an obstacle object's height"),
+    "plan_curvature_rate": Range(0.0, 100.0, "1/(m s)", "the planner's dC_f/dt (0: the sport "
+                                 "preset's); as dC_f_max"),
 }
 
 MAX_STEPS = 1_000_000

@@ -112,8 +112,9 @@ def _path(pf: Fields) -> HermitePath:
     # A segment of zero length has no direction (the run-out and the end test need one).
     for i in range(1, len(knots)):
         if np.array_equal(knots[i], knots[i - 1]):
-            pf.fail(kind, f"[{i * step}] = {knots[i].tolist()} is the same point as "
-                          f"path.{kind}[{(i - 1) * step}]; consecutive points must differ")
+            Fields(pf.doc[kind], pf.source, pf.name(kind)).fail(
+                i * step, f"= {knots[i].tolist()} is the same point as path.{kind}"
+                          f"[{(i - 1) * step}]; a path needs distinct consecutive points")
     if kind == "points":
         return HermitePath.from_points(pts, tan)
     if kind == "bezier":

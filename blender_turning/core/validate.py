@@ -111,7 +111,7 @@ class Fields:
                 self.fail(k, f"is not a known field{nearest(k, known)}")
         return self
 
-    def _get(self, key, default):
+    def value(self, key, default=_REQUIRED):
         if key in self.doc:
             return self.doc[key]
         if default is _REQUIRED:
@@ -120,7 +120,7 @@ class Fields:
 
     def table(self, key, known=None, required=False) -> "Fields":
         """The sub-table ``key`` (an empty one when absent and not required)."""
-        v = self._get(key, _REQUIRED if required else {})
+        v = self.value(key, _REQUIRED if required else {})
         if not isinstance(v, dict):
             self.fail(key, f"= {_short(v)} is not a table of fields")
         f = Fields(v, self.source, self.name(key))
@@ -128,7 +128,7 @@ class Fields:
 
     def tables(self, key, known=None) -> list:
         """The list of tables ``key`` (``[[key]]`` in TOML, a list of objects in JSON)."""
-        v = self._get(key, [])
+        v = self.value(key, [])
         if not isinstance(v, list):
             self.fail(key, f"= {_short(v)} is not a list of tables")
         sub = Fields(v, self.source, self.name(key))
@@ -141,19 +141,19 @@ class Fields:
         return out
 
     def number(self, key, rng: Range | str, default=_REQUIRED):
-        v = self._get(key, default)
+        v = self.value(key, default)
         if v is None and default is None:
             return None
         return check(self.name(key), v, rng, self.source)
 
     def boolean(self, key, default=_REQUIRED) -> bool:
-        v = self._get(key, default)
+        v = self.value(key, default)
         if not isinstance(v, bool):
             self.fail(key, f"= {_short(v)} is not true or false")
         return v
 
     def string(self, key, default=_REQUIRED, choices=None):
-        v = self._get(key, default)
+        v = self.value(key, default)
         if v is None and default is None:
             return None
         if not isinstance(v, str):
@@ -164,12 +164,12 @@ class Fields:
 
     def xy(self, key, default=_REQUIRED) -> np.ndarray:
         """An ``[x, y]`` pair of numbers (m) within ``RANGES['coordinate']``."""
-        v = self._get(key, default)
+        v = self.value(key, default)
         return _pair(self.name(key), v, self.source)
 
     def points(self, key, min_rows: int = 1, default=_REQUIRED) -> np.ndarray:
         """A list of ``[x, y]`` pairs, shape ``(n, 2)``, at least ``min_rows`` of them."""
-        v = self._get(key, default)
+        v = self.value(key, default)
         if not isinstance(v, (list, tuple, np.ndarray)):
             self.fail(key, f"= {_short(v)} is not a list of [x, y] pairs")
         if len(v) < min_rows:
@@ -179,7 +179,7 @@ class Fields:
 
     def numbers(self, key, rng: Range | str, default=_REQUIRED) -> list:
         """A non-empty list of numbers, each inside ``rng``."""
-        v = self._get(key, default)
+        v = self.value(key, default)
         if not isinstance(v, list) or not v:
             self.fail(key, f"= {_short(v)} is not a non-empty list of numbers")
         return [check(f"{self.name(key)}[{i}]", x, rng, self.source) for i, x in enumerate(v)]
