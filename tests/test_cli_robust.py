@@ -262,3 +262,9 @@ def test_a_message_reads_the_same_from_a_flag_and_a_file(tmp_path):
     field = one_line_error(run("follow", small_scene(
         tmp_path, figure={"preset": "cyclist", "body": {"m": 0.5}})), "figure.body.m")
     assert flag.split("--mass", 1)[1] == field.split("figure.body.m", 1)[1]
+
+
+def test_a_body_whose_inertia_term_overflows_is_refused():
+    """Each body value in range, together out of what the model handles (Eq. 2's J)."""
+    one_line_error(run("simulate", "--mass", "1", "--inertia", "300"), "I_v = 300",
+                   "m = 1 kg", "J = (I_v + l^2 m) / (m l) = 301 m", "(0, 100] m")

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
+from .ranges import RANGES
 from .validate import check, check_range
 
 __all__ = ["BodyParams", "Limits", "Figure", "PRESETS", "preset", "check_range"]
@@ -35,6 +36,10 @@ class BodyParams:
     def __post_init__(self):
         for name in ("m", "l", "I_v", "V_cm", "g"):
             check(name, getattr(self, name), name)
+        if not RANGES["J"].contains(self.J):
+            raise ValueError(f"I_v = {self.I_v:g} kg m^2 with m = {self.m:g} kg and l = "
+                             f"{self.l:g} m gives J = (I_v + l^2 m) / (m l) = {self.J:.4g} m, "
+                             f"outside the allowed range {RANGES['J']}")
 
     @cached_property
     def J(self) -> float:

@@ -70,6 +70,9 @@ RANGES: dict[str, Range] = {
                  "overflows as it falls (1e5 kg m^2: NaN)"),
     "V_cm": Range(0.5, 60.0, "m/s", "walking pace to a speed skier; near 0 m/s Eq. (1) asks for "
                   "a curvature of order g / V^2 (1e-300 m/s: NaN)"),
+    "J": Range(0.0, 100.0, "m", "the inertia term (I_v + l^2 m) / (m l) of Eqs. (1), (2), (9), "
+               "1.2 m for the presets; near 300 m the half-turns of the heading table overflow",
+               lo_open=True),
     "g": Range(1.0, 30.0, "m/s^2", "the Moon (1.6) to beyond Jupiter (24.8)"),
     # -- the limits (Sections 3, 5.1) ------------------------------------------------------------
     "C_f_max": Range(0.001, 10.0, "1/m", "a 1 km turning radius to a 10 cm one (in the core, "
