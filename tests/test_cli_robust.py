@@ -268,3 +268,17 @@ def test_a_body_whose_inertia_term_overflows_is_refused():
     """Each body value in range, together out of what the model handles (Eq. 2's J)."""
     one_line_error(run("simulate", "--mass", "1", "--inertia", "300"), "I_v = 300",
                    "m = 1 kg", "J = (I_v + l^2 m) / (m l) = 301 m", "(0, 100] m")
+
+
+def test_a_path_too_long_for_a_bounded_run_asks_for_a_duration(tmp_path):
+    scene = small_scene(tmp_path, path={"polyline": [[0, 0], [90000, 0]]})
+    one_line_error(run("follow", scene), "scene.json: duration is missing", "(0, 3600] s")
+
+
+@pytest.mark.parametrize("out, says", [("", "is not a folder path"),
+                                       ("s.csv", "is a file, not a folder")])
+def test_figures_out_must_be_a_folder(tmp_path, out, says):
+    (tmp_path / "s.csv").write_text("mine")
+    before = snapshot(tmp_path)
+    one_line_error(run("figures", "--out", out, cwd=tmp_path), "--out", says)
+    assert snapshot(tmp_path) == before

@@ -218,6 +218,12 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
 
     duration = top.number("duration", "plan_duration", None)
     run_out = top.number("run_out", "run_out", None)
+    if duration is None:         # Scene.run's safety net (3 L / V) must be a bounded run too
+        longest = 3.0 * path.length() / min(speed.V.min(), fig.body.V_cm)
+        if not RANGES["plan_duration"].contains(longest):
+            top.fail("duration", f"is missing and the path ({path.length():.0f} m) could take "
+                                 f"up to {longest:.0f} s to follow; give a duration in "
+                                 f"{RANGES['plan_duration']} or a shorter path")
     if not math.isfinite(fig.limits.dC_f_max) or not math.isfinite(fig.limits.C_f_max):
         top.fail("figure", "limits: the planner needs finite C_f_max and dC_f_max")
     return Scene(name, fig, path, obstacles, state0, cf0, speed, settings, per, exact, duration,
