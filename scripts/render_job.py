@@ -27,6 +27,7 @@ if str(ROOT) not in sys.path:                      # inside a Blender binary: fi
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-job-"))
 
 from blender_turning.core.files import temp_beside  # noqa: E402
+from blender_turning.core.params import PRESETS  # noqa: E402
 from blender_turning.core.ranges import RANGES  # noqa: E402
 from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
 
@@ -187,6 +188,10 @@ def load_config(path: Path, overrides) -> dict:
                "obstacles": f.string("obstacles", None),
                "plan_curvature_rate": f.number("plan_curvature_rate", "plan_curvature_rate",
                                                None)}
+        fall = math.degrees(PRESETS[sport].limits.theta_fall)
+        if fig["lean_deg"] >= fall:
+            f.fail("lean_deg", f"= {fig['lean_deg']:g} is not below the {sport}'s fall angle "
+                               f"({fall:g} deg)")
         if not fig["name"].strip():
             f.fail("name", "= '' is empty")
         if any(fig["name"] == g["name"] for g in cfg["figures"]):

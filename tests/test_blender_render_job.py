@@ -75,3 +75,15 @@ def test_cycles_renders_too(tmp_path):
     frames = sorted((tmp_path / "frames").glob("frame_*.png"))
     assert len(frames) == 2 and all(png_size(f) == (32, 24) for f in frames)
     assert "with CYCLES" in r.stdout
+
+
+def test_a_failed_bake_is_one_line_exit_1_and_creates_no_output(tmp_path):
+    """A config that is valid but whose figure falls (a 0.3 s, 50 deg slalom): the operator's
+    report, exit 1, and the output folder never created (it is made only after the bakes)."""
+    cfg = tmp_path / "falls.toml"
+    cfg.write_text('[[figures]]\nsport = "skier"\nperiod = 0.3\nlean_deg = 50.0\n')
+    r = run_job("--config", cfg, "--seconds", "2", "--no-render", "--output", tmp_path / "out")
+    assert r.returncode == 1, r.stdout[-2000:] + r.stderr[-2000:]
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "fell over" in lines[0] and "Traceback" not in r.stderr
+    assert not (tmp_path / "out").exists()

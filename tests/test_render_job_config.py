@@ -45,6 +45,8 @@ def refused(r, tmp_path, *names):
     ("[rendr]\n" + FIG, ["job.toml: rendr is not a known field", "did you mean 'render'"]),
     (FIG + "period = -1\n", ["figures[0].period = -1", "[0.3, 20] s"]),
     (FIG + "lean_deg = 89\n", ["figures[0].lean_deg = 89", "[1, 60] deg"]),
+    ('[[figures]]\nsport = "cyclist"\nlean_deg = 55\n',
+     ["figures[0].lean_deg = 55 is not below the cyclist's fall angle (50 deg)"]),
     (FIG + "lean_deg = nan\n", ["figures[0].lean_deg = nan", "[1, 60] deg"]),
     (FIG + 'lean_deg = "20"\n', ["figures[0].lean_deg = '20' is not a number"]),
     (FIG + "start = [nan, 0]\n", ["figures[0].start[0] = nan"]),
