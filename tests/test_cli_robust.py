@@ -282,3 +282,12 @@ def test_figures_out_must_be_a_folder(tmp_path, out, says):
     before = snapshot(tmp_path)
     one_line_error(run("figures", "--out", out, cwd=tmp_path), "--out", says)
     assert snapshot(tmp_path) == before
+
+
+def test_a_horizon_of_too_many_steps_is_refused(tmp_path):
+    scene = small_scene(tmp_path, planner={"stages": 4, "stage_time": 60, "dt": 0.001,
+                                           "sample_dt": 0.1})
+    one_line_error(run("follow", scene), "scene.json: planner: the horizon N t_stage / dt",
+                   "240000", "[1, 2000]")
+    one_line_error(run("follow", small_scene(tmp_path), "--stages", "16", "--stage-time", "60"),
+                   "--stages, --stage-time", "[1, 2000]")

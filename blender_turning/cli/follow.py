@@ -10,7 +10,7 @@ import json
 import math
 
 from ..core.errors import PlanInfeasible
-from ..core.scene import load_scene
+from ..core.scene import check_horizon, load_scene
 from ..core.validate import check
 from .common import Outputs, require_matplotlib
 
@@ -46,6 +46,7 @@ def run(args) -> int:
             scene = scene.with_settings(**changes)
         except ValueError as exc:
             raise ValueError(f"planner settings: {exc}") from None
+        check_horizon(scene.settings, "with --stages, --stage-time: ")
     with Outputs() as outputs:                 # every output path checked before the work
         for flag in ("out", "stats", "plot"):
             outputs.reserve(f"--{flag}", getattr(args, flag))

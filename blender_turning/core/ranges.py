@@ -109,6 +109,10 @@ RANGES: dict[str, Range] = {
                        lo_open=True),
     "planner_dt": Range(1e-4, 1.0, "s", "the planner's RK4 step"),
     "batch": Range(1, 4096, "", "nodes expanded together", integer=True),
+    "horizon_steps": Range(1, 2000, "", "RK4 steps in one horizon, N t_stage / dt: the paper's "
+                           "is 12 x 0.3 s / 0.05 s = 72", integer=True),
+    "horizon_samples": Range(1, 1000, "", "path-distance samples in one horizon, N t_stage / "
+                             "sample_dt: the paper's is 36", integer=True),
     "plan_duration": Range(0.0, 3600.0, "s", "an hour of planned motion (a replanning every "
                            "stage)", lo_open=True),
     # -- scenes: places and shapes ---------------------------------------------------------------

@@ -77,6 +77,18 @@ class Scene:
         return follow(self.problem(), self.state0, self.C_f0, duration, meta={"scene": self.name})
 
 
+def check_horizon(settings: PlannerSettings, where: str = "") -> None:
+    """One planning horizon must stay a bounded amount of work (``RANGES['horizon_*']``)."""
+    horizon = settings.n_stages * settings.t_stage
+    for key, step, name in (("horizon_steps", settings.dt, "dt"),
+                            ("horizon_samples", settings.sample_dt, "sample_dt")):
+        n = horizon / step
+        if not RANGES[key].contains(round(n)):
+            raise FieldError(f"{where}the horizon N t_stage / {name} = {settings.n_stages} x "
+                             f"{settings.t_stage:g} s / {step:g} s = {n:.0f} is outside the "
+                             f"allowed range {RANGES[key]}")
+
+
 def load_scene(path) -> Scene:
     """Read and validate a scene file; every error names the file and the field."""
     text = read_text(path, "scene file")
@@ -215,6 +227,7 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
         settings = PlannerSettings(**kw)
     except ValueError as exc:
         raise FieldError(f"{source}: planner: {exc}") from None
+    check_horizon(settings, f"{source}: planner: ")
 
     duration = top.number("duration", "plan_duration", None)
     run_out = top.number("run_out", "run_out", None)
