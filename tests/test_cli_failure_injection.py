@@ -107,6 +107,7 @@ def test_permission_error_on_the_folder_is_named_before_the_work(tmp_path, monke
 
 
 def test_an_interrupt_mid_run_leaves_nothing(tmp_path, monkeypatch):
+    """Ctrl-C in the middle of the simulation: cli.main removes the reserved hidden files."""
     def interrupted(*a, **k):
         assert len(list(tmp_path.iterdir())) == 2         # the two reserved hidden files
         raise KeyboardInterrupt

@@ -40,20 +40,17 @@ class Outputs:
 
     :meth:`reserve` checks each path before the work starts (an empty or duplicate path, a
     missing or unwritable folder, a folder in place of a file) by creating a hidden file beside
-    it; :meth:`write` fills one; :meth:`commit` renames them all into place.  Leaving the
-    ``with`` block without :meth:`commit` (an error) removes every hidden file, so the folders are
+    it; :meth:`write` fills one; :meth:`commit` renames them all into place.  A command that
+    ends without :meth:`commit` (an error, an interrupt) leaves its hidden files to
+    :func:`discard_pending`, which ``cli.main`` calls when every command ends, so the folders are
     as they were.  Every message names the flag and the path the user gave.
     """
 
+    _pending: list = []
+
     def __init__(self):
         self._files: dict[str, tuple[Path, Path]] = {}     # flag -> (target, hidden file)
-
-    def __enter__(self):
-        return self
-
-    def __exit__(self, *exc):
-        self.discard()
-        return False
+        Outputs._pending.append(self)
 
     def reserve(self, flag: str, path) -> None:
         if path is None:
@@ -119,3 +116,9 @@ class Outputs:
         for _, hidden in self._files.values():
             hidden.unlink(missing_ok=True)
         self._files.clear()
+
+
+def discard_pending() -> None:
+    """Remove the hidden files of every :class:`Outputs` not committed."""
+    while Outputs._pending:
+        Outputs._pending.pop().discard()

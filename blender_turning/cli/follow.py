@@ -47,28 +47,28 @@ def run(args) -> int:
         except ValueError as exc:
             raise ValueError(f"planner settings: {exc}") from None
         check_horizon(scene.settings, "with --stages, --stage-time: ")
-    with Outputs() as outputs:                 # every output path checked before the work
-        for flag in ("out", "stats", "plot"):
-            outputs.reserve(f"--{flag}", getattr(args, flag))
-        try:
-            result = scene.run()
-        except PlanInfeasible as exc:
-            # The plot of the failed run (where it got stuck) is the one output written.
-            if args.plot and exc.trajectory is not None:
-                _plot(outputs, scene, exc.trajectory, failed_at=exc.position)
-                outputs.commit(only=("--plot",))
-            raise
-        traj = result.trajectory
-        if args.out:
-            outputs.write("--out", traj.to_csv)
-        if args.stats:
-            doc = {"scene": scene.name, "settings": _settings(scene.settings),
-                   "replans": [r.as_dict() for r in result.replans], "totals": result.totals()}
-            text = json.dumps(doc, indent=1)
-            outputs.write("--stats", lambda path: path.write_text(text))
-        if args.plot:
-            _plot(outputs, scene, traj)
-        outputs.commit()
+    outputs = Outputs()                       # every output path checked before the work
+    for flag in ("out", "stats", "plot"):
+        outputs.reserve(f"--{flag}", getattr(args, flag))
+    try:
+        result = scene.run()
+    except PlanInfeasible as exc:
+        # The plot of the failed run (where it got stuck) is the one output written.
+        if args.plot and exc.trajectory is not None:
+            _plot(outputs, scene, exc.trajectory, failed_at=exc.position)
+            outputs.commit(only=("--plot",))
+        raise
+    traj = result.trajectory
+    if args.out:
+        outputs.write("--out", traj.to_csv)
+    if args.stats:
+        doc = {"scene": scene.name, "settings": _settings(scene.settings),
+               "replans": [r.as_dict() for r in result.replans], "totals": result.totals()}
+        text = json.dumps(doc, indent=1)
+        outputs.write("--stats", lambda path: path.write_text(text))
+    if args.plot:
+        _plot(outputs, scene, traj)
+    outputs.commit()
     tot = result.totals()
     st = scene.settings
     print(f"follow: {scene.name}, {scene.figure.name}, N = {st.n_stages}, q = {st.q}, "

@@ -93,22 +93,22 @@ def run(args) -> int:
         ctl = PhaseEllipse(fig.body, omega0, theta_max, heading)
     else:
         ctl = CONTROLLERS[args.controller](fig.body, omega0, theta_max)
-    with Outputs() as outputs:                 # every output path checked before the work
-        outputs.reserve("--out", args.out)
-        outputs.reserve("--plot", args.plot)
-        # Start so that the slalom is centred on the heading (with the lean and rate asked for).
-        state0 = slalom_start(fig.body, w0, tm0, heading(0.0))[:3] + (theta0, omega_v0)
-        traj = simulate(fig, ctl, duration, dt, state0,
-                        meta={"controller": args.controller})
-        if args.fps:
-            traj = traj.resample(args.fps)
-        if args.plot:
-            from ..figures.plots import plot_trajectory
-            outputs.write("--plot", lambda path: plot_trajectory(traj, path, title=(
-                f"{fig.name}, {args.controller} controller")))
-        if args.out:
-            outputs.write("--out", traj.to_csv)
-        outputs.commit()
+    outputs = Outputs()                       # every output path checked before the work
+    outputs.reserve("--out", args.out)
+    outputs.reserve("--plot", args.plot)
+    # Start so that the slalom is centred on the heading (with the lean and rate asked for).
+    state0 = slalom_start(fig.body, w0, tm0, heading(0.0))[:3] + (theta0, omega_v0)
+    traj = simulate(fig, ctl, duration, dt, state0,
+                    meta={"controller": args.controller})
+    if args.fps:
+        traj = traj.resample(args.fps)
+    if args.plot:
+        from ..figures.plots import plot_trajectory
+        outputs.write("--plot", lambda path: plot_trajectory(traj, path, title=(
+            f"{fig.name}, {args.controller} controller")))
+    if args.out:
+        outputs.write("--out", traj.to_csv)
+    outputs.commit()
     print(f"simulate: {fig.name}, {args.controller}, {traj.duration:.2f} s, {len(traj)} samples"
           f"{f' at {args.fps:g} fps' if args.fps else ''}; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg, |C_f| max "
