@@ -24,8 +24,8 @@ def check_steps(duration: float, dt: float, fps: float | None = None) -> None:
     steps = duration / dt
     if steps > MAX_STEPS:
         raise FieldError(f"--duration {duration:g} s / --dt {dt:g} s = {steps:.3g} steps; at "
-                         f"most {MAX_STEPS:,} steps a run (about 100 MB): shorten --duration "
-                         f"or lengthen --dt")
+                         f"most {MAX_STEPS:,} steps a run (about 10 s and 160 MB): shorten "
+                         "--duration or lengthen --dt")
     if fps is not None and duration * fps > MAX_SAMPLES:
         raise FieldError(f"--duration {duration:g} s x --fps {fps:g} = {duration * fps:.3g} "
                          f"frames; at most {MAX_SAMPLES:,} frames a run")

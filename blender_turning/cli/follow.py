@@ -46,7 +46,7 @@ def run(args) -> int:
             scene = scene.with_settings(**changes)
         except ValueError as exc:
             raise ValueError(f"planner settings: {exc}") from None
-        check_horizon(scene.settings, "with --stages, --stage-time: ")
+        check_horizon(scene.settings, "with --stages, --choices, --stage-time: ")
     outputs = Outputs()                       # every output path checked before the work
     for flag in ("out", "stats", "plot"):
         outputs.reserve(f"--{flag}", getattr(args, flag))

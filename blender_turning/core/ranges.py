@@ -109,6 +109,9 @@ RANGES: dict[str, Range] = {
                        lo_open=True),
     "planner_dt": Range(1e-4, 1.0, "s", "the planner's RK4 step"),
     "batch": Range(1, 4096, "", "nodes expanded together", integer=True),
+    "search_size": Range(1, 7.0 ** 16, "", "q^N, the leaves of the full search tree: N = 16, "
+                         "q = 7 plans scenes/slalom.json in 24 s, N = 12, q = 9 in 23 s, while "
+                         "N = 16, q = 9 takes 183 s and 340 MB (BENCHMARKS.md)"),
     "horizon_steps": Range(1, 2000, "", "RK4 steps in one horizon, N t_stage / dt: the paper's "
                            "is 12 x 0.3 s / 0.05 s = 72", integer=True),
     "horizon_samples": Range(1, 1000, "", "path-distance samples in one horizon, N t_stage / "
@@ -138,8 +141,9 @@ RANGES: dict[str, Range] = {
                                  "preset's); as dC_f_max"),
 }
 
-MAX_STEPS = 1_000_000
-"""Most integration steps (``duration / dt``) or output samples of one run: about 100 MB of
-trajectory and ten seconds of stepping on one core (``--duration 100000 --dt 0.0001`` would be
-1e9 steps, about 100 GB)."""
+MAX_STEPS = 200_000
+"""Most integration steps (``duration / dt``) or output samples of one run: 4000 s of motion at
+the default dt of 0.02 s.  Measured (BENCHMARKS.md): 200,000 steps take 4.7 s and 160 MB, 9.4 s
+with the 44 MB CSV written; ``--duration 100000 --dt 0.0001`` would be 1e9 steps, hours and
+hundreds of GB."""
 MAX_SAMPLES = MAX_STEPS

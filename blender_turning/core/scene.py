@@ -3,8 +3,8 @@
 A scene holds the path, the obstacles, the start state, the figure preset and the planner settings
 (the format is documented in README.md, "Path following").  Every problem with a file is one
 ``ValueError`` naming the file and the field, with the ranges of :mod:`.ranges`:
-``slalom.json: obstacles[2].radius = -1 is outside the allowed range (0, 10000] m``.  Lengths are metres, times seconds, angles degrees (``*_deg``) at this edge and
-radians inside.
+``slalom.json: obstacles[2].radius = -1 is outside the allowed range (0, 10000] m``.
+Lengths are metres, times seconds, angles degrees (``*_deg``) at this edge and radians inside.
 """
 from __future__ import annotations
 
@@ -78,7 +78,13 @@ class Scene:
 
 
 def check_horizon(settings: PlannerSettings, where: str = "") -> None:
-    """One planning horizon must stay a bounded amount of work (``RANGES['horizon_*']``)."""
+    """One planning search must stay a bounded amount of work (``RANGES['search_size']``,
+    ``RANGES['horizon_*']``)."""
+    size = float(settings.q) ** settings.n_stages
+    if not RANGES["search_size"].contains(size):
+        raise FieldError(f"{where}the search q^N = {settings.q}^{settings.n_stages} = "
+                         f"{size:.3g} leaves is outside the allowed range [1, 7^16 = "
+                         f"{7.0 ** 16:.3g}]: lower the stages or the choices")
     horizon = settings.n_stages * settings.t_stage
     for key, step, name in (("horizon_steps", settings.dt, "dt"),
                             ("horizon_samples", settings.sample_dt, "sample_dt")):
