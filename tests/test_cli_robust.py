@@ -164,6 +164,7 @@ def schedule(tmp_path, text, raw=None):
     ("t,period,lean_deg,heading_deg\n0,2,20,0\n5,2,20,\n", ["s.csv", "heading_deg is blank"]),
     ("t,period,lean_deg\n", ["s.csv", "at least one row"]),
     ("", ["s.csv", "empty"]),
+    ('t,period,lean_deg\n0,2,"' + "x" * 200000 + '"\n', ["s.csv", "is not a CSV file"]),
 ])
 def test_bad_schedules_name_file_row_column_and_value(tmp_path, text, names):
     one_line_error(run("simulate", "--schedule", schedule(tmp_path, text), "--duration", "2"),

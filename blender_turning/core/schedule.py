@@ -81,8 +81,11 @@ def read_schedule_csv(path: str | Path) -> TurnSchedule:
     """
     src = str(path)
     lines = read_text(path, "schedule file").splitlines()
-    rows = [(n, [c.strip() for c in r]) for n, r in enumerate(csv.reader(lines), 1)
-            if any(c.strip() for c in r)]
+    try:
+        rows = [(n, [c.strip() for c in r]) for n, r in enumerate(csv.reader(lines), 1)
+                if any(c.strip() for c in r)]
+    except csv.Error as exc:
+        raise FieldError(f"{src}: is not a CSV file ({exc})") from None
     if not rows:
         raise FieldError(f"{src}: the file is empty; it needs a header t, period, lean_deg "
                          "(and optionally heading_deg) and at least one row")
