@@ -299,3 +299,17 @@ def test_the_search_size_is_bounded():
     """N = 16 and q = 9 are each allowed; together (9^16 leaves) they run for minutes."""
     one_line_error(run("follow", SCENES / "slalom.json", "--stages", "16", "--choices", "9"),
                    "--choices", "q^N = 9^16", "7^16")
+
+
+def test_an_infeasible_plan_writes_only_its_plot(tmp_path):
+    """README: with --plot, the plot of the run up to the failure is the one file written."""
+    pytest.importorskip("matplotlib")
+    wall = {"type": "segment", "from": [8, -3], "to": [8, 3]}
+    scene = small_scene(tmp_path, obstacles=[
+        {"type": "segment", "from": [-5, -3], "to": [40, -3]},
+        {"type": "segment", "from": [-5, 3], "to": [40, 3]}, wall])
+    r = run("follow", scene, "--out", tmp_path / "t.csv", "--stats", tmp_path / "s.json",
+            "--plot", tmp_path / "p.png")
+    one_line_error(r, "no feasible plan at t = ")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["p.png", "scene.json"]
+    assert (tmp_path / "p.png").read_bytes()[:4] == b"\x89PNG"
