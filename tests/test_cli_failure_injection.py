@@ -5,6 +5,7 @@ kept whole, no hidden temporary file) and, where the command goes on to report, 
 the flag."""
 import errno
 import os
+import stat
 
 import pytest
 
@@ -126,3 +127,20 @@ def test_a_read_only_existing_output_is_refused(tmp_path, capsys):
     out.chmod(0o444)
     assert main(["simulate", "--duration", "1", "--out", str(out)]) == 2
     assert "--out" in err_line(capsys) and out.read_text() == "keep"
+
+
+def test_the_core_writer_writes_a_pipe_in_place(tmp_path):
+    """Trajectory.to_csv on a pipe (or a device such as /dev/null) writes into it; a rename
+    would put a regular file in its place."""
+    import threading
+
+    from blender_turning.core import PhaseEllipse, preset, simulate
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_text()), daemon=True)
+    reader.start()
+    fig = preset("skier")
+    simulate(fig, PhaseEllipse(fig.body, 3.0, 0.3, 0.0), 0.2).to_csv(fifo)
+    reader.join(timeout=30)
+    assert stat.S_ISFIFO(os.stat(fifo).st_mode) and got[0].startswith("t,x,y")

@@ -113,10 +113,12 @@ def test_follow_leaves_no_track_when_stats_cannot_be_written(tmp_path):
     (["--out", ""], "--out", "is not a file path"),
     (["--out", " "], "--out", "is not a file path"),
     (["--out", "."], "--out", "is a folder"),
+    (["--out", "pipe"], "--out", "is not a regular file"),
     (["--out", "nowhere/o.csv"], "--out", "does not exist"),
     (["--out", "a.csv", "--plot", "a.csv"], "--plot", "same file as --out"),
 ])
 def test_bad_output_paths(tmp_path, args, flag, says):
+    os.mkfifo(tmp_path / "pipe")             # a device or pipe (/dev/null) is never replaced
     before = snapshot(tmp_path)
     one_line_error(run("simulate", "--duration", "1", *args, cwd=tmp_path), flag, says)
     assert snapshot(tmp_path) == before

@@ -63,6 +63,8 @@ class Outputs:
                 raise FieldError(f"{flag} = {str(path)!r} is the same file as {other}")
         if target.is_dir():
             raise FieldError(f"{flag} = {str(path)!r} is a folder, not a file")
+        if target.exists() and not target.is_file():     # a device or a pipe: never replaced
+            raise FieldError(f"{flag} = {str(path)!r} is not a regular file")
         folder = target.resolve().parent
         if not folder.is_dir():
             raise FieldError(f"{flag} = {str(path)!r}: the folder {str(folder)!r} does not "

@@ -39,7 +39,13 @@ def temp_beside(path) -> Path:
 
 
 def atomic_write_text(path, text: str) -> None:
-    """Write ``text`` to ``path`` completely or not at all."""
+    """Write ``text`` to ``path`` completely or not at all (a device or pipe, which a rename
+    would replace, is written to directly)."""
+    path = Path(path)
+    if path.exists() and not path.is_file():
+        with open(path, "w", newline="") as fh:
+            fh.write(text)
+        return
     tmp = temp_beside(path)
     try:
         with open(tmp, "w", newline="") as fh:
