@@ -117,28 +117,27 @@ def load_config(path: Path, overrides) -> dict:
         cfg["seconds"] = check("--seconds", overrides.seconds, "job_seconds")
     if overrides.frame_step is not None:
         cfg["frame_step"] = check("--frame-step", overrides.frame_step, "frame_step")
+    out = job.string("output", f"out/{cfg['name']}")
+    if not out.strip():
+        job.fail("output", f"= {out!r} is not a folder path")
+    cfg["output"], flag = Path(out).resolve(), f"{src}: job.output"
     if overrides.output is not None:
         if not overrides.output.strip():
             raise ConfigError(f"--output = {overrides.output!r} is not a folder path")
         cfg["output"], flag = Path(overrides.output).resolve(), "--output"
-    else:
-        out = job.string("output", f"out/{cfg['name']}")
-        if not out.strip():
-            job.fail("output", f"= {out!r} is not a folder path")
-        cfg["output"], flag = Path(out).resolve(), f"{src}: job.output"
     check_output(cfg["output"], flag)
 
     r = top.table("render", _KNOWN["render"])
     engine = r.string("engine", "WORKBENCH").upper()
+    if engine not in ENGINES:
+        r.fail("engine", f"= {engine!r} is not one of {', '.join(ENGINES)}")
     if overrides.engine is not None:
         engine = overrides.engine.upper()
-    if engine not in ENGINES:
-        where = "--engine" if overrides.engine is not None else f"{src}: render.engine"
-        raise ConfigError(f"{where} = {engine!r} is not one of {', '.join(ENGINES)}")
+        if engine not in ENGINES:
+            raise ConfigError(f"--engine = {engine!r} is not one of {', '.join(ENGINES)}")
+    res = _resolution(r.value("resolution", [640, 360]), f"{src}: render.resolution")
     if overrides.resolution is not None:
         res = _resolution(overrides.resolution, "--resolution")
-    else:
-        res = _resolution(r.value("resolution", [640, 360]), f"{src}: render.resolution")
     fmt = r.string("format", "PNG").upper()
     if fmt not in ("PNG", "VIDEO"):
         r.fail("format", f"= {fmt!r} is not PNG or VIDEO")

@@ -53,6 +53,7 @@ def refused(r, tmp_path, *names):
     (FIG + "start = [1e300, 0]\n", ["figures[0].start[0] = 1e+300"]),
     ('[job]\nname = "../escaped"\n' + FIG, ["job.name = '../escaped' is not a plain file name"]),
     ('[job]\nname = "a/b"\n' + FIG, ["job.name = 'a/b'"]),
+    ("[job]\noutput = 5\n" + FIG, ["job.output = 5 is not a string"]),
     ("[job]\nseconds = 0\n" + FIG, ["job.seconds = 0", "(0, 600] s"]),
     ("[job]\nfps = 2.5\n" + FIG, ["job.fps = 2.5", "(whole numbers)"]),
     ('[camera]\nfollow = "Skeir"\n' + FIG, ["camera.follow = 'Skeir'"]),
@@ -88,6 +89,16 @@ def test_a_binary_config_names_the_file(tmp_path):
 ])
 def test_bad_flags_name_the_flag(tmp_path, flags, names):
     refused(job(tmp_path, FIG, *flags), tmp_path, *names)
+
+
+@pytest.mark.parametrize("text, flags, names", [
+    ('[render]\nengine = "POVRAY"\n' + FIG, ["--engine", "CYCLES"], ["render.engine = 'POVRAY'"]),
+    ("[render]\nresolution = [1, 1]\n" + FIG, ["--resolution", "8x8"],
+     ["render.resolution[0] = 1"]),
+    ("[job]\nseconds = -1\n" + FIG, ["--seconds", "1"], ["job.seconds = -1"]),
+])
+def test_the_config_is_checked_even_where_a_flag_overrides_it(tmp_path, text, flags, names):
+    refused(job(tmp_path, text, *flags), tmp_path, *names)
 
 
 def test_output_in_a_read_only_folder_is_refused_before_the_bake(tmp_path):
