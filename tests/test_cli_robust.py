@@ -36,6 +36,11 @@ def test_a_run_of_a_billion_steps_is_refused_with_the_bound(tmp_path):
     assert snapshot(tmp_path) == before
 
 
+def test_a_run_shorter_than_one_step_is_refused():
+    one_line_error(run("simulate", "--duration", "1e-300", "--fps", "24"), "--duration = 1e-300",
+                   "shorter than one step")
+
+
 def test_frames_are_bounded_too(tmp_path):
     one_line_error(run("simulate", "--duration", "1000", "--fps", "1000"), "--fps", "1e+06 frames",
                    "200,000 frames")

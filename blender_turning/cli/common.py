@@ -22,6 +22,8 @@ def require_matplotlib(flag: str) -> None:
 def check_steps(duration: float, dt: float, fps: float | None = None) -> None:
     """Refuse a run that would not fit in reasonable time and memory (``MAX_STEPS``)."""
     steps = duration / dt
+    if steps < 1:
+        raise FieldError(f"--duration = {duration:g} s is shorter than one step (--dt {dt:g} s)")
     if steps > MAX_STEPS:
         raise FieldError(f"--duration {duration:g} s / --dt {dt:g} s = {steps:.3g} steps; at "
                          f"most {MAX_STEPS:,} steps a run (about 10 s and 160 MB): shorten "
