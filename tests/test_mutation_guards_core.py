@@ -100,6 +100,11 @@ def check_foot_path(cols, dt):
     rate = vf * cf
     step = np.diff(hd) - 0.5 * (rate[1:] + rate[:-1]) * dt
     assert np.abs(step).max() < 1e-5 * np.abs(np.diff(hd)).max()
+    # s is the foot's distance travelled: each step's chord to 2.2e-7 of a step (measured;
+    # the trapezoid of V_f against the chord).  At V_cm instead of V_f it is off by 1e-5.
+    chord = np.hypot(np.diff(x), np.diff(y))
+    assert cols["s"][0] == 0.0
+    assert np.abs(np.diff(cols["s"]) - chord).max() < 1e-6 * chord.max()
 
 
 def test_foot_path_curvature_is_C_f_one_figure():
