@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core import FellOver, Limits, OpenLoop, Trajectory, preset, run, simulate
-from blender_turning.core.dynamics import leg_force
+from blender_turning.core.dynamics import bound_cf, foot_speed, leg_force
 from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, exhaustive
@@ -40,13 +40,14 @@ def cm_path(tr, body):
 
 
 # -- Appendix A: the leg force is Newton's law on the centre of mass -----------------------------
-@pytest.mark.parametrize("name", ["skier", "cyclist"])
+@pytest.mark.parametrize("name", ["skier", "cyclist", "snowboarder"])
 def test_leg_force_is_newtons_law_on_the_centre_of_mass(name):
     """``F_leg`` (Eqs. 14-18) equals ``m |a_cm + g z|`` in the plane across the direction of
     travel, ``a_cm`` by second differences of the centre of mass's path.  The model holds V_cm
     constant (Section 3), so the along-track component is not part of it.  Measured error
     3.0e-6 m g at dt = 0.002 s (skier; it falls as dt^2: 1.2e-5 at 0.004, 7.6e-7 at 0.001), so
-    2e-5 m g bounds it; dropping ``- l omega_v^2`` moves F_leg by ~0.16 m g."""
+    2e-5 m g bounds it; dropping ``- l omega_v^2`` moves F_leg by ~0.16 m g.  The snowboarder's
+    l = 0.95 m tells ``I_v alpha / l`` from ``I_v alpha l`` (the others have l = 1)."""
     fig = unbounded(name)
     b, dt = fig.body, 0.002
     tr = open_loop_run(fig, dt=dt)
@@ -61,11 +62,37 @@ def test_leg_force_is_newtons_law_on_the_centre_of_mass(name):
     assert err.max() < 2e-5, err.max()
 
 
+def test_foot_speed_is_eq_21_and_the_trajectory_s_V_f():
+    """Eq. (21) in closed form, at l != 1; and :func:`foot_speed` agrees with the V_f the
+    integrator recorded (a separate formula in :mod:`.one_figure`)."""
+    from blender_turning.core import BodyParams
+    b = BodyParams(m=70.0, l=1.3, I_v=9.0, V_cm=7.0)
+    assert foot_speed(b, 0.4, 0.12) == pytest.approx(7.0 / (1 - 0.12 * 1.3 * math.sin(0.4)),
+                                                     rel=1e-15)
+    fig = unbounded("snowboarder")
+    tr = open_loop_run(fig, duration=2.0, dt=0.01)
+    np.testing.assert_allclose(foot_speed(fig.body, tr.theta_v, tr.C_f), tr.V_f, rtol=1e-14)
+    assert np.ptp(tr.V_f) > 1e-4                       # V_f does vary with C_f sin theta_v
+
+
+def test_physical_margin_keeps_the_foot_below_ten_times_V_cm():
+    """Section 3's physical branch needs ``1 - C_f l sin th > 0``; the core keeps it at least
+    0.1 (docs/ARCHITECTURE.md, "The model"), so ``V_f <= 10 V_cm``: a demand beyond it is
+    clamped to exactly that."""
+    b = preset("cyclist").body
+    lim = Limits(C_f_max=5.0)
+    th = math.radians(40)
+    cf = bound_cf(b, lim, 4.0, math.sin(th))
+    assert 1 - cf * b.l * math.sin(th) == pytest.approx(0.1, rel=1e-12)
+    assert foot_speed(b, th, cf) == pytest.approx(10 * b.V_cm, rel=1e-12)
+
+
 def test_leg_force_components_at_simple_states():
     """Closed forms of Eqs. (14)-(18): upright and swinging with no steering, the leg carries
     ``m (g - l omega^2)`` (centripetal unloading); a pure lean acceleration adds the across
     component ``I_v alpha / l``."""
-    b = preset("skier").body
+    from blender_turning.core import BodyParams
+    b = BodyParams(m=70.0, l=1.3, I_v=9.0, V_cm=7.0)
     F, along = leg_force(b, 0.0, 1.5, 0.0, 0.0)
     assert along == pytest.approx(b.m * (b.g - b.l * 1.5 ** 2), rel=1e-14)
     assert F == pytest.approx(abs(along), rel=1e-14)
@@ -266,3 +293,28 @@ def test_trajectory_csv_header_is_checked_on_read(tmp_path):
         bad.write_text("\n".join([header] + text[1:]) + "\n")
         with pytest.raises(ValueError, match="header"):
             Trajectory.from_csv(bad)
+
+
+# -- parameters: every field validated in the core (the CLI and Blender rely on it) -------------
+@pytest.mark.parametrize("field, bad", [("m", math.nan), ("m", 0.0), ("l", math.nan),
+                                        ("l", -1.0), ("I_v", math.nan), ("V_cm", math.nan),
+                                        ("V_cm", 0.0), ("g", math.nan)])
+def test_body_params_refuse_bad_values_naming_the_field(field, bad):
+    from blender_turning.core import BodyParams
+    with pytest.raises(ValueError, match=rf"^{field} = .*allowed range"):
+        BodyParams(**{field: bad})
+
+
+@pytest.mark.parametrize("field, bad", [("theta_fall", math.pi / 2), ("theta_fall", 0.0),
+                                        ("theta_fall", math.nan), ("C_f_max", math.nan),
+                                        ("C_f_max", 0.0), ("dC_f_max", -1.0)])
+def test_limits_refuse_bad_values_naming_the_field(field, bad):
+    with pytest.raises(ValueError, match=rf"^{field} = .*allowed range"):
+        Limits(**{field: bad})
+
+
+def test_inertia_term_J_of_eqs_1_and_2():
+    """``J = (I_v + l^2 m) / (m l)`` (the roll inertia about the foot over m l), at l != 1."""
+    from blender_turning.core import BodyParams
+    b = BodyParams(m=70.0, l=1.3, I_v=9.0)
+    assert b.J == pytest.approx((9.0 + 1.3 ** 2 * 70.0) / (70.0 * 1.3), rel=1e-15)
