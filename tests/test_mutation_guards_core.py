@@ -249,18 +249,25 @@ def test_lipschitz_bound_is_admissible_and_tight_heading_at_the_path():
 
 
 # -- Section 6: obstacles keep their clearance ------------------------------------------------
+@pytest.mark.parametrize("side", [1.0, -1.0])
 @pytest.mark.parametrize("kind", ["segment", "circle", "polygon"])
-def test_clearance_is_kept_from_every_kind_of_obstacle(kind):
-    """A track segment passing 0.3 m from the obstacle collides with clearance 0.35, not 0.25;
-    also after :meth:`Obstacles.near` (the planner's local copy)."""
+def test_clearance_is_kept_from_every_kind_of_obstacle(kind, side):
+    """A track segment passing 0.3 m from the obstacle (on either side of it: ``side``) collides
+    with clearance 0.35, not 0.25; also in :meth:`Obstacles.near`'s local copy for a centre
+    1.2 m from the obstacle (beyond the radius 1 but within radius + clearance)."""
     shapes = {"segment": dict(segments=[[[5.0, 0.3], [5.0, 3.0]]]),
               "circle": dict(circles=[[5.0, 1.3, 1.0]]),
               "polygon": dict(polygons=[[[4.0, 0.3], [6.0, 0.3], [5.0, 2.0]]])}[kind]
+    flip = np.array([1.0, side])
+    shapes = {k: [np.array(v[0]) * (np.append(flip, 1.0) if k == "circles" else flip)]
+              for k, v in shapes.items()}
     a, b = np.array([[0.0, 0.0]]), np.array([[10.0, 0.0]])
+    a_near, b_near = np.array([[5.0, 0.0]]), np.array([[5.05, 0.0]])
     for clearance, hit in ((0.35, True), (0.25, False)):
         obs = Obstacles(**shapes, clearance=clearance)
         assert obs.collides(a, b).tolist() == [hit], (kind, clearance)
-        assert obs.near((5.0, 0.0), 1.0).collides(a, b).tolist() == [hit], (kind, clearance)
+        local = obs.near((5.0, -0.9 * side), 1.0)
+        assert local.collides(a_near, b_near).tolist() == [hit], (kind, clearance)
         assert obs.min_distance([[5.0, 0.0]])[0] == pytest.approx(0.3, abs=1e-12)
 
 
