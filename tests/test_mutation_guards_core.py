@@ -271,6 +271,20 @@ def test_clearance_is_kept_from_every_kind_of_obstacle(kind, side):
         assert obs.min_distance([[5.0, 0.0]])[0] == pytest.approx(0.3, abs=1e-12)
 
 
+def test_collinear_segments_apart_are_not_crossing():
+    """Segments on one line do not cross: their distance is the gap between them (exactly 0 only
+    when they touch or overlap), so a track running along a road edge short of it is clear."""
+    from blender_turning.core.obstacles import segment_distance
+    p = lambda x, y: np.array([x, y], float)                     # noqa: E731
+    assert segment_distance(p(0, 0), p(1, 0), p(2.5, 0), p(3, 0)) == pytest.approx(1.5, abs=1e-15)
+    assert segment_distance(p(0, 0), p(1, 1), p(3, 3), p(2, 2)) == pytest.approx(math.sqrt(2),
+                                                                                 abs=1e-15)
+    assert segment_distance(p(0, 0), p(1, 0), p(1, 0), p(3, 0)) == 0.0
+    obs = Obstacles(segments=[[[12.0, 0.0], [20.0, 0.0]]], clearance=0.5)
+    assert obs.collides([[0.0, 0.0]], [[10.0, 0.0]]).tolist() == [False]
+    assert obs.collides([[0.0, 0.0]], [[11.6, 0.0]]).tolist() == [True]
+
+
 def test_scene_clearance_reaches_the_planner():
     from blender_turning.core.scene import scene_from_dict
     doc = {"figure": {"preset": "skier"},
@@ -325,3 +339,34 @@ def test_inertia_term_J_of_eqs_1_and_2():
     from blender_turning.core import BodyParams
     b = BodyParams(m=70.0, l=1.3, I_v=9.0)
     assert b.J == pytest.approx((9.0 + 1.3 ** 2 * 70.0) / (70.0 * 1.3), rel=1e-15)
+
+
+def test_arc_bound_is_admissible_and_tight_on_the_hardest_steering_branch():
+    """The arc bound (Problem.sample_bounds with a state): the foot stays within ``r(tau)`` of
+    the arc of its curvature.  A path parallel to the heading 1 m to the left, the branch that
+    steers left as hard as it may (``u = +dC_f_max``): its samples are at least the bound from
+    the path while its lean is within the bound (the first 3 samples), and its deviation from
+    the arc reaches 0.685 of ``r`` there (measured; a 5 deg lean bound and dt = 0.01 s keep r's
+    allowance for a faster foot and for RK4's stages small), so a radius half as large is no
+    longer admissible.  (At the default 30 deg and 0.05 s the branch reaches only 0.47 of r.)"""
+    fig = preset("skier", V_cm=8.0)
+    fig = replace(fig, limits=replace(fig.limits, dC_f_max=0.3))
+    path = HermitePath.from_points(np.array([[-10.0, 1.0], [60.0, 1.0]]),
+                                   np.array([[70.0, 0.0], [70.0, 0.0]]))
+    st = PlannerSettings(n_stages=4, q=5, dt=0.01, theta_bound=math.radians(5))
+    pb = Problem(fig, PathDistance(path, per_segment=400), Obstacles(), st)
+    x, c, s = np.zeros((5, 1)), np.zeros(1), np.zeros(1)
+    bound = pb.sample_bounds(np.array([1.0]), 0, x, c)[0, :st.lookahead]
+    d, lean = [], []
+    for _ in range(st.n_stages):
+        r = pb.simulate_stage(x, c, pb.u_values[-1:], np.zeros(1), s, record=True)
+        states = np.array(r.record["state"][1:] + [r.state])[:, :, 0]
+        every = states[st.steps_per_sample - 1::st.steps_per_sample]
+        d += list(pb.distance(every[:, :2]))
+        lean += list(np.cumsum(np.abs(states[:, 3]) > st.theta_bound)
+                     [st.steps_per_sample - 1::st.steps_per_sample] + (lean[-1] if lean else 0))
+        x, c, s = r.state, r.C_f, r.s
+    d, standing = np.array(d[:st.lookahead]), np.array(lean[:st.lookahead]) == 0
+    assert standing.sum() >= 3
+    assert np.all(d[standing] >= bound[standing] - 1e-12), (d, bound)
+    assert np.max((1.0 - d[standing]) / (1.0 - bound[standing])) > 0.6
