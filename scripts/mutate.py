@@ -173,6 +173,8 @@ MUTANTS = [
       "if not rows or tuple(rows[0]) != COLUMNS:", "if not rows:", TRAJ),
     M("csv_low_precision", "core/trajectory.py",
       "w.writerow([repr(float(v)) for v in row])", "w.writerow([f'{v:.6g}' for v in row])", TRAJ),
+    M("resample_heading_rate_C_f", "core/trajectory.py",
+      '"theta_dir": c["V_f"] * c["C_f"],', '"theta_dir": c["C_f"],', TRAJ),
     # -- planner (Section 6) -------------------------------------------------------------------
     M("v_max_without_eq21", "core/planner/problem.py",
       "self.v_max = self.speed.max / (1.0 - slip)", "self.v_max = self.speed.max", PLANNER),
