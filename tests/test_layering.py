@@ -1,4 +1,4 @@
-"""The layers import only downwards (docs/ARCHITECTURE.md, "Layers"): every module of core,
+"""The layers import only downwards (docs/ARCHITECTURE.md Section 1): every module of core,
 mapping, cli and figures imports in a fresh interpreter without bpy or mathutils, and the command
 line never imports the Blender layer."""
 import json
@@ -52,3 +52,11 @@ def test_the_command_line_entry_point_never_imports_blender():
             "'blender_turning.blender'))]\nprint(bad, file=sys.stderr); sys.exit(1 if bad else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+
+
+def test_hypothesis_draws_the_same_examples_every_run():
+    """Fixed seeds (CONTRIBUTING.md): the suite's Hypothesis profile is derandomized and keeps
+    no example database, so a property test cannot pass one run and fail the next."""
+    from hypothesis import settings
+    assert settings.default.derandomize is True
+    assert settings.default.database is None
