@@ -41,9 +41,9 @@ DYNAMICS = [T + "test_mutation_guards_core.py", T + "test_dynamics.py", T + "tes
 SIMULATE = [T + "test_mutation_guards_core.py", T + "test_one_figure.py", T + "test_controllers.py",
             T + "test_trajectory.py"]
 PARAMS = [T + "test_dynamics.py", T + "test_mutation_guards_core.py", T + "test_cli_simulate.py"]
-OBSTACLES = [T + "test_obstacles.py", T + "test_mutation_guards_core.py"]
+OBSTACLES = [T + "test_obstacles.py", T + "test_mutation_guards_planner.py"]
 TRAJ = [T + "test_mutation_guards_core.py", T + "test_trajectory.py", T + "test_cli_simulate.py"]
-PLANNER = [T + "test_mutation_guards_core.py", T + "test_planner_search.py",
+PLANNER = [T + "test_mutation_guards_planner.py", T + "test_planner_search.py",
            T + "test_planner_fall_table.py"]
 MAPPING = [T + "test_mutation_guards_mapping.py", T + "test_mapping_skier.py",
            T + "test_mapping.py", T + "test_mapping_snowboarder.py",
