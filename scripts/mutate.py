@@ -10,7 +10,7 @@ Each mutant is located by an exact snippet that must occur exactly once in its f
 has changed so that a snippet is gone (or is no longer unique), the script says which mutant and
 file and stops before running anything (``--skip-stale`` runs the others and lists the stale).
 
-    PYTHONPATH=$PWD .venv/bin/python scripts/mutate.py               # all, 4-7 minutes
+    PYTHONPATH=$PWD .venv/bin/python scripts/mutate.py               # all, 2-7 minutes
     PYTHONPATH=$PWD .venv/bin/python scripts/mutate.py --only leg_force_no_omega2 ski_tilt_halved
     PYTHONPATH=$PWD .venv/bin/python scripts/mutate.py --list
     .venv/bin/python scripts/mutate.py --group bake --python .venv-bpy42/bin/python
