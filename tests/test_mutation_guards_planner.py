@@ -16,8 +16,8 @@ from blender_turning.core.planner import PlannerSettings, Problem, exhaustive
 
 
 def test_planner_stage_heading_rate_is_V_f_C_f():
-    """Section 6.1's stage simulation (its own fused right-hand side): the heading advances by
-    ``V_f C_f`` and the foot path's curvature is ``C_f``."""
+    """Section 6.1's stage simulation (its own loop over the core's right-hand side): the heading
+    advances by ``V_f C_f`` over every step while ``C_f`` ramps at the largest rate."""
     fig = preset("skier")
     fig = replace(fig, limits=replace(fig.limits, dC_f_max=0.3))
     path = HermitePath.from_points(np.array([[0.0, 0.0], [40.0, 0.0]]),
@@ -39,6 +39,7 @@ def test_planner_stage_heading_rate_is_V_f_C_f():
 
 
 def test_planner_marks_a_fall_to_the_right():
+    """A node leaning and falling either way is marked fallen (mirror images)."""
     fig = preset("skier")
     path = HermitePath.from_points(np.array([[0.0, 0.0], [40.0, 0.0]]),
                                    np.array([[40.0, 0.0], [40.0, 0.0]]))
