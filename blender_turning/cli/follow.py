@@ -1,6 +1,6 @@
 """``follow``: path following around obstacles (Section 6) from a scene file.
 
-Writes the trajectory CSV (DESIGN.md columns, ``phi`` from the Section 6.2 post-pass), the search
+Writes the trajectory CSV (docs/ARCHITECTURE.md Sec. 3, ``phi`` from the 6.2 post-pass), the search
 statistics (JSON: one entry per replanning and totals) and a plot of path, obstacles and track.
 When no plan survives, the error names the time and the position (one line, exit 2).
 """

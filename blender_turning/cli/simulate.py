@@ -18,7 +18,8 @@ BODY_FLAGS = {"mass": "m", "com_height": "l", "inertia": "I_v", "speed": "V_cm",
 def register(sub):
     p = sub.add_parser("simulate", help="simulate a slalom and write its trajectory",
                        description="Simulate one figure (Sections 3-5) and write the trajectory "
-                                   "CSV (columns of DESIGN.md, SI units, radians).")
+                                   "CSV (columns of docs/ARCHITECTURE.md Section 3, SI units, "
+                                   "radians).")
     p.add_argument("--preset", default="skier", choices=sorted(PRESETS))
     p.add_argument("--mass", type=float, help="kg")
     p.add_argument("--com-height", type=float, help="height of the centre of mass, m")
