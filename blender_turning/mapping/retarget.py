@@ -1,0 +1,405 @@
+"""Retargeting (issue 8): the built-in figure's motion on the user's own rig.  numpy only.
+
+The built-in figure's mapping (Section 7) gives a :class:`~.base.PoseTrack` for its own rig
+(``rigs/<sport>.json``).  :func:`retarget` carries it onto a :class:`UserRig` (the user's
+armature at rest, read by the Blender side) through a :class:`~.bone_map.BoneMap`:
+
+* **Frames.**  The user's rig is measured, never assumed: its facing is the direction
+  ``left x up`` with ``left`` from the right hip joint to the left one (Blender characters face
+  -Y, the built-in rigs +Y), its size ``k`` is its leg length (hip joint to knee to ankle, in
+  world metres) over the built-in's.  A built-in armature-space point ``p`` goes to
+  ``origin + (k / s) C p`` in the user's armature space (``C`` turns +Y onto the user's facing,
+  ``s`` is the object's scale, ``origin`` the ankles' midpoint on ``z = 0``).  Scaling the whole
+  pose by ``k`` about the foot point keeps every angle (lean, knee bend, ski tilt) and keeps the
+  equipment on the ground; the trajectory itself (where the foot point goes) is not scaled.
+* **Orientations.**  Each joint's world orientation relative to its rest carries over through
+  the rest-pose difference of the two skeletons: ``R_user = D_builtin A R_user_rest`` with
+  ``D_builtin`` the built-in bone's rotation from its rest (in the user's axes) and ``A`` the
+  fixed rotation taking the user's rest segment (joint to next joint) onto the built-in's (a
+  T-pose arm onto the built-in's hanging arm).  The feet keep ``A = I`` (both rigs stand flat).
+* **Equipment** (:func:`equipment_rest`) is rigid with its joint, placed at rest as on the
+  built-in through the same ``A``: a ski under its foot lands exactly on the built-in's ski.  A
+  pole is rigid in the hand, so it follows the built-in's hand, not the built-in pole's own aim
+  (the built-in's pole swings in its hand; an object tied to a bone cannot, and a hand turned
+  with the pole would put the wrist out of the arm's reach on about 40% of the frames).
+* **Positions.**  The pelvis goes where the built-in's hip joints' midpoint goes (so the body's
+  lean, ankles to pelvis, is the built-in's); each foot is put exactly on the built-in's ankle
+  target by two-bone IK with the knee towards the same side as the built-in's; hands reach the
+  built-in's wrists the same way; the rest is carried by the parents.
+* **Channels.**  For a rig with controls (Rigify) the bake keys the controls, each moving rigidly
+  with its joint (``bone_map.Control``); otherwise the mapped bones (FK) and, on the object, the
+  root motion.  A bone's parent frame is taken to move rigidly with the nearest mapped joint
+  above it (bones between stay at rest), and Blender's ``use_local_location = False`` (location
+  in the parent's orientation) is honoured.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import bones as B
+from .base import BoneChannels, PoseTrack
+from .bone_map import JOINT_PARENT, JOINTS, BoneMap, require_joints
+from .common import rot_z
+from .kinematics import Skeleton, quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
+from .rig_spec import load_rig
+
+__all__ = ["UserRig", "RigFit", "EquipmentPiece", "fit_rig", "retarget", "equipment_rest",
+           "ATTACH"]
+
+#: Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig.
+ATTACH = {
+    "skier": {"ski.L": "foot.L", "ski.R": "foot.R", "pole.L": "hand.L", "pole.R": "hand.R"},
+}
+#: The next joint down a chain: a joint's rest "segment" runs from its head to this one's head.
+CHAIN_CHILD = {B.HIPS: (B.SPINE, B.SPINE_2, B.CHEST), B.SPINE: (B.SPINE_2, B.CHEST),
+               B.SPINE_2: (B.CHEST,), B.CHEST: (B.NECK, B.HEAD), B.NECK: (B.NECK_2, B.HEAD),
+               B.NECK_2: (B.HEAD,)}
+for _s in ("L", "R"):
+    CHAIN_CHILD.update({B.side(a, _s): (B.side(b, _s),) for a, b in (
+        ("shoulder", "upper_arm"), ("upper_arm", "forearm"), ("forearm", "hand"),
+        ("thigh", "shin"), ("shin", "foot"))})
+FLAT = {B.side(b, s) for b in ("foot", "toe") for s in ("L", "R")}     # A = I: stand flat
+
+
+@dataclass(frozen=True)
+class UserRig:
+    """The user's armature at rest, as Blender has it (armature space, the armature's units)."""
+
+    names: tuple
+    parents: tuple
+    """Parent bone name (or ``None``) of each bone."""
+    rest: np.ndarray
+    """(k, 4, 4) ``bone.matrix_local``."""
+    local_location: tuple = None
+    """``bone.use_local_location`` of each bone (default all ``True``)."""
+    scale: float = 1.0
+    """The armature object's uniform scale (world metres per armature unit)."""
+    name: str = "rig"
+
+    def __post_init__(self):
+        k = len(self.names)
+        rest = np.asarray(self.rest, float)
+        if rest.shape != (k, 4, 4) or len(self.parents) != k:
+            raise ValueError(f"rig {self.name!r}: {k} names, {len(self.parents)} parents and "
+                             f"rest matrices of shape {rest.shape} do not agree")
+        if not np.all(np.isfinite(rest)):
+            raise ValueError(f"rig {self.name!r}: a rest matrix is not finite")
+        if not (math.isfinite(self.scale) and self.scale > 0):
+            raise ValueError(f"rig {self.name!r}: scale = {self.scale!r} must be positive")
+        object.__setattr__(self, "rest", rest)
+        if self.local_location is None:
+            object.__setattr__(self, "local_location", (True,) * k)
+        object.__setattr__(self, "_index", {n: i for i, n in enumerate(self.names)})
+
+    def i(self, name: str) -> int:
+        from .bones import MissingBoneError
+        try:
+            return self._index[name]
+        except KeyError:
+            raise MissingBoneError(f"bone {name!r} is not in rig {self.name!r}") from None
+
+    def rest_of(self, name: str) -> np.ndarray:
+        return self.rest[self.i(name)]
+
+    def head(self, name: str) -> np.ndarray:
+        return self.rest[self.i(name)][:3, 3]
+
+
+@dataclass(frozen=True)
+class RigFit:
+    """How the built-in rig's armature space sits in the user's (see the module doc)."""
+
+    facing: float
+    """Direction the user's rig faces in its armature space, rad, counter-clockwise from +X."""
+    k: float
+    """Size of the user's figure over the built-in's (leg length ratio, world metres)."""
+    origin: np.ndarray
+    """(3,) the user's armature point that goes onto the foot point (ankle midpoint, z = 0)."""
+    scale: float
+    """World metres per user armature unit."""
+
+    @property
+    def C(self) -> np.ndarray:
+        """(3, 3) the built-in's axes -> the user's (turns +Y onto the facing)."""
+        return rot_z(self.facing - math.pi / 2)
+
+    def point(self, p) -> np.ndarray:
+        """Built-in armature-space points (..., 3) -> the user's armature space."""
+        return self.origin + (self.k / self.scale) * np.asarray(p, float) @ self.C.T
+
+
+def _unit(v):
+    v = np.asarray(v, float)
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def swing(a, b) -> np.ndarray:
+    """(..., 3, 3) the smallest rotation taking direction ``a`` onto ``b`` (Rodrigues)."""
+    a, b = np.broadcast_arrays(_unit(a), _unit(b))
+    v = np.cross(a, b)
+    c = np.sum(a * b, axis=-1)
+    vx = np.zeros(a.shape + (3,))
+    vx[..., 0, 1], vx[..., 0, 2], vx[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    vx[..., 1, 0], vx[..., 2, 0], vx[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    eye = np.broadcast_to(np.eye(3), vx.shape)
+    out = eye + vx + vx @ vx / (1.0 + c)[..., None, None]
+    # Opposite directions: half a turn about any axis across a.
+    opp = c < -1.0 + 1e-9
+    if np.any(opp):
+        ax = np.cross(a[opp], [1.0, 0.0, 0.0])
+        ax[np.linalg.norm(ax, axis=-1) < 1e-6] = np.cross(a[opp], [0.0, 1.0, 0.0])[
+            np.linalg.norm(ax, axis=-1) < 1e-6]
+        ax = _unit(ax)
+        out[opp] = 2.0 * ax[..., :, None] * ax[..., None, :] - np.eye(3)
+    return out
+
+
+def _mapped(bm: BoneMap, rig: UserRig, joint: str):
+    bone = bm.bone(joint)
+    return bone if bone is not None and bone in rig._index else None
+
+
+def _parent_joint(bm, rig, joint):
+    p = JOINT_PARENT[joint]
+    while p is not None and _mapped(bm, rig, p) is None:
+        p = JOINT_PARENT[p]
+    return p
+
+
+def _chain_child(bm, rig, joint):
+    for c in CHAIN_CHILD.get(joint, ()):
+        if _mapped(bm, rig, c) is not None:
+            return c
+    return None
+
+
+def _leg_length(head):
+    return sum(float(np.linalg.norm(head(b) - head(a)))
+               for a, b in (("thigh.L", "shin.L"), ("shin.L", "foot.L")))
+
+
+def fit_rig(rig: UserRig, bm: BoneMap, sport: str = "skier") -> RigFit:
+    """Measure the user's rig against the built-in figure of ``sport`` (facing, size, origin)."""
+    require_joints(bm, rig.names, f"armature {rig.name!r}")
+    head = lambda j: rig.head(bm.bone(j))            # noqa: E731
+    left = head("thigh.L") - head("thigh.R")
+    left[2] = 0.0
+    if np.linalg.norm(left) < 1e-9:
+        raise ValueError(f"armature {rig.name!r}: the hip joints coincide in plan (thigh.L -> "
+                         f"{bm.bone('thigh.L')!r}, thigh.R -> {bm.bone('thigh.R')!r}); cannot "
+                         f"tell which way it faces")
+    fwd = np.cross(left, [0.0, 0.0, 1.0])
+    toes = sum(rig.rest_of(bm.bone(f"foot.{s}"))[:3, 1] for s in ("L", "R"))
+    if np.dot(toes[:2], fwd[:2]) < 0:
+        raise ValueError(f"armature {rig.name!r}: its feet point backwards from the way its "
+                         f"left and right hips say it faces (are .L and .R swapped?)")
+    spec = load_rig(sport)
+    b_head = lambda j: np.asarray(spec.bone(j).head)  # noqa: E731
+    k = rig.scale * _leg_length(head) / _leg_length(b_head)
+    ankles = 0.5 * (head("foot.L") + head("foot.R"))
+    return RigFit(float(math.atan2(fwd[1], fwd[0])), float(k),
+                  np.array([ankles[0], ankles[1], 0.0]), float(rig.scale))
+
+
+class _Builtin:
+    """The built-in figure's posed bones (armature space) with its rest, in the user's axes."""
+
+    def __init__(self, sport, track, fit):
+        spec = load_rig(sport)
+        self.skel = Skeleton.from_spec(spec)
+        self.n = len(track)
+        self.P = self.skel.fk(track.bones, self.n)
+        self.fit = fit
+
+    def delta(self, bone):
+        """(n, 3, 3) the bone's rotation from rest, in the user's axes."""
+        C = self.fit.C
+        D = self.P[bone][:, :3, :3] @ self.skel.rest_of(bone)[:3, :3].T
+        return C @ D @ C.T
+
+    def head(self, bone):
+        """(n, 3) the posed head, in the user's armature space."""
+        return self.fit.point(self.P[bone][:, :3, 3])
+
+    def rest_vec(self, a, b):
+        """The rest vector from ``a``'s head to ``b``'s head, in the user's axes (built-in m)."""
+        return self.fit.C @ (self.skel.rest_of(b)[:3, 3] - self.skel.rest_of(a)[:3, 3])
+
+
+def _rest_difference(bm, rig, skel, fit, joint):
+    """``A``: the rotation taking the user's rest segment of ``joint`` (to the next mapped joint
+    down its chain, or the bone's Y) onto the built-in's (``skel``), in the user's axes."""
+    if joint in FLAT:
+        return np.eye(3)
+    u_rest = rig.rest_of(bm.bone(joint))
+    child = _chain_child(bm, rig, joint)
+    if child is None:
+        return swing(u_rest[:3, 1], fit.C @ skel.rest_of(joint)[:3, 1])
+    b_vec = fit.C @ (skel.rest_of(child)[:3, 3] - skel.rest_of(joint)[:3, 3])
+    return swing(rig.head(bm.bone(child)) - u_rest[:3, 3], b_vec)
+
+
+def _pole(bi, upper, lower, end):
+    """Where the built-in's middle joint bends (n, 3): off the upper-to-end line, user axes."""
+    root, mid, tip = (bi.P[b][:, :3, 3] for b in (upper, lower, end))
+    u = _unit(tip - root)
+    off = mid - root
+    off = off - np.sum(off * u, axis=-1, keepdims=True) * u
+    return off @ bi.fit.C.T
+
+
+def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
+    """Armature-space poses (n, 4, 4) of the user's mapped joints (see the module doc)."""
+    fit, n = bi.fit, bi.n
+    rest = {j: rig.rest_of(bm.bone(j)) for j in JOINTS if _mapped(bm, rig, j)}
+    A = {j: _rest_difference(bm, rig, bi.skel, fit, j) for j in rest}
+    rot = {j: bi.delta(j) @ (A[j] @ rest[j][:3, :3]) for j in rest}
+    poses = {}
+
+    def place(j, head, R=None):
+        m = np.zeros((n, 4, 4))
+        m[:, :3, :3] = rot[j] if R is None else R
+        m[:, :3, 3] = head
+        m[:, 3, 3] = 1.0
+        poses[j] = m
+
+    def carried(j):
+        pj = _parent_joint(bm, rig, j)
+        p = np.append(rest[j][:3, 3], 1.0)
+        return (poses[pj] @ (np.linalg.inv(rest[pj]) @ p))[:, :3]
+
+    def aimed(j, target_vec, rest_vec):
+        """``rot[j]`` swung so the rest vector ``rest_vec`` (armature space) points along
+        ``target_vec`` (n, 3)."""
+        now = np.einsum("nij,j->ni", rot[j] @ rest[j][:3, :3].T, rest_vec)
+        return swing(now, target_vec) @ rot[j]
+
+    # The pelvis: the hip joints' midpoint goes where the built-in's goes (the lean carries over).
+    hips_u = 0.5 * (rest["thigh.L"][:3, 3] + rest["thigh.R"][:3, 3])
+    hips_b = 0.5 * (bi.head("thigh.L") + bi.head("thigh.R"))
+    DA = rot[B.HIPS] @ rest[B.HIPS][:3, :3].T
+    place(B.HIPS, hips_b - DA @ (hips_u - rest[B.HIPS][:3, 3]))
+    for j in rest:
+        if j == B.HIPS or j in poses:
+            continue
+        side = j[-1]
+        if j.startswith("thigh"):
+            chain = (j, f"shin.{side}", f"foot.{side}")
+            target = bi.head(f"foot.{side}")
+        elif j.startswith("upper_arm"):
+            chain = (j, f"forearm.{side}", f"hand.{side}")
+            target = bi.head(chain[2])
+        else:
+            place(j, carried(j))
+            continue
+        a, b, c = chain
+        root = carried(a)
+        l1 = float(np.linalg.norm(rest[b][:3, 3] - rest[a][:3, 3]))
+        l2 = float(np.linalg.norm(rest[c][:3, 3] - rest[b][:3, 3]))
+        mid, end = two_bone_ik(root, target, l1, l2, _pole(bi, a, b, c))
+        place(a, root, aimed(a, mid - root, rest[b][:3, 3] - rest[a][:3, 3]))
+        place(b, mid, aimed(b, end - mid, rest[c][:3, 3] - rest[b][:3, 3]))
+        place(c, end)
+    return poses
+
+
+def _channels(rig: UserRig, bone: str, pose, parent_delta):
+    """Local channels ``(location (n, 3), rotation (n, 4))`` giving ``bone`` the armature-space
+    ``pose`` (n, 4, 4) when its parent frame has moved by ``parent_delta`` (n, 4, 4) or not at
+    all (``None``)."""
+    i = rig.i(bone)
+    rest, p = rig.rest[i], rig.parents[i]
+    base = rest if parent_delta is None else parent_delta @ rest
+    base = np.broadcast_to(base, pose.shape)
+    local = rigid_inverse(base) @ pose
+    if rig.local_location[i]:
+        loc = local[:, :3, 3]
+    else:     # Blender: the location is in the parent's posed orientation (armature.cc)
+        par = np.eye(4) if p is None else rig.rest_of(p)
+        par = np.broadcast_to(par if parent_delta is None else parent_delta @ par, pose.shape)
+        loc = np.einsum("nji,nj->ni", par[:, :3, :3], pose[:, :3, 3] - base[:, :3, 3])
+    return loc, quat_continuous(quat_from_matrix(local[:, :3, :3]))
+
+
+def _delta(poses, rig, bm, joint):
+    return None if joint is None else poses[joint] @ np.linalg.inv(rig.rest_of(bm.bone(joint)))
+
+
+def _fk_ancestor(rig, bm, bone):
+    """The nearest mapped joint above ``bone`` in the user's hierarchy (or ``None``)."""
+    owner = {b: j for j, b in bm.joints.items()}
+    p = rig.parents[rig.i(bone)]
+    while p is not None and p not in owner:
+        p = rig.parents[rig.i(p)]
+    return None if p is None else owner[p]
+
+
+def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
+             fit: RigFit | None = None) -> PoseTrack:
+    """The built-in figure's ``track`` (from ``map_trajectory(sport, ...)``) on the user's rig:
+    a :class:`PoseTrack` of the user's bones (or controls) and the object's root motion."""
+    if sport not in ATTACH:
+        raise ValueError(f"sport = {sport!r}: retargeting supports {', '.join(ATTACH)}")
+    fit = fit_rig(rig, bm, sport) if fit is None else fit
+    bi = _Builtin(sport, track, fit)
+    poses = solve_joints(bi, rig, bm, sport)
+    bones = {}
+    if bm.controls:
+        for c in bm.controls:
+            rest = rig.rest_of(c.bone)
+            pose = _delta(poses, rig, bm, c.joint) @ rest
+            loc, q = _channels(rig, c.bone, pose, _delta(poses, rig, bm, c.parent))
+            bones[c.bone] = BoneChannels(location=loc if c.parent is None else None, rotation=q)
+    else:
+        for j in poses:
+            bone = bm.bone(j)
+            anc = _fk_ancestor(rig, bm, bone)
+            loc, q = _channels(rig, bone, poses[j], _delta(poses, rig, bm, anc))
+            bones[bone] = BoneChannels(location=loc if anc is None else None, rotation=q)
+    # Root motion: the object turns the user's facing onto the heading and puts `origin` on
+    # the foot point (the built-in's object carries the foot point and theta_dir - 90 deg).
+    heading = track.rotation[:, 2] + math.pi / 2
+    psi = heading - fit.facing
+    R = rot_z(psi)
+    location = track.location - fit.scale * np.einsum("nij,j->ni", R, fit.origin)
+    rotation = np.stack([np.zeros(len(track)), np.zeros(len(track)), psi], axis=1)
+    return PoseTrack(track.frames, location, rotation, bones, dict(track.props))
+
+
+@dataclass(frozen=True)
+class EquipmentPiece:
+    name: str
+    """The built-in rig's equipment bone (``ski.L``); its meshes are the built-in's."""
+    joint: str
+    """Our joint it is rigid with."""
+    bone: str
+    """The user's bone playing that joint."""
+    rest: np.ndarray
+    """(4, 4) its frame at the rig's rest, user armature space (like a bone's ``matrix_local``)."""
+    size: float
+    """Mesh scale: built-in metres -> the user's armature units (``k / s``)."""
+
+
+def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = None) -> list:
+    """Where each piece of the sport's equipment sits on the user's rig at rest: rigid with its
+    joint exactly as on the built-in figure, through the same rest difference ``A`` as the
+    motion (so that in motion it lands where the built-in's equipment is)."""
+    if sport not in ATTACH:
+        raise ValueError(f"sport = {sport!r}: retargeting supports {', '.join(ATTACH)}")
+    fit = fit_rig(rig, bm, sport) if fit is None else fit
+    spec = load_rig(sport)
+    skel = Skeleton.from_spec(spec)
+    C, size = fit.C, fit.k / fit.scale
+    out = []
+    for piece, joint in ATTACH[sport].items():
+        A = _rest_difference(bm, rig, skel, fit, joint)
+        u = rig.rest_of(bm.bone(joint))
+        m = np.eye(4)
+        m[:3, :3] = A.T @ C @ skel.rest_of(piece)[:3, :3]
+        m[:3, 3] = u[:3, 3] + A.T @ (size * (C @ (skel.rest_of(piece)[:3, 3]
+                                                    - skel.rest_of(joint)[:3, 3])))
+        out.append(EquipmentPiece(piece, joint, bm.bone(joint), m, size))
+    return out

@@ -1,0 +1,191 @@
+"""Retargeting in the mapping layer (issue 8), numpy only: the built-in skier's motion on a rig of
+other proportions, facing -Y, in a T-pose, scaled, with other bone names and an extra root."""
+import math
+
+import numpy as np
+import pytest
+
+from blender_turning.core import preset, simulate
+from blender_turning.core.controllers import PhaseEllipse
+from blender_turning.mapping import map_trajectory
+from blender_turning.mapping.bone_map import load_bone_map, parse_bone_map
+from blender_turning.mapping.common import rot_y, rot_z
+from blender_turning.mapping.kinematics import Skeleton, rest_matrix
+from blender_turning.mapping.retarget import (UserRig, equipment_rest, fit_rig, retarget,
+                                              swing)
+from blender_turning.mapping.rig_spec import load_rig
+
+PREFIX = "u_"
+SKEL = Skeleton.from_spec(load_rig("skier"))
+
+
+def user_rig(scale=1.0, size=1.1, t_pose=True, shin_ratio=1.1):
+    """The skier's human bones renamed (``u_`` + name) under an extra root, turned to face -Y,
+    ``size`` times as large, shins ``shin_ratio`` times longer relative to the thighs, the arms
+    raised sideways into a T-pose; in an armature of object scale ``scale``."""
+    spec = load_rig("skier")
+    human = [b for b in spec.bones if b.name not in ("root", "lean") and b.deform
+             and not b.name.startswith(("ski", "pole"))]
+    heads = {b.name: np.array(b.head, float) for b in human}
+    tails = {b.name: np.array(b.tail, float) for b in human}
+    # Longer shins: everything below the knee moves down, the hips up to stay on the ground.
+    for s in "LR":
+        knee = heads[f"shin.{s}"]
+        d = (tails[f"shin.{s}"] - knee) * (shin_ratio - 1.0)
+        for n in (f"shin.{s}",):
+            tails[n] = tails[n] + d
+        for n in (f"foot.{s}", f"toe.{s}"):
+            heads[n], tails[n] = heads[n] + d, tails[n] + d
+    lift = -(tails["shin.L"] - np.array(spec.bone("shin.L").tail))[2]
+    for n in heads:
+        if not n.startswith(("shin", "foot", "toe")):
+            heads[n], tails[n] = heads[n] + [0, 0, lift], tails[n] + [0, 0, lift]
+        elif n.startswith("shin"):
+            heads[n] = heads[n] + [0, 0, lift]
+    for n in heads:
+        if n.startswith(("foot", "toe")):
+            heads[n], tails[n] = heads[n] + [0, 0, lift], tails[n] + [0, 0, lift]
+    names, parents, rest = ["u_root"], [None], [np.eye(4)]
+    for b in human:
+        m = rest_matrix(heads[b.name], tails[b.name], b.roll)
+        if t_pose and b.name.split(".")[0] in ("upper_arm", "forearm", "hand"):
+            s = b.name[-1]
+            pivot = heads[f"upper_arm.{s}"]
+            R = rot_y(np.array(math.radians(90 if s == "R" else -90)))   # arms out sideways
+            m[:3, :3] = R @ m[:3, :3]
+            m[:3, 3] = pivot + R @ (m[:3, 3] - pivot)
+        names.append(PREFIX + b.name)
+        parents.append("u_root" if b.parent in ("lean", None) else PREFIX + b.parent)
+        rest.append(m)
+    turn = np.eye(4)
+    turn[:3, :3] = rot_z(np.array(math.pi))
+    rest = np.array([turn @ np.diag([size, size, size, 1.0]) @ m @ np.diag(
+        [1 / size, 1 / size, 1 / size, 1.0]) for m in rest])
+    rest[:, :3, 3] /= scale
+    return UserRig(tuple(names), tuple(parents), rest, scale=scale, name="user")
+
+
+BM = parse_bone_map({"name": "u", "joints": {j: PREFIX + j for j in load_bone_map(
+    "builtin").joints}})
+
+
+@pytest.fixture(scope="module")
+def run():
+    fig = preset("skier")
+    traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(23),
+                                      heading=0.3), duration=6.0)
+    track = map_trajectory("skier", traj, fps=24)
+    return track
+
+
+def user_fk(rig, track):
+    skel = Skeleton(rig.names, rig.parents, rig.rest, [False] * len(rig.names))
+    return skel.fk(track.bones, len(track))
+
+
+def builtin_fk(track):
+    return Skeleton.from_spec(load_rig("skier")).fk(track.bones, len(track))
+
+
+def world(track, P, facing_up=None):
+    """Armature-space points (n, 3) -> world, from the track's object transform."""
+    R = rot_z(track.rotation[:, 2])
+    return track.location + np.einsum("nij,nj->ni", R, P)
+
+
+def lean_angle(track, ankle_l, ankle_r, hip_l, hip_r):
+    """Lateral lean (rad) of ankles-midpoint -> hips-midpoint, world, across the travel
+    (``track``: the built-in's, whose +Y faces the heading)."""
+    v = 0.5 * (hip_l + hip_r) - 0.5 * (ankle_l + ankle_r)
+    heading = track.rotation[:, 2] + math.pi / 2
+    left = np.stack([-np.sin(heading), np.cos(heading)], 1)
+    return np.arctan2(np.sum(v[:, :2] * left, 1), v[:, 2])
+
+
+@pytest.mark.parametrize("scale, shin_ratio", [(1.0, 1.1), (0.01, 1.1), (1.0, 1.0)])
+def test_feet_lean_and_equipment_follow_the_builtin(run, scale, shin_ratio):
+    """Ankles, lean and skis exactly (the legs reach); the poles too where the arms are as long
+    as the legs' scale says (with longer shins the arms are relatively short and cannot)."""
+    rig = user_rig(scale=scale, shin_ratio=shin_ratio)
+    fit = fit_rig(rig, BM)
+    assert fit.facing == pytest.approx(-math.pi / 2, abs=1e-9)      # measured: faces -Y
+    assert fit.k == pytest.approx(1.1 * (0.4311 + 0.4111 * shin_ratio) / (0.4311 + 0.4111),
+                                  rel=2e-3)
+    out = retarget(run, "skier", rig, BM, fit)
+    P, Pb = user_fk(rig, out), builtin_fk(run)
+    sw = lambda tr, p: world(tr, p * (scale if tr is out else 1.0))      # noqa: E731
+    u = {j: sw(out, P[PREFIX + j][:, :3, 3]) for j in ("foot.L", "foot.R", "thigh.L", "thigh.R")}
+    b = {j: world(run, Pb[j][:, :3, 3]) for j in u}
+    # The ankles are exactly where the built-in's are (scaled by k about the foot point).
+    for j in ("foot.L", "foot.R"):
+        foot_pt = np.column_stack([run.location[:, :2], np.zeros(len(run))])
+        assert np.max(np.abs(u[j] - (foot_pt + fit.k * (b[j] - foot_pt)))) < 1e-6
+    lu = lean_angle(run, u["foot.L"], u["foot.R"], u["thigh.L"], u["thigh.R"])
+    lb = lean_angle(run, b["foot.L"], b["foot.R"], b["thigh.L"], b["thigh.R"])
+    assert np.max(np.abs(lu - lb)) < math.radians(0.01)
+    assert np.ptp(lb) > math.radians(20)                  # it does lean
+    # Each ski rigid on its foot lands exactly on the built-in's ski (scaled), on the snow.
+    for piece in equipment_rest("skier", rig, BM, fit):
+        if piece.name.startswith("pole") and shin_ratio != 1.0:
+            continue
+        Mu = P[piece.bone] @ np.linalg.inv(rig.rest_of(piece.bone)) @ piece.rest
+        # The built-in's equipment as carried by the joint from rest (the ski is glued to the
+        # foot; the built-in's pole also swings in its hand, the user's is rigid in it).
+        Mb = Pb[piece.joint] @ np.linalg.inv(SKEL.rest_of(piece.joint)) @ SKEL.rest_of(
+            piece.name)
+        R = rot_z(out.rotation[:, 2])
+        assert np.max(np.abs(R @ Mu[:, :3, :3] - rot_z(run.rotation[:, 2]) @ Mb[:, :3, :3])) < 1e-6
+        head_u = sw(out, Mu[:, :3, 3])
+        foot_pt = np.column_stack([run.location[:, :2], np.zeros(len(run))])
+        head_b = foot_pt + fit.k * (world(run, Mb[:, :3, 3]) - foot_pt)
+        assert np.max(np.abs(head_u - head_b)) < 1e-6
+
+
+def test_knee_flexion_follows_within_5_deg(run):
+    rig = user_rig()
+    out = retarget(run, "skier", rig, BM)
+    P, Pb = user_fk(rig, out), builtin_fk(run)
+
+    def flex(P, pre, s):
+        h, k, a = (P[pre + f"{b}.{s}"][:, :3, 3] for b in ("thigh", "shin", "foot"))
+        return np.arccos(np.clip(np.sum(_u(k - h) * _u(a - k), 1), -1, 1))
+    for s in "LR":
+        fu, fb = flex(P, PREFIX, s), flex(Pb, "", s)
+        assert np.ptp(fb) > math.radians(5)
+        assert np.max(np.abs(fu - fb)) < math.radians(5)
+
+
+def _u(v):
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def test_t_pose_arms_hang_like_the_builtins(run):
+    """The rest difference: a T-pose upper arm ends up pointing where the built-in's does."""
+    out = retarget(run, "skier", user_rig(t_pose=True), BM)
+    P, Pb = user_fk(user_rig(), out), builtin_fk(run)
+    for s in "LR":
+        yu = _u(P[PREFIX + f"forearm.{s}"][:, :3, 3] - P[PREFIX + f"upper_arm.{s}"][:, :3, 3])
+        yb = _u(Pb[f"forearm.{s}"][:, :3, 3] - Pb[f"upper_arm.{s}"][:, :3, 3])
+        yb = yb @ rot_z(np.array(math.pi)).T       # into the user's (-Y facing) axes
+        assert np.degrees(np.max(np.arccos(np.clip(np.sum(yu * yb, 1), -1, 1)))) < 20
+
+
+def test_swing_takes_a_onto_b_including_opposite():
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(size=(50, 3)), rng.normal(size=(50, 3))
+    a[0], b[0] = [0, 0, 1], [0, 0, -1]
+    R = swing(a, b)
+    assert np.allclose(np.einsum("nij,nj->ni", R, _u(a)), _u(b), atol=1e-9)
+    assert np.allclose(R @ np.swapaxes(R, 1, 2), np.eye(3), atol=1e-9)
+
+
+def test_a_rig_whose_feet_point_backwards_is_refused():
+    rig = user_rig()
+    rest = rig.rest.copy()
+    for s in "LR":                               # swap the sides: hips say +Y, feet say -Y
+        i, j = rig.names.index(PREFIX + f"thigh.{s}"), rig.names.index(
+            PREFIX + f"thigh.{'R' if s == 'L' else 'L'}")
+        rest[i, :3, 3], rest[j, :3, 3] = rig.rest[j, :3, 3], rig.rest[i, :3, 3]
+    bad = UserRig(rig.names, rig.parents, rest, name="user")
+    with pytest.raises(ValueError, match="feet point backwards"):
+        fit_rig(bad, BM)
