@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import importlib
 
-_MODULES = ("props", "presets", "ops_figure", "ops_bake", "ops_path", "panel")
+_MODULES = ("props_rig", "props", "presets", "ops_figure", "ops_bake", "ops_path", "ops_rig",
+            "panel", "panel_rig")
 
 
 def _modules():

@@ -7,7 +7,7 @@ import math
 import bpy
 
 from ..core.errors import TurningError
-from . import bake, foot_track
+from . import bake, foot_track, retarget_adapter
 from .ops_common import context_figure, poll_figure
 from .pipeline import figure_pose_track
 from .scene_adapters import FrameRange, start_from_object
@@ -21,7 +21,11 @@ def apply_bake(fig, traj, track):
 
 
 def reset_pose(fig):
-    """Put a figure without baked keys back at its start, in its rest pose."""
+    """Put a figure without baked keys back at its start, in its rest pose (a user's rig: as it
+    was before it became a figure)."""
+    if retarget_adapter.is_user_rig(fig):
+        retarget_adapter.restore_state(fig, pose_only=True)
+        return
     s = fig.turning
     fig.location = s.start
     fig.rotation_euler = (0.0, 0.0, s.start_heading - math.pi / 2)

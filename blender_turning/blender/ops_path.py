@@ -39,7 +39,7 @@ def finish(context, fig, job, result):
     frames = FrameRange(scene.frame_start, scene.frame_start + max(n, 1), fps)
     traj = result.trajectory.resample(fps, start=0.0)
     traj = type(traj)(traj.data[:, :frames.end - frames.start + 1], traj.meta)
-    track = map_track(fig.turning.sport, traj, frames)        # may raise: nothing written yet
+    track = map_track(fig.turning.sport, traj, frames, obj=fig)   # may raise: nothing written
     scene.frame_end = frames.end
     apply_bake(fig, traj, track)
     return frames

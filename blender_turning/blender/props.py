@@ -12,6 +12,8 @@ import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty,
                        PointerProperty)
 
+from .props_rig import TurningRigSettings
+
 SPORTS = (
     ("SKIER", "Skier", "Alpine skier on slalom skis"),
     ("SNOWBOARDER", "Snowboarder", "Carving snowboarder"),
@@ -81,6 +83,7 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                     "Rate.  The sport presets set a gentler rate than the figure's limit")
     foot_track: PointerProperty(name="Foot Track", type=bpy.types.Object, options=_STATIC,
                                 description="Curve object drawn along the foot's path")
+    rig: PointerProperty(type=TurningRigSettings, options=_STATIC)   # issue 8: your own rig
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.

@@ -22,8 +22,10 @@ armature at rest, read by the Blender side) through a :class:`~.bone_map.BoneMap
   pole is rigid in the hand, so it follows the built-in's hand, not the built-in pole's own aim
   (the built-in's pole swings in its hand; an object tied to a bone cannot, and a hand turned
   with the pole would put the wrist out of the arm's reach on about 40% of the frames).
-* **Positions.**  The pelvis goes where the built-in's hip joints' midpoint goes (so the body's
-  lean, ankles to pelvis, is the built-in's); each foot is put exactly on the built-in's ankle
+* **Positions.**  The hip joints' midpoint goes on the built-in's line from the ankles' midpoint
+  to its hip joints (so the body's lean is the built-in's), as far along it as bends the user's
+  knees as much as the built-in's (thighs and shins of other proportions need another hip
+  height for the same bend: an angle carries over, not a length); each foot is put exactly on the built-in's ankle
   target by two-bone IK with the knee towards the same side as the built-in's; hands reach the
   built-in's wrists the same way; the rest is carried by the parents.
 * **Channels.**  For a rig with controls (Rigify) the bake keys the controls, each moving rigidly
@@ -145,9 +147,9 @@ def swing(a, b) -> np.ndarray:
     vx[..., 0, 1], vx[..., 0, 2], vx[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
     vx[..., 1, 0], vx[..., 2, 0], vx[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
     eye = np.broadcast_to(np.eye(3), vx.shape)
-    out = eye + vx + vx @ vx / (1.0 + c)[..., None, None]
-    # Opposite directions: half a turn about any axis across a.
     opp = c < -1.0 + 1e-9
+    out = eye + vx + vx @ vx / np.where(opp, 1.0, 1.0 + c)[..., None, None]
+    # Opposite directions: half a turn about any axis across a.
     if np.any(opp):
         ax = np.cross(a[opp], [1.0, 0.0, 0.0])
         ax[np.linalg.norm(ax, axis=-1) < 1e-6] = np.cross(a[opp], [0.0, 1.0, 0.0])[
@@ -251,6 +253,21 @@ def _pole(bi, upper, lower, end):
     return off @ bi.fit.C.T
 
 
+def _knee_slide(bi, rest, DA, hips_b, hips_u, axis, s):
+    """(n,) how far along ``axis`` the hip joints' midpoint must move from ``hips_b`` for the
+    user's leg ``s`` to bend its knee as much as the built-in's (the law of cosines on the
+    user's thigh and shin; at most 99.9% of the leg's reach)."""
+    thigh, shin, foot = (f"{b}.{s}" for b in ("thigh", "shin", "foot"))
+    h, k, a = (bi.P[b][:, :3, 3] for b in (thigh, shin, foot))
+    cos_bend = np.sum(_unit(k - h) * _unit(a - k), axis=-1)
+    l1 = float(np.linalg.norm(rest[shin][:3, 3] - rest[thigh][:3, 3]))
+    l2 = float(np.linalg.norm(rest[foot][:3, 3] - rest[shin][:3, 3]))
+    d = np.sqrt(np.minimum(l1 * l1 + l2 * l2 + 2 * l1 * l2 * cos_bend, (0.999 * (l1 + l2)) ** 2))
+    w = hips_b + DA @ (rest[thigh][:3, 3] - hips_u) - bi.head(foot)
+    wu = np.sum(w * axis, axis=-1)
+    return -wu + np.sqrt(np.maximum(wu * wu - np.sum(w * w, axis=-1) + d * d, 0.0))
+
+
 def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
     """Armature-space poses (n, 4, 4) of the user's mapped joints (see the module doc)."""
     fit, n = bi.fit, bi.n
@@ -277,11 +294,15 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         now = np.einsum("nij,j->ni", rot[j] @ rest[j][:3, :3].T, rest_vec)
         return swing(now, target_vec) @ rot[j]
 
-    # The pelvis: the hip joints' midpoint goes where the built-in's goes (the lean carries over).
+    # The pelvis: the hip joints' midpoint goes on the built-in's line from the ankles' midpoint
+    # to its hip joints (the lean carries over), as far along it as gives the knees the
+    # built-in's bend (an angle: thighs and shins of other proportions need another distance).
     hips_u = 0.5 * (rest["thigh.L"][:3, 3] + rest["thigh.R"][:3, 3])
     hips_b = 0.5 * (bi.head("thigh.L") + bi.head("thigh.R"))
     DA = rot[B.HIPS] @ rest[B.HIPS][:3, :3].T
-    place(B.HIPS, hips_b - DA @ (hips_u - rest[B.HIPS][:3, 3]))
+    axis = _unit(hips_b - 0.5 * (bi.head("foot.L") + bi.head("foot.R")))
+    slide = np.mean([_knee_slide(bi, rest, DA, hips_b, hips_u, axis, s) for s in "LR"], axis=0)
+    place(B.HIPS, hips_b + slide[:, None] * axis - DA @ (hips_u - rest[B.HIPS][:3, 3]))
     for j in rest:
         if j == B.HIPS or j in poses:
             continue

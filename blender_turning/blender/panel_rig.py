@@ -1,0 +1,88 @@
+"""The Turning tab's "Your Rig" sub-panel (issue 8): make the active armature a figure, its bone
+map (a custom one edited as a list: our joint -> your bone, with a bone picker), remove it."""
+from __future__ import annotations
+
+import bpy
+
+from . import retarget_adapter as ra
+from .panel import TurningPanel
+
+
+class TURNING_UL_bone_map(bpy.types.UIList):
+    """Rows of the custom bone map: our joint, and a picker among the armature's bones."""
+
+    def draw_item(self, context, layout, data, item, icon, active_data, active_prop, index=0):
+        arm = data.id_data.data if data.id_data.type == "ARMATURE" else None
+        row = layout.row(align=True)
+        row.label(text=item.name)
+        if arm is not None:
+            row.prop_search(item, "bone", arm, "bones", text="")
+        else:
+            row.prop(item, "bone", text="")
+
+
+class TURNING_OT_custom_map_from(bpy.types.Operator):
+    """Fill the custom bone map from a shipped one (then edit the rows)"""
+
+    bl_idname = "turning.custom_map_from"
+    bl_label = "Start Custom Map"
+    bl_options = {"REGISTER", "UNDO"}
+
+    source: bpy.props.EnumProperty(name="From", items=[(k, k.title(), "") for k in ra.NAMED])
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.active_object
+        if obj is None or obj.type != "ARMATURE":
+            cls.poll_message_set("Select your armature")
+            return False
+        return True
+
+    def execute(self, context):
+        from ..mapping.bone_map import load_bone_map
+        obj = context.active_object
+        ra.fill_custom_map(obj, load_bone_map(ra.NAMED[self.source]))
+        obj.turning.rig.bone_map = "CUSTOM"
+        return {"FINISHED"}
+
+
+class VIEW3D_PT_turning_rig(TurningPanel, bpy.types.Panel):
+    bl_label = "Your Rig"
+    bl_parent_id = "VIEW3D_PT_turning"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.active_object
+        return obj is not None and obj.type == "ARMATURE" and (
+            not obj.turning.is_figure or ra.is_user_rig(obj))
+
+    def draw(self, context):
+        layout = self.layout
+        obj = context.active_object
+        rig = obj.turning.rig
+        if not obj.turning.is_figure:
+            layout.label(text=f"Make {obj.name} a figure:", icon="ARMATURE_DATA")
+            row = layout.row(align=True)
+            row.operator_menu_enum("turning.make_figure", "sport", text="Make Figure",
+                                        icon="ADD")
+            layout.separator()
+            layout.label(text="Custom bone map (optional):")
+            layout.operator_menu_enum("turning.custom_map_from", "source",
+                                      text="Start From a Shipped Map")
+            if len(rig.custom_map):
+                layout.template_list("TURNING_UL_bone_map", "", rig, "custom_map", rig,
+                                     "custom_index", rows=6)
+                row = layout.row()
+                row.operator("turning.make_figure", text="Make Figure (Custom Map)").bone_map = (
+                    "CUSTOM")
+            return
+        col = layout.column()
+        col.label(text=f"Bone map: {rig.bone_map.title()}", icon="BONE_DATA")
+        if rig.equipment is not None:
+            col.label(text=f"Equipment: {rig.equipment.name}", icon="OUTLINER_COLLECTION")
+        layout.operator("turning.remove_figure", icon="X")
+
+
+classes = (TURNING_UL_bone_map, TURNING_OT_custom_map_from, VIEW3D_PT_turning_rig)
+register, unregister = bpy.utils.register_classes_factory(classes)

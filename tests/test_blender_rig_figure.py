@@ -1,0 +1,194 @@
+"""The user's own rig as a figure, on the bpy wheel (issue 8): a Rigify rig and a Mixamo-named
+skeleton ski beside a built-in skier with the same settings, measured frame by frame."""
+import math
+import os
+import tempfile
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
+bpy = pytest.importorskip("bpy")
+
+from blender_turning import blender as addon  # noqa: E402
+from blender_turning.blender import bake, compat  # noqa: E402
+from rig_fixtures import PREFIX, mixamo_skeleton, rigify_rig  # noqa: E402
+
+pytestmark = pytest.mark.blender
+FRAMES = (1, 48)
+SAME = ("mass", "com_height", "inertia", "speed", "period", "lean", "heading", "start_heading")
+
+#: The bones each measure reads: ankle, knee, hip joint per side.
+JOINTS = {
+    "builtin": {"ankle": "foot.{s}", "knee": "shin.{s}", "hip": "thigh.{s}"},
+    "rigify": {"ankle": "DEF-foot.{s}", "knee": "DEF-shin.{s}", "hip": "DEF-thigh.{s}"},
+    "mixamo": {"ankle": PREFIX + "{S}Foot", "knee": PREFIX + "{S}Leg", "hip": PREFIX + "{S}UpLeg"},
+}
+
+
+def activate(obj):
+    for o in bpy.context.selected_objects:
+        o.select_set(False)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+
+
+@pytest.fixture(scope="module")
+def scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon.register()
+    sc = bpy.context.scene
+    sc.frame_start, sc.frame_end = FRAMES
+    sc.render.fps = 24
+    rigify = rigify_rig(location=(4.0, 0.0, 0.0))
+    mixamo = mixamo_skeleton(location=(-4.0, 0.0, 0.0))
+    sc.cursor.location = (0, 0, 0)
+    assert bpy.ops.turning.add_figure(sport="SKIER") == {"FINISHED"}
+    builtin = bpy.context.view_layer.objects.active
+    yield {"builtin": builtin, "rigify": rigify, "mixamo": mixamo}
+    addon.unregister()
+
+
+def state(obj):
+    """What Remove Figure must give back exactly."""
+    pose = {pb.name: (pb.rotation_mode, tuple(pb.location), tuple(pb.rotation_quaternion),
+                      tuple(pb.rotation_euler), tuple(pb.scale)) for pb in obj.pose.bones}
+    props = {pb.name: dict(pb.items()) for pb in obj.pose.bones if pb.keys()}
+    bones = {b.name: (tuple(b.head_local), tuple(b.tail_local), b.matrix_local.copy())
+             for b in obj.data.bones}
+    return (tuple(obj.location), tuple(obj.rotation_euler), tuple(obj.scale), obj.rotation_mode,
+            sorted(obj.keys()), pose, props, bones,
+            obj.animation_data.action if obj.animation_data else None)
+
+
+@pytest.fixture(scope="module")
+def figures(scene):
+    before = {k: state(scene[k]) for k in ("rigify", "mixamo")}
+    for key in ("rigify", "mixamo"):
+        obj = scene[key]
+        obj.rotation_euler = (0.0, 0.0, math.pi)          # face +Y, as the built-in does
+        activate(obj)
+        assert bpy.ops.turning.make_figure(sport="SKIER", bone_map="AUTO") == {"FINISHED"}
+        assert obj.turning.rig.bone_map == key.upper()
+    src = scene["builtin"].turning
+    for key in ("rigify", "mixamo"):
+        for name in SAME:
+            setattr(scene[key].turning, name, getattr(src, name))
+    for obj in scene.values():
+        activate(obj)
+        assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    return scene, before
+
+
+def world_head(obj, bone):
+    return np.array(obj.matrix_world @ obj.pose.bones[bone].head)
+
+
+def name(key, which, s):
+    return JOINTS[key][which].format(s=s, S="Left" if s == "L" else "Right")
+
+
+@pytest.fixture(scope="module")
+def sampled(figures):
+    """Per frame: each figure's ankles, knees and hip joints (world); each user rig's skis'
+    lowest point and the distance from each ankle to its binding; every deforming bone's
+    armature-space matrix."""
+    scene, _ = figures
+    sc = bpy.context.scene
+    out = {k: {"p": [], "heading": []} for k in scene}
+    users = ("rigify", "mixamo")
+    skis = {k: [o for o in scene[k].turning.rig.equipment.objects
+                if o["turning_equipment"].startswith("ski")] for k in users}
+    # The binding: where the ankle is on the ski at rest, in the ski's own frame.
+    binding = {}
+    for k in users:
+        obj = scene[k]
+        for o in skis[k]:
+            bone = obj.data.bones[o.constraints[0].subtarget]
+            ankle = obj.data.bones[name(k, "ankle", o["turning_equipment"][-1])].head_local
+            binding[o.name] = (bone.matrix_local @ o.matrix_basis).inverted() @ ankle
+    low = {k: [] for k in users}
+    gap = {k: [] for k in users}
+    deform = {k: [] for k in users}
+    for f in range(FRAMES[0], FRAMES[1] + 1):
+        sc.frame_set(f)
+        for k, obj in scene.items():
+            out[k]["p"].append({(w, s): world_head(obj, name(k, w, s))
+                                for w in ("ankle", "knee", "hip") for s in "LR"})
+            out[k]["heading"].append(scene["builtin"].rotation_euler[2] + math.pi / 2)
+        for k in users:
+            obj = scene[k]
+            lows, gaps = [], []
+            for o in skis[k]:
+                mw = np.array(o.matrix_world)
+                v = np.array([tuple(x.co) for x in o.data.vertices])
+                lows.append(np.min(v @ mw[2, :3] + mw[2, 3]))
+                ankle = world_head(obj, name(k, "ankle", o["turning_equipment"][-1]))
+                gaps.append(np.linalg.norm(np.array(o.matrix_world @ binding[o.name]) - ankle))
+            low[k].append(min(lows))
+            gap[k].append(max(gaps))
+            deform[k].append({pb.name: (np.array(pb.matrix), np.array(obj.matrix_world @ pb.matrix))
+                              for pb in obj.pose.bones if pb.bone.use_deform})
+    return out, low, gap, deform
+
+
+def lean(rec):
+    """Lateral lean of ankles-midpoint -> hip-joints-midpoint across the travel, per frame."""
+    out = []
+    for p, h in zip(rec["p"], rec["heading"]):
+        v = 0.5 * (p["hip", "L"] + p["hip", "R"]) - 0.5 * (p["ankle", "L"] + p["ankle", "R"])
+        left = np.array([-math.sin(h), math.cos(h)])
+        out.append(math.atan2(float(v[:2] @ left), float(v[2])))
+    return np.array(out)
+
+
+def knee(rec, s):
+    out = []
+    for p in rec["p"]:
+        a, b = p["knee", s] - p["hip", s], p["ankle", s] - p["knee", s]
+        out.append(math.acos(np.clip(a @ b / np.linalg.norm(a) / np.linalg.norm(b), -1, 1)))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_lean_follows_the_builtin_within_2_deg(sampled, key):
+    out = sampled[0]
+    lb, lu = lean(out["builtin"]), lean(out[key])
+    assert np.ptp(lb) > math.radians(15)
+    assert np.max(np.abs(lu - lb)) < math.radians(2), np.degrees(np.max(np.abs(lu - lb)))
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_knee_flexion_follows_within_5_deg(sampled, key):
+    out = sampled[0]
+    for s in "LR":
+        kb, ku = knee(out["builtin"], s), knee(out[key], s)
+        assert np.ptp(kb) > math.radians(3)
+        assert np.max(np.abs(ku - kb)) < math.radians(5), np.degrees(np.max(np.abs(ku - kb)))
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_feet_on_the_skis_and_skis_on_the_snow(sampled, key):
+    """Ankle to binding within 1 cm; no point of a ski below the snow, none 2 cm above it (the
+    built-in's skis are on the snow on every frame)."""
+    _, low, gap, _ = sampled
+    low, gap = np.array(low[key]), np.array(gap[key])
+    assert np.all(low > -1e-3) and np.all(low < 0.02), (low.min(), low.max())
+    assert np.all(gap < 0.01), gap.max()
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_deforming_bones_all_move_none_sheared(sampled, key):
+    """Every deforming bone moves in the armature's own space (not only with the object), and
+    no bone's world matrix is non-finite or sheared (its axes stay perpendicular)."""
+    frames = sampled[3][key]
+    names = list(frames[0])
+    assert len(names) > (100 if key == "rigify" else 20)
+    for n in names:
+        arm = np.array([f[n][0] for f in frames])                 # (frames, 4, 4)
+        world = np.array([f[n][1] for f in frames])
+        assert np.all(np.isfinite(world)), n
+        cols = world[:, :3, :3] / np.linalg.norm(world[:, :3, :3], axis=1, keepdims=True)
+        shear = np.abs(np.einsum("fki,fkj->fij", cols, cols) - np.eye(3)).max()
+        assert shear < 1e-3, (n, shear)
+        assert np.ptp(arm.reshape(len(arm), -1), axis=0).max() > 1e-3, n
