@@ -42,6 +42,8 @@ def scene():
     sc.render.fps = 24
     rigify = rigify_rig(location=(4.0, 0.0, 0.0))
     mixamo = mixamo_skeleton(location=(-4.0, 0.0, 0.0))
+    for obj in (rigify, mixamo):
+        obj.rotation_euler = (0.0, 0.0, math.pi)          # face +Y, as the built-in does
     sc.cursor.location = (0, 0, 0)
     assert bpy.ops.turning.add_figure(sport="SKIER") == {"FINISHED"}
     builtin = bpy.context.view_layer.objects.active
@@ -49,11 +51,16 @@ def scene():
     addon.unregister()
 
 
+def _plain(v):
+    return v.to_list() if hasattr(v, "to_list") else v.to_dict() if hasattr(v, "to_dict") else v
+
+
 def state(obj):
     """What Remove Figure must give back exactly."""
     pose = {pb.name: (pb.rotation_mode, tuple(pb.location), tuple(pb.rotation_quaternion),
-                      tuple(pb.rotation_euler), tuple(pb.scale)) for pb in obj.pose.bones}
-    props = {pb.name: dict(pb.items()) for pb in obj.pose.bones if pb.keys()}
+                      tuple(pb.rotation_euler), tuple(pb.scale), pb.ik_stretch)
+            for pb in obj.pose.bones}
+    props = {pb.name: {k: _plain(v) for k, v in pb.items()} for pb in obj.pose.bones if pb.keys()}
     bones = {b.name: (tuple(b.head_local), tuple(b.tail_local), b.matrix_local.copy())
              for b in obj.data.bones}
     return (tuple(obj.location), tuple(obj.rotation_euler), tuple(obj.scale), obj.rotation_mode,
@@ -66,7 +73,6 @@ def figures(scene):
     before = {k: state(scene[k]) for k in ("rigify", "mixamo")}
     for key in ("rigify", "mixamo"):
         obj = scene[key]
-        obj.rotation_euler = (0.0, 0.0, math.pi)          # face +Y, as the built-in does
         activate(obj)
         assert bpy.ops.turning.make_figure(sport="SKIER", bone_map="AUTO") == {"FINISHED"}
         assert obj.turning.rig.bone_map == key.upper()
@@ -192,3 +198,80 @@ def test_deforming_bones_all_move_none_sheared(sampled, key):
         shear = np.abs(np.einsum("fki,fkj->fij", cols, cols) - np.eye(3)).max()
         assert shear < 1e-3, (n, shear)
         assert np.ptp(arm.reshape(len(arm), -1), axis=0).max() > 1e-3, n
+
+
+def test_rigify_controls_carry_the_keys(figures):
+    """The animator keeps editing with the rig's own controls: the keys are on them, none on
+    the DEF or ORG bones."""
+    obj = figures[0]["rigify"]
+    paths = {fc.data_path for fc in compat.channels(obj).fcurves}
+    for b in ("torso", "hips", "chest", "head", "foot_ik.L", "foot_ik.R", "hand_ik.L",
+              "hand_ik.R", "thigh_ik_target.L", "thigh_ik_target.R", "thigh_fk.L", "hand_fk.R"):
+        assert f'pose.bones["{b}"].rotation_quaternion' in paths, b
+    for b in ("torso", "foot_ik.L", "hand_ik.R", "thigh_ik_target.L"):
+        assert f'pose.bones["{b}"].location' in paths, b
+    assert not [p for p in paths if '"DEF-' in p or '"ORG-' in p or '"MCH-' in p]
+
+
+def test_rigify_fk_switch_still_shows_the_motion(figures, sampled):
+    """IK/FK slider at FK: the FK controls carry the same motion (knees within 5 deg of the
+    built-in's, ankles within 2 cm of where the IK put them)."""
+    scene, _ = figures
+    obj, out = scene["rigify"], sampled[0]
+    sc = bpy.context.scene
+    parents = ("thigh_parent.L", "thigh_parent.R", "upper_arm_parent.L", "upper_arm_parent.R")
+    for p in parents:
+        obj.pose.bones[p]["IK_FK"] = 1.0
+    obj.update_tag()
+    try:
+        fk = {"p": [], "heading": out["rigify"]["heading"]}
+        for f in range(FRAMES[0], FRAMES[1] + 1):
+            sc.frame_set(f)
+            fk["p"].append({(w, s): world_head(obj, name("rigify", w, s))
+                            for w in ("ankle", "knee", "hip") for s in "LR"})
+    finally:
+        for p in parents:
+            obj.pose.bones[p]["IK_FK"] = 0.0
+        obj.update_tag()
+    for s in "LR":
+        diff = np.abs(knee(fk, s) - knee(out["builtin"], s))
+        assert np.max(diff) < math.radians(5), np.degrees(diff.max())
+        moved = [np.linalg.norm(a["ankle", s] - b["ankle", s])
+                 for a, b in zip(fk["p"], out["rigify"]["p"])]
+        assert max(moved) < 0.02, max(moved)
+
+
+def test_a_rig_lacking_joints_is_refused_with_the_list(scene):
+    arm = bpy.data.armatures.new("Stub")
+    obj = bpy.data.objects.new("Stub", arm)
+    bpy.context.scene.collection.objects.link(obj)
+    activate(obj)
+    bpy.ops.object.mode_set(mode="EDIT")
+    for n in ("mixamorig:Hips", "mixamorig:Spine2", "mixamorig:LeftUpLeg"):
+        arm.edit_bones.new(n).tail = (0, 0, 1)
+    bpy.ops.object.mode_set(mode="OBJECT")
+    before = state(obj)
+    n_objects = len(bpy.data.objects)
+    with pytest.raises(RuntimeError, match=r"lacks 12 bone\(s\).*spine.006 -> 'mixamorig:Head'"):
+        bpy.ops.turning.make_figure(sport="SKIER", bone_map="MIXAMO")
+    with pytest.raises(RuntimeError, match="matches none of the bone maps"):
+        bpy.ops.turning.make_figure(sport="SKIER", bone_map="AUTO")
+    assert state(obj) == before and not obj.turning.is_figure
+    assert len(bpy.data.objects) == n_objects
+    obj.scale = (1, 2, 1)
+    with pytest.raises(RuntimeError, match="one positive scale"):
+        bpy.ops.turning.make_figure(sport="SKIER", bone_map="MIXAMO")
+    bpy.data.objects.remove(obj)
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_remove_figure_gives_the_rig_back_exactly(figures, key):
+    scene, before = figures
+    obj = scene[key]
+    coll = obj.turning.rig.equipment.name
+    activate(obj)
+    assert bpy.ops.turning.remove_figure() == {"FINISHED"}
+    assert state(obj) == before[key]
+    assert coll not in bpy.data.collections
+    assert not [o for o in bpy.data.objects if o.name.startswith(obj.name + " ")]
+    assert "turning" not in obj.keys()

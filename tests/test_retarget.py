@@ -152,7 +152,9 @@ def test_knee_flexion_follows_within_5_deg(run):
     for s in "LR":
         fu, fb = flex(P, PREFIX, s), flex(Pb, "", s)
         assert np.ptp(fb) > math.radians(5)
-        assert np.max(np.abs(fu - fb)) < math.radians(0.0), np.degrees(np.max(np.abs(fu - fb)))
+        # The hips slide along the lean line until the knees bend as the built-in's: measured
+        # 0.004 deg (the two legs share one pelvis: the mean of their bends is matched).
+        assert np.max(np.abs(fu - fb)) < math.radians(0.05), np.degrees(np.max(np.abs(fu - fb)))
 
 
 def _u(v):

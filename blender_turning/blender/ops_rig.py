@@ -47,7 +47,7 @@ class TURNING_OT_make_figure(bpy.types.Operator):
         obj = _active_armature(cls, context)
         if obj is None:
             return False
-        if obj.turning.is_figure:
+        if ra.is_figure(obj):
             cls.poll_message_set("The active armature is already a figure")
             return False
         return True

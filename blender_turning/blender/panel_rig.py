@@ -55,13 +55,13 @@ class VIEW3D_PT_turning_rig(TurningPanel, bpy.types.Panel):
     def poll(cls, context):
         obj = context.active_object
         return obj is not None and obj.type == "ARMATURE" and (
-            not obj.turning.is_figure or ra.is_user_rig(obj))
+            not ra.is_figure(obj) or ra.is_user_rig(obj))
 
     def draw(self, context):
         layout = self.layout
         obj = context.active_object
         rig = obj.turning.rig
-        if not obj.turning.is_figure:
+        if not ra.is_figure(obj):
             layout.label(text=f"Make {obj.name} a figure:", icon="ARMATURE_DATA")
             row = layout.row(align=True)
             row.operator_menu_enum("turning.make_figure", "sport", text="Make Figure",

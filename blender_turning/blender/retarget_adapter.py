@@ -17,6 +17,7 @@ from ..mapping.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map, p
                                 require_joints)
 from ..mapping.retarget import UserRig, equipment_rest, fit_rig, retarget
 from ..mapping.rig_spec import load_rig
+from . import compat
 from .rig_builder import material, primitive
 
 #: Panel / operator choice -> shipped map name.
@@ -27,10 +28,19 @@ def rig_settings(obj):
     return obj.turning.rig
 
 
+def is_figure(obj) -> bool:
+    """Whether ``obj`` is a figure, read without leaving settings behind on an armature that
+    is not one (see ``compat.ADDON_PROPS_IN_ID_PROPERTIES``)."""
+    if obj is None or obj.type != "ARMATURE":
+        return False
+    if compat.ADDON_PROPS_IN_ID_PROPERTIES and "turning" not in obj.keys():
+        return False
+    return bool(obj.turning.is_figure)
+
+
 def is_user_rig(obj) -> bool:
     """``True`` for a figure made from the user's armature by Make Figure."""
-    s = getattr(obj, "turning", None)
-    return bool(s is not None and s.is_figure and s.rig.is_user_rig)
+    return is_figure(obj) and bool(obj.turning.rig.is_user_rig)
 
 
 def check_transform(obj) -> None:
