@@ -191,3 +191,66 @@ def test_a_rig_whose_feet_point_backwards_is_refused():
     bad = UserRig(rig.names, rig.parents, rest, name="user")
     with pytest.raises(ValueError, match="feet point backwards"):
         fit_rig(bad, BM)
+
+
+@pytest.fixture(scope="module")
+def board_run():
+    fig = preset("snowboarder")
+    traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(20),
+                                      heading=0.3), duration=6.0)
+    return map_trajectory("snowboarder", traj, fps=24)
+
+
+def test_snowboarder_stands_side_on_both_boots_on_the_board(board_run):
+    """The built-in snowboarder faces +X (side-on); the user's rig, facing -Y, is turned onto
+    it (measured), both ankles land on the built-in's, the board on the built-in's board."""
+    run = board_run
+    rig = user_rig()
+    fit = fit_rig(rig, BM, "snowboarder")
+    assert fit.builtin_facing == pytest.approx(0.0, abs=1e-9)
+    assert fit.travel == pytest.approx(0.0, abs=1e-9)     # regular: rides towards its left
+    out = retarget(run, "snowboarder", rig, BM, fit)
+    P = user_fk(rig, out)
+    Pb = Skeleton.from_spec(load_rig("snowboarder")).fk(run.bones, len(run))
+    foot_pt = np.column_stack([run.location[:, :2], np.zeros(len(run))])
+    for s in "LR":
+        u = world(out, P[PREFIX + f"foot.{s}"][:, :3, 3])
+        b = foot_pt + fit.k * (world(run, Pb[f"foot.{s}"][:, :3, 3]) - foot_pt)
+        assert np.max(np.abs(u - b)) < 1e-6
+    piece, = equipment_rest("snowboarder", rig, BM, fit)
+    Mu = P[piece.bone] @ np.linalg.inv(rig.rest_of(piece.bone)) @ piece.rest
+    head_b = foot_pt + fit.k * (world(run, Pb["board"][:, :3, 3]) - foot_pt)
+    assert np.max(np.abs(world(out, Mu[:, :3, 3]) - head_b)) < 1e-6
+    Rb = rot_z(run.rotation[:, 2]) @ Pb["board"][:, :3, :3]
+    assert np.max(np.abs(rot_z(out.rotation[:, 2]) @ Mu[:, :3, :3] - Rb)) < 1e-6
+
+
+def test_telemark_skis_go_with_the_toes_heel_lifted():
+    """The telemark's trailing heel lifts off the ski; the user's ski, rigid with the toe, lands
+    exactly on the built-in's ski (scaled) although the user's feet are longer."""
+    fig = preset("telemark")
+    traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(23),
+                                      heading=0.3), duration=6.0)
+    run = map_trajectory("telemark", traj, fps=24)
+    rig = user_rig(shin_ratio=1.1)
+    fit = fit_rig(rig, BM, "telemark")
+    out = retarget(run, "telemark", rig, BM, fit)
+    P = user_fk(rig, out)
+    skel = Skeleton.from_spec(load_rig("telemark"))
+    Pb = skel.fk(run.bones, len(run))
+    foot_pt = np.column_stack([run.location[:, :2], np.zeros(len(run))])
+    heel = []
+    for piece in equipment_rest("telemark", rig, BM, fit):
+        if not piece.name.startswith("ski"):
+            continue
+        s = piece.name[-1]
+        Mu = P[piece.bone] @ np.linalg.inv(rig.rest_of(piece.bone)) @ piece.rest
+        head_b = foot_pt + fit.k * (world(run, Pb[piece.name][:, :3, 3]) - foot_pt)
+        assert np.max(np.abs(world(out, Mu[:, :3, 3]) - head_b)) < 1e-6
+        # The heel lifts: the foot turns against the ski (toe flat), up to tens of degrees.
+        f = P[PREFIX + f"foot.{s}"][:, :3, :3]
+        rel = np.einsum("nji,njk->nik", Mu[:, :3, :3], f)            # foot in the ski's frame
+        rel = rel @ (piece.rest[:3, :3].T @ rig.rest_of(PREFIX + f"foot.{s}")[:3, :3]).T
+        heel.append(np.degrees(np.arccos(np.clip((np.trace(rel, axis1=1, axis2=2) - 1) / 2,
+                                                 -1, 1))).max())
+    assert max(heel) > 30, heel   # heel_max 45 deg

@@ -79,7 +79,7 @@ class TURNING_OT_make_figure(bpy.types.Operator):
         body = PRESETS[sport].body
         s.com_height = body.l * fit.k
         s.mass = body.m * fit.k ** 2
-        heading = obj.rotation_euler[2] + fit.facing
+        heading = obj.rotation_euler[2] + fit.travel
         s.start = obj.location
         s.start_heading = heading
         s.heading = heading

@@ -106,11 +106,11 @@ def fill_custom_map(obj, bm: BoneMap) -> None:
 
 
 def facing(obj) -> float:
-    """Direction the figure's armature faces in its own axes, rad CCW from +X: measured for a
+    """The figure's direction of travel in its armature's axes, rad CCW from +X: measured for a
     user's rig, +Y (pi/2) for the built-in figures."""
     if not is_user_rig(obj):
         return math.pi / 2
-    return fit_rig(user_rig(obj), figure_bone_map(obj), obj.turning.sport.lower()).facing
+    return fit_rig(user_rig(obj), figure_bone_map(obj), obj.turning.sport.lower()).travel
 
 
 def retarget_track(obj, track):

@@ -6,9 +6,10 @@ armature at rest, read by the Blender side) through a :class:`~.bone_map.BoneMap
 
 * **Frames.**  The user's rig is measured, never assumed: its facing is the direction
   ``left x up`` with ``left`` from the right hip joint to the left one (Blender characters face
-  -Y, the built-in rigs +Y), its size ``k`` is its leg length (hip joint to knee to ankle, in
+  -Y, the built-in rigs +Y, the built-in snowboarder stands side-on facing +X), its size ``k`` is its leg length (hip joint to knee to ankle, in
   world metres) over the built-in's.  A built-in armature-space point ``p`` goes to
-  ``origin + (k / s) C p`` in the user's armature space (``C`` turns +Y onto the user's facing,
+  ``origin + (k / s) C p`` in the user's armature space (``C`` turns the built-in's facing,
+  measured the same way, onto the user's,
   ``s`` is the object's scale, ``origin`` the ankles' midpoint on ``z = 0``).  Scaling the whole
   pose by ``k`` about the foot point keeps every angle (lean, knee bend, ski tilt) and keeps the
   equipment on the ground; the trajectory itself (where the foot point goes) is not scaled.
@@ -54,7 +55,14 @@ __all__ = ["UserRig", "RigFit", "EquipmentPiece", "fit_rig", "retarget", "equipm
 #: Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig.
 ATTACH = {
     "skier": {"ski.L": "foot.L", "ski.R": "foot.R", "pole.L": "hand.L", "pole.R": "hand.R"},
+    # Regular stance: the left boot is the front one; the back boot is bound as exactly.
+    "snowboarder": {"board": "foot.L"},
+    # The trailing heel lifts off its ski: the skis go with the toes, flat on them.
+    "telemark": {"ski.L": "toe.L", "ski.R": "toe.R", "pole.L": "hand.L", "pole.R": "hand.R"},
 }
+#: Where a foot meets its equipment, when not at the ankle: the leg's IK puts that joint's head
+#: exactly on the built-in's (the telemark's ball of the foot, which stays on the ski).
+ANCHOR = {"telemark": "toe"}
 #: The next joint down a chain: a joint's rest "segment" runs from its head to this one's head.
 CHAIN_CHILD = {B.HIPS: (B.SPINE, B.SPINE_2, B.CHEST), B.SPINE: (B.SPINE_2, B.CHEST),
                B.SPINE_2: (B.CHEST,), B.CHEST: (B.NECK, B.HEAD), B.NECK: (B.NECK_2, B.HEAD),
@@ -116,6 +124,9 @@ class RigFit:
 
     facing: float
     """Direction the user's rig faces in its armature space, rad, counter-clockwise from +X."""
+    builtin_facing: float
+    """Direction the built-in rig faces in its armature space (+Y = pi/2; the snowboarder
+    stands side-on, facing +X = 0), rad."""
     k: float
     """Size of the user's figure over the built-in's (leg length ratio, world metres)."""
     origin: np.ndarray
@@ -125,8 +136,15 @@ class RigFit:
 
     @property
     def C(self) -> np.ndarray:
-        """(3, 3) the built-in's axes -> the user's (turns +Y onto the facing)."""
-        return rot_z(self.facing - math.pi / 2)
+        """(3, 3) the built-in's axes -> the user's (turns the built-in's facing onto the
+        user's)."""
+        return rot_z(self.facing - self.builtin_facing)
+
+    @property
+    def travel(self) -> float:
+        """The direction of travel in the user's armature space (where the built-in's +Y goes),
+        rad CCW from +X: the object turns it onto the heading."""
+        return math.pi / 2 + self.facing - self.builtin_facing
 
     def point(self, p) -> np.ndarray:
         """Built-in armature-space points (..., 3) -> the user's armature space."""
@@ -187,23 +205,32 @@ def fit_rig(rig: UserRig, bm: BoneMap, sport: str = "skier") -> RigFit:
     """Measure the user's rig against the built-in figure of ``sport`` (facing, size, origin)."""
     require_joints(bm, rig.names, f"armature {rig.name!r}")
     head = lambda j: rig.head(bm.bone(j))            # noqa: E731
-    left = head("thigh.L") - head("thigh.R")
-    left[2] = 0.0
-    if np.linalg.norm(left) < 1e-9:
+    fwd = _forward(head("thigh.L") - head("thigh.R"))
+    if fwd is None:
         raise ValueError(f"armature {rig.name!r}: the hip joints coincide in plan (thigh.L -> "
                          f"{bm.bone('thigh.L')!r}, thigh.R -> {bm.bone('thigh.R')!r}); cannot "
                          f"tell which way it faces")
-    fwd = np.cross(left, [0.0, 0.0, 1.0])
     toes = sum(rig.rest_of(bm.bone(f"foot.{s}"))[:3, 1] for s in ("L", "R"))
     if np.dot(toes[:2], fwd[:2]) < 0:
         raise ValueError(f"armature {rig.name!r}: its feet point backwards from the way its "
                          f"left and right hips say it faces (are .L and .R swapped?)")
     spec = load_rig(sport)
     b_head = lambda j: np.asarray(spec.bone(j).head)  # noqa: E731
+    b_fwd = _forward(b_head("thigh.L") - b_head("thigh.R"))
     k = rig.scale * _leg_length(head) / _leg_length(b_head)
     ankles = 0.5 * (head("foot.L") + head("foot.R"))
-    return RigFit(float(math.atan2(fwd[1], fwd[0])), float(k),
-                  np.array([ankles[0], ankles[1], 0.0]), float(rig.scale))
+    return RigFit(float(math.atan2(fwd[1], fwd[0])), float(math.atan2(b_fwd[1], b_fwd[0])),
+                  float(k), np.array([ankles[0], ankles[1], 0.0]), float(rig.scale))
+
+
+def _forward(left):
+    """The facing (unit, horizontal) of a body whose right-to-left hip vector is ``left``:
+    ``left x up``; ``None`` if the hips coincide in plan."""
+    left = np.array([left[0], left[1], 0.0])
+    if np.linalg.norm(left) < 1e-9:
+        return None
+    fwd = np.cross(left, [0.0, 0.0, 1.0])
+    return fwd / np.linalg.norm(fwd)
 
 
 class _Builtin:
@@ -253,7 +280,23 @@ def _pole(bi, upper, lower, end):
     return off @ bi.fit.C.T
 
 
-def _knee_slide(bi, rest, DA, hips_b, hips_u, axis, s):
+def _ankle_target(bi, rest, rot, sport, s):
+    """(n, 3) where the leg's IK puts the user's ankle: on the built-in's, or such that the
+    sport's ``ANCHOR`` joint (turning with the foot) lands on the built-in's."""
+    foot = f"foot.{s}"
+    anchor = ANCHOR.get(sport)
+    if anchor is None:
+        return bi.head(foot)
+    anchor = f"{anchor}.{s}"
+    if anchor not in rest:
+        raise ValueError(f"a {sport} figure needs joint {anchor!r} (the ball of the foot stays "
+                         f"on the ski) in the bone map")
+    lever = rest[anchor][:3, 3] - rest[foot][:3, 3]
+    turn = rot[foot] @ rest[foot][:3, :3].T
+    return bi.head(anchor) - np.einsum("nij,j->ni", turn, lever)
+
+
+def _knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankle):
     """(n,) how far along ``axis`` the hip joints' midpoint must move from ``hips_b`` for the
     user's leg ``s`` to bend its knee as much as the built-in's (the law of cosines on the
     user's thigh and shin; at most 99.9% of the leg's reach)."""
@@ -263,7 +306,7 @@ def _knee_slide(bi, rest, DA, hips_b, hips_u, axis, s):
     l1 = float(np.linalg.norm(rest[shin][:3, 3] - rest[thigh][:3, 3]))
     l2 = float(np.linalg.norm(rest[foot][:3, 3] - rest[shin][:3, 3]))
     d = np.sqrt(np.minimum(l1 * l1 + l2 * l2 + 2 * l1 * l2 * cos_bend, (0.999 * (l1 + l2)) ** 2))
-    w = hips_b + DA @ (rest[thigh][:3, 3] - hips_u) - bi.head(foot)
+    w = hips_b + DA @ (rest[thigh][:3, 3] - hips_u) - ankle
     wu = np.sum(w * axis, axis=-1)
     return -wu + np.sqrt(np.maximum(wu * wu - np.sum(w * w, axis=-1) + d * d, 0.0))
 
@@ -294,6 +337,7 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         now = np.einsum("nij,j->ni", rot[j] @ rest[j][:3, :3].T, rest_vec)
         return swing(now, target_vec) @ rot[j]
 
+    ankles = {s: _ankle_target(bi, rest, rot, sport, s) for s in "LR"}
     # The pelvis: the hip joints' midpoint goes on the built-in's line from the ankles' midpoint
     # to its hip joints (the lean carries over), as far along it as gives the knees the
     # built-in's bend (an angle: thighs and shins of other proportions need another distance).
@@ -301,7 +345,8 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
     hips_b = 0.5 * (bi.head("thigh.L") + bi.head("thigh.R"))
     DA = rot[B.HIPS] @ rest[B.HIPS][:3, :3].T
     axis = _unit(hips_b - 0.5 * (bi.head("foot.L") + bi.head("foot.R")))
-    slide = np.mean([_knee_slide(bi, rest, DA, hips_b, hips_u, axis, s) for s in "LR"], axis=0)
+    slide = np.mean([_knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankles[s])
+                     for s in "LR"], axis=0)
     place(B.HIPS, hips_b + slide[:, None] * axis - DA @ (hips_u - rest[B.HIPS][:3, 3]))
     for j in rest:
         if j == B.HIPS or j in poses:
@@ -309,7 +354,7 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         side = j[-1]
         if j.startswith("thigh"):
             chain = (j, f"shin.{side}", f"foot.{side}")
-            target = bi.head(f"foot.{side}")
+            target = ankles[side]
         elif j.startswith("upper_arm"):
             chain = (j, f"forearm.{side}", f"hand.{side}")
             target = bi.head(chain[2])
@@ -383,7 +428,7 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     # Root motion: the object turns the user's facing onto the heading and puts `origin` on
     # the foot point (the built-in's object carries the foot point and theta_dir - 90 deg).
     heading = track.rotation[:, 2] + math.pi / 2
-    psi = heading - fit.facing
+    psi = heading - fit.travel
     R = rot_z(psi)
     location = track.location - fit.scale * np.einsum("nij,j->ni", R, fit.origin)
     rotation = np.stack([np.zeros(len(track)), np.zeros(len(track)), psi], axis=1)
