@@ -1,8 +1,11 @@
 """Users' rigs built on the bpy wheel for the retargeting tests (issue 8): a Rigify rig generated
 from Blender's Human metarig, and a Mixamo-named T-pose skeleton (in centimetres, object scale
 0.01, as an FBX import gives it).  Both face -Y, as Blender characters do."""
+import math
+
 import addon_utils
 import bpy
+import numpy as np
 from mathutils import Vector
 
 #: Mixamo's standard bones, T-pose, cm, facing -Y (the character's left is +X):
@@ -67,3 +70,121 @@ def rigify_rig(name="Rigify", location=(0, 0, 0)):
     rig.name = name
     rig.location = location
     return rig
+
+
+#: The bones each measure reads: ankle, knee, hip joint per side.
+#: The bones each measure reads (their heads): ankle, ball of the foot, knee, hip joint.
+JOINTS = {
+    "builtin": {"ankle": "foot.{s}", "toe": "toe.{s}", "knee": "shin.{s}", "hip": "thigh.{s}"},
+    "rigify": {"ankle": "DEF-foot.{s}", "toe": "DEF-toe.{s}", "knee": "DEF-shin.{s}",
+               "hip": "DEF-thigh.{s}"},
+    "mixamo": {"ankle": PREFIX + "{S}Foot", "toe": PREFIX + "{S}ToeBase",
+               "knee": PREFIX + "{S}Leg", "hip": PREFIX + "{S}UpLeg"},
+}
+
+
+def activate(obj):
+    for o in bpy.context.selected_objects:
+        o.select_set(False)
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+
+
+def _plain(v):
+    return v.to_list() if hasattr(v, "to_list") else v.to_dict() if hasattr(v, "to_dict") else v
+
+
+def state(obj):
+    """What Remove Figure must give back exactly."""
+    pose = {pb.name: (pb.rotation_mode, tuple(pb.location), tuple(pb.rotation_quaternion),
+                      tuple(pb.rotation_euler), tuple(pb.scale), pb.ik_stretch)
+            for pb in obj.pose.bones}
+    props = {pb.name: {k: _plain(v) for k, v in pb.items()} for pb in obj.pose.bones if pb.keys()}
+    bones = {b.name: (tuple(b.head_local), tuple(b.tail_local), b.matrix_local.copy())
+             for b in obj.data.bones}
+    return (tuple(obj.location), tuple(obj.rotation_euler), tuple(obj.scale), obj.rotation_mode,
+            sorted(obj.keys()), pose, props, bones,
+            obj.animation_data.action if obj.animation_data else None)
+
+
+def world_head(obj, bone):
+    return np.array(obj.matrix_world @ obj.pose.bones[bone].head)
+
+
+def name(key, which, s):
+    return JOINTS[key][which].format(s=s, S="Left" if s == "L" else "Right")
+
+
+def lean(rec):
+    """Lateral lean of ankles-midpoint -> hip-joints-midpoint across the travel, per frame."""
+    out = []
+    for p, h in zip(rec["p"], rec["heading"]):
+        v = 0.5 * (p["hip", "L"] + p["hip", "R"]) - 0.5 * (p["ankle", "L"] + p["ankle", "R"])
+        left = np.array([-math.sin(h), math.cos(h)])
+        out.append(math.atan2(float(v[:2] @ left), float(v[2])))
+    return np.array(out)
+
+
+def knee(rec, s):
+    out = []
+    for p in rec["p"]:
+        a, b = p["knee", s] - p["hip", s], p["ankle", s] - p["knee", s]
+        out.append(math.acos(np.clip(a @ b / np.linalg.norm(a) / np.linalg.norm(b), -1, 1)))
+    return np.array(out)
+
+
+
+
+def sample(scene, frames, bindings):
+    """Per frame: each figure's ankles, knees and hip joints (world) and the heading; for each
+    user rig (every key but 'builtin'), the lowest point of its ground equipment (the pieces in
+    ``bindings``), the largest distance from a joint to its binding (``bindings``: piece ->
+    ``[(joint, side), ...]``, the joint's rest point in the piece's own frame) and every
+    deforming bone's (armature-space, world) matrices."""
+    from blender_turning.blender.retarget_adapter import facing, figure_bone_map, user_rig
+    from blender_turning.mapping.kinematics import Skeleton
+    from blender_turning.mapping.retarget import fit_rig
+    from blender_turning.mapping.rig_spec import load_rig
+    sc = bpy.context.scene
+    out = {k: {"p": [], "heading": []} for k in scene}
+    users = [k for k in scene if k != "builtin"]
+    travel = {k: facing(obj) for k, obj in scene.items()}
+    ground = {k: [o for o in scene[k].turning.rig.equipment.objects
+                  if o["turning_equipment"] in bindings] for k in users}
+    # The binding: where the built-in figure's joint sits on the piece at rest, in the piece's
+    # own frame, scaled to the character as the piece is.
+    binding = {}
+    for k in users:
+        obj = scene[k]
+        sport = obj.turning.sport.lower()
+        spec = Skeleton.from_spec(load_rig(sport))
+        fit = fit_rig(user_rig(obj), figure_bone_map(obj), sport)
+        for o in ground[k]:
+            piece = o["turning_equipment"]
+            for joint, s in bindings[piece]:
+                p = np.linalg.inv(spec.rest_of(piece)) @ np.append(
+                    spec.rest_of(name("builtin", joint, s))[:3, 3], 1.0)
+                binding[o.name, joint, s] = Vector(fit.k / fit.scale * p[:3])
+    low, gap, deform = ({k: [] for k in users} for _ in range(3))
+    for f in range(frames[0], frames[1] + 1):
+        sc.frame_set(f)
+        for k, obj in scene.items():
+            out[k]["p"].append({(w, s): world_head(obj, name(k, w, s))
+                                for w in ("ankle", "knee", "hip") for s in "LR"})
+            out[k]["heading"].append(obj.rotation_euler[2] + travel[k])
+        for k in users:
+            obj = scene[k]
+            lows, gaps = [], []
+            for o in ground[k]:
+                mw = np.array(o.matrix_world)
+                v = np.array([tuple(x.co) for x in o.data.vertices])
+                lows.append(np.min(v @ mw[2, :3] + mw[2, 3]))
+                for joint, s in bindings[o["turning_equipment"]]:
+                    at = np.array(o.matrix_world @ binding[o.name, joint, s])
+                    gaps.append(np.linalg.norm(at - world_head(obj, name(k, joint, s))))
+            low[k].append(min(lows))
+            gap[k].append(max(gaps))
+            deform[k].append({pb.name: (np.array(pb.matrix),
+                                        np.array(obj.matrix_world @ pb.matrix))
+                              for pb in obj.pose.bones if pb.bone.use_deform})
+    return out, low, gap, deform

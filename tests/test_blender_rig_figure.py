@@ -12,25 +12,12 @@ bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import bake, compat  # noqa: E402
-from rig_fixtures import PREFIX, mixamo_skeleton, rigify_rig  # noqa: E402
+from rig_fixtures import (activate, knee, lean, mixamo_skeleton, name, rigify_rig,  # noqa: E402
+                          sample, state, world_head)
 
 pytestmark = pytest.mark.blender
 FRAMES = (1, 48)
 SAME = ("mass", "com_height", "inertia", "speed", "period", "lean", "heading", "start_heading")
-
-#: The bones each measure reads: ankle, knee, hip joint per side.
-JOINTS = {
-    "builtin": {"ankle": "foot.{s}", "knee": "shin.{s}", "hip": "thigh.{s}"},
-    "rigify": {"ankle": "DEF-foot.{s}", "knee": "DEF-shin.{s}", "hip": "DEF-thigh.{s}"},
-    "mixamo": {"ankle": PREFIX + "{S}Foot", "knee": PREFIX + "{S}Leg", "hip": PREFIX + "{S}UpLeg"},
-}
-
-
-def activate(obj):
-    for o in bpy.context.selected_objects:
-        o.select_set(False)
-    obj.select_set(True)
-    bpy.context.view_layer.objects.active = obj
 
 
 @pytest.fixture(scope="module")
@@ -51,23 +38,6 @@ def scene():
     addon.unregister()
 
 
-def _plain(v):
-    return v.to_list() if hasattr(v, "to_list") else v.to_dict() if hasattr(v, "to_dict") else v
-
-
-def state(obj):
-    """What Remove Figure must give back exactly."""
-    pose = {pb.name: (pb.rotation_mode, tuple(pb.location), tuple(pb.rotation_quaternion),
-                      tuple(pb.rotation_euler), tuple(pb.scale), pb.ik_stretch)
-            for pb in obj.pose.bones}
-    props = {pb.name: {k: _plain(v) for k, v in pb.items()} for pb in obj.pose.bones if pb.keys()}
-    bones = {b.name: (tuple(b.head_local), tuple(b.tail_local), b.matrix_local.copy())
-             for b in obj.data.bones}
-    return (tuple(obj.location), tuple(obj.rotation_euler), tuple(obj.scale), obj.rotation_mode,
-            sorted(obj.keys()), pose, props, bones,
-            obj.animation_data.action if obj.animation_data else None)
-
-
 @pytest.fixture(scope="module")
 def figures(scene):
     before = {k: state(scene[k]) for k in ("rigify", "mixamo")}
@@ -86,74 +56,9 @@ def figures(scene):
     return scene, before
 
 
-def world_head(obj, bone):
-    return np.array(obj.matrix_world @ obj.pose.bones[bone].head)
-
-
-def name(key, which, s):
-    return JOINTS[key][which].format(s=s, S="Left" if s == "L" else "Right")
-
-
 @pytest.fixture(scope="module")
 def sampled(figures):
-    """Per frame: each figure's ankles, knees and hip joints (world); each user rig's skis'
-    lowest point and the distance from each ankle to its binding; every deforming bone's
-    armature-space matrix."""
-    scene, _ = figures
-    sc = bpy.context.scene
-    out = {k: {"p": [], "heading": []} for k in scene}
-    users = ("rigify", "mixamo")
-    skis = {k: [o for o in scene[k].turning.rig.equipment.objects
-                if o["turning_equipment"].startswith("ski")] for k in users}
-    # The binding: where the ankle is on the ski at rest, in the ski's own frame.
-    binding = {}
-    for k in users:
-        obj = scene[k]
-        for o in skis[k]:
-            bone = obj.data.bones[o.constraints[0].subtarget]
-            ankle = obj.data.bones[name(k, "ankle", o["turning_equipment"][-1])].head_local
-            binding[o.name] = (bone.matrix_local @ o.matrix_basis).inverted() @ ankle
-    low = {k: [] for k in users}
-    gap = {k: [] for k in users}
-    deform = {k: [] for k in users}
-    for f in range(FRAMES[0], FRAMES[1] + 1):
-        sc.frame_set(f)
-        for k, obj in scene.items():
-            out[k]["p"].append({(w, s): world_head(obj, name(k, w, s))
-                                for w in ("ankle", "knee", "hip") for s in "LR"})
-            out[k]["heading"].append(scene["builtin"].rotation_euler[2] + math.pi / 2)
-        for k in users:
-            obj = scene[k]
-            lows, gaps = [], []
-            for o in skis[k]:
-                mw = np.array(o.matrix_world)
-                v = np.array([tuple(x.co) for x in o.data.vertices])
-                lows.append(np.min(v @ mw[2, :3] + mw[2, 3]))
-                ankle = world_head(obj, name(k, "ankle", o["turning_equipment"][-1]))
-                gaps.append(np.linalg.norm(np.array(o.matrix_world @ binding[o.name]) - ankle))
-            low[k].append(min(lows))
-            gap[k].append(max(gaps))
-            deform[k].append({pb.name: (np.array(pb.matrix), np.array(obj.matrix_world @ pb.matrix))
-                              for pb in obj.pose.bones if pb.bone.use_deform})
-    return out, low, gap, deform
-
-
-def lean(rec):
-    """Lateral lean of ankles-midpoint -> hip-joints-midpoint across the travel, per frame."""
-    out = []
-    for p, h in zip(rec["p"], rec["heading"]):
-        v = 0.5 * (p["hip", "L"] + p["hip", "R"]) - 0.5 * (p["ankle", "L"] + p["ankle", "R"])
-        left = np.array([-math.sin(h), math.cos(h)])
-        out.append(math.atan2(float(v[:2] @ left), float(v[2])))
-    return np.array(out)
-
-
-def knee(rec, s):
-    out = []
-    for p in rec["p"]:
-        a, b = p["knee", s] - p["hip", s], p["ankle", s] - p["knee", s]
-        out.append(math.acos(np.clip(a @ b / np.linalg.norm(a) / np.linalg.norm(b), -1, 1)))
-    return np.array(out)
+    return sample(figures[0], FRAMES, {"ski.L": [("ankle", "L")], "ski.R": [("ankle", "R")]})
 
 
 @pytest.mark.parametrize("key", ["rigify", "mixamo"])

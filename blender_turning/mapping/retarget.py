@@ -296,16 +296,48 @@ def _ankle_target(bi, rest, rot, sport, s):
     return bi.head(anchor) - np.einsum("nij,j->ni", turn, lever)
 
 
-def _knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankle):
-    """(n,) how far along ``axis`` the hip joints' midpoint must move from ``hips_b`` for the
-    user's leg ``s`` to bend its knee as much as the built-in's (the law of cosines on the
-    user's thigh and shin; at most 99.9% of the leg's reach)."""
+def _knee_distance(bi, rest, s):
+    """(n,) the hip-to-ankle distance that bends the user's knee ``s`` as much as the
+    built-in's (the law of cosines on the user's thigh and shin; at most 99.9% of its reach)."""
     thigh, shin, foot = (f"{b}.{s}" for b in ("thigh", "shin", "foot"))
     h, k, a = (bi.P[b][:, :3, 3] for b in (thigh, shin, foot))
     cos_bend = np.sum(_unit(k - h) * _unit(a - k), axis=-1)
     l1 = float(np.linalg.norm(rest[shin][:3, 3] - rest[thigh][:3, 3]))
     l2 = float(np.linalg.norm(rest[foot][:3, 3] - rest[shin][:3, 3]))
-    d = np.sqrt(np.minimum(l1 * l1 + l2 * l2 + 2 * l1 * l2 * cos_bend, (0.999 * (l1 + l2)) ** 2))
+    return np.sqrt(np.minimum(l1 * l1 + l2 * l2 + 2 * l1 * l2 * cos_bend,
+                              (0.999 * (l1 + l2)) ** 2))
+
+
+def _heel_for_knee(bi, hip, ball, ankle, d, s):
+    """Turn the foot about the ball of the foot (``ball``, on the ski) by the angle that puts
+    the ankle at distance ``d`` (n,) from the hip joint, so the knee bends as the built-in's
+    although the user's foot has other proportions: returns ``(ankle (n, 3), turn (n, 3, 3))``.
+    The axis is the built-in's toe's lateral (X) axis; of the two angles the smaller, none
+    where no angle reaches ``d``."""
+    a = _unit(bi.P[f"toe.{s}"][:, :3, 0] @ bi.fit.C.T)
+    v, w = ankle - ball, hip - ball
+    aw, av = np.sum(a * w, -1), np.sum(a * v, -1)
+    P = np.sum(w * v, -1) - aw * av
+    Q = np.sum(w * np.cross(a, v), -1)
+    r = 0.5 * (np.sum(w * w, -1) + np.sum(v * v, -1) - d * d) - aw * av
+    amp = np.hypot(P, Q)
+    base = np.arctan2(Q, P)
+    off = np.arccos(np.clip(r / np.maximum(amp, 1e-12), -1.0, 1.0))
+    phi = np.where(np.abs(base - off) < np.abs(base + off), base - off, base + off)
+    phi = (phi + np.pi) % (2 * np.pi) - np.pi
+    c, sn = np.cos(phi)[:, None, None], np.sin(phi)[:, None, None]
+    K = np.zeros(a.shape + (3,))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -a[:, 2], a[:, 1], -a[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = a[:, 2], -a[:, 1], a[:, 0]
+    turn = np.eye(3) + sn * K + (1 - c) * (K @ K)
+    return ball + np.einsum("nij,nj->ni", turn, v), turn
+
+
+def _knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankle):
+    """(n,) how far along ``axis`` the hip joints' midpoint must move from ``hips_b`` for the
+    user's leg ``s`` to bend its knee as much as the built-in's (:func:`_knee_distance`)."""
+    thigh = f"thigh.{s}"
+    d = _knee_distance(bi, rest, s)
     w = hips_b + DA @ (rest[thigh][:3, 3] - hips_u) - ankle
     wu = np.sum(w * axis, axis=-1)
     return -wu + np.sqrt(np.maximum(wu * wu - np.sum(w * w, axis=-1) + d * d, 0.0))
@@ -337,17 +369,32 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         now = np.einsum("nij,j->ni", rot[j] @ rest[j][:3, :3].T, rest_vec)
         return swing(now, target_vec) @ rot[j]
 
-    ankles = {s: _ankle_target(bi, rest, rot, sport, s) for s in "LR"}
     # The pelvis: the hip joints' midpoint goes on the built-in's line from the ankles' midpoint
-    # to its hip joints (the lean carries over), as far along it as gives the knees the
-    # built-in's bend (an angle: thighs and shins of other proportions need another distance).
+    # to its hip joints, drawn from the user's ankles (the lean carries over), as far along it
+    # as gives the knees the built-in's bend (an angle: thighs and shins of other proportions
+    # need another distance).  With an ANCHOR (the telemark) the two legs differ too much for
+    # one pelvis: each foot then turns about the ball of the foot until its own knee bends as
+    # the built-in's, and the pelvis follows the ankles that gives (a few passes converge).
     hips_u = 0.5 * (rest["thigh.L"][:3, 3] + rest["thigh.R"][:3, 3])
-    hips_b = 0.5 * (bi.head("thigh.L") + bi.head("thigh.R"))
+    lean_b = 0.5 * (bi.head("thigh.L") + bi.head("thigh.R") - bi.head("foot.L")
+                    - bi.head("foot.R"))
+    axis = _unit(lean_b)
     DA = rot[B.HIPS] @ rest[B.HIPS][:3, :3].T
-    axis = _unit(hips_b - 0.5 * (bi.head("foot.L") + bi.head("foot.R")))
-    slide = np.mean([_knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankles[s])
-                     for s in "LR"], axis=0)
-    place(B.HIPS, hips_b + slide[:, None] * axis - DA @ (hips_u - rest[B.HIPS][:3, 3]))
+    anchor = ANCHOR.get(sport)
+    first = {s: _ankle_target(bi, rest, rot, sport, s) for s in "LR"}
+    ankles, turns = dict(first), {}
+    for _ in range(6 if anchor else 1):
+        hips_b = 0.5 * (ankles["L"] + ankles["R"]) + lean_b     # from the user's own ankles
+        slide = np.mean([_knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankles[s])
+                         for s in "LR"], axis=0)
+        place(B.HIPS, hips_b + slide[:, None] * axis - DA @ (hips_u - rest[B.HIPS][:3, 3]))
+        if anchor:
+            for s in "LR":
+                ankles[s], turns[s] = _heel_for_knee(
+                    bi, carried(f"thigh.{s}"), bi.head(f"{anchor}.{s}"), first[s],
+                    _knee_distance(bi, rest, s), s)
+    for s, turn in turns.items():
+        rot[f"foot.{s}"] = turn @ rot[f"foot.{s}"]
     for j in rest:
         if j == B.HIPS or j in poses:
             continue

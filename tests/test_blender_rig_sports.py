@@ -1,0 +1,105 @@
+"""The user's own rig as a snowboarder and a telemark skier, on the bpy wheel (issue 8): a
+Rigify rig and a Mixamo-named skeleton beside the built-in figure of the sport, same settings;
+each rig is made a figure of one sport, baked, measured and given back (Remove Figure) before
+the next."""
+import math
+import os
+import tempfile
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
+bpy = pytest.importorskip("bpy")
+
+from blender_turning import blender as addon  # noqa: E402
+from blender_turning.blender.retarget_adapter import facing  # noqa: E402
+from rig_fixtures import (activate, knee, lean, mixamo_skeleton, rigify_rig, sample,  # noqa: E402
+                          state)
+
+pytestmark = pytest.mark.blender
+FRAMES = (1, 48)
+SAME = ("mass", "com_height", "inertia", "speed", "period", "lean", "heading", "start_heading")
+#: Ground equipment -> the joints bound to it (the telemark's ball of the foot stays on its ski).
+BINDINGS = {
+    "SNOWBOARDER": {"board": [("ankle", "L"), ("ankle", "R")]},
+    "TELEMARK": {"ski.L": [("toe", "L")], "ski.R": [("toe", "R")]},
+}
+
+
+@pytest.fixture(scope="module")
+def rigs():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon.register()
+    sc = bpy.context.scene
+    sc.frame_start, sc.frame_end = FRAMES
+    sc.render.fps = 24
+    users = {"rigify": rigify_rig(location=(4.0, 0.0, 0.0)),
+             "mixamo": mixamo_skeleton(location=(-4.0, 0.0, 0.0))}
+    for obj in users.values():
+        obj.rotation_euler = (0.0, 0.0, math.pi)
+    yield users
+    addon.unregister()
+
+
+@pytest.fixture(scope="module", params=["SNOWBOARDER", "TELEMARK"])
+def run(request, rigs):
+    sport = request.param
+    before = {k: state(o) for k, o in rigs.items()}
+    sc = bpy.context.scene
+    sc.cursor.location = (0, 0, 0)
+    assert bpy.ops.turning.add_figure(sport=sport) == {"FINISHED"}
+    builtin = bpy.context.view_layer.objects.active
+    for obj in rigs.values():
+        activate(obj)
+        assert bpy.ops.turning.make_figure(sport=sport, bone_map="AUTO") == {"FINISHED"}
+        for n in SAME:
+            setattr(obj.turning, n, getattr(builtin.turning, n))
+        # Turned to start along the built-in's heading (the snowboarder rides side-on).
+        obj.rotation_euler[2] = builtin.turning.start_heading - facing(obj)
+    figures = {"builtin": builtin, **rigs}
+    for obj in figures.values():
+        activate(obj)
+        assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    yield sport, sample(figures, FRAMES, BINDINGS[sport])
+    for k, obj in rigs.items():
+        activate(obj)
+        assert bpy.ops.turning.remove_figure() == {"FINISHED"}
+        assert state(obj) == before[k], k
+    activate(builtin)
+    bpy.ops.turning.clear_bake()
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_lean_and_knees_follow_the_builtin(run, key):
+    sport, (out, _, _, _) = run
+    lb = lean(out["builtin"])
+    assert np.ptp(lb) > math.radians(15)
+    assert np.max(np.abs(lean(out[key]) - lb)) < math.radians(0.02), sport
+    for s in "LR":
+        kb = knee(out["builtin"], s)
+        assert np.ptp(kb) > math.radians(3)
+        assert np.max(np.abs(knee(out[key], s) - kb)) < math.radians(0.5), (
+            sport, s, np.degrees(np.max(np.abs(knee(out[key], s) - kb))))
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_boots_bound_and_equipment_on_the_snow(run, key):
+    """Snowboard: both ankles on the board; telemark: the balls of the feet on the skis (the
+    trailing heel lifts); no point of the equipment below the snow, none 2 cm above it."""
+    sport, (_, low, gap, _) = run
+    low, gap = np.array(low[key]), np.array(gap[key])
+    assert np.all(low > -1e-3) and np.all(low < 0.02), (sport, low.min(), low.max())
+    assert np.all(gap < 0.01), (sport, gap.max())
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_deforming_bones_move_none_sheared(run, key):
+    sport, (_, _, _, deform) = run
+    for n in deform[key][0]:
+        arm = np.array([f[n][0] for f in deform[key]])
+        world = np.array([f[n][1] for f in deform[key]])
+        assert np.all(np.isfinite(world)), n
+        cols = world[:, :3, :3] / np.linalg.norm(world[:, :3, :3], axis=1, keepdims=True)
+        assert np.abs(np.einsum("fki,fkj->fij", cols, cols) - np.eye(3)).max() < 1e-3, n
+        assert np.ptp(arm.reshape(len(arm), -1), axis=0).max() > 1e-3, (sport, n)
