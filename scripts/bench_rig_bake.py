@@ -29,6 +29,7 @@ from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import bake, retarget_adapter  # noqa: E402
 from blender_turning.blender.pipeline import map_track, simulate_figure  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.mapping.retarget import retarget  # noqa: E402
 from rig_fixtures import rigify_rig  # noqa: E402
 
 
@@ -77,7 +78,8 @@ def _bench(args) -> int:
     traj = simulate_figure(builtin, frames)
     t_sim = time.perf_counter() - t
     t_map, track = best_of(args.repeat, lambda: map_track("skier", traj, frames))
-    t_ret, rtrack = best_of(args.repeat, lambda: retarget_adapter.retarget_track(rig, track))
+    t_ret, rtrack = best_of(args.repeat, lambda: retarget(
+        track, "skier", retarget_adapter.user_rig(rig), retarget_adapter.figure_bone_map(rig)))
     t_bake_b, res_b = best_of(args.repeat, lambda: bake.bake_pose_track(builtin, track))
     t_bake_r, res_r = best_of(args.repeat, lambda: bake.bake_pose_track(rig, rtrack))
     builtin_total = t_map + t_bake_b

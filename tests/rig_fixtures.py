@@ -141,7 +141,9 @@ def sample(scene, frames, bindings):
     ``bindings``), the largest distance from a joint to its binding (``bindings``: piece ->
     ``[(joint, side), ...]``, the joint's rest point in the piece's own frame) and every
     deforming bone's (armature-space, world) matrices."""
-    from blender_turning.blender.retarget_adapter import facing, figure_bone_map, user_rig
+    from blender_turning.blender.retarget_adapter import (facing, figure_bone_map, mirrored,
+                                                          user_rig)
+    from blender_turning.mapping.bones import mirror
     from blender_turning.mapping.kinematics import Skeleton
     from blender_turning.mapping.retarget import fit_rig
     from blender_turning.mapping.rig_spec import load_rig
@@ -156,14 +158,16 @@ def sample(scene, frames, bindings):
     binding = {}
     for k in users:
         obj = scene[k]
-        sport = obj.turning.sport.lower()
-        spec = Skeleton.from_spec(load_rig(sport))
-        fit = fit_rig(user_rig(obj), figure_bone_map(obj), sport)
+        sport, goofy = obj.turning.sport.lower(), mirrored(obj)
+        base = Skeleton.from_spec(load_rig(sport))
+        S = np.diag([-1.0, 1.0, 1.0, 1.0])       # a goofy rider: the built-in's mirror image
+        rest_of = (lambda n: S @ base.rest_of(mirror(n)) @ S) if goofy else base.rest_of
+        fit = fit_rig(user_rig(obj), figure_bone_map(obj), sport, goofy)
         for o in ground[k]:
             piece = o["turning_equipment"]
             for joint, s in bindings[piece]:
-                p = np.linalg.inv(spec.rest_of(piece)) @ np.append(
-                    spec.rest_of(name("builtin", joint, s))[:3, 3], 1.0)
+                p = np.linalg.inv(rest_of(piece)) @ np.append(
+                    rest_of(name("builtin", joint, s))[:3, 3], 1.0)
                 binding[o.name, joint, s] = Vector(fit.k / fit.scale * p[:3])
     low, gap, deform = ({k: [] for k in users} for _ in range(3))
     for f in range(frames[0], frames[1] + 1):

@@ -23,6 +23,7 @@ SAME = ("mass", "com_height", "inertia", "speed", "period", "lean", "heading", "
 #: Ground equipment -> the joints bound to it (the telemark's ball of the foot stays on its ski).
 BINDINGS = {
     "SNOWBOARDER": {"board": [("ankle", "L"), ("ankle", "R")]},
+    "GOOFY": {"board": [("ankle", "L"), ("ankle", "R")]},
     "TELEMARK": {"ski.L": [("toe", "L")], "ski.R": [("toe", "R")]},
 }
 
@@ -42,9 +43,11 @@ def rigs():
     addon.unregister()
 
 
-@pytest.fixture(scope="module", params=["SNOWBOARDER", "TELEMARK"])
+@pytest.fixture(scope="module", params=["SNOWBOARDER", "GOOFY", "TELEMARK"])
 def run(request, rigs):
-    sport = request.param
+    """``GOOFY``: a goofy snowboarder beside the built-in's regular one."""
+    case = request.param
+    sport, stance = ("SNOWBOARDER", "GOOFY") if case == "GOOFY" else (case, "REGULAR")
     before = {k: state(o) for k, o in rigs.items()}
     sc = bpy.context.scene
     sc.cursor.location = (0, 0, 0)
@@ -52,7 +55,8 @@ def run(request, rigs):
     builtin = bpy.context.view_layer.objects.active
     for obj in rigs.values():
         activate(obj)
-        assert bpy.ops.turning.make_figure(sport=sport, bone_map="AUTO") == {"FINISHED"}
+        assert bpy.ops.turning.make_figure(sport=sport, bone_map="AUTO",
+                                           stance=stance) == {"FINISHED"}
         for n in SAME:
             setattr(obj.turning, n, getattr(builtin.turning, n))
         # Turned to start along the built-in's heading (the snowboarder rides side-on).
@@ -61,7 +65,7 @@ def run(request, rigs):
     for obj in figures.values():
         activate(obj)
         assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    yield sport, sample(figures, FRAMES, BINDINGS[sport])
+    yield case, sample(figures, FRAMES, BINDINGS[case])
     for k, obj in rigs.items():
         activate(obj)
         assert bpy.ops.turning.remove_figure() == {"FINISHED"}
@@ -103,3 +107,15 @@ def test_deforming_bones_move_none_sheared(run, key):
         cols = world[:, :3, :3] / np.linalg.norm(world[:, :3, :3], axis=1, keepdims=True)
         assert np.abs(np.einsum("fki,fkj->fij", cols, cols) - np.eye(3)).max() < 1e-3, n
         assert np.ptp(arm.reshape(len(arm), -1), axis=0).max() > 1e-3, (sport, n)
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_the_stance_says_which_boot_leads(run, key):
+    case, (out, _, _, _) = run
+    if case == "TELEMARK":
+        pytest.skip("no stance")
+    lead = "R" if case == "GOOFY" else "L"
+    back = "L" if lead == "R" else "R"
+    for p, h in zip(out[key]["p"], out[key]["heading"]):
+        ahead = (p["ankle", lead] - p["ankle", back])[:2] @ np.array([math.cos(h), math.sin(h)])
+        assert ahead > 0.2, (case, ahead)

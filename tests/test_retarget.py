@@ -11,8 +11,8 @@ from blender_turning.mapping import map_trajectory
 from blender_turning.mapping.bone_map import load_bone_map, parse_bone_map
 from blender_turning.mapping.common import rot_y, rot_z
 from blender_turning.mapping.kinematics import Skeleton, rest_matrix
-from blender_turning.mapping.retarget import (UserRig, equipment_rest, fit_rig, retarget,
-                                              swing)
+from blender_turning.mapping.retarget import (UserRig, equipment_rest, fit_rig,
+                                              mirrored_trajectory, retarget, swing)
 from blender_turning.mapping.rig_spec import load_rig
 
 PREFIX = "u_"
@@ -266,3 +266,36 @@ def test_telemark_skis_go_with_the_toes_heel_lifted():
     assert np.max(np.abs(lu - lb)) < math.radians(1e-4)        # measured 2e-6 deg
     for s in "LR":
         assert np.max(np.abs(_flex(P, PREFIX, s) - _flex(Pb, "", s))) < math.radians(1e-6)
+
+
+def test_goofy_is_the_mirror_image_of_regular():
+    """Goofy on a run = the mirror image (.L/.R swapped) of regular on the mirrored run: the
+    user's rig rides towards its right, its right boot in front, both boots on the board, its
+    lean the mirror of the regular built-in's on the mirrored run."""
+    fig = preset("snowboarder")
+    traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(20),
+                                      heading=0.3), duration=6.0).resample(24)
+    mirrored = map_trajectory("snowboarder", mirrored_trajectory(traj))
+    rig = user_rig()
+    fit = fit_rig(rig, BM, "snowboarder", mirror=True)
+    assert fit.travel == pytest.approx(-math.pi, abs=1e-9)       # towards its right (-X)
+    out = retarget(mirrored, "snowboarder", rig, BM, fit, mirror=True)
+    assert np.allclose(out.props["turn_lean"], traj.theta_v)
+    assert np.allclose(out.props["turn_phase"], traj.phi)
+    P = user_fk(rig, out)
+    Pb = Skeleton.from_spec(load_rig("snowboarder")).fk(mirrored.bones, len(mirrored))
+    S = np.diag([-1.0, 1.0, 1.0])
+    foot_pt = np.column_stack([mirrored.location[:, :2], np.zeros(len(mirrored))])
+    for s, o in (("L", "R"), ("R", "L")):
+        u = world(out, P[PREFIX + f"foot.{s}"][:, :3, 3])
+        b = foot_pt + fit.k * (world(mirrored, Pb[f"foot.{o}"][:, :3, 3] @ S) - foot_pt)
+        assert np.max(np.abs(u - b)) < 1e-6
+    # The right boot leads: it is ahead along the travel.
+    heading = mirrored.rotation[:, 2] + math.pi / 2
+    ahead = np.stack([np.cos(heading), np.sin(heading)], 1)
+    lead = world(out, P[PREFIX + "foot.R"][:, :3, 3]) - world(out, P[PREFIX + "foot.L"][:, :3, 3])
+    assert np.all(np.sum(lead[:, :2] * ahead, 1) > 0.2)
+    piece, = equipment_rest("snowboarder", rig, BM, fit, mirror=True)
+    Mu = P[piece.bone] @ np.linalg.inv(rig.rest_of(piece.bone)) @ piece.rest
+    head_b = foot_pt + fit.k * (world(mirrored, Pb["board"][:, :3, 3] @ S) - foot_pt)
+    assert np.max(np.abs(world(out, Mu[:, :3, 3]) - head_b)) < 1e-6

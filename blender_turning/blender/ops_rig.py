@@ -10,10 +10,11 @@ from bpy.props import EnumProperty
 from ..core.params import PRESETS
 from ..core.errors import TurningError
 from ..mapping.retarget import ATTACH, fit_rig
+from ..mapping.retarget import STANCES as RIG_STANCES
 from . import bake, foot_track
 from . import retarget_adapter as ra
 from .props import SPORTS
-from .props_rig import BONE_MAPS
+from .props_rig import BONE_MAPS, STANCES
 from .scene_adapters import settings_from_preset
 
 _RETARGETED = tuple(s for s in SPORTS if s[0].lower() in ATTACH)
@@ -41,6 +42,8 @@ class TURNING_OT_make_figure(bpy.types.Operator):
     sport: EnumProperty(name="Sport", items=_RETARGETED, default="SKIER")
     bone_map: EnumProperty(name="Bone Map", items=BONE_MAPS, default="AUTO",
                            description="Which bone of your rig plays each of our joints")
+    stance: EnumProperty(name="Stance", items=STANCES, default="REGULAR",
+                         description="Snowboarder: which foot is forward")
 
     @classmethod
     def poll(cls, context):
@@ -58,7 +61,8 @@ class TURNING_OT_make_figure(bpy.types.Operator):
             ra.check_transform(obj)
             bm = ra.resolve_bone_map(obj, self.bone_map)
             sport = self.sport.lower()
-            fit = fit_rig(ra.user_rig(obj), bm, sport)
+            mirror = self.stance == "GOOFY" and sport in RIG_STANCES
+            fit = fit_rig(ra.user_rig(obj), bm, sport, mirror)
         except (ValueError, TurningError) as exc:
             self.report({"ERROR"}, f"Make Figure: {exc}")
             return {"CANCELLED"}
@@ -70,6 +74,7 @@ class TURNING_OT_make_figure(bpy.types.Operator):
             return {"CANCELLED"}
         rig = s.rig
         rig.bone_map = "CUSTOM" if bm.name == "custom" else bm.name.upper()
+        rig.stance = "GOOFY" if mirror else "REGULAR"
         ra.save_state(obj, bm)
         s.is_figure = True
         rig.is_user_rig = True

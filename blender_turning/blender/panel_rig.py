@@ -79,6 +79,8 @@ class VIEW3D_PT_turning_rig(TurningPanel, bpy.types.Panel):
             return
         col = layout.column()
         col.label(text=f"Bone map: {rig.bone_map.title()}", icon="BONE_DATA")
+        if ra.mirrored(obj) or obj.turning.sport == "SNOWBOARDER":
+            col.label(text=f"Stance: {rig.stance.title()}")
         if rig.equipment is not None:
             col.label(text=f"Equipment: {rig.equipment.name}", icon="OUTLINER_COLLECTION")
         layout.operator("turning.remove_figure", icon="X")

@@ -16,10 +16,9 @@ def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None):
     retargeted onto ``obj`` when it is a figure made from the user's own rig (issue 8)."""
     from ..mapping import map_trajectory      # the mapping layer's entry point
     from . import retarget_adapter
-    track = map_trajectory(sport.lower(), traj, options, frame_start=frames.start, fps=frames.fps)
     if obj is not None and retarget_adapter.is_user_rig(obj):
-        track = retarget_adapter.retarget_track(obj, track)
-    return track
+        return retarget_adapter.user_rig_track(obj, traj, frames, options)
+    return map_trajectory(sport.lower(), traj, options, frame_start=frames.start, fps=frames.fps)
 
 
 def resampled(traj, frames: FrameRange):

@@ -18,6 +18,10 @@ BONE_MAPS = (
     ("BUILTIN", "Built-in Names", "The built-in figures' bone names (also a Rigify metarig's)"),
     ("CUSTOM", "Custom", "Your own list: our joint -> your bone"),
 )
+STANCES = (
+    ("REGULAR", "Regular", "Left foot forward"),
+    ("GOOFY", "Goofy", "Right foot forward"),
+)
 _STATIC = set()
 
 
@@ -36,6 +40,8 @@ class TurningRigSettings(bpy.types.PropertyGroup):
                            description="Which bone of your rig plays each of our joints")
     custom_map: CollectionProperty(type=TurningJointBone, options=_STATIC)
     custom_index: IntProperty(options=_STATIC)
+    stance: EnumProperty(name="Stance", items=STANCES, default="REGULAR", options=_STATIC,
+                         description="Snowboarder: which foot is forward (set by Make Figure)")
     equipment: PointerProperty(name="Equipment", type=bpy.types.Collection, options=_STATIC,
                                description="The sport's equipment, tied to your rig")
     saved_state: StringProperty(options={"HIDDEN"},

@@ -15,7 +15,9 @@ from mathutils import Matrix, Quaternion
 
 from ..mapping.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map, parse_bone_map,
                                 require_joints)
-from ..mapping.retarget import UserRig, equipment_rest, fit_rig, retarget
+from ..mapping import map_trajectory
+from ..mapping.retarget import (STANCES, UserRig, equipment_rest, fit_rig, mirrored_trajectory,
+                                retarget)
 from ..mapping.rig_spec import load_rig
 from . import compat
 from .rig_builder import material, primitive
@@ -105,18 +107,27 @@ def fill_custom_map(obj, bm: BoneMap) -> None:
         row.bone = bm.bone(joint) or ""
 
 
+def mirrored(obj) -> bool:
+    """A goofy snowboarder: the mirror image of the built-in's regular stance."""
+    return obj.turning.rig.stance == "GOOFY" and obj.turning.sport.lower() in STANCES
+
+
 def facing(obj) -> float:
     """The figure's direction of travel in its armature's axes, rad CCW from +X: measured for a
     user's rig, +Y (pi/2) for the built-in figures."""
     if not is_user_rig(obj):
         return math.pi / 2
-    return fit_rig(user_rig(obj), figure_bone_map(obj), obj.turning.sport.lower()).travel
+    return fit_rig(user_rig(obj), figure_bone_map(obj), obj.turning.sport.lower(),
+                   mirrored(obj)).travel
 
 
-def retarget_track(obj, track):
-    """The built-in figure's pose track on ``obj`` (the mapping layer's retargeting)."""
-    sport = obj.turning.sport.lower()
-    return retarget(track, sport, user_rig(obj), figure_bone_map(obj))
+def user_rig_track(obj, traj, frames, options=None):
+    """The pose track of ``obj`` (a user's rig) for ``traj``: the built-in figure's Section 7
+    mapping (of the mirrored run for a goofy stance), retargeted by the mapping layer."""
+    sport, mirror = obj.turning.sport.lower(), mirrored(obj)
+    track = map_trajectory(sport, mirrored_trajectory(traj) if mirror else traj, options,
+                           frame_start=frames.start, fps=frames.fps)
+    return retarget(track, sport, user_rig(obj), figure_bone_map(obj), mirror=mirror)
 
 
 # -- the rig as it was -------------------------------------------------------------------------
@@ -231,7 +242,7 @@ def build_equipment(context, obj, bm: BoneMap):
     coll = bpy.data.collections.new(f"{obj.name} Equipment")
     parent = obj.users_collection[0] if obj.users_collection else context.scene.collection
     parent.children.link(coll)
-    for piece in equipment_rest(sport, rig, bm):
+    for piece in equipment_rest(sport, rig, bm, mirror=mirrored(obj)):
         name = f"{obj.name} {piece.name}"
         eq = bpy.data.objects.new(name, _piece_mesh(spec, piece, name))
         coll.objects.link(eq)

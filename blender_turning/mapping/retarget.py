@@ -50,7 +50,7 @@ from .kinematics import Skeleton, quat_continuous, quat_from_matrix, rigid_inver
 from .rig_spec import load_rig
 
 __all__ = ["UserRig", "RigFit", "EquipmentPiece", "fit_rig", "retarget", "equipment_rest",
-           "ATTACH"]
+           "mirrored_trajectory", "unmirror_props", "ATTACH", "STANCES"]
 
 #: Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig.
 ATTACH = {
@@ -72,6 +72,48 @@ for _s in ("L", "R"):
         ("shoulder", "upper_arm"), ("upper_arm", "forearm"), ("forearm", "hand"),
         ("thigh", "shin"), ("shin", "foot"))})
 FLAT = {B.side(b, s) for b in ("foot", "toe") for s in ("L", "R")}     # A = I: stand flat
+#: Sports with a stance: the built-in rides ``regular`` (left foot forward); ``goofy`` is its
+#: mirror image (see :func:`mirrored_trajectory`).
+STANCES = {"snowboarder": ("regular", "goofy")}
+_S4 = np.diag([-1.0, 1.0, 1.0, 1.0])        # mirror across the travel line (x -> -x)
+
+
+def mirrored_trajectory(traj):
+    """The mirror image of ``traj`` across its own line of travel: lean, its rate and
+    acceleration, and curvature change sign, the phase moves half a cycle; where the foot goes
+    (x, y, theta_dir) stays.  A goofy rider on ``traj`` is the mirror image, .L and .R swapped, of
+    a regular rider on this (Section 7's snowboarder rides regular)."""
+    cols = traj.columns()
+    for c in ("theta_v", "omega_v", "alpha_v", "C_f"):
+        cols[c] = -np.asarray(cols[c])
+    cols["phi"] = np.mod(np.asarray(cols["phi"]) + np.pi, 2 * np.pi)
+    return type(traj).from_columns(cols, traj.meta)
+
+
+def unmirror_props(props: dict) -> dict:
+    """State properties of a mirrored run (``STATE_PROPS``) back to the run itself."""
+    out = dict(props)
+    for p in ("turn_lean", "turn_curvature"):
+        if p in out:
+            out[p] = -np.asarray(out[p])
+    if "turn_phase" in out:
+        out["turn_phase"] = np.mod(np.asarray(out["turn_phase"]) + np.pi, 2 * np.pi)
+    return out
+
+
+class _Mirrored:
+    """A built-in skeleton mirrored across its travel line with .L and .R swapped."""
+
+    def __init__(self, skel):
+        self._skel = skel
+
+    def rest_of(self, name):
+        return _S4 @ self._skel.rest_of(B.mirror(name)) @ _S4
+
+
+def _skeleton(sport, mirror):
+    skel = Skeleton.from_spec(load_rig(sport))
+    return _Mirrored(skel) if mirror else skel
 
 
 @dataclass(frozen=True)
@@ -201,8 +243,9 @@ def _leg_length(head):
                for a, b in (("thigh.L", "shin.L"), ("shin.L", "foot.L")))
 
 
-def fit_rig(rig: UserRig, bm: BoneMap, sport: str = "skier") -> RigFit:
-    """Measure the user's rig against the built-in figure of ``sport`` (facing, size, origin)."""
+def fit_rig(rig: UserRig, bm: BoneMap, sport: str = "skier", mirror: bool = False) -> RigFit:
+    """Measure the user's rig against the built-in figure of ``sport`` (facing, size, origin);
+    ``mirror``: against its mirror image (a goofy snowboarder)."""
     require_joints(bm, rig.names, f"armature {rig.name!r}")
     head = lambda j: rig.head(bm.bone(j))            # noqa: E731
     fwd = _forward(head("thigh.L") - head("thigh.R"))
@@ -214,8 +257,8 @@ def fit_rig(rig: UserRig, bm: BoneMap, sport: str = "skier") -> RigFit:
     if np.dot(toes[:2], fwd[:2]) < 0:
         raise ValueError(f"armature {rig.name!r}: its feet point backwards from the way its "
                          f"left and right hips say it faces (are .L and .R swapped?)")
-    spec = load_rig(sport)
-    b_head = lambda j: np.asarray(spec.bone(j).head)  # noqa: E731
+    skel = _skeleton(sport, mirror)
+    b_head = lambda j: skel.rest_of(j)[:3, 3]        # noqa: E731
     b_fwd = _forward(b_head("thigh.L") - b_head("thigh.R"))
     k = rig.scale * _leg_length(head) / _leg_length(b_head)
     ankles = 0.5 * (head("foot.L") + head("foot.R"))
@@ -236,11 +279,13 @@ def _forward(left):
 class _Builtin:
     """The built-in figure's posed bones (armature space) with its rest, in the user's axes."""
 
-    def __init__(self, sport, track, fit):
-        spec = load_rig(sport)
-        self.skel = Skeleton.from_spec(spec)
+    def __init__(self, sport, track, fit, mirror=False):
+        skel = Skeleton.from_spec(load_rig(sport))
         self.n = len(track)
-        self.P = self.skel.fk(track.bones, self.n)
+        self.P = skel.fk(track.bones, self.n)
+        if mirror:
+            self.P = {n: _S4 @ self.P[B.mirror(n)] @ _S4 for n in self.P}
+        self.skel = _Mirrored(skel) if mirror else skel
         self.fit = fit
 
     def delta(self, bone):
@@ -451,13 +496,15 @@ def _fk_ancestor(rig, bm, bone):
 
 
 def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
-             fit: RigFit | None = None) -> PoseTrack:
+             fit: RigFit | None = None, mirror: bool = False) -> PoseTrack:
     """The built-in figure's ``track`` (from ``map_trajectory(sport, ...)``) on the user's rig:
-    a :class:`PoseTrack` of the user's bones (or controls) and the object's root motion."""
+    a :class:`PoseTrack` of the user's bones (or controls) and the object's root motion.  With
+    ``mirror`` the track is of the mirrored trajectory and the user's rig takes its mirror
+    image (a goofy snowboarder); the state properties are given back unmirrored."""
     if sport not in ATTACH:
         raise ValueError(f"sport = {sport!r}: retargeting supports {', '.join(ATTACH)}")
-    fit = fit_rig(rig, bm, sport) if fit is None else fit
-    bi = _Builtin(sport, track, fit)
+    fit = fit_rig(rig, bm, sport, mirror) if fit is None else fit
+    bi = _Builtin(sport, track, fit, mirror)
     poses = solve_joints(bi, rig, bm, sport)
     bones = {}
     if bm.controls:
@@ -479,7 +526,8 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     R = rot_z(psi)
     location = track.location - fit.scale * np.einsum("nij,j->ni", R, fit.origin)
     rotation = np.stack([np.zeros(len(track)), np.zeros(len(track)), psi], axis=1)
-    return PoseTrack(track.frames, location, rotation, bones, dict(track.props))
+    props = unmirror_props(track.props) if mirror else dict(track.props)
+    return PoseTrack(track.frames, location, rotation, bones, props)
 
 
 @dataclass(frozen=True)
@@ -496,15 +544,15 @@ class EquipmentPiece:
     """Mesh scale: built-in metres -> the user's armature units (``k / s``)."""
 
 
-def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = None) -> list:
+def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = None,
+                   mirror: bool = False) -> list:
     """Where each piece of the sport's equipment sits on the user's rig at rest: rigid with its
     joint exactly as on the built-in figure, through the same rest difference ``A`` as the
     motion (so that in motion it lands where the built-in's equipment is)."""
     if sport not in ATTACH:
         raise ValueError(f"sport = {sport!r}: retargeting supports {', '.join(ATTACH)}")
-    fit = fit_rig(rig, bm, sport) if fit is None else fit
-    spec = load_rig(sport)
-    skel = Skeleton.from_spec(spec)
+    fit = fit_rig(rig, bm, sport, mirror) if fit is None else fit
+    skel = _skeleton(sport, mirror)
     C, size = fit.C, fit.k / fit.scale
     out = []
     for piece, joint in ATTACH[sport].items():
