@@ -8,6 +8,7 @@ import tomllib
 import zipfile
 from pathlib import Path
 
+from blender_turning.mapping.bone_map import BONE_MAPS
 from blender_turning.mapping.rig_spec import RIG_NAMES
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -37,10 +38,12 @@ def test_the_wheel_carries_the_rigs_and_the_mapping_finds_them(tmp_path):
         names = set(zf.namelist())
         zf.extractall(tmp_path / "site")
     assert {f"blender_turning/rigs/{n}.json" for n in RIG_NAMES} <= names
+    assert {f"blender_turning/rigs/bone_maps/{n}.json" for n in BONE_MAPS} <= names
     assert not any(n.startswith(("tests/", "scripts/", "rigs/")) for n in names)
     # From the unpacked wheel alone (not the repository): the mapping loads every rig.
-    code = ("import blender_turning.mapping.rig_spec as r; "
-            "[r.load_rig(n) for n in r.RIG_NAMES]; print(r.RIGS_DIR)")
+    code = ("import blender_turning.mapping.rig_spec as r, blender_turning.mapping.bone_map as b; "
+            "[r.load_rig(n) for n in r.RIG_NAMES]; [b.load_bone_map(n) for n in b.BONE_MAPS]; "
+            "print(r.RIGS_DIR)")
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                          text=True, env={"PYTHONPATH": str(tmp_path / "site")}, timeout=120)
     assert out.returncode == 0, out.stderr
