@@ -75,11 +75,12 @@ def rigify_rig(name="Rigify", location=(0, 0, 0)):
 #: The bones each measure reads: ankle, knee, hip joint per side.
 #: The bones each measure reads (their heads): ankle, ball of the foot, knee, hip joint.
 JOINTS = {
-    "builtin": {"ankle": "foot.{s}", "toe": "toe.{s}", "knee": "shin.{s}", "hip": "thigh.{s}"},
+    "builtin": {"ankle": "foot.{s}", "toe": "toe.{s}", "knee": "shin.{s}", "hip": "thigh.{s}",
+                "wrist": "hand.{s}"},
     "rigify": {"ankle": "DEF-foot.{s}", "toe": "DEF-toe.{s}", "knee": "DEF-shin.{s}",
-               "hip": "DEF-thigh.{s}"},
+               "hip": "DEF-thigh.{s}", "wrist": "DEF-hand.{s}"},
     "mixamo": {"ankle": PREFIX + "{S}Foot", "toe": PREFIX + "{S}ToeBase",
-               "knee": PREFIX + "{S}Leg", "hip": PREFIX + "{S}UpLeg"},
+               "knee": PREFIX + "{S}Leg", "hip": PREFIX + "{S}UpLeg", "wrist": PREFIX + "{S}Hand"},
 }
 
 
@@ -135,12 +136,13 @@ def knee(rec, s):
 
 
 
-def sample(scene, frames, bindings):
+def sample(scene, frames, bindings, ground=None):
     """Per frame: each figure's ankles, knees and hip joints (world) and the heading; for each
-    user rig (every key but 'builtin'), the lowest point of its ground equipment (the pieces in
-    ``bindings``), the largest distance from a joint to its binding (``bindings``: piece ->
-    ``[(joint, side), ...]``, the joint's rest point in the piece's own frame) and every
-    deforming bone's (armature-space, world) matrices."""
+    user rig (every key but 'builtin'), the lowest point of its ground equipment (``ground``,
+    default the pieces in ``bindings``), the largest distance from a joint to its binding
+    (``bindings``: piece -> ``[(joint, side), ...]``, the joint's rest point in the piece's own
+    frame; joint ``'pelvis'``: the hip joints' midpoint) and every deforming bone's (armature-space, world) matrices."""
+    ground_names = set(bindings if ground is None else ground)
     from blender_turning.blender.retarget_adapter import (facing, figure_bone_map, mirrored,
                                                           user_rig)
     from blender_turning.mapping.bones import mirror
@@ -152,7 +154,9 @@ def sample(scene, frames, bindings):
     users = [k for k in scene if k != "builtin"]
     travel = {k: facing(obj) for k, obj in scene.items()}
     ground = {k: [o for o in scene[k].turning.rig.equipment.objects
-                  if o["turning_equipment"] in bindings] for k in users}
+                  if o["turning_equipment"] in ground_names] for k in users}
+    bound = {k: [o for o in scene[k].turning.rig.equipment.objects
+                 if o["turning_equipment"] in bindings] for k in users}
     # The binding: where the built-in figure's joint sits on the piece at rest, in the piece's
     # own frame, scaled to the character as the piece is.
     binding = {}
@@ -163,11 +167,12 @@ def sample(scene, frames, bindings):
         S = np.diag([-1.0, 1.0, 1.0, 1.0])       # a goofy rider: the built-in's mirror image
         rest_of = (lambda n: S @ base.rest_of(mirror(n)) @ S) if goofy else base.rest_of
         fit = fit_rig(user_rig(obj), figure_bone_map(obj), sport, goofy)
-        for o in ground[k]:
+        for o in bound[k]:
             piece = o["turning_equipment"]
             for joint, s in bindings[piece]:
-                p = np.linalg.inv(rest_of(piece)) @ np.append(
-                    rest_of(name("builtin", joint, s))[:3, 3], 1.0)
+                point = (0.5 * sum(rest_of(name("builtin", "hip", x))[:3, 3] for x in "LR")
+                         if joint == "pelvis" else rest_of(name("builtin", joint, s))[:3, 3])
+                p = np.linalg.inv(rest_of(piece)) @ np.append(point, 1.0)
                 binding[o.name, joint, s] = Vector(fit.k / fit.scale * p[:3])
     low, gap, deform = ({k: [] for k in users} for _ in range(3))
     for f in range(frames[0], frames[1] + 1):
@@ -183,9 +188,12 @@ def sample(scene, frames, bindings):
                 mw = np.array(o.matrix_world)
                 v = np.array([tuple(x.co) for x in o.data.vertices])
                 lows.append(np.min(v @ mw[2, :3] + mw[2, 3]))
+            for o in bound[k]:
                 for joint, s in bindings[o["turning_equipment"]]:
                     at = np.array(o.matrix_world @ binding[o.name, joint, s])
-                    gaps.append(np.linalg.norm(at - world_head(obj, name(k, joint, s))))
+                    there = (0.5 * sum(world_head(obj, name(k, "hip", x)) for x in "LR")
+                             if joint == "pelvis" else world_head(obj, name(k, joint, s)))
+                    gaps.append(np.linalg.norm(at - there))
             low[k].append(min(lows))
             gap[k].append(max(gaps))
             deform[k].append({pb.name: (np.array(pb.matrix),

@@ -299,3 +299,45 @@ def test_goofy_is_the_mirror_image_of_regular():
     Mu = P[piece.bone] @ np.linalg.inv(rig.rest_of(piece.bone)) @ piece.rest
     head_b = foot_pt + fit.k * (world(mirrored, Pb["board"][:, :3, 3] @ S) - foot_pt)
     assert np.max(np.abs(world(out, Mu[:, :3, 3]) - head_b)) < 1e-6
+
+
+def test_cyclist_sits_steers_and_pedals():
+    """The cyclist's bicycle on the user's rig: the frame rigid with the pelvis, the fork with
+    the left hand, the pedals with the feet, each exactly the built-in's (scaled); the right hand
+    on the bar; the pedals on the crank circle."""
+    fig = preset("cyclist")
+    traj = simulate(fig, PhaseEllipse(fig.body, omega0=2 * math.pi / 3, theta_max=math.radians(15),
+                                      heading=0.3), duration=6.0)
+    run = map_trajectory("cyclist", traj, fps=24)
+    rig = user_rig(shin_ratio=1.1)
+    fit = fit_rig(rig, BM, "cyclist")
+    out = retarget(run, "cyclist", rig, BM, fit)
+    P = user_fk(rig, out)
+    skel = Skeleton.from_spec(load_rig("cyclist"))
+    Pb = skel.fk(run.bones, len(run))
+    foot_pt = np.column_stack([run.location[:, :2], np.zeros(len(run))])
+    mapped = lambda p: foot_pt + fit.k * (world(run, p) - foot_pt)         # noqa: E731
+    pieces = {p.name: p for p in equipment_rest("cyclist", rig, BM, fit)}
+    posed = {}
+    for name, piece in pieces.items():
+        Mu = P[piece.bone] @ np.linalg.inv(rig.rest_of(piece.bone)) @ piece.rest
+        posed[name] = Mu
+        if name in ("wheel.F", "wheel.R", "crank"):
+            continue                     # they turn (wheels spin, the crank follows its track)
+        assert np.max(np.abs(world(out, Mu[:, :3, 3]) - mapped(Pb[name][:, :3, 3]))) < 1e-6, name
+        Rb = rot_z(run.rotation[:, 2]) @ Pb[name][:, :3, :3]
+        assert np.max(np.abs(rot_z(out.rotation[:, 2]) @ Mu[:, :3, :3] - Rb)) < 1e-6, name
+    assert pieces["crank"].track == "pedal.R" and pieces["crank"].track_axis == "NEGATIVE_X"
+    # The right hand on the bar: its wrist where the built-in's is (carried by the fork).
+    wrist = world(out, P[PREFIX + "hand.R"][:, :3, 3])
+    assert np.max(np.abs(wrist - mapped(Pb["hand.R"][:, :3, 3]))) < 1e-6
+    # Pedals through the whole crank circle: their distance from the crank's axle is constant.
+    crank = posed["crank"]
+    axle = crank[:, :3, 1]
+    for s in "LR":
+        d = posed[f"pedal.{s}"][:, :3, 3] - crank[:, :3, 3]
+        d -= np.sum(d * axle, 1)[:, None] * axle
+        r = np.linalg.norm(d, axis=1)
+        assert np.ptp(r) < 1e-6 and r.min() > 0.1
+    angle = np.unwrap(np.arctan2(*(posed["pedal.R"][:, :3, 3] - crank[:, :3, 3])[:, 1:3].T))
+    assert np.ptp(angle) > 2 * math.pi            # a whole turn and more in 6 s

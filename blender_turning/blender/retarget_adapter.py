@@ -242,7 +242,9 @@ def build_equipment(context, obj, bm: BoneMap):
     coll = bpy.data.collections.new(f"{obj.name} Equipment")
     parent = obj.users_collection[0] if obj.users_collection else context.scene.collection
     parent.children.link(coll)
-    for piece in equipment_rest(sport, rig, bm, mirror=mirrored(obj)):
+    pieces = equipment_rest(sport, rig, bm, mirror=mirrored(obj))
+    made = {}
+    for piece in pieces:
         name = f"{obj.name} {piece.name}"
         eq = bpy.data.objects.new(name, _piece_mesh(spec, piece, name))
         coll.objects.link(eq)
@@ -253,6 +255,12 @@ def build_equipment(context, obj, bm: BoneMap):
         con.target, con.subtarget = obj, piece.bone
         con.inverse_matrix = Matrix.Identity(4)
         eq["turning_equipment"] = piece.name
+        made[piece.name] = eq
+    for piece in pieces:          # the crank turns to face its pedal about its axle
+        if piece.track:
+            con = made[piece.name].constraints.new("DAMPED_TRACK")
+            con.name = "Turning: faces " + piece.track
+            con.target, con.track_axis = made[piece.track], "TRACK_" + piece.track_axis
     rig_settings(obj).equipment = coll
     return coll
 

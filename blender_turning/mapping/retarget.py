@@ -59,7 +59,18 @@ ATTACH = {
     "snowboarder": {"board": "foot.L"},
     # The trailing heel lifts off its ski: the skis go with the toes, flat on them.
     "telemark": {"ski.L": "toe.L", "ski.R": "toe.R", "pole.L": "hand.L", "pole.R": "hand.R"},
+    # The rider sits on the frame, steers the fork (the hands are carried by it) and pedals (the
+    # feet are carried by the pedals).  The wheels do not spin on the user's rig: no bone of the
+    # rider turns with them.
+    "cyclist": {"frame": "spine", "wheel.R": "spine", "crank": "spine", "fork": "hand.L",
+                "wheel.F": "hand.L", "pedal.L": "foot.L", "pedal.R": "foot.R"},
 }
+#: Equipment that turns about its own axle to face another piece (Blender: Damped Track): the
+#: crank follows the pedals round the crank circle.
+TRACKS = {"cyclist": {"crank": "pedal.R"}}
+#: Sports where the pelvis sits on the equipment (the saddle): it goes exactly where the
+#: built-in's goes, the knees bend as the pedals ask.
+SEATED = {"cyclist"}
 #: Where a foot meets its equipment, when not at the ankle: the leg's IK puts that joint's head
 #: exactly on the built-in's (the telemark's ball of the foot, which stays on the ski).
 ANCHOR = {"telemark": "toe"}
@@ -430,8 +441,8 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
     ankles, turns = dict(first), {}
     for _ in range(6 if anchor else 1):
         hips_b = 0.5 * (ankles["L"] + ankles["R"]) + lean_b     # from the user's own ankles
-        slide = np.mean([_knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankles[s])
-                         for s in "LR"], axis=0)
+        slide = np.zeros(n) if sport in SEATED else np.mean(
+            [_knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankles[s]) for s in "LR"], axis=0)
         place(B.HIPS, hips_b + slide[:, None] * axis - DA @ (hips_u - rest[B.HIPS][:3, 3]))
         if anchor:
             for s in "LR":
@@ -530,6 +541,14 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     return PoseTrack(track.frames, location, rotation, bones, props)
 
 
+def _anchor(head, joint):
+    """Where equipment rigid with ``joint`` is measured from: the joint's head, or for the
+    pelvis the hip joints' midpoint (which :func:`solve_joints` puts on the built-in's)."""
+    if joint == B.HIPS:
+        return 0.5 * (head("thigh.L") + head("thigh.R"))
+    return head(joint)
+
+
 @dataclass(frozen=True)
 class EquipmentPiece:
     name: str
@@ -542,6 +561,10 @@ class EquipmentPiece:
     """(4, 4) its frame at the rig's rest, user armature space (like a bone's ``matrix_local``)."""
     size: float
     """Mesh scale: built-in metres -> the user's armature units (``k / s``)."""
+    track: str | None = None
+    """Another piece this one turns to face about its own Y axis (``TRACKS``), or ``None``."""
+    track_axis: str = ""
+    """Its local axis that points at ``track`` at rest: 'X', 'Z', 'NEGATIVE_X' or 'NEGATIVE_Z'."""
 
 
 def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = None,
@@ -555,12 +578,20 @@ def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = N
     skel = _skeleton(sport, mirror)
     C, size = fit.C, fit.k / fit.scale
     out = []
+    u_head = lambda j: rig.head(bm.bone(j))                # noqa: E731
+    b_head = lambda j: skel.rest_of(j)[:3, 3]                # noqa: E731
     for piece, joint in ATTACH[sport].items():
         A = _rest_difference(bm, rig, skel, fit, joint)
-        u = rig.rest_of(bm.bone(joint))
         m = np.eye(4)
         m[:3, :3] = A.T @ C @ skel.rest_of(piece)[:3, :3]
-        m[:3, 3] = u[:3, 3] + A.T @ (size * (C @ (skel.rest_of(piece)[:3, 3]
-                                                    - skel.rest_of(joint)[:3, 3])))
-        out.append(EquipmentPiece(piece, joint, bm.bone(joint), m, size))
+        m[:3, 3] = _anchor(u_head, joint) + A.T @ (size * (C @ (b_head(piece)
+                                                                 - _anchor(b_head, joint))))
+        track = TRACKS.get(sport, {}).get(piece)
+        axis = ""
+        if track is not None:
+            v = skel.rest_of(piece)[:3, :3].T @ (b_head(track) - b_head(piece))
+            v[1] = 0.0                                       # about its own Y axis
+            i = 0 if abs(v[0]) >= abs(v[2]) else 2
+            axis = ("" if v[i] > 0 else "NEGATIVE_") + "XYZ"[i]
+        out.append(EquipmentPiece(piece, joint, bm.bone(joint), m, size, track, axis))
     return out
