@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib
 
 _MODULES = ("props_rig", "props", "presets", "ops_figure", "ops_bake", "ops_path", "ops_rig",
-            "panel", "panel_rig")
+            "ops_bone_map", "panel", "panel_rig")
 
 
 def _modules():

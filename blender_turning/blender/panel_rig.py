@@ -1,5 +1,6 @@
 """The Turning tab's "Your Rig" sub-panel (issue 8): make the active armature a figure, its bone
-map (a custom one edited as a list: our joint -> your bone, with a bone picker), remove it."""
+map (a custom one edited as a list: our joint -> your bone, with a bone picker, saved and loaded
+as presets), remove it."""
 from __future__ import annotations
 
 import bpy
@@ -19,31 +20,6 @@ class TURNING_UL_bone_map(bpy.types.UIList):
             row.prop_search(item, "bone", arm, "bones", text="")
         else:
             row.prop(item, "bone", text="")
-
-
-class TURNING_OT_custom_map_from(bpy.types.Operator):
-    """Fill the custom bone map from a shipped one (then edit the rows)"""
-
-    bl_idname = "turning.custom_map_from"
-    bl_label = "Start Custom Map"
-    bl_options = {"REGISTER", "UNDO"}
-
-    source: bpy.props.EnumProperty(name="From", items=[(k, k.title(), "") for k in ra.NAMED])
-
-    @classmethod
-    def poll(cls, context):
-        obj = context.active_object
-        if obj is None or obj.type != "ARMATURE":
-            cls.poll_message_set("Select your armature")
-            return False
-        return True
-
-    def execute(self, context):
-        from ..mapping.bone_map import load_bone_map
-        obj = context.active_object
-        ra.fill_custom_map(obj, load_bone_map(ra.NAMED[self.source]))
-        obj.turning.rig.bone_map = "CUSTOM"
-        return {"FINISHED"}
 
 
 class VIEW3D_PT_turning_rig(TurningPanel, bpy.types.Panel):
@@ -68,14 +44,17 @@ class VIEW3D_PT_turning_rig(TurningPanel, bpy.types.Panel):
                                         icon="ADD")
             layout.separator()
             layout.label(text="Custom bone map (optional):")
-            layout.operator_menu_enum("turning.custom_map_from", "source",
-                                      text="Start From a Shipped Map")
+            row = layout.row(align=True)
+            row.operator_menu_enum("turning.custom_map_from", "source",
+                                   text="Start From a Shipped Map")
+            row.operator_menu_enum("turning.custom_map_load", "preset", text="", icon="PRESET")
             if len(rig.custom_map):
                 layout.template_list("TURNING_UL_bone_map", "", rig, "custom_map", rig,
                                      "custom_index", rows=6)
-                row = layout.row()
+                row = layout.row(align=True)
                 row.operator("turning.make_figure", text="Make Figure (Custom Map)").bone_map = (
                     "CUSTOM")
+                row.operator("turning.custom_map_save", text="", icon="FILE_TICK")
             return
         col = layout.column()
         col.label(text=f"Bone map: {rig.bone_map.title()}", icon="BONE_DATA")
@@ -86,5 +65,5 @@ class VIEW3D_PT_turning_rig(TurningPanel, bpy.types.Panel):
         layout.operator("turning.remove_figure", icon="X")
 
 
-classes = (TURNING_UL_bone_map, TURNING_OT_custom_map_from, VIEW3D_PT_turning_rig)
+classes = (TURNING_UL_bone_map, VIEW3D_PT_turning_rig)
 register, unregister = bpy.utils.register_classes_factory(classes)
