@@ -147,7 +147,7 @@ def sample(scene, frames, bindings, ground=None):
                                                           user_rig)
     from blender_turning.mapping.bones import mirror
     from blender_turning.mapping.kinematics import Skeleton
-    from blender_turning.mapping.retarget import fit_rig
+    from blender_turning.mapping.user_rig import fit_rig
     from blender_turning.mapping.rig_spec import load_rig
     sc = bpy.context.scene
     out = {k: {"p": [], "heading": []} for k in scene}

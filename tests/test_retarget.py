@@ -11,8 +11,10 @@ from blender_turning.mapping import map_trajectory
 from blender_turning.mapping.bone_map import load_bone_map, parse_bone_map
 from blender_turning.mapping.common import rot_y, rot_z
 from blender_turning.mapping.kinematics import Skeleton, rest_matrix
-from blender_turning.mapping.retarget import (UserRig, equipment_rest, fit_rig,
-                                              mirrored_trajectory, retarget, swing)
+from blender_turning.mapping.equipment import equipment_rest
+from blender_turning.mapping.retarget import retarget, swing
+from blender_turning.mapping.stance import mirrored_trajectory
+from blender_turning.mapping.user_rig import UserRig, fit_rig
 from blender_turning.mapping.rig_spec import load_rig
 
 PREFIX = "u_"

@@ -9,8 +9,9 @@ from bpy.props import EnumProperty
 
 from ..core.params import PRESETS
 from ..core.errors import TurningError
-from ..mapping.retarget import ATTACH, fit_rig
-from ..mapping.retarget import STANCES as RIG_STANCES
+from ..mapping.retarget import ATTACH
+from ..mapping.stance import STANCES as RIG_STANCES
+from ..mapping.user_rig import fit_rig
 from . import bake, foot_track
 from . import retarget_adapter as ra
 from .props import SPORTS

@@ -16,8 +16,10 @@ from mathutils import Matrix, Quaternion
 from ..mapping.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map, parse_bone_map,
                                 require_joints)
 from ..mapping import map_trajectory
-from ..mapping.retarget import (STANCES, UserRig, equipment_rest, fit_rig, mirrored_trajectory,
-                                retarget)
+from ..mapping.equipment import equipment_rest
+from ..mapping.retarget import retarget
+from ..mapping.stance import STANCES, mirrored_trajectory
+from ..mapping.user_rig import UserRig, fit_rig
 from ..mapping.rig_spec import load_rig
 from . import compat
 from .rig_builder import material, primitive

@@ -18,7 +18,7 @@ armature at rest, read by the Blender side) through a :class:`~.bone_map.BoneMap
   ``D_builtin`` the built-in bone's rotation from its rest (in the user's axes) and ``A`` the
   fixed rotation taking the user's rest segment (joint to next joint) onto the built-in's (a
   T-pose arm onto the built-in's hanging arm).  The feet keep ``A = I`` (both rigs stand flat).
-* **Equipment** (:func:`equipment_rest`) is rigid with its joint, placed at rest as on the
+* **Equipment** (:func:`.equipment.equipment_rest`) is rigid with its joint, placed at rest as on the
   built-in through the same ``A``: a ski under its foot lands exactly on the built-in's ski.  A
   pole is rigid in the hand, so it follows the built-in's hand, not the built-in pole's own aim
   (the built-in's pole swings in its hand; an object tied to a bone cannot, and a hand turned
@@ -38,19 +38,18 @@ armature at rest, read by the Blender side) through a :class:`~.bone_map.BoneMap
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from . import bones as B
 from .base import BoneChannels, PoseTrack
-from .bone_map import JOINT_PARENT, JOINTS, BoneMap, require_joints
+from .bone_map import JOINT_PARENT, JOINTS, BoneMap
 from .common import rot_z
-from .kinematics import Skeleton, quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
-from .rig_spec import load_rig
+from .kinematics import quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
+from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
+from .user_rig import RigFit, UserRig, fit_rig
 
-__all__ = ["UserRig", "RigFit", "EquipmentPiece", "fit_rig", "retarget", "equipment_rest",
-           "mirrored_trajectory", "unmirror_props", "ATTACH", "STANCES"]
+__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SEATED", "ANCHOR"]
 
 #: Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig.
 ATTACH = {
@@ -83,127 +82,6 @@ for _s in ("L", "R"):
         ("shoulder", "upper_arm"), ("upper_arm", "forearm"), ("forearm", "hand"),
         ("thigh", "shin"), ("shin", "foot"))})
 FLAT = {B.side(b, s) for b in ("foot", "toe") for s in ("L", "R")}     # A = I: stand flat
-#: Sports with a stance: the built-in rides ``regular`` (left foot forward); ``goofy`` is its
-#: mirror image (see :func:`mirrored_trajectory`).
-STANCES = {"snowboarder": ("regular", "goofy")}
-_S4 = np.diag([-1.0, 1.0, 1.0, 1.0])        # mirror across the travel line (x -> -x)
-
-
-def mirrored_trajectory(traj):
-    """The mirror image of ``traj`` across its own line of travel: lean, its rate and
-    acceleration, and curvature change sign, the phase moves half a cycle; where the foot goes
-    (x, y, theta_dir) stays.  A goofy rider on ``traj`` is the mirror image, .L and .R swapped, of
-    a regular rider on this (Section 7's snowboarder rides regular)."""
-    cols = traj.columns()
-    for c in ("theta_v", "omega_v", "alpha_v", "C_f"):
-        cols[c] = -np.asarray(cols[c])
-    cols["phi"] = np.mod(np.asarray(cols["phi"]) + np.pi, 2 * np.pi)
-    return type(traj).from_columns(cols, traj.meta)
-
-
-def unmirror_props(props: dict) -> dict:
-    """State properties of a mirrored run (``STATE_PROPS``) back to the run itself."""
-    out = dict(props)
-    for p in ("turn_lean", "turn_curvature"):
-        if p in out:
-            out[p] = -np.asarray(out[p])
-    if "turn_phase" in out:
-        out["turn_phase"] = np.mod(np.asarray(out["turn_phase"]) + np.pi, 2 * np.pi)
-    return out
-
-
-class _Mirrored:
-    """A built-in skeleton mirrored across its travel line with .L and .R swapped."""
-
-    def __init__(self, skel):
-        self._skel = skel
-
-    def rest_of(self, name):
-        return _S4 @ self._skel.rest_of(B.mirror(name)) @ _S4
-
-
-def _skeleton(sport, mirror):
-    skel = Skeleton.from_spec(load_rig(sport))
-    return _Mirrored(skel) if mirror else skel
-
-
-@dataclass(frozen=True)
-class UserRig:
-    """The user's armature at rest, as Blender has it (armature space, the armature's units)."""
-
-    names: tuple
-    parents: tuple
-    """Parent bone name (or ``None``) of each bone."""
-    rest: np.ndarray
-    """(k, 4, 4) ``bone.matrix_local``."""
-    local_location: tuple = None
-    """``bone.use_local_location`` of each bone (default all ``True``)."""
-    scale: float = 1.0
-    """The armature object's uniform scale (world metres per armature unit)."""
-    name: str = "rig"
-
-    def __post_init__(self):
-        k = len(self.names)
-        rest = np.asarray(self.rest, float)
-        if rest.shape != (k, 4, 4) or len(self.parents) != k:
-            raise ValueError(f"rig {self.name!r}: {k} names, {len(self.parents)} parents and "
-                             f"rest matrices of shape {rest.shape} do not agree")
-        if not np.all(np.isfinite(rest)):
-            raise ValueError(f"rig {self.name!r}: a rest matrix is not finite")
-        if not (math.isfinite(self.scale) and self.scale > 0):
-            raise ValueError(f"rig {self.name!r}: scale = {self.scale!r} must be positive")
-        object.__setattr__(self, "rest", rest)
-        if self.local_location is None:
-            object.__setattr__(self, "local_location", (True,) * k)
-        object.__setattr__(self, "_index", {n: i for i, n in enumerate(self.names)})
-
-    def i(self, name: str) -> int:
-        from .bones import MissingBoneError
-        try:
-            return self._index[name]
-        except KeyError:
-            raise MissingBoneError(f"bone {name!r} is not in rig {self.name!r}") from None
-
-    def rest_of(self, name: str) -> np.ndarray:
-        return self.rest[self.i(name)]
-
-    def head(self, name: str) -> np.ndarray:
-        return self.rest[self.i(name)][:3, 3]
-
-
-@dataclass(frozen=True)
-class RigFit:
-    """How the built-in rig's armature space sits in the user's (see the module doc)."""
-
-    facing: float
-    """Direction the user's rig faces in its armature space, rad, counter-clockwise from +X."""
-    builtin_facing: float
-    """Direction the built-in rig faces in its armature space (+Y = pi/2; the snowboarder
-    stands side-on, facing +X = 0), rad."""
-    k: float
-    """Size of the user's figure over the built-in's (leg length ratio, world metres)."""
-    origin: np.ndarray
-    """(3,) the user's armature point that goes onto the foot point (ankle midpoint, z = 0)."""
-    scale: float
-    """World metres per user armature unit."""
-
-    @property
-    def C(self) -> np.ndarray:
-        """(3, 3) the built-in's axes -> the user's (turns the built-in's facing onto the
-        user's)."""
-        return rot_z(self.facing - self.builtin_facing)
-
-    @property
-    def travel(self) -> float:
-        """The direction of travel in the user's armature space (where the built-in's +Y goes),
-        rad CCW from +X: the object turns it onto the heading."""
-        return math.pi / 2 + self.facing - self.builtin_facing
-
-    def point(self, p) -> np.ndarray:
-        """Built-in armature-space points (..., 3) -> the user's armature space."""
-        return self.origin + (self.k / self.scale) * np.asarray(p, float) @ self.C.T
-
-
 def _unit(v):
     v = np.asarray(v, float)
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
@@ -249,54 +127,16 @@ def _chain_child(bm, rig, joint):
     return None
 
 
-def _leg_length(head):
-    return sum(float(np.linalg.norm(head(b) - head(a)))
-               for a, b in (("thigh.L", "shin.L"), ("shin.L", "foot.L")))
-
-
-def fit_rig(rig: UserRig, bm: BoneMap, sport: str = "skier", mirror: bool = False) -> RigFit:
-    """Measure the user's rig against the built-in figure of ``sport`` (facing, size, origin);
-    ``mirror``: against its mirror image (a goofy snowboarder)."""
-    require_joints(bm, rig.names, f"armature {rig.name!r}")
-    head = lambda j: rig.head(bm.bone(j))            # noqa: E731
-    fwd = _forward(head("thigh.L") - head("thigh.R"))
-    if fwd is None:
-        raise ValueError(f"armature {rig.name!r}: the hip joints coincide in plan (thigh.L -> "
-                         f"{bm.bone('thigh.L')!r}, thigh.R -> {bm.bone('thigh.R')!r}); cannot "
-                         f"tell which way it faces")
-    toes = sum(rig.rest_of(bm.bone(f"foot.{s}"))[:3, 1] for s in ("L", "R"))
-    if np.dot(toes[:2], fwd[:2]) < 0:
-        raise ValueError(f"armature {rig.name!r}: its feet point backwards from the way its "
-                         f"left and right hips say it faces (are .L and .R swapped?)")
-    skel = _skeleton(sport, mirror)
-    b_head = lambda j: skel.rest_of(j)[:3, 3]        # noqa: E731
-    b_fwd = _forward(b_head("thigh.L") - b_head("thigh.R"))
-    k = rig.scale * _leg_length(head) / _leg_length(b_head)
-    ankles = 0.5 * (head("foot.L") + head("foot.R"))
-    return RigFit(float(math.atan2(fwd[1], fwd[0])), float(math.atan2(b_fwd[1], b_fwd[0])),
-                  float(k), np.array([ankles[0], ankles[1], 0.0]), float(rig.scale))
-
-
-def _forward(left):
-    """The facing (unit, horizontal) of a body whose right-to-left hip vector is ``left``:
-    ``left x up``; ``None`` if the hips coincide in plan."""
-    left = np.array([left[0], left[1], 0.0])
-    if np.linalg.norm(left) < 1e-9:
-        return None
-    fwd = np.cross(left, [0.0, 0.0, 1.0])
-    return fwd / np.linalg.norm(fwd)
-
-
 class _Builtin:
     """The built-in figure's posed bones (armature space) with its rest, in the user's axes."""
 
     def __init__(self, sport, track, fit, mirror=False):
-        skel = Skeleton.from_spec(load_rig(sport))
+        skel = builtin_skeleton(sport)
         self.n = len(track)
         self.P = skel.fk(track.bones, self.n)
         if mirror:
-            self.P = {n: _S4 @ self.P[B.mirror(n)] @ _S4 for n in self.P}
-        self.skel = _Mirrored(skel) if mirror else skel
+            self.P = mirror_poses(self.P)
+        self.skel = MirroredSkeleton(skel) if mirror else skel
         self.fit = fit
 
     def delta(self, bone):
@@ -539,59 +379,3 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     rotation = np.stack([np.zeros(len(track)), np.zeros(len(track)), psi], axis=1)
     props = unmirror_props(track.props) if mirror else dict(track.props)
     return PoseTrack(track.frames, location, rotation, bones, props)
-
-
-def _anchor(head, joint):
-    """Where equipment rigid with ``joint`` is measured from: the joint's head, or for the
-    pelvis the hip joints' midpoint (which :func:`solve_joints` puts on the built-in's)."""
-    if joint == B.HIPS:
-        return 0.5 * (head("thigh.L") + head("thigh.R"))
-    return head(joint)
-
-
-@dataclass(frozen=True)
-class EquipmentPiece:
-    name: str
-    """The built-in rig's equipment bone (``ski.L``); its meshes are the built-in's."""
-    joint: str
-    """Our joint it is rigid with."""
-    bone: str
-    """The user's bone playing that joint."""
-    rest: np.ndarray
-    """(4, 4) its frame at the rig's rest, user armature space (like a bone's ``matrix_local``)."""
-    size: float
-    """Mesh scale: built-in metres -> the user's armature units (``k / s``)."""
-    track: str | None = None
-    """Another piece this one turns to face about its own Y axis (``TRACKS``), or ``None``."""
-    track_axis: str = ""
-    """Its local axis that points at ``track`` at rest: 'X', 'Z', 'NEGATIVE_X' or 'NEGATIVE_Z'."""
-
-
-def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = None,
-                   mirror: bool = False) -> list:
-    """Where each piece of the sport's equipment sits on the user's rig at rest: rigid with its
-    joint exactly as on the built-in figure, through the same rest difference ``A`` as the
-    motion (so that in motion it lands where the built-in's equipment is)."""
-    if sport not in ATTACH:
-        raise ValueError(f"sport = {sport!r}: retargeting supports {', '.join(ATTACH)}")
-    fit = fit_rig(rig, bm, sport, mirror) if fit is None else fit
-    skel = _skeleton(sport, mirror)
-    C, size = fit.C, fit.k / fit.scale
-    out = []
-    u_head = lambda j: rig.head(bm.bone(j))                # noqa: E731
-    b_head = lambda j: skel.rest_of(j)[:3, 3]                # noqa: E731
-    for piece, joint in ATTACH[sport].items():
-        A = _rest_difference(bm, rig, skel, fit, joint)
-        m = np.eye(4)
-        m[:3, :3] = A.T @ C @ skel.rest_of(piece)[:3, :3]
-        m[:3, 3] = _anchor(u_head, joint) + A.T @ (size * (C @ (b_head(piece)
-                                                                 - _anchor(b_head, joint))))
-        track = TRACKS.get(sport, {}).get(piece)
-        axis = ""
-        if track is not None:
-            v = skel.rest_of(piece)[:3, :3].T @ (b_head(track) - b_head(piece))
-            v[1] = 0.0                                       # about its own Y axis
-            i = 0 if abs(v[0]) >= abs(v[2]) else 2
-            axis = ("" if v[i] > 0 else "NEGATIVE_") + "XYZ"[i]
-        out.append(EquipmentPiece(piece, joint, bm.bone(joint), m, size, track, axis))
-    return out
