@@ -1,34 +1,40 @@
 """Retargeting (issue 8): the built-in figure's motion on the user's own rig.  numpy only.
 
 The built-in figure's mapping (Section 7) gives a :class:`~.base.PoseTrack` for its own rig
-(``rigs/<sport>.json``).  :func:`retarget` carries it onto a :class:`UserRig` (the user's
-armature at rest, read by the Blender side) through a :class:`~.bone_map.BoneMap`:
+(``rigs/<sport>.json``).  :func:`retarget` carries it onto a :class:`~.user_rig.UserRig` (the
+user's armature at rest, read by the Blender side) through a :class:`~.bone_map.BoneMap`:
 
-* **Frames.**  The user's rig is measured, never assumed: its facing is the direction
-  ``left x up`` with ``left`` from the right hip joint to the left one (Blender characters face
-  -Y, the built-in rigs +Y, the built-in snowboarder stands side-on facing +X), its size ``k`` is its leg length (hip joint to knee to ankle, in
-  world metres) over the built-in's.  A built-in armature-space point ``p`` goes to
-  ``origin + (k / s) C p`` in the user's armature space (``C`` turns the built-in's facing,
-  measured the same way, onto the user's,
-  ``s`` is the object's scale, ``origin`` the ankles' midpoint on ``z = 0``).  Scaling the whole
-  pose by ``k`` about the foot point keeps every angle (lean, knee bend, ski tilt) and keeps the
-  equipment on the ground; the trajectory itself (where the foot point goes) is not scaled.
+* **Frames** (:func:`~.user_rig.fit_rig`).  The user's rig is measured, never assumed: its
+  facing is ``left x up`` with ``left`` from the right hip joint to the left one (Blender
+  characters face -Y, the built-in rigs +Y, the built-in snowboarder stands side-on facing +X,
+  measured the same way); its size ``k`` is its leg length (hip joint to knee to ankle, world
+  metres) over the built-in's.  A built-in armature-space point ``p`` goes to
+  ``origin + (k / s) C p`` in the user's armature space (``C`` turns the built-in's facing onto
+  the user's, ``s`` is the object's scale, ``origin`` the ankles' midpoint on ``z = 0``).
+  Scaling the pose by ``k`` about the foot point keeps every angle (lean, knee bend, ski tilt)
+  and the equipment on the ground; the trajectory (where the foot point goes) is not scaled.
 * **Orientations.**  Each joint's world orientation relative to its rest carries over through
   the rest-pose difference of the two skeletons: ``R_user = D_builtin A R_user_rest`` with
   ``D_builtin`` the built-in bone's rotation from its rest (in the user's axes) and ``A`` the
   fixed rotation taking the user's rest segment (joint to next joint) onto the built-in's (a
   T-pose arm onto the built-in's hanging arm).  The feet keep ``A = I`` (both rigs stand flat).
-* **Equipment** (:func:`.equipment.equipment_rest`) is rigid with its joint, placed at rest as on the
-  built-in through the same ``A``: a ski under its foot lands exactly on the built-in's ski.  A
-  pole is rigid in the hand, so it follows the built-in's hand, not the built-in pole's own aim
-  (the built-in's pole swings in its hand; an object tied to a bone cannot, and a hand turned
-  with the pole would put the wrist out of the arm's reach on about 40% of the frames).
-* **Positions.**  The hip joints' midpoint goes on the built-in's line from the ankles' midpoint
-  to its hip joints (so the body's lean is the built-in's), as far along it as bends the user's
-  knees as much as the built-in's (thighs and shins of other proportions need another hip
-  height for the same bend: an angle carries over, not a length); each foot is put exactly on the built-in's ankle
-  target by two-bone IK with the knee towards the same side as the built-in's; hands reach the
-  built-in's wrists the same way; the rest is carried by the parents.
+* **Positions.**  Each ankle goes exactly on the built-in's (two-bone IK, the knee towards the
+  same side as the built-in's); the hip joints' midpoint on the built-in's line from the ankles'
+  midpoint to its hip joints, drawn from the user's ankles (so the body's lean is the
+  built-in's), as far along it as bends the user's knees as much as the built-in's (thighs and
+  shins of other proportions need another hip height for the same bend: an angle carries over,
+  not a length).  The telemark skier (``ANCHOR``) puts the ball of each foot on the built-in's
+  instead and turns each foot about it until that knee bends as the built-in's (the two legs
+  differ too much for one pelvis); the cyclist (``SEATED``) keeps the hips where the
+  built-in's are, on the saddle.  Wrists reach the built-in's by IK; the rest is carried.
+* **Equipment** (:func:`.equipment.equipment_rest`) is rigid with its joint (``ATTACH``), placed
+  at rest as on the built-in through the same ``A``: a ski under its foot lands exactly on the
+  built-in's ski.  A pole is rigid in the hand, so it follows the built-in's hand, not the
+  built-in pole's own aim (the built-in's pole swings in its hand; an object tied to a bone
+  cannot, and a hand turned with the pole would put the wrist out of the arm's reach on about
+  40% of the frames).
+* **Stance** (:mod:`.stance`): a goofy snowboarder is the mirror image of the regular
+  built-in on the mirrored run (``mirror=True``).
 * **Channels.**  For a rig with controls (Rigify) the bake keys the controls, each moving rigidly
   with its joint (``bone_map.Control``); otherwise the mapped bones (FK) and, on the object, the
   root motion.  A bone's parent frame is taken to move rigidly with the nearest mapped joint
