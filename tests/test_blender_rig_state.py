@@ -1,5 +1,6 @@
-"""Undo restores the rig after Make Figure and after Remove Figure (issue 8), on the bpy wheel
-(Blender's memfile undo runs headless).  Operators called from Python push no undo step of
+"""The user's rig keeps its state (issue 8), on the bpy wheel: Undo restores it after Make Figure
+and after Remove Figure (Blender's memfile undo runs headless), and the action it was playing
+survives a bake.  Operators called from Python push no undo step of
 their own here, so the test pushes one after each, as the window manager does after an operator
 with the UNDO flag: what is checked is that everything they change is undoable data."""
 import os
@@ -11,6 +12,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
 from rig_fixtures import activate, mixamo_skeleton, state  # noqa: E402
 
 pytestmark = pytest.mark.blender
@@ -48,3 +50,28 @@ def test_undo_make_figure_and_remove_figure():
     bpy.ops.ed.undo()
     obj = bpy.data.objects["Bob"]
     assert obj.turning.is_figure and len(obj.turning.rig.equipment.objects) == 4
+
+
+def test_the_users_action_is_kept_and_given_back():
+    """The bake's guarantees on a user's rig: the action the rig was playing goes onto a muted
+    NLA track, untouched; Clear Bake gives it back; Remove Figure leaves the rig as it was."""
+    obj = mixamo_skeleton("Ann")
+    pb = obj.pose.bones["mixamorig:Head"]
+    for f, z in ((1, 0.0), (10, 0.2)):
+        pb.rotation_quaternion = (1.0, 0.0, 0.0, z)
+        pb.keyframe_insert("rotation_quaternion", frame=f)
+    mine = obj.animation_data.action
+    keys = [tuple(k.co) for fc in compat.channels(obj).fcurves for k in fc.keyframe_points]
+    activate(obj)
+    before = state(obj)
+    assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
+    bpy.context.scene.frame_start, bpy.context.scene.frame_end = 1, 24
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert obj.animation_data.action is not mine
+    assert [t.name for t in obj.animation_data.nla_tracks if t.mute]
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}
+    assert obj.animation_data.action is mine
+    assert [tuple(k.co) for fc in compat.channels(obj).fcurves
+            for k in fc.keyframe_points] == keys
+    assert bpy.ops.turning.remove_figure() == {"FINISHED"}
+    assert state(obj) == before
