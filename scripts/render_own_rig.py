@@ -29,12 +29,13 @@ from blender_turning.blender import compat  # noqa: E402
 from blender_turning.blender.rig_builder import material, primitive  # noqa: E402
 from rig_fixtures import activate, mixamo_skeleton, rigify_rig  # noqa: E402
 
-SKIN = {"rigify": ["DEF-spine", "DEF-spine.001", "DEF-spine.002", "DEF-spine.003",
-                   "DEF-spine.004", "DEF-spine.006"]
-        + [f"DEF-{b}.{s}" for s in "LR" for b in (
-            "thigh", "shin", "foot", "toe", "upper_arm", "forearm", "hand")]
-        + [f"DEF-{b}.{s}.001" for s in "LR" for b in ("thigh", "shin", "upper_arm", "forearm")],
-        "mixamo": None}
+#: The Rigify rig's deforming limb and spine bones that get a capsule.
+RIGIFY_SKIN = (["DEF-spine", "DEF-spine.001", "DEF-spine.002", "DEF-spine.003", "DEF-spine.004",
+                "DEF-spine.006"]
+               + [f"DEF-{b}.{s}" for s in "LR" for b in (
+                   "thigh", "shin", "foot", "toe", "upper_arm", "forearm", "hand")]
+               + [f"DEF-{b}.{s}.001" for s in "LR" for b in ("thigh", "shin", "upper_arm",
+                                                             "forearm")])
 RADIUS = {"spine": 0.12, "head": 0.1, "spine.006": 0.1, "thigh": 0.075, "shin": 0.055,
           "foot": 0.045, "toe": 0.035, "upper_arm": 0.05, "forearm": 0.042, "hand": 0.04,
           "UpLeg": 7.5, "Leg": 5.5, "Foot": 4.5, "ToeBase": 3.5, "Arm": 5.0, "ForeArm": 4.2,
@@ -102,7 +103,7 @@ def render(args):
     scene.render.fps = 24
     rigify = rigify_rig(location=(2.2, 0.0, 0.0))
     mixamo = mixamo_skeleton(location=(-2.2, 0.0, 0.0))
-    skin(rigify, SKIN["rigify"], (0.85, 0.45, 0.15, 1.0))
+    skin(rigify, RIGIFY_SKIN, (0.85, 0.45, 0.15, 1.0))
     skin(mixamo, [b.name for b in mixamo.data.bones], (0.2, 0.65, 0.35, 1.0))
     scene.cursor.location = (0, 0, 0)
     bpy.ops.turning.add_figure(sport="SKIER")

@@ -141,11 +141,12 @@ def sample(scene, frames, bindings, ground=None):
     user rig (every key but 'builtin'), the lowest point of its ground equipment (``ground``,
     default the pieces in ``bindings``), the largest distance from a joint to its binding
     (``bindings``: piece -> ``[(joint, side), ...]``, the joint's rest point in the piece's own
-    frame; joint ``'pelvis'``: the hip joints' midpoint) and every deforming bone's (armature-space, world) matrices."""
-    ground_names = set(bindings if ground is None else ground)
+    frame; joint ``'pelvis'``: the hip joints' midpoint) and every deforming bone's
+    (armature-space, world) matrices."""
     from blender_turning.blender.retarget_adapter import (facing, figure_bone_map, mirrored,
                                                           user_rig)
     from blender_turning.mapping.bones import mirror
+    ground_names = set(bindings if ground is None else ground)
     from blender_turning.mapping.kinematics import Skeleton
     from blender_turning.mapping.user_rig import fit_rig
     from blender_turning.mapping.rig_spec import load_rig
