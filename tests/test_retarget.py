@@ -343,3 +343,24 @@ def test_cyclist_sits_steers_and_pedals():
         assert np.ptp(r) < 1e-6 and r.min() > 0.1
     angle = np.unwrap(np.arctan2(*(posed["pedal.R"][:, :3, 3] - crank[:, :3, 3])[:, 1:3].T))
     assert np.ptp(angle) > 2 * math.pi            # a whole turn and more in 6 s
+
+
+def test_a_goofy_builtin_snowboarder_is_the_mirror_of_regular():
+    """The built-in rig keyed goofy: forward kinematics of its channels gives every bone the
+    pose of its mirror image on the mirrored run (so the right boot leads), the connected
+    chains stay connected, the state properties are the run's own."""
+    from blender_turning.mapping.stance import goofy_track
+    fig = preset("snowboarder")
+    traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(20),
+                                      heading=0.3), duration=4.0).resample(24)
+    regular_m = map_trajectory("snowboarder", mirrored_trajectory(traj))
+    goofy = goofy_track("snowboarder", regular_m)
+    skel = Skeleton.from_spec(load_rig("snowboarder"))
+    P, Pm = skel.fk(goofy.bones, len(goofy)), skel.fk(regular_m.bones, len(goofy))
+    S = np.diag([-1.0, 1.0, 1.0, 1.0])
+    for name in ("foot.L", "hand.R", "board", "spine.003", "shin.R"):
+        other = name[:-1] + {"L": "R", "R": "L"}[name[-1]] if name[-2:] in (".L", ".R") else name
+        assert np.allclose(P[name], S @ Pm[other] @ S, atol=1e-9), name
+    assert np.allclose(goofy.props["turn_lean"], traj.theta_v)
+    # The right boot leads (+Y is the travel in the rig's frame), the left trails.
+    assert np.all(P["foot.R"][:, 1, 3] > P["foot.L"][:, 1, 3] + 0.3)

@@ -65,5 +65,23 @@ class VIEW3D_PT_turning_rig(TurningPanel, bpy.types.Panel):
         layout.operator("turning.remove_figure", icon="X")
 
 
-classes = (TURNING_UL_bone_map, VIEW3D_PT_turning_rig)
+class VIEW3D_PT_turning_stance(TurningPanel, bpy.types.Panel):
+    """The built-in snowboarder's stance (a figure made from your rig shows it under Your
+    Rig)."""
+
+    bl_label = "Stance"
+    bl_parent_id = "VIEW3D_PT_turning"
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.active_object
+        return (ra.is_figure(obj) and not ra.is_user_rig(obj)
+                and obj.turning.sport == "SNOWBOARDER")
+
+    def draw(self, context):
+        self.layout.use_property_split = True
+        self.layout.prop(context.active_object.turning.rig, "stance")
+
+
+classes = (TURNING_UL_bone_map, VIEW3D_PT_turning_rig, VIEW3D_PT_turning_stance)
 register, unregister = bpy.utils.register_classes_factory(classes)

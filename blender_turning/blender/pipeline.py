@@ -16,8 +16,8 @@ def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None):
     retargeted onto ``obj`` when it is a figure made from the user's own rig (issue 8)."""
     from ..mapping import map_trajectory      # the mapping layer's entry point
     from . import retarget_adapter
-    if obj is not None and retarget_adapter.is_user_rig(obj):
-        return retarget_adapter.user_rig_track(obj, traj, frames, options)
+    if obj is not None and (retarget_adapter.is_user_rig(obj) or retarget_adapter.mirrored(obj)):
+        return retarget_adapter.figure_track(obj, traj, frames, options)
     return map_trajectory(sport.lower(), traj, options, frame_start=frames.start, fps=frames.fps)
 
 

@@ -41,7 +41,8 @@ class TurningRigSettings(bpy.types.PropertyGroup):
     custom_map: CollectionProperty(type=TurningJointBone, options=_STATIC)
     custom_index: IntProperty(options=_STATIC)
     stance: EnumProperty(name="Stance", items=STANCES, default="REGULAR", options=_STATIC,
-                         description="Snowboarder: which foot is forward (set by Make Figure)")
+                         description="Snowboarder: which foot is forward (on your own rig it "
+                                     "is chosen by Make Figure: the board is placed for it)")
     equipment: PointerProperty(name="Equipment", type=bpy.types.Collection, options=_STATIC,
                                description="The sport's equipment, tied to your rig")
     saved_state: StringProperty(options={"HIDDEN"},

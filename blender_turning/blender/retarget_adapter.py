@@ -18,7 +18,7 @@ from ..mapping.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map, p
 from ..mapping import map_trajectory
 from ..mapping.equipment import equipment_rest
 from ..mapping.retarget import retarget
-from ..mapping.stance import STANCES, mirrored_trajectory
+from ..mapping.stance import STANCES, goofy_track, mirrored_trajectory
 from ..mapping.user_rig import UserRig, fit_rig
 from ..mapping.rig_spec import load_rig
 from . import compat
@@ -110,8 +110,10 @@ def fill_custom_map(obj, bm: BoneMap) -> None:
 
 
 def mirrored(obj) -> bool:
-    """A goofy snowboarder: the mirror image of the built-in's regular stance."""
-    return obj.turning.rig.stance == "GOOFY" and obj.turning.sport.lower() in STANCES
+    """A goofy snowboarder (built-in or the user's rig): the mirror image of the built-in's
+    regular stance."""
+    return (is_figure(obj) and obj.turning.sport.lower() in STANCES
+            and obj.turning.rig.stance == "GOOFY")
 
 
 def facing(obj) -> float:
@@ -123,12 +125,15 @@ def facing(obj) -> float:
                    mirrored(obj)).travel
 
 
-def user_rig_track(obj, traj, frames, options=None):
-    """The pose track of ``obj`` (a user's rig) for ``traj``: the built-in figure's Section 7
-    mapping (of the mirrored run for a goofy stance), retargeted by the mapping layer."""
+def figure_track(obj, traj, frames, options=None):
+    """The pose track of ``obj`` for ``traj`` when it is a user's rig or rides goofy: the
+    built-in figure's Section 7 mapping (of the mirrored run for a goofy stance), retargeted
+    onto the user's rig, or mirrored onto the built-in rig itself."""
     sport, mirror = obj.turning.sport.lower(), mirrored(obj)
     track = map_trajectory(sport, mirrored_trajectory(traj) if mirror else traj, options,
                            frame_start=frames.start, fps=frames.fps)
+    if not is_user_rig(obj):
+        return goofy_track(sport, track)
     return retarget(track, sport, user_rig(obj), figure_bone_map(obj), mirror=mirror)
 
 

@@ -6,11 +6,12 @@ from __future__ import annotations
 import numpy as np
 
 from . import bones as B
-from .kinematics import Skeleton
+from .base import BoneChannels, PoseTrack
+from .kinematics import Skeleton, quat_continuous, quat_from_matrix, rigid_inverse
 from .rig_spec import load_rig
 
 __all__ = ["STANCES", "mirrored_trajectory", "unmirror_props", "MirroredSkeleton",
-           "builtin_skeleton", "mirror_poses"]
+           "builtin_skeleton", "mirror_poses", "goofy_track"]
 
 #: Sports with a stance: the built-in rides ``regular`` (left foot forward); ``goofy`` is its
 #: mirror image (see :func:`mirrored_trajectory`).
@@ -60,3 +61,24 @@ def builtin_skeleton(sport: str, mirror: bool = False):
 def mirror_poses(poses: dict) -> dict:
     """Armature-space poses (n, 4, 4) by bone -> their mirror image, .L and .R swapped."""
     return {n: _S4 @ poses[B.mirror(n)] @ _S4 for n in poses}
+
+
+def goofy_track(sport: str, mirrored_track: PoseTrack) -> PoseTrack:
+    """The built-in rig of ``sport`` riding goofy: ``mirrored_track`` is its regular mapping of
+    the mirrored run (:func:`mirrored_trajectory`); every bone is given the pose of its mirror
+    image (.L and .R swapped), as local channels on the same rig (rotation on every bone,
+    location where the bone is not connected), and the state properties are unmirrored."""
+    skel = Skeleton.from_spec(load_rig(sport))
+    n = len(mirrored_track)
+    poses = mirror_poses(skel.fk(mirrored_track.bones, n))
+    bones = {}
+    for i, name in enumerate(skel.names):
+        parent = skel.parents[i]
+        base = skel.rest_relative(name)
+        base = np.broadcast_to(base, (n, 4, 4)) if parent is None else poses[parent] @ base
+        local = rigid_inverse(base) @ poses[name]
+        bones[name] = BoneChannels(
+            location=None if skel.connected[i] else local[:, :3, 3],
+            rotation=quat_continuous(quat_from_matrix(local[:, :3, :3])))
+    return PoseTrack(mirrored_track.frames, mirrored_track.location, mirrored_track.rotation,
+                     bones, unmirror_props(mirrored_track.props))
