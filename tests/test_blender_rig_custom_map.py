@@ -10,6 +10,7 @@ bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat, ops_bone_map  # noqa: E402
+from blender_turning.core.params import PRESETS  # noqa: E402
 from rig_fixtures import PREFIX, activate, mixamo_skeleton  # noqa: E402
 
 pytestmark = pytest.mark.blender
@@ -52,6 +53,11 @@ def test_custom_map_edit_save_load_and_bake():
     assert bpy.ops.turning.custom_map_load(preset="Bob rig") == {"FINISHED"}
     assert bpy.ops.turning.make_figure(sport="SKIER", bone_map="CUSTOM") == {"FINISHED"}
     assert other.turning.rig.bone_map == "CUSTOM"
+    # The body defaults from the rig's proportions: COM height with the legs, mass with the
+    # height squared (the skeleton's legs are 0.87 m against the built-in's 0.842 m).
+    k = (0.430029 + 0.440256) / (0.431045 + 0.411096)
+    assert other.turning.com_height == pytest.approx(PRESETS["skier"].body.l * k, rel=1e-3)
+    assert other.turning.mass == pytest.approx(PRESETS["skier"].body.m * k * k, rel=1e-3)
     bpy.context.scene.frame_start, bpy.context.scene.frame_end = 1, 24
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     keyed = {fc.data_path.split('"')[1] for fc in compat.channels(other).fcurves
