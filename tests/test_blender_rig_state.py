@@ -75,3 +75,20 @@ def test_the_users_action_is_kept_and_given_back():
             for k in fc.keyframe_points] == keys
     assert bpy.ops.turning.remove_figure() == {"FINISHED"}
     assert state(obj) == before
+
+
+def test_clear_bake_puts_the_rig_back_where_its_run_started():
+    """Moved after Make Figure, then baked: Clear Bake puts the rig where the run started (its
+    Start, as for a built-in figure) with the pose it had."""
+    obj = mixamo_skeleton("Cid")
+    activate(obj)
+    assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
+    obj.location = (3.0, -2.0, 0.0)
+    obj.rotation_euler[2] = 0.5
+    bpy.context.scene.frame_start, bpy.context.scene.frame_end = 1, 24
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    bpy.context.scene.frame_set(20)
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}
+    assert tuple(obj.location) == pytest.approx((3.0, -2.0, 0.0), abs=1e-6)
+    assert obj.rotation_euler[2] == pytest.approx(0.5, abs=1e-6)
+    assert all(tuple(pb.rotation_quaternion) == (1.0, 0.0, 0.0, 0.0) for pb in obj.pose.bones)

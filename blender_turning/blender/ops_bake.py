@@ -24,7 +24,7 @@ def reset_pose(fig):
     """Put a figure without baked keys back at its start, in its rest pose (a user's rig: as it
     was before it became a figure)."""
     if retarget_adapter.is_user_rig(fig):
-        retarget_adapter.restore_state(fig, pose_only=True)
+        retarget_adapter.reset_user_rig(fig)
         return
     s = fig.turning
     fig.location = s.start

@@ -203,6 +203,16 @@ def restore_state(obj, pose_only: bool = False) -> None:
     obj.update_tag()
 
 
+def reset_user_rig(obj) -> None:
+    """Clear Bake on a user's rig: its channels as they were before it became a figure, the
+    object at its Start, facing the Start direction (as a built-in figure is put back)."""
+    restore_state(obj, pose_only=True)
+    s = obj.turning
+    obj.location = s.start
+    if obj.rotation_mode == "XYZ":
+        obj.rotation_euler[2] = s.start_heading - facing(obj)
+
+
 def apply_rig_settings(obj, bm: BoneMap) -> None:
     for bone, kind, prop, value in bm.rig_settings:
         pb = obj.pose.bones.get(bone)
