@@ -155,9 +155,9 @@ def sample(scene, frames, bindings, ground=None):
     users = [k for k in scene if k != "builtin"]
     travel = {k: facing(obj) for k, obj in scene.items()}
     ground = {k: [o for o in scene[k].turning.rig.equipment.objects
-                  if o["turning_equipment"] in ground_names] for k in users}
+                  if o.get("turning_equipment") in ground_names] for k in users}
     bound = {k: [o for o in scene[k].turning.rig.equipment.objects
-                 if o["turning_equipment"] in bindings] for k in users}
+                 if o.get("turning_equipment") in bindings] for k in users}
     # The binding: where the built-in figure's joint sits on the piece at rest, in the piece's
     # own frame, scaled to the character as the piece is.
     binding = {}

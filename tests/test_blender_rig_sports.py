@@ -129,3 +129,25 @@ def test_the_stance_says_which_boot_leads(run, key):
     for p, h in zip(out[key]["p"], out[key]["heading"]):
         ahead = (p["ankle", lead] - p["ankle", back])[:2] @ np.array([math.cos(h), math.sin(h)])
         assert ahead > 0.2, (case, ahead)
+
+
+@pytest.mark.parametrize("key", ["rigify", "mixamo"])
+def test_the_bicycle_wheels_roll_with_the_distance(run, rigs, key):
+    """The wheels turn about their axles by the distance travelled over the tyre's radius (a
+    driver on the baked ``turn_distance``): a few turns in two seconds at 6 m/s."""
+    case, _ = run
+    if case != "CYCLIST":
+        pytest.skip("no wheels")
+    obj = rigs[key]
+    wheels = [o for o in obj.turning.rig.equipment.objects
+              if o.get("turning_equipment") in ("wheel.F", "wheel.R")]
+    assert len(wheels) == 2
+    sc = bpy.context.scene
+    for f in (FRAMES[0], 30, FRAMES[1]):
+        sc.frame_set(f)
+        d = obj["turn_distance"]
+        for w in wheels:
+            spin = w.animation_data.drivers[0].driver.expression.split(" * ")[0]
+            assert w.rotation_euler[1] == pytest.approx(float(spin) * d, rel=1e-5, abs=1e-6)
+    assert obj["turn_distance"] > 5.0
+    assert abs(wheels[0].rotation_euler[1]) > 2 * math.pi

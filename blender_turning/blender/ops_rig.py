@@ -131,6 +131,8 @@ def remove_user_figure(obj) -> None:
     foot_track.remove_foot_track(obj)
     ra.remove_equipment(obj)
     ra.restore_state(obj)
+    for prop in [p for p in obj.keys() if p.startswith("turn_")]:    # ours (Make Figure
+        del obj[prop]                                                 # refuses a rig with any)
     obj.property_unset("turning")
 
 

@@ -265,9 +265,15 @@ def build_equipment(context, obj, bm: BoneMap):
         name = f"{obj.name} {piece.name}"
         eq = bpy.data.objects.new(name, _piece_mesh(spec, piece, name))
         coll.objects.link(eq)
+        tied = eq
+        if piece.spin:            # a wheel rolls about its axle on a hub tied to the rig
+            tied = bpy.data.objects.new(name + " hub", None)
+            coll.objects.link(tied)
+            eq.parent = tied
+            _drive_spin(eq, obj, piece.spin)
         rest = obj.data.bones[piece.bone].matrix_local
-        eq.matrix_basis = rest.inverted() @ Matrix(piece.rest.tolist())
-        con = eq.constraints.new("CHILD_OF")
+        tied.matrix_basis = rest.inverted() @ Matrix(piece.rest.tolist())
+        con = tied.constraints.new("CHILD_OF")
         con.name = "Turning: follows " + piece.bone
         con.target, con.subtarget = obj, piece.bone
         con.inverse_matrix = Matrix.Identity(4)
@@ -280,6 +286,20 @@ def build_equipment(context, obj, bm: BoneMap):
             con.target, con.track_axis = made[piece.track], "TRACK_" + piece.track_axis
     rig_settings(obj).equipment = coll
     return coll
+
+
+def _drive_spin(eq, obj, spin: float) -> None:
+    """``eq.rotation_euler.y = spin * obj["turn_distance"]`` (a simple expression: no Python)."""
+    if "turn_distance" not in obj.keys():
+        obj["turn_distance"] = 0.0
+    fc = eq.driver_add("rotation_euler", 1)
+    drv = fc.driver
+    drv.type = "SCRIPTED"
+    var = drv.variables.new()
+    var.name, var.type = "d", "SINGLE_PROP"
+    var.targets[0].id = obj
+    var.targets[0].data_path = '["turn_distance"]'
+    drv.expression = f"{spin!r} * d"
 
 
 def remove_equipment(obj) -> None:

@@ -9,7 +9,9 @@ import numpy as np
 
 from . import bones as B
 from .bone_map import BoneMap
-from .retarget import ATTACH, TRACKS, _rest_difference
+from .cyclist import tyre_radius
+from .retarget import ATTACH, SPIN, TRACKS, _rest_difference
+from .rig_spec import load_rig
 from .stance import builtin_skeleton
 from .user_rig import RigFit, UserRig, fit_rig
 
@@ -40,6 +42,10 @@ class EquipmentPiece:
     """Another piece this one turns to face about its own Y axis (``TRACKS``), or ``None``."""
     track_axis: str = ""
     """Its local axis that points at ``track`` at rest: 'X', 'Z', 'NEGATIVE_X' or 'NEGATIVE_Z'."""
+    spin: float = 0.0
+    """Rotation about its own Y axis (the axle) per metre travelled, rad/m (``SPIN``): a wheel
+    of the built-in's tyre radius ``r`` scaled by ``k`` rolls forwards at ``-1 / (k r)``, as the
+    built-in's wheels do (Section 7: "as a function of the distance travelled")."""
 
 
 def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = None,
@@ -68,5 +74,7 @@ def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = N
             v[1] = 0.0                                       # about its own Y axis
             i = 0 if abs(v[0]) >= abs(v[2]) else 2
             axis = ("" if v[i] > 0 else "NEGATIVE_") + "XYZ"[i]
-        out.append(EquipmentPiece(piece, joint, bm.bone(joint), m, size, track, axis))
+        spin = -1.0 / (fit.k * tyre_radius(load_rig(sport))) if piece in SPIN.get(sport, ()) \
+            else 0.0
+        out.append(EquipmentPiece(piece, joint, bm.bone(joint), m, size, track, axis, spin))
     return out

@@ -55,7 +55,7 @@ from .kinematics import quat_continuous, quat_from_matrix, rigid_inverse, two_bo
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
 from .user_rig import RigFit, UserRig, fit_rig
 
-__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SEATED", "ANCHOR"]
+__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SEATED", "ANCHOR"]
 
 #: Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig.
 ATTACH = {
@@ -73,6 +73,10 @@ ATTACH = {
 #: Equipment that turns about its own axle to face another piece (Blender: Damped Track): the
 #: crank follows the pedals round the crank circle.
 TRACKS = {"cyclist": {"crank": "pedal.R"}}
+#: Equipment that rolls with the distance travelled (about its own Y axis, the axle): no bone of
+#: the rider turns with it, so the bake keys the distance as ``turn_distance`` on the armature
+#: and a driver turns the piece (:attr:`.equipment.EquipmentPiece.spin`).
+SPIN = {"cyclist": ("wheel.F", "wheel.R")}
 #: Sports where the pelvis sits on the equipment (the saddle): it goes exactly where the
 #: built-in's goes, the knees bend as the pedals ask.
 SEATED = {"cyclist"}
@@ -384,4 +388,7 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     location = track.location - fit.scale * np.einsum("nij,j->ni", R, fit.origin)
     rotation = np.stack([np.zeros(len(track)), np.zeros(len(track)), psi], axis=1)
     props = unmirror_props(track.props) if mirror else dict(track.props)
+    if sport in SPIN:       # the foot point's path length (chords of one frame), m
+        step = np.linalg.norm(np.diff(track.location[:, :2], axis=0), axis=1)
+        props["turn_distance"] = np.concatenate([[0.0], np.cumsum(step)])
     return PoseTrack(track.frames, location, rotation, bones, props)
