@@ -2,7 +2,7 @@
 retargeting, build the sport's equipment tied to it, and keep what it was before.
 
 Reads ``bone.matrix_local``, parents and ``use_local_location`` into a
-:class:`~..mapping.retarget.UserRig`; everything numerical happens in the mapping layer.
+:class:`~..mapping.user_rig.UserRig`; everything numerical happens in the mapping layer.
 """
 from __future__ import annotations
 
@@ -13,14 +13,14 @@ import bpy
 import numpy as np
 from mathutils import Matrix, Quaternion
 
+from ..mapping import map_trajectory
 from ..mapping.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map, parse_bone_map,
                                 require_joints)
-from ..mapping import map_trajectory
 from ..mapping.equipment import equipment_rest
 from ..mapping.retarget import retarget
+from ..mapping.rig_spec import load_rig
 from ..mapping.stance import STANCES, goofy_track, mirrored_trajectory
 from ..mapping.user_rig import UserRig, fit_rig
-from ..mapping.rig_spec import load_rig
 from . import compat
 from .rig_builder import material, primitive
 
@@ -252,7 +252,9 @@ def _piece_mesh(spec, piece, name):
 def build_equipment(context, obj, bm: BoneMap):
     """The sport's equipment as objects of their own collection, each tied to its bone by a
     Child Of constraint (placed at the rig's rest as on the built-in figure, sized to the
-    character); returns the collection."""
+    character); a piece that faces another gets a Damped Track (the crank), one that rolls a
+    hub empty tied to the bone and a driver on the distance travelled (the wheels).  Returns
+    the collection."""
     sport = obj.turning.sport.lower()
     rig = user_rig(obj)
     spec = load_rig(sport)
