@@ -26,7 +26,11 @@ import numpy as np
 
 from .params import check_range
 
-__all__ = ["Plane", "HeightField", "FLAT", "SurfaceFrame", "surface_frame"]
+__all__ = ["Plane", "HeightField", "FLAT", "SurfaceFrame", "surface_frame", "OffTerrain"]
+
+
+class OffTerrain(ValueError):
+    """A point off a :class:`HeightField`'s grid."""
 
 
 @dataclass(frozen=True)
@@ -118,7 +122,7 @@ class HeightField:
         x = np.asarray(x, dtype=float)
         y = np.asarray(y, dtype=float)
         if not np.all(self.contains(x, y)):
-            raise ValueError(f"a point lies off the terrain; it covers x, y in "
+            raise OffTerrain(f"a point lies off the terrain; it covers x, y in "
                              f"[{self.extent[0]:g}, {self.extent[1]:g}] x "
                              f"[{self.extent[2]:g}, {self.extent[3]:g}] m")
         fx = (x - self.x0) / self.cell

@@ -36,7 +36,7 @@ from .dynamics import bound_cf
 from .params import BodyParams, Limits, check_range
 from .terrain import surface_frame
 
-__all__ = ["TERRAIN_STATE", "V_CM", "Resistance", "RESISTANCE", "terrain_steer",
+__all__ = ["TERRAIN_STATE", "V_CM", "Resistance", "RESISTANCE", "plumb_lean", "terrain_steer",
            "terrain_inverse_cf", "terrain_leg_force", "terrain_rk4_step"]
 
 TERRAIN_STATE = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
@@ -80,6 +80,13 @@ RESISTANCE: dict[str, Resistance] = {
     # 0.3-0.4 m^2 (Wilson & Papadopoulos 2004, "Bicycling Science", 3rd ed., Ch. 4-5); sea level.
     "cyclist": Resistance(mu=0.005, CdA=0.36, rho=1.225),
 }
+
+
+def plumb_lean(frame):
+    """The equilibrium lean of a straight run (docs/TERRAIN.md Section 2): ``theta_v`` where
+    ``g_n sin th + g_b cos th = 0``, i.e. ``-atan(g_b / g_n)``, the plumb line seen from the
+    surface normal (0 on flat ground, leaning uphill on a traverse)."""
+    return np.arctan2(-frame.g_lateral, frame.g_normal)
 
 
 def terrain_inverse_cf(body: BodyParams, frame, theta_v, alpha_v, V):

@@ -16,6 +16,8 @@ import numpy as np
 from ..dynamics import THETA_V, inverse_cf
 from ..one_figure import scalar_inverse_cf
 from ..params import BodyParams
+from ..terrain import surface_frame
+from ..terrain_dynamics import plumb_lean, terrain_inverse_cf
 
 
 class Controller:
@@ -56,6 +58,30 @@ class Controller:
             return self.desired_cf
         inverse, alpha = scalar_inverse_cf(self.body), self.desired_alpha
         return lambda t, state: inverse(state[THETA_V], alpha(t, state))
+
+    def terrain_cf_law(self, ground):
+        """``f(t, state) -> C_f`` on terrain (``state`` = ``(x, y, theta_dir, theta_v, omega_v,
+        V_cm)``, docs/TERRAIN.md Section 6): the lean law is asked about the lean from the
+        local plumb lean (:func:`..terrain_dynamics.plumb_lean`), so the lean oscillates about
+        the equilibrium, not about the surface normal; its ``alpha_v`` is turned into ``C_f`` by
+        Eq. (1) on terrain at the current speed.  :meth:`begin_step` sees the same relative
+        lean (:meth:`relative_state`).  One figure: the law gets Python floats."""
+        g = self.body.g
+
+        def law(t, st):
+            fr = surface_frame(ground, st[0], st[1], st[2], g)
+            rel = (float(st[0]), float(st[1]), float(st[2]), float(st[3] - plumb_lean(fr)),
+                   float(st[4]))
+            return terrain_inverse_cf(self.body, fr, st[3], self.desired_alpha(t, rel), st[5])
+
+        return law
+
+    def relative_state(self, ground, state):
+        """``state`` (6 terrain rows) as the lean law sees it: 5 rows, the lean taken from the
+        plumb lean."""
+        fr = surface_frame(ground, state[0], state[1], state[2], self.body.g)
+        return (float(state[0]), float(state[1]), float(state[2]),
+                float(state[3] - plumb_lean(fr)), float(state[4]))
 
     def target(self, t: float):
         """``(omega0, theta_max)`` of the ellipse the motion is following now (for the phase)."""
