@@ -161,7 +161,8 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
             controller.heading = course
     traj = _trajectory(body, ground, resistance, np.array(rows, float), dt, info)
     if stop == "fell":
-        raise FellOver(float(traj.t[-1]), float(traj.theta_v[-1]), traj,
+        last = surface_frame(ground, traj.x[-1], traj.y[-1], traj.theta_dir[-1], body.g)
+        raise FellOver(float(traj.t[-1]), float(traj.theta_v[-1] - plumb_lean(last)), traj,
                        fall_cause(limits, traj.C_f, traj.t))
     if stop == "stopped":
         raise Stopped(float(traj.t[-1]), float(traj.V_cm[-1]), traj)

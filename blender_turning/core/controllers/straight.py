@@ -6,6 +6,7 @@ equilibrium, held to round-off), on a traverse started at the plumb lean it stay
 """
 from __future__ import annotations
 
+from ..schedule import Schedule
 from .base import Controller
 
 
@@ -15,7 +16,7 @@ class Straight(Controller):
 
     def __init__(self, body, omega0=1.0, theta_max=1.0):
         super().__init__(body)
-        self._target = (float(omega0), float(theta_max))
+        self.omega0, self.theta_max = Schedule.of(omega0), Schedule.of(theta_max)
 
     def desired_alpha(self, t, state):
         raise NotImplementedError("Straight demands a curvature (0), not a lean acceleration")
@@ -30,4 +31,4 @@ class Straight(Controller):
         return lambda t, state: 0.0 * state[3]
 
     def target(self, t):
-        return self._target
+        return self.omega0(t), self.theta_max(t)
