@@ -36,7 +36,8 @@ from .dynamics import bound_cf
 from .params import BodyParams, Limits, check_range
 from .terrain import surface_frame
 
-__all__ = ["TERRAIN_STATE", "V_CM", "Resistance", "RESISTANCE", "plumb_lean", "terrain_steer",
+__all__ = ["TERRAIN_STATE", "V_CM", "Resistance", "RESISTANCE", "plumb_lean", "plumb_lean_along",
+           "terrain_steer",
            "terrain_inverse_cf", "terrain_leg_force", "terrain_rk4_step"]
 
 TERRAIN_STATE = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
@@ -87,6 +88,17 @@ def plumb_lean(frame):
     ``g_n sin th + g_b cos th = 0``, i.e. ``-atan(g_b / g_n)``, the plumb line seen from the
     surface normal (0 on flat ground, leaning uphill on a traverse)."""
     return np.arctan2(-frame.g_lateral, frame.g_normal)
+
+
+def plumb_lean_along(frame, heading, g: float):
+    """:func:`plumb_lean` for a foot at the frame's point heading ``heading`` (horizontal, rad)
+    instead of the frame's own heading: from the normal, ``g_b = -g b_z`` with
+    ``b_z = n_x t_y - n_y t_x`` and ``t`` the heading lifted onto the surface."""
+    n = frame.n
+    c, s = np.cos(heading), np.sin(heading)
+    p = -(n[0] * c + n[1] * s) / n[2]                       # slope along the heading
+    g_b = -g * (n[0] * s - n[1] * c) / np.sqrt(1.0 + p * p)
+    return np.arctan2(-g_b, frame.g_normal)
 
 
 def terrain_inverse_cf(body: BodyParams, frame, theta_v, alpha_v, V):

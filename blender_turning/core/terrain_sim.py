@@ -25,7 +25,7 @@ from .params import Figure, check_range
 from .phase import phase
 from .schedule import Schedule
 from .terrain import FLAT, HeightField, OffTerrain, Plane, surface_frame
-from .terrain_dynamics import (Resistance, plumb_lean, terrain_leg_force, terrain_rk4_step,
+from .terrain_dynamics import (Resistance, terrain_leg_force, terrain_rk4_step,
                                terrain_steer)
 from .trajectory import Trajectory, body_meta, resistance_meta
 
@@ -154,15 +154,18 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
     course = getattr(controller, "heading", None)
     try:
         if brake is not None:
+            # The command jumps across the fall line when the side flips: lean about the
+            # plumb lean of the heading the figure has, which swings through it smoothly.
             controller.heading = Schedule.of(brake)
+            controller.lean_about_heading = True
         rows, stop = _loop(body, limits, controller, ground, resistance, st, n, dt, C_f0, brake)
     finally:
         if brake is not None:
             controller.heading = course
+            controller.lean_about_heading = False
     traj = _trajectory(body, ground, resistance, np.array(rows, float), dt, info)
     if stop == "fell":
-        last = surface_frame(ground, traj.x[-1], traj.y[-1], traj.theta_dir[-1], body.g)
-        raise FellOver(float(traj.t[-1]), float(traj.theta_v[-1] - plumb_lean(last)), traj,
+        raise FellOver(float(traj.t[-1]), float(rows[-1][-1]), traj,
                        fall_cause(limits, traj.C_f, traj.t))
     if stop == "stopped":
         raise Stopped(float(traj.t[-1]), float(traj.V_cm[-1]), traj)
@@ -172,7 +175,8 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
 
 
 def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake):
-    """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max)``.
+    """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean from
+    the controller's equilibrium lean)``.
     Returns ``(rows, None | "fell" | "stopped" | "left")``."""
     controller.begin_run(limits)
     law = controller.terrain_cf_law(ground)
@@ -187,11 +191,11 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
             V_now = V
         if brake is not None:
             brake.update(t, st)
-        rel = controller.relative_state(ground, st)
+        rel = controller.relative_state(ground, st, t)
         controller.begin_step(t, rel)
         _, cf, alpha, V_f, _, _ = terrain_steer(body, limits, resistance, ground, law(t, st), st,
                                                 anchor, dt)
-        rows.append((*st, float(alpha), float(cf), float(V_f), *controller.target(t)))
+        rows.append((*st, float(alpha), float(cf), float(V_f), *controller.target(t), rel[3]))
         if abs(rel[3]) > limits.theta_fall:
             return rows, "fell"
         if V < MIN_SPEED:
@@ -209,12 +213,12 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
 def _trajectory(body, ground, resistance, rec, dt, info) -> Trajectory:
     """The DESIGN.md columns (and ``z``, ``V_cm``) from the per-sample rows."""
     n = len(rec)
-    x, y, d, th, om, V, alpha, cf, V_f, w, tm = rec.T
+    x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel = rec.T
     fr = surface_frame(ground, x, y, d, body.g)
     ds = 0.5 * (V_f[1:] + V_f[:-1]) * dt                 # along the surface (the foot's speed)
     cols = {"t": np.arange(n) * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
             "omega_v": om, "alpha_v": alpha, "C_f": cf, "V_f": V_f, "z": fr.z, "V_cm": V,
             "F_leg": terrain_leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
-            "phi": phase(th - plumb_lean(fr), om, tm, w),
+            "phi": phase(rel, om, tm, w),
             "s": np.concatenate([[0.0], np.cumsum(ds)])}
     return Trajectory.from_columns(cols, info)

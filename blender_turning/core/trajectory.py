@@ -110,8 +110,9 @@ class Trajectory:
         derivatives at the samples (:func:`.terrain_dynamics.terrain_steer` under the recorded
         ``C_f``; the friction and drag recorded in ``meta``).  ``z`` is the ground's height at
         the interpolated ``(x, y)``; ``alpha_v``, ``V_f``, ``F_leg`` come from the terrain
-        model at the row's state, ``phi`` is the phase of the lean about the plumb lean (the
-        phase the controller follows, docs/TERRAIN.md Section 6).
+        model at the row's state; ``phi`` (the controller's phase, about its equilibrium lean,
+        docs/TERRAIN.md Section 6, which the trajectory does not record) is interpolated along
+        the step the shorter way round the circle, exact at the samples.
         """
         if not (fps > 0 and math.isfinite(fps)):
             raise ValueError(f"fps = {fps!r} is outside the allowed range (0, inf)")
@@ -136,7 +137,7 @@ class Trajectory:
             if ground is None:
                 raise ValueError(f"this trajectory ran on {self.meta['ground']}: pass ground= "
                                  "(the surface it ran on) to resample it")
-            return Trajectory.from_columns(_terrain_rows(body, ground, self.meta, t, c, tn, i, j, u),
+            return Trajectory.from_columns(_terrain_rows(body, ground, self.meta, t, c, tn, i, u),
                                            meta)
         V_f, C_f = c["V_f"], c["C_f"]
         slope = {"x": V_f * np.cos(c["theta_dir"]), "y": V_f * np.sin(c["theta_dir"]),
@@ -216,11 +217,10 @@ def resistance_meta(resistance) -> dict:
             for f in fields(resistance)}
 
 
-def _terrain_rows(body, ground, meta, t, c, tn, i, j, u) -> dict:
+def _terrain_rows(body, ground, meta, t, c, tn, i, u) -> dict:
     """:meth:`Trajectory.resample` on terrain: the rows at times ``tn`` (step ``i``, fraction
-    ``u``; ``j`` the sample at or before each row)."""
-    from .terrain import surface_frame
-    from .terrain_dynamics import Resistance, plumb_lean, terrain_leg_force, terrain_steer
+    ``u``)."""
+    from .terrain_dynamics import Resistance, terrain_leg_force, terrain_steer
     res = Resistance(**{k: float(meta[f"resistance.{k}"]) for k in ("mu", "CdA", "rho")
                         if f"resistance.{k}" in meta})
     free = Limits()                         # the recorded C_f is already bounded
@@ -235,10 +235,10 @@ def _terrain_rows(body, ground, meta, t, c, tn, i, j, u) -> dict:
     out["alpha_v"], out["V_f"], out["z"] = alpha, V_f, fr.z
     th, om, V = out["theta_v"], out["omega_v"], out["V_cm"]
     out["F_leg"] = terrain_leg_force(body, th, om, alpha, cf, V, V_f, fr)[0]
-    # The phase about the plumb lean, with each sample's ellipse rate (as on flat ground).
-    eq = plumb_lean(surface_frame(ground, c["x"], c["y"], c["theta_dir"], body.g))
-    rate = _ellipse_rate(c["theta_v"] - eq, c["omega_v"], c["phi"])[j]
-    out["phi"] = phase(th - plumb_lean(fr), om, 1.0, rate)
+    # The controller's phase is about its equilibrium lean, which the trajectory does not
+    # record: interpolated along the step (the shorter way round), exact at the samples.
+    dphi = np.mod(c["phi"][i + 1] - c["phi"][i] + np.pi, 2 * np.pi) - np.pi
+    out["phi"] = np.mod(c["phi"][i] + u * dphi, 2 * np.pi)
     return out
 
 

@@ -17,7 +17,7 @@ from ..dynamics import THETA_V, inverse_cf
 from ..one_figure import scalar_inverse_cf
 from ..params import BodyParams
 from ..terrain import surface_frame
-from ..terrain_dynamics import plumb_lean, terrain_inverse_cf
+from ..terrain_dynamics import plumb_lean, plumb_lean_along, terrain_inverse_cf
 
 
 class Controller:
@@ -27,6 +27,10 @@ class Controller:
         self.body = body
         self.nominal_body = body
         """The body the controller was made for; :attr:`body` carries the current speed."""
+        self.lean_about_heading = False
+        """On terrain: lean about the plumb lean of the current heading, not of the commanded
+        one (:meth:`equilibrium_lean`; set while a target speed swings the command across the
+        hill)."""
 
     def follow_speed(self, V_cm: float) -> BodyParams:
         """Steer at the forward speed ``V_cm`` from now on (a speed that varies over time);
@@ -70,18 +74,28 @@ class Controller:
 
         def law(t, st):
             fr = surface_frame(ground, st[0], st[1], st[2], g)
-            rel = (float(st[0]), float(st[1]), float(st[2]), float(st[3] - plumb_lean(fr)),
-                   float(st[4]))
+            rel = (float(st[0]), float(st[1]), float(st[2]),
+                   float(st[3] - self.equilibrium_lean(fr, t)), float(st[4]))
             return terrain_inverse_cf(self.body, fr, st[3], self.desired_alpha(t, rel), st[5])
 
         return law
 
-    def relative_state(self, ground, state):
+    def relative_state(self, ground, state, t=0.0):
         """``state`` (6 terrain rows) as the lean law sees it: 5 rows, the lean taken from the
         plumb lean."""
         fr = surface_frame(ground, state[0], state[1], state[2], self.body.g)
         return (float(state[0]), float(state[1]), float(state[2]),
-                float(state[3] - plumb_lean(fr)), float(state[4]))
+                float(state[3] - self.equilibrium_lean(fr, t)), float(state[4]))
+
+    def equilibrium_lean(self, frame, t):
+        """The lean the law oscillates about (docs/TERRAIN.md Section 6): the plumb lean of the
+        commanded mean heading when the controller holds one (it does not swing with each
+        turn's heading, which would force the lean at the turn's own frequency), else, or with
+        :attr:`lean_about_heading` set, of the current heading."""
+        heading = getattr(self, "heading", None)
+        if heading is None or self.lean_about_heading:
+            return plumb_lean(frame)
+        return plumb_lean_along(frame, heading(t), self.body.g)
 
     def target(self, t: float):
         """``(omega0, theta_max)`` of the ellipse the motion is following now (for the phase)."""
