@@ -185,10 +185,11 @@ def surface_frame(ground, x, y, theta_dir, g: float) -> SurfaceFrame:
     c, s = np.cos(theta_dir), np.sin(theta_dir)
     p = hx * c + hy * s                                   # slope along the heading
     inv_t = 1.0 / np.sqrt(1.0 + p * p)
-    t = np.stack(np.broadcast_arrays(c * inv_t, s * inv_t, p * inv_t))
+    tx, ty, tz = np.broadcast_arrays(c * inv_t, s * inv_t, p * inv_t)
     inv_n = 1.0 / np.sqrt(1.0 + hx * hx + hy * hy)
-    n = np.stack(np.broadcast_arrays(-hx * inv_n, -hy * inv_n, inv_n))
-    b = np.cross(n, t, axis=0)
+    nx, ny, nz = np.broadcast_arrays(-hx * inv_n, -hy * inv_n, inv_n)
+    t, n = np.array([tx, ty, tz]), np.array([nx, ny, nz])
+    b = np.array([ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx])     # n x t
     # Second fundamental form over the first along (c, s): Euler's normal curvature of a graph.
     kappa_n = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * inv_n * inv_t * inv_t
     hor = t[0] * t[0] + t[1] * t[1]

@@ -99,6 +99,25 @@ class _Braking:
         return self.course(t) + self.side * self.offset
 
 
+class _LastPoint:
+    """``ground`` remembering its last point: at every RK4 stage the steering law and the
+    right-hand side ask about the same foot position (a height field's bicubic costs ~100 us)."""
+
+    def __init__(self, ground):
+        self.ground, self._key, self._value = ground, None, None
+
+    def derivatives(self, x, y):
+        if np.ndim(x) or np.ndim(y):
+            return self.ground.derivatives(x, y)
+        key = (float(x), float(y))
+        if key != self._key:
+            self._value, self._key = self.ground.derivatives(x, y), key
+        return self._value
+
+    def __getattr__(self, name):
+        return getattr(self.ground, name)
+
+
 def describe_ground(ground) -> str:
     """The ``meta["ground"]`` entry of a trajectory: ``"flat"`` or what the surface was."""
     if isinstance(ground, Plane):
@@ -158,7 +177,8 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
             # plumb lean of the heading the figure has, which swings through it smoothly.
             controller.heading = Schedule.of(brake)
             controller.lean_about_heading = True
-        rows, stop = _loop(body, limits, controller, ground, resistance, st, n, dt, C_f0, brake)
+        rows, stop = _loop(body, limits, controller, _LastPoint(ground), resistance, st, n, dt,
+                           C_f0, brake)
     finally:
         if brake is not None:
             controller.heading = course
