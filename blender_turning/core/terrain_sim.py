@@ -114,6 +114,15 @@ class _LastPoint:
             self._value, self._key = self.ground.derivatives(x, y), key
         return self._value
 
+    def derivatives_one(self, x: float, y: float):
+        key = (x, y)
+        if key != self._key:
+            one = getattr(self.ground, "derivatives_one", None)
+            self._value = (one(x, y) if one is not None else
+                           tuple(float(v) for v in self.ground.derivatives(x, y)))
+            self._key = key
+        return self._value
+
     def __getattr__(self, name):
         return getattr(self.ground, name)
 

@@ -73,9 +73,10 @@ class Controller:
         g = self.body.g
 
         def law(t, st):
+            if type(st[0]) is not float:
+                st = [float(v) for v in st]
             fr = surface_frame(ground, st[0], st[1], st[2], g)
-            rel = (float(st[0]), float(st[1]), float(st[2]),
-                   float(st[3] - self.equilibrium_lean(fr, t)), float(st[4]))
+            rel = (st[0], st[1], st[2], float(st[3] - self.equilibrium_lean(fr, t)), st[4])
             return terrain_inverse_cf(self.body, fr, st[3], self.desired_alpha(t, rel), st[5])
 
         return law
@@ -83,9 +84,9 @@ class Controller:
     def relative_state(self, ground, state, t=0.0):
         """``state`` (6 terrain rows) as the lean law sees it: 5 rows, the lean taken from the
         plumb lean."""
-        fr = surface_frame(ground, state[0], state[1], state[2], self.body.g)
-        return (float(state[0]), float(state[1]), float(state[2]),
-                float(state[3] - self.equilibrium_lean(fr, t)), float(state[4]))
+        x, y, d, th, om = (float(v) for v in state[:5])
+        fr = surface_frame(ground, x, y, d, self.body.g)
+        return (x, y, d, float(th - self.equilibrium_lean(fr, t)), om)
 
     def equilibrium_lean(self, frame, t):
         """The lean the law oscillates about (docs/TERRAIN.md Section 6): the plumb lean of the
