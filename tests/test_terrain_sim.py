@@ -242,3 +242,22 @@ def test_runs_that_end_early_say_why():
         simulate(SKIER, PhaseEllipse(BODY, W, TM), 1.0, 0.02, ground=flat, target_speed=5.0)
     with pytest.raises(ValueError, match="target_speed"):
         TargetSpeed(0.0)
+
+
+def test_one_figure_float_path_is_the_array_path():
+    """One figure is stepped on Python floats (``derivatives_one``, the frame's float branch):
+    the same numbers as the array formulas, to round-off."""
+    slope = ski_slope(length=200.0, width=200.0, cell=2.0)
+    rng = np.random.default_rng(11)
+    for ground in (slope, Plane(math.radians(25), 0.7, 1.0, -2.0, 3.0)):
+        for _ in range(100):
+            x, y, d = (float(v) for v in (rng.uniform(-99, 99), rng.uniform(-99, 99),
+                                          rng.uniform(-4, 4)))
+            np.testing.assert_allclose(ground.derivatives_one(x, y),
+                                       [float(v) for v in ground.derivatives(x, y)],
+                                       rtol=1e-13, atol=1e-13)
+            one = surface_frame(ground, x, y, d, BODY.g)
+            arr = surface_frame(ground, np.array(x), np.array(y), np.array(d), BODY.g)
+            assert type(one.g_lateral) is float
+            for a, b in zip(one, arr):
+                np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13)

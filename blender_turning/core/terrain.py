@@ -163,17 +163,12 @@ class HeightField:
         wx, dwx, ddwx = _catmull_rom_one(fx - i)
         wy, dwy, ddwy = _catmull_rom_one(fy - j)
         rows = self._h[j + 1:j + 5, i + 1:i + 5].tolist()          # the 4 x 4 stencil
-        # Each row against the x weights, then the rows against the y weights.
-        r0 = [a * rows[k][0] + b * rows[k][1] + c * rows[k][2] + d * rows[k][3]
-              for k in range(4) for a, b, c, d in (wx,)]
-        r1 = [a * rows[k][0] + b * rows[k][1] + c * rows[k][2] + d * rows[k][3]
-              for k in range(4) for a, b, c, d in (dwx,)]
-        r2 = [a * rows[k][0] + b * rows[k][1] + c * rows[k][2] + d * rows[k][3]
-              for k in range(4) for a, b, c, d in (ddwx,)]
 
         def dot(w, r):
             return w[0] * r[0] + w[1] * r[1] + w[2] * r[2] + w[3] * r[3]
 
+        # Each stencil row against the x weights, then those against the y weights.
+        r0, r1, r2 = ([dot(w, r) for r in rows] for w in (wx, dwx, ddwx))
         cc = self.cell
         return (dot(wy, r0), dot(wy, r1) / cc, dot(dwy, r0) / cc, dot(wy, r2) / (cc * cc),
                 dot(dwy, r1) / (cc * cc), dot(ddwy, r0) / (cc * cc))
