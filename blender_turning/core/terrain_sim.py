@@ -107,12 +107,7 @@ class _LastPoint:
         self.ground, self._key, self._value = ground, None, None
 
     def derivatives(self, x, y):
-        if np.ndim(x) or np.ndim(y):
-            return self.ground.derivatives(x, y)
-        key = (float(x), float(y))
-        if key != self._key:
-            self._value, self._key = self.ground.derivatives(x, y), key
-        return self._value
+        return self.ground.derivatives(x, y)
 
     def derivatives_one(self, x: float, y: float):
         key = (x, y)
@@ -192,7 +187,7 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
         if brake is not None:
             controller.heading = course
             controller.lean_about_heading = False
-    traj = _trajectory(body, ground, resistance, np.array(rows, float), dt, info)
+    traj = _trajectory(body, ground, np.array(rows, float), dt, info)
     if stop == "fell":
         raise FellOver(float(traj.t[-1]), float(rows[-1][-1]), traj,
                        fall_cause(limits, traj.C_f, traj.t))
@@ -239,7 +234,7 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
     return rows, None
 
 
-def _trajectory(body, ground, resistance, rec, dt, info) -> Trajectory:
+def _trajectory(body, ground, rec, dt, info) -> Trajectory:
     """The DESIGN.md columns (and ``z``, ``V_cm``) from the per-sample rows."""
     n = len(rec)
     x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel = rec.T

@@ -2,8 +2,9 @@
 
 A :class:`Trajectory` holds equal-length 1-D arrays, one per column of ``COLUMNS`` (SI units,
 radians; ``s`` is the foot's distance travelled, ``z`` the ground's height at the foot and
-``V_cm`` the body's speed: 0 and constant on flat ground at a constant speed), plus a small ``meta`` mapping (preset, body
-parameters) that travels with it in JSON.  CSV files have exactly these column names in a header
+``V_cm`` the body's speed: 0 and constant on flat ground at a constant speed), plus a small
+``meta`` mapping (preset, body parameters, the ground and resistance on terrain) that travels
+with it in JSON.  CSV files have exactly these column names in a header
 row.  Writers write to a temporary file and rename it, so a failure leaves no partial file.
 """
 from __future__ import annotations
