@@ -261,3 +261,20 @@ def test_one_figure_float_path_is_the_array_path():
             assert type(one.g_lateral) is float
             for a, b in zip(one, arr):
                 np.testing.assert_allclose(a, b, rtol=1e-13, atol=1e-13)
+
+
+def test_resample_a_terrain_csv_given_its_ground(tmp_path):
+    """A CSV has no meta: given the ground, the resistance and the body, its frames are the
+    ones the trajectory itself gives."""
+    plane = Plane(math.radians(15), -math.pi / 2)
+    res = RESISTANCE["skier"]
+    ctl, s0 = _slalom(-math.pi / 2)
+    traj = simulate(SKIER, ctl, 4.0, 0.02, s0, ground=plane, resistance=res)
+    traj.to_csv(tmp_path / "t.csv")
+    back = Trajectory.from_csv(tmp_path / "t.csv")
+    want = traj.resample(30, ground=plane)
+    got = back.resample(30, body=BODY, ground=plane, resistance=res)
+    np.testing.assert_allclose(got.data, want.data, rtol=0, atol=1e-12)
+    # Without the resistance the speed's slope is wrong between samples.
+    wrong = back.resample(30, body=BODY, ground=plane)
+    assert np.abs(wrong.V_cm - want.V_cm).max() > 1e-4

@@ -22,6 +22,7 @@ import numpy as np
 
 from .dynamics import foot_speed, forward_alpha, leg_force
 from .params import BodyParams, Limits
+from .terrain import FLAT
 from .phase import phase
 
 COLUMNS = ("t", "x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f", "F_leg", "phi",
@@ -73,7 +74,8 @@ class Trajectory:
 
     # -- frame output --------------------------------------------------------------------------
     def resample(self, fps: float, start: float | None = None,
-                 body: BodyParams | None = None, ground=None) -> "Trajectory":
+                 body: BodyParams | None = None, ground=None,
+                 resistance=None) -> "Trajectory":
         """Samples at ``start + k / fps`` over the trajectory's span, each a state of the model.
 
         The state ``(x, y, theta_dir, theta_v, omega_v)`` and ``s`` between two samples is the
@@ -105,8 +107,9 @@ class Trajectory:
 
         ``body`` defaults to the one recorded in ``meta`` (:func:`body_meta`).
 
-        **On terrain** (a trajectory whose ``meta["ground"]`` is not ``"flat"``; pass the
-        ``ground`` it ran on, :mod:`.terrain`) the state is ``(x, y, theta_dir, theta_v, omega_v,
+        **On terrain** (a trajectory from the terrain loop, ``meta["ground"]`` set; pass the
+        ``ground`` it ran on, :mod:`.terrain`, unless flat; or a trajectory without meta, e.g.
+        read from a CSV, given ``ground=`` and ``resistance=``) the state is ``(x, y, theta_dir, theta_v, omega_v,
         V_cm)`` and all six, and ``s``, are Hermite-interpolated with the terrain model's
         derivatives at the samples (:func:`.terrain_dynamics.terrain_steer` under the recorded
         ``C_f``; the friction and drag recorded in ``meta``).  ``z`` is the ground's height at
@@ -134,12 +137,15 @@ class Trajectory:
         j = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 1)  # frame's step
         i = np.minimum(j, len(t) - 2)
         u = (tn - t[i]) / (t[i + 1] - t[i])
-        if self.meta.get("ground", "flat") != "flat":
+        ran_on = self.meta.get("ground")          # None: the paper's flat model
+        if ran_on is not None or ground is not None or resistance is not None:
             if ground is None:
-                raise ValueError(f"this trajectory ran on {self.meta['ground']}: pass ground= "
-                                 "(the surface it ran on) to resample it")
-            return Trajectory.from_columns(_terrain_rows(body, ground, self.meta, t, c, tn, i, u),
-                                           meta)
+                if ran_on not in (None, "flat"):
+                    raise ValueError(f"this trajectory ran on {ran_on}: pass ground= (the "
+                                     "surface it ran on) to resample it")
+                ground = FLAT
+            rows = _terrain_rows(body, ground, resistance, self.meta, t, c, tn, i, u)
+            return Trajectory.from_columns(rows, meta)
         V_f, C_f = c["V_f"], c["C_f"]
         slope = {"x": V_f * np.cos(c["theta_dir"]), "y": V_f * np.sin(c["theta_dir"]),
                  "theta_dir": V_f * C_f, "theta_v": c["omega_v"], "omega_v": c["alpha_v"],
@@ -218,12 +224,13 @@ def resistance_meta(resistance) -> dict:
             for f in fields(resistance)}
 
 
-def _terrain_rows(body, ground, meta, t, c, tn, i, u) -> dict:
+def _terrain_rows(body, ground, res, meta, t, c, tn, i, u) -> dict:
     """:meth:`Trajectory.resample` on terrain: the rows at times ``tn`` (step ``i``, fraction
-    ``u``)."""
+    ``u``); ``res`` the resistance (``None``: the one recorded in ``meta``, else none)."""
     from .terrain_dynamics import Resistance, terrain_leg_force, terrain_steer
-    res = Resistance(**{k: float(meta[f"resistance.{k}"]) for k in ("mu", "CdA", "rho")
-                        if f"resistance.{k}" in meta})
+    if res is None:
+        res = Resistance(**{k: float(meta[f"resistance.{k}"]) for k in ("mu", "CdA", "rho")
+                            if f"resistance.{k}" in meta})
     free = Limits()                         # the recorded C_f is already bounded
     state = tuple(c[k] for k in ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm"))
     deriv, _, _, V_f, _, _ = terrain_steer(body, free, res, ground, c["C_f"], state)
