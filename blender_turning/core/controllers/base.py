@@ -66,8 +66,8 @@ class Controller:
     def terrain_cf_law(self, ground):
         """``f(t, state) -> C_f`` on terrain (``state`` = ``(x, y, theta_dir, theta_v, omega_v,
         V_cm)``, docs/TERRAIN.md Section 6): the lean law is asked about the lean from the
-        local plumb lean (:func:`..terrain_dynamics.plumb_lean`), so the lean oscillates about
-        the equilibrium, not about the surface normal; its ``alpha_v`` is turned into ``C_f`` by
+        local plumb lean (:meth:`equilibrium_lean`), so the lean oscillates about the
+        equilibrium, not about the surface normal; its ``alpha_v`` is turned into ``C_f`` by
         Eq. (1) on terrain at the current speed.  :meth:`begin_step` sees the same relative
         lean (:meth:`relative_state`).  One figure: the law gets Python floats."""
         g = self.body.g
@@ -82,8 +82,8 @@ class Controller:
         return law
 
     def relative_state(self, ground, state, t=0.0):
-        """``state`` (6 terrain rows) as the lean law sees it: 5 rows, the lean taken from the
-        plumb lean."""
+        """``state`` (6 terrain rows) as the lean law sees it at time ``t``: 5 floats, the lean
+        taken from :meth:`equilibrium_lean`."""
         x, y, d, th, om = (float(v) for v in state[:5])
         fr = surface_frame(ground, x, y, d, self.body.g)
         return (x, y, d, float(th - self.equilibrium_lean(fr, t)), om)
