@@ -278,3 +278,15 @@ def test_resample_a_terrain_csv_given_its_ground(tmp_path):
     # Without the resistance the speed's slope is wrong between samples.
     wrong = back.resample(30, body=BODY, ground=plane)
     assert np.abs(wrong.V_cm - want.V_cm).max() > 1e-4
+
+
+def test_flat_ground_at_a_height_is_todays_run_lifted():
+    """A flat plane at z0 (the figure's start height in Blender): today's run, ``z = z0``."""
+    ctl, s0 = _slalom()
+    today = simulate(SKIER, ctl, 5.0, 0.02, s0)
+    ctl, _ = _slalom()
+    lifted = simulate(SKIER, ctl, 5.0, 0.02, s0, ground=Plane(z0=2.0))
+    np.testing.assert_array_equal(lifted.z, 2.0)
+    cols = [c for c in today.columns() if c != "z"]
+    for c in cols:
+        np.testing.assert_array_equal(getattr(lifted, c), getattr(today, c), err_msg=c)
