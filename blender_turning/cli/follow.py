@@ -2,14 +2,16 @@
 
 Writes the trajectory CSV (DESIGN.md columns, ``phi`` from the Section 6.2 post-pass), the search
 statistics (JSON: one entry per replanning and totals) and a plot of path, obstacles and track.
-When no plan survives, the error names the time and the position (one line, exit 2).
+When no plan survives, the error names the time and the position; when the time limit (three times
+the time to ride the path) comes before the end of the path, how far along it got (arc length);
+either is one line on stderr, exit 2, and no trajectory or statistics are written.
 """
 from __future__ import annotations
 
 import json
 import math
 
-from ..core.errors import PlanInfeasible
+from ..core.errors import PathNotFinished, PlanInfeasible
 from ..core.params import check_range
 from ..core.scene import load_scene
 from ..core.trajectory import _atomic_write
@@ -54,9 +56,11 @@ def run(args) -> int:
             raise ValueError(f"planner settings: {exc}") from None
     try:
         result = scene.run()
-    except PlanInfeasible as exc:
+    except (PlanInfeasible, PathNotFinished) as exc:
         if args.plot and exc.trajectory is not None:
-            _plot(args.plot, scene, exc.trajectory, failed_at=exc.position)
+            where = getattr(exc, "position", None) or (float(exc.trajectory.x[-1]),
+                                                       float(exc.trajectory.y[-1]))
+            _plot(args.plot, scene, exc.trajectory, failed_at=where)
         raise
     traj = result.trajectory
     if args.out:
@@ -73,7 +77,7 @@ def run(args) -> int:
           f"{traj.duration:.2f} s, {tot['replans']} replans, {tot['expanded']} nodes expanded, "
           f"{tot['wall_time']:.2f} s planning; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg"
-          f"{'' if result.reached_end else ' (stopped at the duration, not at the path end)'}"
+          f"{'' if result.reached_end else ' (stopped at the given duration)'}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0
 

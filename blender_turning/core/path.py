@@ -11,12 +11,17 @@ is C1 (both tangents at a knot are the same); built from a Bezier curve it is ex
 ``per_segment`` (default 12) equal parameter steps per segment, or, with ``exact=True``, the
 distance to the nearest point of the spline itself.  Both are distances to a set, so both are
 1-Lipschitz in the foot position, which the planner's lower bound relies on.
+
+:class:`PathProgress` is how far along the path (arc length) the foot has got, tracked so that it
+can only move forward through the parts of the path the foot has actually passed near: the test
+of "the end of the path was reached" (not a half-plane through the end, which a switchback, a loop
+or a start far from the path satisfy at once).
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["HermitePath", "PathDistance"]
+__all__ = ["HermitePath", "PathDistance", "PathProgress"]
 
 # Hermite basis in monomial form: S(u) = [1 u u^2 u^3] @ _H @ [P0, T0, P1, T1].
 _H = np.array([[1.0, 0.0, 0.0, 0.0],
@@ -107,12 +112,34 @@ class HermitePath:
         pts = self.evaluate(seg, np.tile(u, self.n_segments))
         return np.vstack([pts, self.knots[-1:]])
 
+    def start_direction(self) -> np.ndarray:
+        """Unit tangent leaving the start of the path: the first non-degenerate one (coincident
+        first points, or a zero first tangent, are skipped)."""
+        return self._direction(1)
+
     def end_direction(self) -> np.ndarray:
-        """Unit tangent at the end of the path."""
-        d = self.evaluate(self.n_segments - 1, 1.0, 1)
-        if not np.any(d):
-            d = self.knots[-1] - self.evaluate(self.n_segments - 1, 0.99)
-        return d / np.linalg.norm(d)
+        """Unit tangent arriving at the end of the path (the last non-degenerate one)."""
+        return self._direction(-1)
+
+    def _direction(self, sign) -> np.ndarray:
+        """The direction of the first (``sign`` 1) or last (-1) chord of non-zero length, on 64
+        samples per segment: the limit of the chords is the tangent where it is not zero, and
+        where it is (a zero handle, a repeated point), the direction the curve leaves in."""
+        pts = self.sample(64)[::sign]
+        step = np.diff(pts, axis=0) * sign
+        length = np.hypot(step[:, 0], step[:, 1])
+        scale = max(float(np.abs(self.knots).max()), 1.0)
+        ok = np.flatnonzero(length > 1e-12 * scale)
+        if not len(ok):
+            raise ValueError("path has no length: all its points coincide")
+        # The analytic tangent at the chord's start when it is not degenerate; else the chord.
+        d = step[ok[0]]
+        seg, u = (0, 0.0) if sign > 0 else (self.n_segments - 1, 1.0)
+        if ok[0] == 0:
+            t = self.evaluate(seg, u, 1)
+            if np.hypot(*t) > 1e-12 * scale:
+                d = t
+        return d / np.hypot(*d)
 
     def extended(self, length: float) -> "HermitePath":
         """This path with a straight run-out of ``length`` m along its end tangent (the planner
@@ -227,3 +254,44 @@ class PathDistance:
         r = self.path.evaluate(s, uu) - flat
         d = np.sqrt(np.einsum("mjk,mjk->mj", r, r).min(axis=1))
         return d.reshape(P.shape[:-1])
+
+
+class PathProgress:
+    """Arc length along the path reached so far, m.
+
+    The path is sampled at ``per_segment`` equal parameter steps per segment (arc lengths: the
+    polyline through the samples).  :meth:`advance` moves the progress ``p`` to the arc length of
+    the sample nearest the foot among those within ``window`` of ``p`` along the path, if the foot
+    is within ``window`` of that sample, and never backwards.  So the progress goes through the
+    path in order: it cannot jump to the other leg of a switchback or the end of a loop (more
+    than ``window`` further on), and a foot farther than ``window`` from the path makes none.
+    The end is reached when the progress is the path's length (the foot is nearest the last
+    sample) and the foot has crossed the line through the end, normal to the end direction.
+    """
+
+    def __init__(self, path: HermitePath, window: float, per_segment: int = 64):
+        if not window > 0:
+            raise ValueError(f"progress window = {window!r} is outside the allowed range (0, inf)")
+        self.window = float(window)
+        self.samples = path.sample(per_segment)
+        step = np.hypot(*np.diff(self.samples, axis=0).T)
+        self.arc = np.concatenate([[0.0], np.cumsum(step)])
+        self.length = float(self.arc[-1])
+        self.end = path.knots[-1]
+        self.end_dir = path.end_direction()
+
+    def advance(self, p: float, xy) -> float:
+        """The progress after the foot has reached ``xy``, from progress ``p``."""
+        lo = np.searchsorted(self.arc, p - self.window, side="left")
+        hi = np.searchsorted(self.arc, p + self.window, side="right")
+        cand = self.samples[lo:hi] - np.asarray(xy, float)[None, :2]
+        d = np.hypot(cand[:, 0], cand[:, 1])
+        j = int(np.argmin(d))
+        if d[j] > self.window:
+            return float(p)
+        return float(max(p, self.arc[lo + j]))
+
+    def at_end(self, p: float, xy) -> bool:
+        """Has the foot at ``xy`` with progress ``p`` reached the end of the path?"""
+        crossed = float(np.dot(np.asarray(xy, float)[:2] - self.end, self.end_dir)) >= 0.0
+        return bool(p >= self.length and crossed)

@@ -16,8 +16,9 @@ import numpy as np
 
 from .obstacles import Obstacles
 from .params import Figure, check_range, preset
-from .path import HermitePath, PathDistance
-from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile, follow
+from .follow_problem import DEFAULT_CLEARANCE, FollowSetup, start_state
+from .path import HermitePath
+from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile
 
 __all__ = ["Scene", "load_scene", "scene_from_dict"]
 
@@ -143,26 +144,19 @@ class Scene:
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))
 
+    def setup(self) -> FollowSetup:
+        """The shared path-following builder (:mod:`.follow_problem`) for this scene."""
+        return FollowSetup(self.figure, self.path, self.obstacles, self.settings, self.speed,
+                           self.samples_per_segment, self.exact_distance, self.run_out)
+
     def problem(self) -> Problem:
-        """The planning problem; the path gets a straight run-out (default: one horizon's reach)
-        so the planner does not turn back toward the end of the path."""
-        base = Problem(self.figure, PathDistance(self.path, self.samples_per_segment,
-                                                 self.exact_distance), self.obstacles,
-                       self.settings, self.speed)
-        run_out = base.reach() if self.run_out is None else self.run_out
-        dist = PathDistance(self.path.extended(run_out), self.samples_per_segment,
-                            self.exact_distance)
-        return Problem(self.figure, dist, self.obstacles, self.settings, self.speed)
+        """The planning problem (the path with its run-out: :mod:`.follow_problem`)."""
+        return self.setup().problem()
 
     def run(self) -> FollowResult:
-        """Follow the path to its end (or for ``duration`` seconds)."""
-        duration = self.duration
-        if duration is None:       # a safety net: three times the time to ride the path
-            duration = 3.0 * self.path.length() / min(self.speed.V.min(), self.figure.body.V_cm)
-            return follow(self.problem(), self.state0, self.C_f0, duration,
-                          end=self.path.knots[-1], end_dir=self.path.end_direction(),
-                          meta={"scene": self.name})
-        return follow(self.problem(), self.state0, self.C_f0, duration, meta={"scene": self.name})
+        """Follow the path to its end (raises ``PathNotFinished`` at the time limit), or for
+        ``duration`` seconds."""
+        return self.setup().run(self.state0, self.C_f0, self.duration, meta={"scene": self.name})
 
 
 def load_scene(path) -> Scene:
@@ -226,7 +220,7 @@ def scene_from_dict(doc) -> Scene:
     exact = pf.boolean("exact_distance", False)
 
     # Obstacles.
-    clearance = top.number("clearance", 0.0, 0.0, 1e3)
+    clearance = top.number("clearance", DEFAULT_CLEARANCE, 0.0, 1e3)
     obs = doc.get("obstacles", [])
     if not isinstance(obs, list):
         top.fail("obstacles", "is not a list")
@@ -255,18 +249,17 @@ def scene_from_dict(doc) -> Scene:
     sf = top.obj("start", allowed={"position", "heading_deg", "lean_deg", "lean_rate_deg",
                                    "speed", "C_f"})
     pos = sf.xy("position", list(path.knots[0]))
-    if sf.has("heading_deg"):
-        heading = math.radians(sf.number("heading_deg"))
-    else:
-        d = path.evaluate(0, 0.0, 1)
-        heading = math.atan2(d[1], d[0])
+    heading = math.radians(sf.number("heading_deg")) if sf.has("heading_deg") else None
     lean = math.radians(sf.number("lean_deg", 0.0, -89.0, 89.0))
     rate = math.radians(sf.number("lean_rate_deg", 0.0, -3600.0, 3600.0))
     if sf.has("speed"):
         fig = replace(fig, body=replace(fig.body, V_cm=sf.number("speed", lo=0, hi=100,
                                                                  lo_open=True)))
     cf0 = sf.number("C_f", 0.0, -fig.limits.C_f_max, fig.limits.C_f_max)
-    state0 = np.array([pos[0], pos[1], heading, lean, rate])
+    try:
+        state0 = start_state(path, pos, heading, lean, rate)
+    except ValueError as exc:
+        raise ValueError(f"scene field path: {exc}") from None
 
     # Speed profile (Section 6: "a function of the terrain").
     spf = top.obj("speed", allowed={"by", "at", "V_cm"})

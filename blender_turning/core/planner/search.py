@@ -24,20 +24,37 @@ Beyond the paper (each switchable, for the benchmarks and the exactness tests):
   clipped, backed up through the nodes it expanded);
 - batches: ``batch`` queue nodes are expanded together, their ``batch * q`` children simulated as
   one array operation.
+
+The problem solved (``viable_stages = M > 0``; with M = 0 it is the paper's): the receding horizon
+applies only the first stage of a plan, so a plan whose last node cannot go on is a poor choice
+however close it keeps to the path (in the paper's problem about three in four executed plans
+ended so on the shipped scenes: BENCHMARKS.md).  A last node is *dead* when each of its q
+children collides or falls within one more stage (simulated, as any stage), or the fall table
+(``fall_table.py``) proves that every way on from it passes the lean bound within M further
+stages (its conservative grid lookup, exactly as ``FallTable.doomed`` computes it; where the
+table does not apply, only the first test is made).  The search returns the least ``f`` over the plans
+whose every node neither collides nor falls and whose last node is not dead, the lexicographically
+smallest of ties; when there is no such plan, the paper's optimum (the same over all plans that
+neither collide nor fall), flagged ``Plan.viable = False``.  ``exhaustive`` computes the same
+(tested).  Every bound stays admissible: the plans allowed are a subset of the paper's, so a
+lower bound on the cost of any completion bounds theirs; a warm start only offers plans with a
+live last node as upper bounds; and the previous search's proof (``proof.py``) was proved over
+the same restricted problem, or over the paper's (a superset) after a fallback, while a fallback
+search starts without one.
 """
 from __future__ import annotations
 
 import heapq
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .problem import Problem
 from .proof import ProvenBounds, back_up
 
-__all__ = ["SearchStats", "Plan", "branch_and_bound", "exhaustive"]
+__all__ = ["SearchStats", "Plan", "branch_and_bound", "exhaustive", "dead_end"]
 
 _REL_TOL = 1e-9
 
@@ -74,6 +91,10 @@ class Plan:
     stats: SearchStats
     proof: ProvenBounds | None = None
     """What the search proved about its subtrees, for the next replanning (``proof.py``)."""
+    leaf: tuple | None = None
+    """The plan's last node: ``(state (5,), C_f, t, s)``."""
+    viable: bool = True
+    """False when no plan with a viable last node exists and this is the paper's optimum."""
 
     @property
     def feasible(self) -> bool:
@@ -185,32 +206,67 @@ def _root(q, state, C_f, t0, s0, old):
     return nodes
 
 
+def _dead_leaves(problem, state, C_f, t, s):
+    """Which last nodes are dead ends (module docstring): each of their q children collides or
+    falls within one more stage, or the fall table proves they fall within ``viable_stages``
+    stages whatever they do.  None is, when ``viable_stages`` is 0."""
+    st = problem.settings
+    C_f = np.atleast_1d(np.asarray(C_f, float))
+    dead = np.zeros(len(C_f), bool)
+    if not st.viable_stages or not len(C_f):
+        return dead
+    table = problem.fall_table()
+    if table is not None:
+        dead |= table.doomed(state, C_f, st.viable_stages * st.steps_per_stage)
+    i = np.flatnonzero(~dead)
+    if len(i):
+        q = st.q
+        t = np.broadcast_to(np.asarray(t, float), C_f.shape)
+        s = np.broadcast_to(np.asarray(s, float), C_f.shape)
+        r = problem.simulate_stage(np.repeat(state[:, i], q, 1), np.repeat(C_f[i], q),
+                                   np.tile(problem.u_values, len(i)), np.repeat(t[i], q),
+                                   np.repeat(s[i], q))
+        dead[i] = (r.collided | r.fell).reshape(len(i), q).all(axis=1)
+    return dead
+
+
 def _follow_choices(problem, state, C_f, t0, s0, choices):
     """Simulate one fixed plan (all q choices at its last stage when ``choices`` is one short).
-    Returns ``(cost, full choices, nodes whose children were simulated)`` of its best feasible
-    completion, or ``(inf, None, nodes)``."""
+    Returns ``(cost, full choices, nodes whose children were simulated, leaf)`` of its best
+    feasible completion (a viable last node: :func:`_dead_leaves`), or ``(inf, None, nodes,
+    None)``."""
     st = problem.settings
     x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
     f = np.zeros(1)
     for k, c in enumerate(choices):
         r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
         if r.collided[0] or r.fell[0]:
-            return np.inf, None, k + 1
+            return np.inf, None, k + 1, None
         x, cf, s, f, t = r.state, r.C_f, r.s, f + r.cost, t + st.t_stage
     if len(choices) < st.n_stages:
         q = st.q
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
-        fc = np.where(r.collided | r.fell, np.inf, f[0] + r.cost)
+        bad = r.collided | r.fell
+        bad[~bad] = _dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
+                                 r.s[~bad])
+        fc = np.where(bad, np.inf, f[0] + r.cost)
         j = int(np.argmin(fc))
         n = len(choices) + 1
-        return (float(fc[j]), list(choices) + [j], n) if np.isfinite(fc[j]) else (np.inf, None, n)
-    return float(f[0]), list(choices), len(choices)
+        if not np.isfinite(fc[j]):
+            return np.inf, None, n, None
+        return float(fc[j]), list(choices) + [j], n, (r.state[:, j].copy(), float(r.C_f[j]),
+                                                      t + st.t_stage, float(r.s[j]))
+    if _dead_leaves(problem, x, cf, t, s)[0]:
+        return np.inf, None, len(choices), None
+    return float(f[0]), list(choices), len(choices), (x[:, 0].copy(), float(cf[0]), t,
+                                                      float(s[0]))
 
 
 def _greedy_dive(problem, state, C_f, t0, s0):
-    """A first complete plan: at each stage take the child with the least ``f + lower bound``.
-    Returns ``(cost, choices, nodes expanded)``, or ``(inf, None, nodes expanded)``."""
+    """A first complete plan: at each stage take the child with the least ``f + lower bound``
+    (at the last, only viable ones: :func:`_dead_leaves`).  Returns ``(cost, choices, nodes
+    expanded, leaf)``, or ``(inf, None, nodes expanded, None)``."""
     st = problem.settings
     q = st.q
     x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
@@ -220,13 +276,17 @@ def _greedy_dive(problem, state, C_f, t0, s0):
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
         key = f + r.cost + problem.lower_bound(r.d_last, depth, r.state, r.C_f)
-        key = np.where(r.collided | r.fell, np.inf, key)
+        bad = r.collided | r.fell
+        if depth == st.n_stages:
+            bad[~bad] = _dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
+                                     r.s[~bad])
+        key = np.where(bad, np.inf, key)
         j = int(np.argmin(key))
         if not np.isfinite(key[j]):
-            return np.inf, None, depth
+            return np.inf, None, depth, None
         choices.append(j)
         x, cf, s, f, t = r.state[:, [j]], r.C_f[[j]], r.s[[j]], f + r.cost[j], t + st.t_stage
-    return float(f), choices, st.n_stages
+    return float(f), choices, st.n_stages, (x[:, 0].copy(), float(cf[0]), t, float(s[0]))
 
 
 def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
@@ -243,17 +303,18 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     st = problem.settings
     clock = time.perf_counter()
     N = st.n_stages
-    ub, best = np.inf, None
+    ub, best, best_leaf = np.inf, None, None
     warm_cost = np.inf
     expanded = 0              # every node whose children are simulated, the warm start's too
     hot = False               # the first bound is the previous plan (usually the optimum)
     if st.warm_start:
         if previous is not None and len(previous) == N:
-            ub, best, n = _follow_choices(problem, state, C_f, t0, s0, list(previous[1:]))
+            ub, best, n, best_leaf = _follow_choices(problem, state, C_f, t0, s0,
+                                                     list(previous[1:]))
             expanded += n
             hot = best is not None
         if best is None:
-            ub, best, n = _greedy_dive(problem, state, C_f, t0, s0)
+            ub, best, n, best_leaf = _greedy_dive(problem, state, C_f, t0, s0)
             expanded += n
         warm_cost = ub
     if not st.reuse_proof:
@@ -295,14 +356,24 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         clip_fall += int(np.count_nonzero(r.fell & ~r.collided))
         alive = ~(r.collided | r.fell)
         leaf = alive & (depth == N)
+        dead = np.zeros(len(par), bool)
+        if leaf.any() and st.viable_stages:       # dead-end last nodes are not plans here
+            # Only those that could be the best plan need the (costly) check.
+            j = np.flatnonzero(leaf & ~(f > ub + tol()))
+            dead[j] = _dead_leaves(problem, r.state[:, j], r.C_f[j],
+                                   nodes.cols["t"][par[j]] + st.t_stage, r.s[j])
+            clip_doom += int(np.count_nonzero(dead))
+            leaf &= ~dead
         leaves += int(np.count_nonzero(leaf))
         if leaf.any():
             f_min = f[leaf].min()
             if f_min <= ub:
                 tied = np.flatnonzero(leaf & (f == f_min))
-                plan = min(nodes.choices(int(par[j])) + [int(ch[j])] for j in tied)
+                plan, j = min((nodes.choices(int(par[j])) + [int(ch[j])], int(j)) for j in tied)
                 if f_min < ub or best is None or plan < list(best):
                     ub, best = float(f_min), plan
+                    best_leaf = (r.state[:, j].copy(), float(r.C_f[j]),
+                                 float(nodes.cols["t"][par[j]]) + st.t_stage, float(r.s[j]))
         inner = alive & (depth < N)
         if table is not None and inner.any():
             doomed = inner & table.doomed(r.state, r.C_f, (N - depth) * st.steps_per_stage)
@@ -330,7 +401,8 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                 problem, r, depth, None if togo is None else togo[k], True, k,
                 None if pairs is None else pairs[sub]))
             keep[k] = ~(prio[k] > ub + tol())
-        nodes.child_total[par, ch] = np.where(leaf, f, np.where(inner, prio, np.inf))
+        # A dead last node keeps its f: one stage on (the next search) it may have a live one.
+        nodes.child_total[par, ch] = np.where(leaf | dead, f, np.where(inner, prio, np.inf))
         clip_bound += int(np.count_nonzero(inner & ~keep))
         if keep.any():
             k = np.flatnonzero(keep)
@@ -342,15 +414,47 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     stats = SearchStats(expanded, generated, clip_col, clip_fall, clip_bound, clip_doom, leaves,
                         time.perf_counter() - clock, proven, float(warm_cost))
     if best is None:
+        if st.viable_stages:
+            # No plan ends viably: the paper's problem (its own proof; the one handed in was
+            # proved for the restricted problem and may mark its plans infeasible).
+            plan = branch_and_bound(_paper_problem(problem), state, C_f, t0, s0, previous)
+            stats = SearchStats(**{**plan.stats.as_dict(), **{
+                k: getattr(stats, k) + getattr(plan.stats, k) for k in _COUNTS},
+                "wall_time": time.perf_counter() - clock})
+            return replace(plan, stats=stats, viable=False)
         return Plan((), (), math.inf, stats)
     return Plan(tuple(best), tuple(float(problem.u_values[c]) for c in best), float(ub), stats,
-                nodes.proof())
+                nodes.proof(), best_leaf)
+
+
+_COUNTS = ("expanded", "generated", "clipped_collision", "clipped_fall", "clipped_bound",
+           "clipped_doomed", "leaves")
+
+
+def dead_end(problem: Problem, leaf) -> bool:
+    """Does the plan's last node ``leaf`` (``Plan.leaf``) end in a dead end: does each of its q
+    children collide or fall within one more stage?  (A measurement: one stage of q children.)"""
+    x, cf, t, s = leaf
+    q = problem.settings.q
+    r = problem.simulate_stage(np.repeat(np.reshape(x, (5, 1)), q, 1), np.full(q, cf),
+                               problem.u_values, np.full(q, t), np.full(q, s))
+    return bool(np.all(r.collided | r.fell))
+
+
+def _paper_problem(problem: Problem) -> Problem:
+    """The same problem with ``viable_stages = 0`` (sharing its tables: none depends on it)."""
+    p = Problem.__new__(Problem)
+    p.__dict__.update(problem.__dict__)
+    p.settings = replace(problem.settings, viable_stages=0)
+    return p
 
 
 
 def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0):
     """Reference: simulate all ``q^N`` plans level by level (clipping only collisions and falls)
-    and return ``(f_opt, choices)``, or ``(inf, None)`` when none survives."""
+    and return ``(f_opt, choices)`` of the problem stated in the module docstring (the least
+    cost of the plans with a viable last node, or if there are none, of all), or ``(inf, None)``
+    when none survives."""
     st = problem.settings
     q = st.q
     x = np.asarray(state, float).reshape(5, 1)
@@ -368,5 +472,8 @@ def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float =
         f = (f[par] + r.cost)[alive]
         t = t[par][alive] + st.t_stage
         paths = np.concatenate([paths[par], ch[:, None]], axis=1)[alive]
+    viable = ~_dead_leaves(problem, x, cf, t, s)
+    if viable.any():
+        f, paths = f[viable], paths[viable]
     j = int(np.argmin(f))
     return float(f[j]), tuple(int(c) for c in paths[j])
