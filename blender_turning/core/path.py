@@ -122,24 +122,24 @@ class HermitePath:
         return self._direction(-1)
 
     def _direction(self, sign) -> np.ndarray:
-        """The direction of the first (``sign`` 1) or last (-1) chord of non-zero length, on 64
-        samples per segment: the limit of the chords is the tangent where it is not zero, and
-        where it is (a zero handle, a repeated point), the direction the curve leaves in."""
-        pts = self.sample(64)[::sign]
+        """The tangent direction where the path leaves its start (``sign`` 1) or arrives at its
+        end (-1), skipping segments of no length: on the first (last) segment that has length,
+        its tangent at that end; where that is zero (a handle on its knot), the second
+        derivative's direction (``S(u) - S(0) ~ S''(0) u^2 / 2``); failing both, the chord."""
+        per = 64
+        pts = self.sample(per)[::sign]
         step = np.diff(pts, axis=0) * sign
         length = np.hypot(step[:, 0], step[:, 1])
-        scale = max(float(np.abs(self.knots).max()), 1.0)
-        ok = np.flatnonzero(length > 1e-12 * scale)
+        tiny = 1e-12 * max(float(np.abs(self.knots).max()), 1.0)
+        ok = np.flatnonzero(length > tiny)
         if not len(ok):
             raise ValueError("path has no length: all its points coincide")
-        # The analytic tangent at the chord's start when it is not degenerate; else the chord.
-        d = step[ok[0]]
-        seg, u = (0, 0.0) if sign > 0 else (self.n_segments - 1, 1.0)
-        if ok[0] == 0:
-            t = self.evaluate(seg, u, 1)
-            if np.hypot(*t) > 1e-12 * scale:
-                d = t
-        return d / np.hypot(*d)
+        i = int(ok[0]) // per
+        seg, u = (i, 0.0) if sign > 0 else (self.n_segments - 1 - i, 1.0)
+        for d in (self.evaluate(seg, u, 1), sign * self.evaluate(seg, u, 2), step[ok[0]]):
+            if np.hypot(*d) > tiny:
+                return d / np.hypot(*d)
+        raise AssertionError("unreachable: the chord has length")
 
     def extended(self, length: float) -> "HermitePath":
         """This path with a straight run-out of ``length`` m along its end tangent (the planner
