@@ -140,10 +140,11 @@ def test_scene_start_heading_follows_the_path_not_plus_x():
 def progress_along(path, track, window):
     from blender_turning.core.path import PathProgress
     pr = PathProgress(path, window)
-    p, out = 0.0, []
-    for xy in track:
-        p = pr.advance(p, xy)
+    p, out, prev = 0.0, [], None
+    for xy in np.asarray(track, float):
+        p = pr.advance(p, xy, 0.0 if prev is None else float(np.hypot(*(xy - prev))))
         out.append((p, pr.at_end(p, xy)))
+        prev = xy
     return pr, out
 
 
@@ -159,12 +160,19 @@ def test_progress_on_a_switchback_does_not_jump_to_the_end():
     assert out[39][0] == pytest.approx(39.0, abs=0.8) and not out[39][1]
     assert out[-1][1] and out[-1][0] == pytest.approx(pr.length)
     assert [end for _, end in out].index(True) == len(walk) - 2      # at x = 0, on the end line
-    # A loop whose end is its start: not at the end from the start.
-    ring = np.column_stack([20 * np.cos(np.linspace(0, 2 * np.pi, 25)),
-                            20 * np.sin(np.linspace(0, 2 * np.pi, 25))])
+
+    # A loop (shorter than the distance counted as near) whose end is its start: not at the end
+    # from the start nor from just behind it; at the end once round.
+    ang = np.linspace(0, 2 * np.pi, 25)
+    ring = np.column_stack([5 * np.sin(ang), 5 - 5 * np.cos(ang)])
     loop = HermitePath.from_polyline(ring)
-    _, out = progress_along(loop, [ring[0] + [0.1, 0.0], ring[0] + [0.3, 0.5]], window=10.0)
+    pr, out = progress_along(loop, [[-0.05, 0.0], [0.0, 0.02], [0.3, 0.0]], window=50.0)
     assert all(p < 1.0 and not end for p, end in out)
+    a = np.linspace(0.0, 2 * np.pi + 0.3, 200)
+    pr, out = progress_along(loop, np.column_stack([5.2 * np.sin(a), 5 - 5.2 * np.cos(a)]),
+                             window=50.0)
+    first = [end for _, end in out].index(True)
+    assert a[first] == pytest.approx(2 * np.pi, abs=0.04) and out[first][0] == pr.length
 
 
 def test_progress_needs_the_foot_near_the_path():

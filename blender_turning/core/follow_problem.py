@@ -8,8 +8,8 @@ the same inputs, with the same run-out, time limit, start state and end test.
 - Time limit: :data:`TIME_LIMIT_FACTOR` times the time to ride the path at the slowest speed of
   the profile; reaching it before the end of the path is a failure
   (:class:`.errors.PathNotFinished`).
-- End: progress along the path by arc length (:class:`.path.PathProgress`), in windows of one
-  horizon's reach.
+- End: progress along the path by arc length (:class:`.path.PathProgress`), counted while the
+  foot is within one horizon's reach of the path (what the planner can see).
 - Start: the path's first point, heading along its first non-degenerate tangent
   (:meth:`.path.HermitePath.start_direction`), upright, at rest in lean.
 """
@@ -82,7 +82,7 @@ class FollowSetup:
         return TIME_LIMIT_FACTOR * self.path.length() / v
 
     def progress(self, problem: Problem | None = None) -> PathProgress:
-        """The end test: progress along the path in windows of one horizon's reach."""
+        """The end test: progress along the path, counted within one horizon's reach of it."""
         return PathProgress(self.path, (problem or self.problem()).reach())
 
     def run(self, state0=None, C_f0: float = 0.0, duration: float | None = None,

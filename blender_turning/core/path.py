@@ -260,36 +260,41 @@ class PathProgress:
     """Arc length along the path reached so far, m.
 
     The path is sampled at ``per_segment`` equal parameter steps per segment (arc lengths: the
-    polyline through the samples).  :meth:`advance` moves the progress ``p`` to the arc length of
-    the sample nearest the foot among those within ``window`` of ``p`` along the path, if the foot
-    is within ``window`` of that sample, and never backwards.  So the progress goes through the
-    path in order: it cannot jump to the other leg of a switchback or the end of a loop (more
-    than ``window`` further on), and a foot farther than ``window`` from the path makes none.
+    polyline through the samples).  :meth:`advance` is called for each small move of the foot
+    (``travel`` m): the progress ``p`` moves to the arc length of the sample nearest the foot
+    among those from ``p - near`` to ``p + 2 travel + spacing`` along the path (``spacing``: the
+    largest between samples; ties go to the sample nearest ``p`` along the path), if the foot is
+    within ``near`` of it, and never backwards.  So the progress goes through the path in order,
+    no faster than twice the foot (the nearest point runs ahead of the foot only inside a curve,
+    by ``R / (R - e)`` at ``e`` m inside a radius ``R``): it cannot jump to the other leg of a
+    switchback or the end of a loop, and a foot farther than ``near`` from the path makes none.
     The end is reached when the progress is the path's length (the foot is nearest the last
     sample) and the foot has crossed the line through the end, normal to the end direction.
     """
 
-    def __init__(self, path: HermitePath, window: float, per_segment: int = 64):
-        if not window > 0:
-            raise ValueError(f"progress window = {window!r} is outside the allowed range (0, inf)")
-        self.window = float(window)
+    def __init__(self, path: HermitePath, near: float, per_segment: int = 64):
+        if not near > 0:
+            raise ValueError(f"progress distance = {near!r} is outside the allowed range (0, inf)")
+        self.near = float(near)
         self.samples = path.sample(per_segment)
         step = np.hypot(*np.diff(self.samples, axis=0).T)
         self.arc = np.concatenate([[0.0], np.cumsum(step)])
+        self.spacing = float(step.max())
         self.length = float(self.arc[-1])
         self.end = path.knots[-1]
         self.end_dir = path.end_direction()
 
-    def advance(self, p: float, xy) -> float:
-        """The progress after the foot has reached ``xy``, from progress ``p``."""
-        lo = np.searchsorted(self.arc, p - self.window, side="left")
-        hi = np.searchsorted(self.arc, p + self.window, side="right")
+    def advance(self, p: float, xy, travel: float) -> float:
+        """The progress after the foot moved ``travel`` m to ``xy``, from progress ``p``."""
+        lo = np.searchsorted(self.arc, p - self.near, side="left")
+        hi = np.searchsorted(self.arc, p + 2.0 * travel + self.spacing, side="right")
         cand = self.samples[lo:hi] - np.asarray(xy, float)[None, :2]
         d = np.hypot(cand[:, 0], cand[:, 1])
-        j = int(np.argmin(d))
-        if d[j] > self.window:
+        best = np.flatnonzero(d <= d.min() * (1 + 1e-12) + 1e-12)
+        j = lo + best[np.argmin(np.abs(self.arc[lo + best] - p))]
+        if d[j - lo] > self.near:
             return float(p)
-        return float(max(p, self.arc[lo + j]))
+        return float(max(p, self.arc[j]))
 
     def at_end(self, p: float, xy) -> bool:
         """Has the foot at ``xy`` with progress ``p`` reached the end of the path?"""

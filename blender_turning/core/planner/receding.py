@@ -107,8 +107,9 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
         previous = plan.choices
         proof = plan.proof.after(plan.choices[0])
         if progress is not None:
-            for xs in r.record["state"][1:] + [x]:
-                p = progress.advance(p, xs[:2, 0])
+            steps = [xs[:2, 0] for xs in r.record["state"]] + [x[:2, 0]]
+            for a, b in zip(steps[:-1], steps[1:]):
+                p = progress.advance(p, b, float(np.hypot(*(b - a))))
             if progress.at_end(p, x[:2, 0]):
                 reached = True
                 break
