@@ -4,7 +4,8 @@ Writes the trajectory CSV (DESIGN.md columns, ``phi`` from the Section 6.2 post-
 statistics (JSON: one entry per replanning and totals) and a plot of path, obstacles and track.
 When no plan survives, the error names the time and the position; when the time limit (three times
 the time to ride the path) comes before the end of the path, how far along it got (arc length);
-either is one line on stderr, exit 2, and no trajectory or statistics are written.
+either is one line on stderr, exit 2, and no trajectory or statistics are written (``--plot``
+still draws the track up to there, to show where it went wrong).
 """
 from __future__ import annotations
 
