@@ -79,6 +79,8 @@ def run_case(name, N, q, n_base, literal_cap, plain_cap, viable_stages=None):
            "expanded_total": int(ex.sum()), "wall_median_s": float(np.median(wt)),
            "wall_max_s": float(wt.max()), "real_time_factor": wall / float(tr.duration),
            "per_replan_wall_s": wt.tolist(), "per_replan_expanded": ex.tolist(),
+           "track_mean_d": float(np.mean(scene.problem().distance(
+               np.column_stack([tr.x, tr.y])))),
            "dead_ends": sum(r.dead_end for r in reps),
            "not_viable": sum(not r.viable for r in reps)}
     if n_base < 0:                                        # --no-baseline
@@ -185,7 +187,8 @@ def main(argv=None):
               f"{r['wall_total_s']:.1f} s"
               f" (x{r['real_time_factor']:.2f} real time); per replan median "
               f"{r['wall_median_s'] * 1e3:.0f} ms, worst {r['wall_max_s'] * 1e3:.0f} ms; nodes "
-              f"median {r['expanded_median']:.0f}, worst {r['expanded_max']}; plans ending in a "
+              f"median {r['expanded_median']:.0f}, worst {r['expanded_max']}; mean distance "
+              f"from the path {r['track_mean_d']:.3f} m; plans ending in a "
               f"dead end {r['dead_ends']} of {r['replans']} ({r['not_viable']} with no other)",
               flush=True)
     if args.json:
