@@ -9,6 +9,7 @@ from blender_turning.core import preset
 from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
+from blender_turning.core.planner import search
 from blender_turning.core.planner.search import dead_end
 from blender_turning.core.planner.spacing import PairFloor
 
@@ -134,7 +135,11 @@ def test_proven_bounds_are_admissible(seed):
         togo = proof.togo[proof.root, c]
         if kids.collided[c] or kids.fell[c]:
             continue
-        f_ref, _ = exhaustive(rest, kids.state[:, c], float(kids.C_f[c]), 0.6, float(kids.s[c]))
+        if search._doomed(problem, kids.state[:, [c]], kids.C_f[[c]], 2)[0]:
+            assert togo == math.inf     # not a node of any allowed plan (module docstring)
+            continue
+        f_ref, _ = exhaustive(rest, kids.state[:, c], float(kids.C_f[c]), 0.6, float(kids.s[c]),
+                              fallback=False)         # the problem the search proved it for
         assert togo <= f_ref * (1 + 1e-9) + 1e-9
         checked += np.isfinite(togo) and togo > 0
     assert checked

@@ -27,20 +27,27 @@ Beyond the paper (each switchable, for the benchmarks and the exactness tests):
 
 The problem solved (``viable_stages = M > 0``; with M = 0 it is the paper's): the receding horizon
 applies only the first stage of a plan, so a plan whose last node cannot go on is a poor choice
-however close it keeps to the path (in the paper's problem about three in four executed plans
-ended so on the shipped scenes: BENCHMARKS.md).  A last node is *dead* when each of its q
-children collides or falls within one more stage (simulated, as any stage), or the fall table
-(``fall_table.py``) proves that every way on from it passes the lean bound within M further
-stages (its conservative grid lookup, exactly as ``FallTable.doomed`` computes it; where the
-table does not apply, only the first test is made).  The search returns the least ``f`` over the plans
-whose every node neither collides nor falls and whose last node is not dead, the lexicographically
-smallest of ties; when there is no such plan, the paper's optimum (the same over all plans that
-neither collide nor fall), flagged ``Plan.viable = False``.  ``exhaustive`` computes the same
-(tested).  Every bound stays admissible: the plans allowed are a subset of the paper's, so a
-lower bound on the cost of any completion bounds theirs; a warm start only offers plans with a
-live last node as upper bounds; and the previous search's proof (``proof.py``) was proved over
-the same restricted problem, or over the paper's (a superset) after a fallback, while a fallback
-search starts without one.
+however close it keeps to the path (in the paper's problem about four in five executed plans
+ended so on the shipped scenes: BENCHMARKS.md).  A plan is *allowed* when none of its nodes
+collides or falls (the paper's condition) and
+
+- no node of it, at depth ``d``, is *doomed*: proved by the fall table (``fall_table.py``; its
+  conservative grid lookup, exactly as ``FallTable.doomed`` computes it) to pass the lean bound
+  within ``N - d + M`` stages whatever it does, i.e. before M stages after the horizon;
+- its last node is not a *dead end*: one of its q children neither collides nor falls within one
+  more stage (simulated as any stage).
+
+Where the table does not apply (a varying speed, a figure whose lean is not monotone) only the
+second condition is tested.  The search returns the least ``f`` over the allowed plans, the
+lexicographically smallest of ties; when no plan is allowed, the paper's optimum (the same over
+all plans that neither collide nor fall), flagged ``Plan.viable = False``.  ``exhaustive``
+computes the same (tested).  With M > 0 the ``fall_table`` switch changes nothing (the doomed
+test is part of the problem); with M = 0 it is the exact speed-up described above.  Every bound
+stays admissible: the allowed plans are a subset of the paper's, so a lower bound on the cost of
+any completion bounds theirs; a warm start only offers allowed plans as upper bounds; a proof
+(``proof.py``) marks a node without allowed completions infinite only where it has none in the
+next search either (a doomed node stays doomed one stage later, with one stage more to go; a dead
+last node keeps its ``f``, as it is an inner node then), and a fallback search starts without one.
 """
 from __future__ import annotations
 
@@ -206,28 +213,32 @@ def _root(q, state, C_f, t0, s0, old):
     return nodes
 
 
-def _dead_leaves(problem, state, C_f, t, s):
-    """Which last nodes are dead ends (module docstring): each of their q children collides or
-    falls within one more stage, or the fall table proves they fall within ``viable_stages``
-    stages whatever they do.  None is, when ``viable_stages`` is 0."""
+def _doomed(problem, state, C_f, depth):
+    """Nodes at ``depth`` that the fall table proves will fall within the horizon or the
+    ``viable_stages`` after it whatever they do (module docstring); with ``viable_stages`` 0,
+    within the horizon (only where ``fall_table`` is set: then it is a pure speed-up)."""
     st = problem.settings
     C_f = np.atleast_1d(np.asarray(C_f, float))
-    dead = np.zeros(len(C_f), bool)
+    table = problem.fall_table() if (st.fall_table or st.viable_stages) else None
+    if table is None or not len(C_f):
+        return np.zeros(len(C_f), bool)
+    steps = (st.n_stages - np.asarray(depth) + st.viable_stages) * st.steps_per_stage
+    return table.doomed(state, C_f, steps)
+
+
+def _dead_leaves(problem, state, C_f, t, s):
+    """Which last nodes are dead ends (module docstring): each of their q children collides or
+    falls within one more stage.  None is, when ``viable_stages`` is 0."""
+    st = problem.settings
+    C_f = np.atleast_1d(np.asarray(C_f, float))
     if not st.viable_stages or not len(C_f):
-        return dead
-    table = problem.fall_table()
-    if table is not None:
-        dead |= table.doomed(state, C_f, st.viable_stages * st.steps_per_stage)
-    i = np.flatnonzero(~dead)
-    if len(i):
-        q = st.q
-        t = np.broadcast_to(np.asarray(t, float), C_f.shape)
-        s = np.broadcast_to(np.asarray(s, float), C_f.shape)
-        r = problem.simulate_stage(np.repeat(state[:, i], q, 1), np.repeat(C_f[i], q),
-                                   np.tile(problem.u_values, len(i)), np.repeat(t[i], q),
-                                   np.repeat(s[i], q))
-        dead[i] = (r.collided | r.fell).reshape(len(i), q).all(axis=1)
-    return dead
+        return np.zeros(len(C_f), bool)
+    q, m = st.q, len(C_f)
+    t = np.broadcast_to(np.asarray(t, float), C_f.shape)
+    s = np.broadcast_to(np.asarray(s, float), C_f.shape)
+    r = problem.simulate_stage(np.repeat(state, q, 1), np.repeat(C_f, q),
+                               np.tile(problem.u_values, m), np.repeat(t, q), np.repeat(s, q))
+    return (r.collided | r.fell).reshape(m, q).all(axis=1)
 
 
 def _follow_choices(problem, state, C_f, t0, s0, choices):
@@ -240,14 +251,14 @@ def _follow_choices(problem, state, C_f, t0, s0, choices):
     f = np.zeros(1)
     for k, c in enumerate(choices):
         r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
-        if r.collided[0] or r.fell[0]:
+        if r.collided[0] or r.fell[0] or _doomed(problem, r.state, r.C_f, k + 1)[0]:
             return np.inf, None, k + 1, None
         x, cf, s, f, t = r.state, r.C_f, r.s, f + r.cost, t + st.t_stage
     if len(choices) < st.n_stages:
         q = st.q
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
-        bad = r.collided | r.fell
+        bad = r.collided | r.fell | _doomed(problem, r.state, r.C_f, st.n_stages)
         bad[~bad] = _dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
                                  r.s[~bad])
         fc = np.where(bad, np.inf, f[0] + r.cost)
@@ -276,7 +287,7 @@ def _greedy_dive(problem, state, C_f, t0, s0):
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
         key = f + r.cost + problem.lower_bound(r.d_last, depth, r.state, r.C_f)
-        bad = r.collided | r.fell
+        bad = r.collided | r.fell | _doomed(problem, r.state, r.C_f, depth)
         if depth == st.n_stages:
             bad[~bad] = _dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
                                      r.s[~bad])
@@ -323,7 +334,6 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     heap = [(0.0, 0, 0)]
     generated = leaves = 0
     clip_col = clip_fall = clip_bound = clip_doom = 0
-    table = problem.fall_table() if st.fall_table else None
     proven = True
     tol = lambda: _REL_TOL * max(1.0, abs(ub))     # noqa: E731
     while heap:
@@ -355,6 +365,10 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         clip_col += int(np.count_nonzero(r.collided))
         clip_fall += int(np.count_nonzero(r.fell & ~r.collided))
         alive = ~(r.collided | r.fell)
+        doomed = np.zeros(len(par), bool)
+        doomed[alive] = _doomed(problem, r.state[:, alive], r.C_f[alive], depth[alive])
+        clip_doom += int(np.count_nonzero(doomed))
+        alive &= ~doomed
         leaf = alive & (depth == N)
         dead = np.zeros(len(par), bool)
         if leaf.any() and st.viable_stages:       # dead-end last nodes are not plans here
@@ -375,10 +389,6 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                     best_leaf = (r.state[:, j].copy(), float(r.C_f[j]),
                                  float(nodes.cols["t"][par[j]]) + st.t_stage, float(r.s[j]))
         inner = alive & (depth < N)
-        if table is not None and inner.any():
-            doomed = inner & table.doomed(r.state, r.C_f, (N - depth) * st.steps_per_stage)
-            clip_doom += int(np.count_nonzero(doomed))
-            inner &= ~doomed
         old = np.full(len(par), -1)
         togo = None
         if proof is not None:
@@ -402,6 +412,8 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                 None if pairs is None else pairs[sub]))
             keep[k] = ~(prio[k] > ub + tol())
         # A dead last node keeps its f: one stage on (the next search) it may have a live one.
+        # (A doomed one does not: it falls within the horizon and M stages, as does every node
+        # below it, and the next search's horizon ends one stage later.)
         nodes.child_total[par, ch] = np.where(leaf | dead, f, np.where(inner, prio, np.inf))
         clip_bound += int(np.count_nonzero(inner & ~keep))
         if keep.any():
@@ -450,17 +462,19 @@ def _paper_problem(problem: Problem) -> Problem:
 
 
 
-def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0):
+def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
+               fallback: bool = True):
     """Reference: simulate all ``q^N`` plans level by level (clipping only collisions and falls)
     and return ``(f_opt, choices)`` of the problem stated in the module docstring (the least
-    cost of the plans with a viable last node, or if there are none, of all), or ``(inf, None)``
-    when none survives."""
+    cost of the allowed plans, or if there are none, of all: not with ``fallback=False``), or
+    ``(inf, None)`` when none survives."""
     st = problem.settings
     q = st.q
     x = np.asarray(state, float).reshape(5, 1)
     cf, t, s, f = np.array([C_f], float), np.array([t0], float), np.array([s0], float), np.zeros(1)
     paths = np.zeros((1, 0), np.int64)
-    for _ in range(st.n_stages):
+    ok = np.ones(1, bool)           # no node so far is doomed within the horizon and M stages
+    for depth in range(1, st.n_stages + 1):
         m = x.shape[1]
         par = np.repeat(np.arange(m), q)
         ch = np.tile(np.arange(q), m)
@@ -468,12 +482,15 @@ def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float =
         alive = ~(r.collided | r.fell)
         if not alive.any():
             return np.inf, None
+        ok = (ok[par] & ~_doomed(problem, r.state, r.C_f, depth))[alive]
         x, cf, s = r.state[:, alive], r.C_f[alive], r.s[alive]
         f = (f[par] + r.cost)[alive]
         t = t[par][alive] + st.t_stage
         paths = np.concatenate([paths[par], ch[:, None]], axis=1)[alive]
-    viable = ~_dead_leaves(problem, x, cf, t, s)
-    if viable.any():
+    viable = ok & ~_dead_leaves(problem, x, cf, t, s)
+    if st.viable_stages and (viable.any() or not fallback):
         f, paths = f[viable], paths[viable]
+        if not len(f):
+            return np.inf, None
     j = int(np.argmin(f))
     return float(f[j]), tuple(int(c) for c in paths[j])

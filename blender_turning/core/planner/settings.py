@@ -46,10 +46,10 @@ class PlannerSettings:
     """Also clip nodes that provably fall within their remaining stages whatever they do
     (``fall_table.py``; exact).  Off: only the paper's clip of a branch that has fallen."""
     viable_stages: int = 3
-    """Prefer plans that do not end in a dead end: a plan whose last node the fall table
-    (``fall_table.py``) proves will fall within this many further stages whatever it does is
-    only taken when no other plan is feasible (``search.py`` says exactly which problem is then
-    solved); 0: the paper's problem."""
+    """Prefer plans that do not end in a dead end: a plan whose last node has no child that
+    survives one more stage, or one of whose nodes the fall table (``fall_table.py``) proves
+    will fall before this many stages after the horizon whatever it does, is only taken when no
+    other plan is feasible (``search.py`` states the problem solved); 0: the paper's problem."""
     reuse_proof: bool = True
     """Receding horizon: bound the cost still to come by what the previous search proved about
     the same subtree (``proof.py``; exact)."""
