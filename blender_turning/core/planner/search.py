@@ -227,13 +227,19 @@ def _doomed(problem, state, C_f, depth):
 
 
 def _dead_leaves(problem, state, C_f, t, s):
-    """Which last nodes are dead ends (module docstring): each of their q children collides or
-    falls within one more stage.  None is, when ``viable_stages`` is 0."""
-    st = problem.settings
+    """Which last nodes are dead ends, when ``viable_stages`` is set (else none)."""
     C_f = np.atleast_1d(np.asarray(C_f, float))
-    if not st.viable_stages or not len(C_f):
+    if not problem.settings.viable_stages:
         return np.zeros(len(C_f), bool)
-    q, m = st.q, len(C_f)
+    return _no_way_on(problem, state, C_f, t, s)
+
+
+def _no_way_on(problem, state, C_f, t, s):
+    """Nodes each of whose q children collides or falls within one more stage (dead ends)."""
+    C_f = np.atleast_1d(np.asarray(C_f, float))
+    if not len(C_f):
+        return np.zeros(0, bool)
+    q, m = problem.settings.q, len(C_f)
     t = np.broadcast_to(np.asarray(t, float), C_f.shape)
     s = np.broadcast_to(np.asarray(s, float), C_f.shape)
     r = problem.simulate_stage(np.repeat(state, q, 1), np.repeat(C_f, q),
@@ -447,10 +453,7 @@ def dead_end(problem: Problem, leaf) -> bool:
     """Does the plan's last node ``leaf`` (``Plan.leaf``) end in a dead end: does each of its q
     children collide or fall within one more stage?  (A measurement: one stage of q children.)"""
     x, cf, t, s = leaf
-    q = problem.settings.q
-    r = problem.simulate_stage(np.repeat(np.reshape(x, (5, 1)), q, 1), np.full(q, cf),
-                               problem.u_values, np.full(q, t), np.full(q, s))
-    return bool(np.all(r.collided | r.fell))
+    return bool(_no_way_on(problem, np.reshape(x, (5, 1)), cf, t, s)[0])
 
 
 def _paper_problem(problem: Problem) -> Problem:
@@ -459,7 +462,6 @@ def _paper_problem(problem: Problem) -> Problem:
     p.__dict__.update(problem.__dict__)
     p.settings = replace(problem.settings, viable_stages=0)
     return p
-
 
 
 def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
