@@ -28,8 +28,9 @@ from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile, follo
 __all__ = ["FollowSetup", "DEFAULT_CLEARANCE", "TIME_LIMIT_FACTOR", "start_state"]
 
 #: Distance kept from every obstacle by the foot and the body's ground point when none is given,
-#: m: about half a figure's shoulder width, so the body's sides clear as well as its centre.
-DEFAULT_CLEARANCE = 0.3
+#: m: about half the width of a figure with its equipment (poles, handlebars), so its sides clear
+#: as well as its centre line.  (Blender's Follow Path keeps the same.)
+DEFAULT_CLEARANCE = 0.5
 
 #: The time limit is this many times the time to ride the path at the slowest speed.
 TIME_LIMIT_FACTOR = 3.0
