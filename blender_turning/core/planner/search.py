@@ -71,7 +71,9 @@ class SearchStats:
     """What one search did.  ``expanded``: nodes whose children were simulated, those of the
     warm start's plans included.  Clipped counts are children (or queued nodes) dropped, by reason:
     collision, fall (the lean passed its bound), bound (cannot beat the best plan) and doomed
-    (will fall within the horizon whatever it does, ``fall_table.py``)."""
+    (will fall within the horizon, or with ``viable_stages`` before that many stages after it,
+    whatever it does, ``fall_table.py``; and last nodes that are dead ends).  After a fallback
+    to the paper's problem, the counts of both searches."""
 
     expanded: int
     generated: int
