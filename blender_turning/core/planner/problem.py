@@ -235,9 +235,10 @@ class Problem:
         return r[:, per - 1::per] * (1 + 1e-6) + 1e-9
 
     def body_point(self, state) -> np.ndarray:
-        """The ground point under the centre of mass, shape ``(2, m)``: the foot plus
-        ``l sin(theta_v)`` across the direction of travel, to the left for a lean to the left
-        (DESIGN.md Section 1), i.e. ``foot + l sin(theta_v) (-sin theta_dir, cos theta_dir)``."""
+        """The ground point under the centre of mass, shape ``(2, ...)`` for ``state`` of shape
+        ``(>= 4, ...)``: the foot plus ``l sin(theta_v)`` across the direction of travel, to the
+        left for a lean to the left (DESIGN.md Section 1), i.e.
+        ``foot + l sin(theta_v) (-sin theta_dir, cos theta_dir)``."""
         off = self.body.l * np.sin(state[THETA_V])
         th = state[THETA_DIR]
         return np.stack([state[X] - off * np.sin(th), state[Y] + off * np.cos(th)])
@@ -272,11 +273,11 @@ class Problem:
         cost = np.zeros(m)
         d = np.zeros(m)
         fell = np.zeros(m, bool)
-        seg_a, seg_b = [], []
+        track = [x[:THETA_V + 1]]          # x, y, theta_dir, theta_v at every step's end
         rec = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")} if record else None
         h = st.dt
         half = 0.5 * h
-        body_check = len(self.obstacles) > 0
+        check = len(self.obstacles) > 0
         k1, k2, k3, k4 = (np.empty_like(x) for _ in range(4))
         for k in range(st.steps_per_stage):
             tau = k * h
@@ -292,11 +293,8 @@ class Problem:
             self._rhs(x + half * k2, V, tau + half, C_f0, u, cf, half, k3)
             self._rhs(x + h * k3, V, tau + h, C_f0, u, cf, h, k4)
             new = x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
-            seg_a.append(x[:2].T)
-            seg_b.append(new[:2].T)
-            if body_check:
-                seg_a.append(self.body_point(x).T)
-                seg_b.append(self.body_point(new).T)
+            if check:
+                track.append(new[:THETA_V + 1])
             s = s + np.hypot(new[X] - x[X], new[Y] - x[Y])
             x, anchor = new, cf
             fell |= ~(np.abs(x[THETA_V]) <= st.theta_bound)       # NaN counts as fallen
@@ -306,8 +304,12 @@ class Problem:
         # The curvature in force at the end of the stage (the next stage's C0).
         cf_end = self._rhs(x, self._speed_at(t0 + st.t_stage, s), st.t_stage, C_f0, u, anchor,
                            h, k1)[0]
-        if body_check:   # foot and body ground point, step by step
-            collided = self.obstacles.collides(np.concatenate(seg_a), np.concatenate(seg_b))
+        if check:   # the foot's and the body's ground point's moves, step by step
+            P = np.stack(track, axis=1)                          # (4, steps + 1, m)
+            pts = np.concatenate([P[:2], self.body_point(P)], axis=1)
+            a = pts[:, np.r_[0:len(track) - 1, len(track):2 * len(track) - 1]]
+            b = pts[:, np.r_[1:len(track), len(track) + 1:2 * len(track)]]
+            collided = self.obstacles.collides(a.reshape(2, -1).T, b.reshape(2, -1).T)
             collided = collided.reshape(-1, m).any(axis=0)
         else:
             collided = np.zeros(m, bool)
