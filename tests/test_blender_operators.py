@@ -11,6 +11,8 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
+from scene_snapshot import snapshot  # noqa: E402
+
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat, ops_path, presets  # noqa: E402
 from blender_turning.blender.follow_job import Cancelled  # noqa: E402
@@ -54,26 +56,6 @@ def add(sport="SKIER", at=(0, 0, 0)):
     bpy.context.scene.cursor.location = at
     assert bpy.ops.turning.add_figure(sport=sport) == {"FINISHED"}
     return bpy.context.view_layer.objects.active
-
-
-def snapshot():
-    """Everything a failed or cancelled operator must leave alone."""
-    sc = bpy.context.scene
-    out = {"frames": (sc.frame_start, sc.frame_end, sc.frame_current),
-           "objects": sorted(o.name for o in bpy.data.objects),
-           "actions": sorted(a.name for a in bpy.data.actions),
-           "curves": sorted(c.name for c in bpy.data.curves)}
-    for a in bpy.data.actions:
-        for fc in compat.all_fcurves(a):
-            co = np.empty(2 * len(fc.keyframe_points), np.float32)
-            fc.keyframe_points.foreach_get("co", co)
-            out[(a.name, fc.data_path, fc.array_index)] = co.tobytes()
-    for o in bpy.data.objects:
-        out[o.name] = (tuple(round(v, 6) for v in o.location),
-                       tuple(round(v, 6) for v in o.rotation_euler),
-                       o.animation_data.action.name if o.animation_data and
-                       o.animation_data.action else None)
-    return out
 
 
 def test_every_operator_has_undo_and_a_poll():
@@ -224,7 +206,8 @@ def test_infeasible_plan_is_reported_and_scene_unchanged(scene):
     obj.turning.obstacles = walls
     bpy.context.view_layer.objects.active = obj
     before = snapshot()
-    with pytest.raises(RuntimeError, match=r"no feasible plan at t = [\d.]+ s, position"):
+    with pytest.raises(RuntimeError, match=r"no feasible plan at t = [\d.]+ s, position.*"
+                                           r"\(nearest obstacle: 'Wall', [\d.]+ m away\)"):
         bpy.ops.turning.follow_path()
     assert snapshot() == before
 
@@ -339,7 +322,7 @@ def modal_operator(obj):
     fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),
                            "_cleanup": op_cls._cleanup, "_complete": op_cls._complete})()
     fake._job = ops_path.prepare(bpy.context, obj)
-    fake._fig_name, fake._timer = obj.name, object()
+    fake._fig_uid, fake._timer = obj.session_uid, object()
     fake._job.start()
     return op_cls, fake, reports
 

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
-from blender_turning.core.controllers.ellipse import ellipse_alpha, ellipse_alpha_one
+from blender_turning.core.controllers.ellipse import LAWS
 from blender_turning.core.dynamics import steer
 from blender_turning.core.heading_table import heading_table
 from blender_turning.core.one_figure import rhs, scalar_inverse_cf
@@ -58,7 +58,8 @@ def test_float_inverse_equals_eq_1():
     np.testing.assert_allclose(got, want, rtol=1e-12, atol=0)
 
 
-def test_ellipse_law_on_floats_equals_the_array_law():
+@pytest.mark.parametrize("law", sorted(LAWS))
+def test_ellipse_law_on_floats_equals_the_array_law(law):
     """Random states plus the special ones where the branches meet: the axes, the target ellipse,
     the lines |x| = 1 and |y| = 1 (with ulps either side), the origin disc and slow states."""
     w, tm = TWO_PI / 2, math.radians(23)
@@ -74,6 +75,7 @@ def test_ellipse_law_on_floats_equals_the_array_law():
             th.append(a), om.append(b)
             th.append(-a), om.append(b)
     th, om = np.array(th), np.array(om)
+    ellipse_alpha, ellipse_alpha_one = LAWS[law]
     for tmax, w0 in ((tm, w), (1.3 * tm, 0.8 * w)):
         vec = ellipse_alpha(th, om, tmax, w0, amax)
         one = [ellipse_alpha_one(float(a), float(b), tmax, w0, amax) for a, b in zip(th, om)]

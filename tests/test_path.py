@@ -131,9 +131,11 @@ def test_start_direction_skips_coincident_first_points():
 
 
 def test_scene_start_heading_follows_the_path_not_plus_x():
+    """A scene path (Bezier) whose first handle sits on its first point starts along the path,
+    not along +x.  (Scene files refuse repeated consecutive points; the core handles them.)"""
     from blender_turning.core.scene import scene_from_dict
     sc = scene_from_dict({"figure": {"preset": "skier"},
-                          "path": {"polyline": [[0, 0], [0, 0], [0, 30]]}})
+                          "path": {"bezier": [[0, 0], [0, 0], [0, 20], [0, 30]]}})
     assert sc.state0[2] == pytest.approx(np.pi / 2, abs=1e-12)
 
 

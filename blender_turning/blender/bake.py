@@ -5,7 +5,9 @@ animated channel becomes one F-curve filled by ``keyframe_points.add(n)`` and tw
 calls (no ``bpy.ops``, no ``frame_set``, no mode switch).  Baking again replaces exactly the
 F-curves the previous bake wrote; everything else in that action (the user's own keys, e.g. on
 the controller's ``turning.*`` parameters) stays.  If the figure was playing an action of the
-user's, that action is kept on a muted NLA track and comes back on :func:`clear_bake`.
+user's, that action is kept on a muted NLA track and comes back on :func:`clear_bake`
+(:mod:`.user_action`).  The action belongs to its figure (an ID pointer on it), so a duplicate
+bakes its own; a bake the user pushed down onto an NLA strip is re-baked and cleared in place.
 """
 from __future__ import annotations
 
@@ -14,15 +16,15 @@ from dataclasses import dataclass
 import bpy
 import numpy as np
 
-from . import compat
+from . import compat, user_action
+from .user_action import PROP_GROUP, REST, STASHED
 from ..mapping.base import PoseTrack
 
 #: ID property on an action made by :func:`bake_pose_track`: the paths it wrote, one per line.
 BAKED_PATHS = "turning_baked_paths"
-#: ID property on the armature object: the identifier of the action the bake replaced.
-STASHED = "turning_stashed_action"
-STASH_TRACK = "Turning: user action"
-PROP_GROUP = "Turning state"
+#: ID property on that action: the figure (object) it belongs to.  An ID pointer, so a duplicated
+#: figure's copied action points at the copy, and an action shared by two figures is the owner's.
+OWNER = "turning_figure"
 #: Parameter F-curves (``Object.turning.*``) the user keys; a bake copies them, never drops them.
 PARAM_PREFIX = "turning."
 
@@ -79,50 +81,59 @@ def check_track(obj, track: PoseTrack) -> None:
         raise BakeError("the pose track holds a value that is not a finite number")
 
 
-def _is_ours(action) -> bool:
-    return action is not None and BAKED_PATHS in action
+def _is_ours(action, obj) -> bool:
+    """Is ``action`` a bake of the figure ``obj`` (not a user's, not another figure's)?"""
+    if action is None or BAKED_PATHS not in action:
+        return False
+    owner = action.get(OWNER)
+    return owner is None or owner == obj       # None: made before owners were recorded
 
 
-def _copy_fcurve(src, bag):
-    """Copy the F-curve ``src`` (keys, interpolation, handles) into ``bag``."""
-    grp = src.group.name if src.group else PROP_GROUP
-    dst = compat.new_fcurve(bag, src.data_path, src.array_index, grp)
-    n = len(src.keyframe_points)
-    dst.keyframe_points.add(n)
-    for attr, width, dtype in (("co", 2, np.float32), ("handle_left", 2, np.float32),
-                               ("handle_right", 2, np.float32), ("interpolation", 1, np.int32),
-                               ("handle_left_type", 1, np.int32),
-                               ("handle_right_type", 1, np.int32)):
-        buf = np.empty(n * width, dtype)
-        src.keyframe_points.foreach_get(attr, buf)
-        dst.keyframe_points.foreach_set(attr, buf)
-    dst.update()
+def find_bake(obj):
+    """``(action, nla_strip)`` of the figure's own action: assigned (strip ``None``) or pushed
+    down onto an NLA strip; ``(None, None)`` when the figure is not baked."""
+    adt = obj.animation_data if obj is not None else None
+    if adt is None:
+        return None, None
+    if _is_ours(adt.action, obj):
+        return adt.action, None
+    for track in adt.nla_tracks:
+        for strip in track.strips:
+            if _is_ours(strip.action, obj):
+                return strip.action, strip
+    return None, None
+
+
+def _bag(obj, action, strip):
+    if strip is None:
+        return compat.channels(obj, action)
+    return compat.channelbag(action, compat.strip_slot(strip))
 
 
 def _figure_action(obj):
-    """The figure's own action, assigned to ``obj``; a user's action is stashed, not touched."""
+    """The figure's own action and strip (see :func:`find_bake`); made and assigned when there is
+    none.  A user's action is stashed, not touched."""
+    action, strip = find_bake(obj)
+    if action is not None and _bag(obj, action, strip) is not None:
+        return action, strip
     adt = obj.animation_data
     current = adt.action if adt else None
-    if _is_ours(current) and compat.channels(obj) is not None:
-        return current
     params = []
     if current is not None:
-        # The user's action: keep it (muted, on its own NLA track) and remember it for Clear Bake.
         bag = compat.channels(obj)
         params = [fc for fc in (bag.fcurves if bag else ())
                   if fc.data_path.startswith(PARAM_PREFIX)]
-        track = adt.nla_tracks.new()
-        track.name = STASH_TRACK
-        compat.nla_strip_new(track, current.name, int(current.frame_range[0]), current)
-        track.mute = True
-        obj[STASHED] = current.name
-        obj[STASHED + "_slot"] = compat.slot_identifier(obj) or ""
+        user_action.stash(obj, current)
+    user_action.record_rest(obj)
+    for old in [a for a in bpy.data.actions if a.get(OWNER) == obj and a.users == 0]:
+        bpy.data.actions.remove(old)          # an earlier bake the user unassigned: unused, ours
     action = compat.assign_new_action(obj, obj.name)
     action[BAKED_PATHS] = ""
+    action[OWNER] = obj
     bag = compat.channels(obj)
     for fc in params:                     # the controller's keyed parameters stay with the figure
-        _copy_fcurve(fc, bag)
-    return action
+        user_action.copy_fcurve(fc, bag)
+    return action, None
 
 
 def _remove_baked(bag, action) -> None:
@@ -152,8 +163,11 @@ def write_channels(bag, channels, frames) -> int:
 
 
 def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
-    """Bake ``track`` into ``obj``'s figure action (created or reused); see the module doc."""
+    """Bake ``track`` into ``obj``'s figure action (created or reused; in place when the user
+    pushed it down onto an NLA strip); see the module doc."""
     check_track(obj, track)
+    chans = _channel_list(obj, track)
+    action, strip = _figure_action(obj)
     for name, ch in track.bones.items():
         if ch.rotation is not None:
             obj.pose.bones[name].rotation_mode = "QUATERNION"
@@ -161,48 +175,73 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
     for prop, values in track.props.items():
         if prop not in obj.keys():
             obj[prop] = float(values[0])
-    action = _figure_action(obj)
-    bag = compat.channels(obj)
+    bag = _bag(obj, action, strip)
     _remove_baked(bag, action)
-    chans = _channel_list(obj, track)
-    count = write_channels(bag, chans, np.asarray(track.frames, float))
+    # Tagged before writing: curves of a bake cut short (an exception, a crash) are still known as
+    # the bake's, so the next bake or Clear Bake removes them instead of colliding with them.
     action[BAKED_PATHS] = "\n".join(sorted({c[0] for c in chans}))
+    count = write_channels(bag, chans, np.asarray(track.frames, float))
+    if strip is not None:
+        _fit_strip(strip, action)
     return BakeResult(action, count, len(track))
 
 
+def _fit_strip(strip, action) -> None:
+    """Let a pushed-down strip play the whole re-baked range (it keeps its scale and repeats)."""
+    lo, hi = action.frame_range
+    if (strip.action_frame_start, strip.action_frame_end) != (lo, hi):
+        strip.action_frame_end = max(hi, strip.action_frame_start + 1)
+        strip.action_frame_start = lo
+        strip.action_frame_end = hi
+
+
 def figure_action(obj):
-    """The add-on's action on ``obj``, or ``None``."""
-    adt = obj.animation_data if obj is not None else None
-    action = adt.action if adt else None
-    return action if _is_ours(action) else None
+    """The add-on's action of ``obj`` (assigned or on one of its NLA strips), or ``None``."""
+    return find_bake(obj)[0]
+
+
+def _drop_strip(adt, strip) -> None:
+    for track in adt.nla_tracks:
+        if any(s == strip for s in track.strips):
+            track.strips.remove(strip)
+            if len(track.strips) == 0:
+                adt.nla_tracks.remove(track)
+            return
 
 
 def clear_bake(obj) -> bool:
-    """Remove what the bakes wrote; restore a stashed user action.  ``False`` if nothing baked.
+    """Remove what the bakes wrote and give the user's action back as it was (with any keys the
+    user set while baked), and the transform and pose the first bake overrode.  ``False`` if
+    nothing was baked.
 
-    The figure's action is deleted when nothing of the user's (parameter keys) is left in it.
+    The figure's action is deleted, unless it holds keys of the user's and there is no user action
+    to give them back to: then it stays, as the user's (no longer tagged as a bake).
     """
-    action = figure_action(obj)
+    action, strip = find_bake(obj)
     if action is None:
         return False
-    bag = compat.channels(obj)
+    bag = _bag(obj, action, strip)
     if bag is not None:
         _remove_baked(bag, action)
-    keep = bag is not None and len(bag.fcurves) > 0
-    stashed = obj.get(STASHED)
-    if not keep:
-        obj.animation_data.action = None
+    user = user_action.stashed_action(obj)
+    if user is not None and bag is not None:
+        user_action.give_back(bag, user_action.stashed_channels(obj, user))
+    if user is not None or bag is None or len(bag.fcurves) == 0:
+        if strip is not None:
+            _drop_strip(obj.animation_data, strip)
+        else:
+            obj.animation_data.action = None
         bpy.data.actions.remove(action)
-    if stashed and not keep:
-        adt = obj.animation_data
-        for track in list(adt.nla_tracks):
-            if track.name == STASH_TRACK:
-                adt.nla_tracks.remove(track)
-        user = bpy.data.actions.get(stashed)
-        if user is not None:
-            compat.restore_action(obj, user, obj.get(STASHED + "_slot"))
-        del obj[STASHED]
-        del obj[STASHED + "_slot"]
+    else:                                 # only the user's keys are left: it is their action now
+        for key in (BAKED_PATHS, OWNER):
+            del action[key]
+    if STASHED in obj:
+        user_action.unstash(obj, user)
     for prop in [p for p in obj.keys() if p.startswith("turn_")]:
         del obj[prop]
+    if REST in obj:
+        user_action.restore_rest(obj)
+    adt = obj.animation_data
+    if adt.action is None and len(adt.nla_tracks) == 0 and len(adt.drivers) == 0:
+        obj.animation_data_clear()        # the bake made it; nothing of the user's is in it
     return True

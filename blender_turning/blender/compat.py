@@ -59,9 +59,14 @@ def channels(id_data, action=None):
         action = adt.action if adt else None
     if action is None:
         return None
+    slot = adt.action_slot if SLOTTED_ACTIONS and adt and adt.action == action else None
+    return channelbag(action, slot)
+
+
+def channelbag(action, slot):
+    """The F-curve container of ``action`` for ``slot`` (an NLA strip's or the assigned one)."""
     if not SLOTTED_ACTIONS:
         return action                     # 4.2/4.3: Action.fcurves and Action.groups
-    slot = adt.action_slot if adt and adt.action == action else None
     if slot is None:
         return None
     for layer in action.layers:           # 4.4+: anim_utils' helper, inlined (not in 4.2)
@@ -70,6 +75,11 @@ def channels(id_data, action=None):
             if bag:
                 return bag
     return None
+
+
+def strip_slot(strip):
+    """The slot an NLA strip animates through (``None`` before 4.4)."""
+    return strip.action_slot if SLOTTED_ACTIONS else None
 
 
 def new_fcurve(bag, data_path: str, index: int, group: str):
@@ -105,15 +115,20 @@ def nla_strip_new(track, name: str, frame: int, action):
     return strip
 
 
+def slot_named(action, identifier: str | None):
+    """The slot of ``action`` with ``identifier`` (``None`` before 4.4 or when there is none)."""
+    if not SLOTTED_ACTIONS or not identifier:
+        return None
+    return next((slot for slot in action.slots if slot.identifier == identifier), None)
+
+
 def restore_action(id_data, action, slot_name: str | None = None):
     """Assign ``action`` back to ``id_data`` (on 4.4+ with the slot named ``slot_name``)."""
     adt = id_data.animation_data or id_data.animation_data_create()
     adt.action = action
-    if SLOTTED_ACTIONS and action is not None and slot_name:
-        for slot in action.slots:
-            if slot.identifier == slot_name:
-                adt.action_slot = slot
-                break
+    slot = slot_named(action, slot_name) if action is not None else None
+    if slot is not None:
+        adt.action_slot = slot
 
 
 def slot_identifier(id_data) -> str | None:

@@ -1,21 +1,107 @@
-"""``turning.bake_turns`` and ``turning.clear_bake``: the parametric controller (Section 5) over the
-scene's frame range, and its removal."""
+"""``turning.bake_turns`` and ``turning.clear_bake``: the parametric controller (Section 5) for
+every selected figure over a frame range, and its removal.
+
+A bake computes every figure first (:class:`BakeJob`) and writes only when all succeeded: a
+failure or Esc leaves the scene as it was.  With several figures and a window the operator is
+modal (one figure per timer tick, a progress bar, Esc cancels between figures).
+"""
 from __future__ import annotations
 
 import math
 
 import bpy
+import numpy as np
+from bpy.props import EnumProperty, IntProperty
 
 from ..core.errors import TurningError
-from . import bake, foot_track
-from .ops_common import context_figure, poll_figure
+from ..mapping.base import BoneChannels, PoseTrack
+from . import bake, compat, foot_track
+from .ops_common import check_figure, context_figure, poll_figure, report_error, selected_figures
 from .pipeline import figure_pose_track
 from .scene_adapters import FrameRange, start_from_object
 
+FRAME_RANGES = (
+    ("SCENE", "Scene", "The scene's frame range (Output properties)"),
+    ("PREVIEW", "Preview", "The scene's preview range (the Timeline's clock button)"),
+    ("CUSTOM", "Custom", "The Start and End frames given here"),
+)
 
-def apply_bake(fig, traj, track):
-    """Write a computed bake: F-curves, then the foot track.  Returns the bake result."""
-    result = bake.bake_pose_track(fig, track)
+
+def bake_frames(scene, choice: str, start: int, end: int) -> FrameRange:
+    """The frames to bake: the scene's range, its preview range or ``start..end``."""
+    fps = scene.render.fps / scene.render.fps_base
+    if choice == "PREVIEW":
+        if not scene.use_preview_range:
+            raise ValueError("the scene has no preview range (turn it on in the Timeline)")
+        return FrameRange(scene.frame_preview_start, scene.frame_preview_end, fps)
+    if choice == "CUSTOM":
+        return FrameRange(start, end, fps)
+    return FrameRange.of_scene(scene)
+
+
+def every_nth(track: PoseTrack, step: int) -> PoseTrack:
+    """``track`` at every ``step``-th frame and its last (``step = 1``: ``track`` itself)."""
+    if step <= 1:
+        return track
+    idx = np.arange(0, len(track), step)
+    if idx[-1] != len(track) - 1:
+        idx = np.append(idx, len(track) - 1)
+
+    def take(a):
+        return None if a is None else a[idx]
+
+    return PoseTrack(take(track.frames), take(track.location), take(track.rotation),
+                     {b: BoneChannels(take(ch.location), take(ch.rotation))
+                      for b, ch in track.bones.items()},
+                     {p: take(v) for p, v in track.props.items()})
+
+
+def _baked_curves(fig) -> dict:
+    """``{(data_path, index): (frames, values)}`` of every F-curve the last bake wrote."""
+    action = bake.figure_action(fig)
+    paths = set(action.get(bake.BAKED_PATHS, "").splitlines())
+    out = {}
+    for fc in compat.channels(fig).fcurves:
+        if fc.data_path in paths:
+            co = np.empty(2 * len(fc.keyframe_points))
+            fc.keyframe_points.foreach_get("co", co)
+            out[(fc.data_path, fc.array_index)] = (co[0::2], co[1::2], fc)
+    return out
+
+
+def set_hermite_handles(fig, slopes: dict) -> None:
+    """Bezier keys whose handles carry the exact slope of the every-frame bake (``slopes``:
+    ``{(data_path, index): (frames, d value / d frame)}``): each segment is the cubic Hermite
+    interpolant of its two keys, so the in-betweens are smooth and follow the motion closely."""
+    enum = bpy.types.Keyframe.bl_rna.properties
+    bezier = enum["interpolation"].enum_items["BEZIER"].value
+    free = enum["handle_left_type"].enum_items["FREE"].value
+    for key, (f, v, fc) in _baked_curves(fig).items():
+        frames, slope = slopes[key]
+        d = np.interp(f, frames, slope)
+        h = np.diff(f) / 3.0                                   # handles at thirds: Hermite
+        hl = np.r_[h[:1], h]
+        hr = np.r_[h, h[-1:]]
+        kp = fc.keyframe_points
+        n = len(f)
+        kp.foreach_set("handle_left", np.column_stack([f - hl, v - d * hl]).ravel())
+        kp.foreach_set("handle_right", np.column_stack([f + hr, v + d * hr]).ravel())
+        for attr, value in (("interpolation", bezier), ("handle_left_type", free),
+                            ("handle_right_type", free)):
+            kp.foreach_set(attr, np.full(n, value, np.int32))
+        fc.update()
+
+
+def apply_bake(fig, traj, track, step: int = 1):
+    """Write a computed bake: F-curves (every ``step``-th frame, smooth in between), then the
+    foot track.  Returns the bake result."""
+    if step > 1:
+        bake.bake_pose_track(fig, track)            # every frame first: the slopes at the keys
+        slopes = {k: (f, np.gradient(v, f, edge_order=2))
+                  for k, (f, v, _) in _baked_curves(fig).items()}
+    result = bake.bake_pose_track(fig, every_nth(track, step))
+    if step > 1:
+        set_hermite_handles(fig, slopes)
     foot_track.write_foot_track(fig, traj.x, traj.y)
     return result
 
@@ -30,43 +116,172 @@ def reset_pose(fig):
         pb.rotation_quaternion = (1.0, 0.0, 0.0, 0.0)
 
 
+class BakeJob:
+    """Bake figures (by name) over ``frames``: :meth:`compute_next` one at a time (nothing is
+    written), then :meth:`write` all of them."""
+
+    def __init__(self, names, frames: FrameRange, step: int = 1):
+        self.names, self.frames, self.step = list(names), frames, step
+        self.results = []                     # (name, start or None, traj, track)
+
+    @property
+    def done(self) -> bool:
+        return len(self.results) == len(self.names)
+
+    @property
+    def current(self) -> str:
+        """The figure :meth:`compute_next` works on."""
+        return self.names[min(len(self.results), len(self.names) - 1)]
+
+    def compute_next(self) -> None:
+        """Simulate and map the next figure (raises ``ValueError`` or ``TurningError``)."""
+        name = self.current
+        fig = bpy.data.objects.get(name)
+        if fig is None:
+            raise ValueError("the figure was deleted while baking")
+        check_figure(fig)
+        # Not baked yet: start where the user put the figure; baked: from its Start settings.
+        start = start_from_object(fig) if bake.figure_action(fig) is None else None
+        traj, track = figure_pose_track(fig, self.frames, start=start)
+        bake.check_track(fig, track)
+        self.results.append((name, start, traj, track))
+
+    def write(self) -> list:
+        """Write every computed figure; ``[(name, BakeResult)]``."""
+        out = []
+        for name, start, traj, track in self.results:
+            fig = bpy.data.objects[name]
+            if start is not None:
+                fig.turning.start = (start[0], start[1], 0.0)
+                fig.turning.start_heading = start[2]
+            out.append((name, apply_bake(fig, traj, track, self.step)))
+        return out
+
+
 class TURNING_OT_bake_turns(bpy.types.Operator):
-    """Simulate the active figure's turns over the scene's frame range and bake them to keys"""
+    """Simulate the turns of every selected figure over a frame range and bake them to keys"""
 
     bl_idname = "turning.bake_turns"
     bl_label = "Bake Turns"
     bl_options = {"REGISTER", "UNDO"}
 
+    # Range and step are not remembered between bakes (SKIP_SAVE): the button always bakes the
+    # scene's range on every frame, as the panel says; a custom Start/End is remembered.
+    frame_range: EnumProperty(name="Frames", items=FRAME_RANGES, default="SCENE",
+                              options={"SKIP_SAVE"}, description="Which frames to bake")
+    frame_start: IntProperty(name="Start", default=1, min=-1048574, max=1048574,
+                             description="First frame of a custom range")
+    frame_end: IntProperty(name="End", default=250, min=-1048574, max=1048574,
+                           description="Last frame of a custom range")
+    step: IntProperty(name="Step", default=1, min=1, max=1000, soft_max=12,
+                      options={"SKIP_SAVE"},
+                      description="Key every n-th frame (and the last); smooth (Bezier) in "
+                                  "between.  1 keys every frame, exactly")
+
+    _job = None
+    _timer = None
+
     @classmethod
     def poll(cls, context):
-        if not poll_figure(cls, context):
-            return False
-        if context.scene.frame_end <= context.scene.frame_start:
-            cls.poll_message_set("The scene's frame range needs at least two frames")
-            return False
-        return True
+        return poll_figure(cls, context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "frame_range")
+        col = layout.column(align=True)
+        col.active = self.frame_range == "CUSTOM"
+        col.prop(self, "frame_start")
+        col.prop(self, "frame_end")
+        layout.prop(self, "step")
+
+    def _prepare(self, context):
+        """The job for the selected figures, or ``None`` (reported)."""
+        scene = context.scene
+        for name, value in (("frame_start", scene.frame_start), ("frame_end", scene.frame_end)):
+            if not self.properties.is_property_set(name):
+                setattr(self, name, value)          # a custom range starts as the scene's
+        try:
+            frames = bake_frames(scene, self.frame_range, self.frame_start, self.frame_end)
+        except ValueError as exc:
+            self.report({"ERROR"}, f"Bake Turns: {exc}")
+            return None
+        return BakeJob([f.name for f in selected_figures(context)], frames, self.step)
+
+    def _finish(self, job):
+        written = job.write()
+        frames = job.frames
+        every = "" if job.step == 1 else f", every {job.step} frames"
+        what = ", ".join(f"{name} ({r.fcurves} F-curves x {r.frames} keys)" for name, r in written)
+        self.report({"INFO"}, f"Baked {what} over frames {frames.start}-{frames.end}{every}")
+        return {"FINISHED"}
 
     def execute(self, context):
-        fig = context_figure(context)
-        # Not baked yet: start where the user put the figure; baked: from its Start settings.
-        start = start_from_object(fig) if bake.figure_action(fig) is None else None
-        try:
-            frames = FrameRange.of_scene(context.scene)
-            traj, track = figure_pose_track(fig, frames, start=start)   # nothing written yet
-        except (ValueError, TurningError) as exc:
-            self.report({"ERROR"}, f"Bake Turns: {fig.name}: {exc}")
+        job = self._prepare(context)
+        if job is None:
             return {"CANCELLED"}
-        if start is not None:
-            fig.turning.start = (start[0], start[1], 0.0)
-            fig.turning.start_heading = start[2]
-        result = apply_bake(fig, traj, track)
-        self.report({"INFO"}, f"Baked {fig.name}: {result.fcurves} F-curves x {result.frames} "
-                              f"frames ({frames.start}-{frames.end})")
-        return {"FINISHED"}
+        try:                              # everything that can fail, before anything is written
+            while not job.done:
+                job.compute_next()
+        except Exception as exc:
+            return report_error(self, "Bake Turns", job.current, exc)
+        return self._finish(job)
+
+    def invoke(self, context, event):
+        if context.window is None or len(selected_figures(context)) < 2:
+            return self.execute(context)
+        self._job = self._prepare(context)
+        if self._job is None:
+            return {"CANCELLED"}
+        wm = context.window_manager
+        wm.progress_begin(0, len(self._job.names))
+        self._timer = wm.event_timer_add(0.01, window=context.window)
+        wm.modal_handler_add(self)
+        self._status(context)
+        return {"RUNNING_MODAL"}
+
+    def _status(self, context):
+        job = self._job
+        context.workspace.status_text_set(
+            f"Bake Turns: {len(job.results)} of {len(job.names)} figures (Esc to cancel)")
+
+    def _cleanup(self, context):
+        wm = context.window_manager
+        if self._timer is not None:
+            wm.event_timer_remove(self._timer)
+            self._timer = None
+        wm.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+    def cancel(self, context):
+        """Blender ends the operator (a file opened, Blender quits): stop, write nothing."""
+        self._cleanup(context)
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._cleanup(context)
+            self.report({"WARNING"}, "Bake Turns cancelled; nothing was written")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        job = self._job
+        try:
+            job.compute_next()
+        except Exception as exc:
+            self._cleanup(context)
+            return report_error(self, "Bake Turns", job.current, exc)
+        context.window_manager.progress_update(len(job.results))
+        if not job.done:
+            self._status(context)
+            return {"RUNNING_MODAL"}
+        self._cleanup(context)
+        return self._finish(job)
 
 
 class TURNING_OT_clear_bake(bpy.types.Operator):
-    """Remove the active figure's baked turns and foot track (the user's own keys stay)"""
+    """Remove the baked turns and foot tracks of the selected figures (the user's own keys
+    stay)"""
 
     bl_idname = "turning.clear_bake"
     bl_label = "Clear Bake"
@@ -76,17 +291,20 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
     def poll(cls, context):
         if not poll_figure(cls, context):
             return False
-        if bake.figure_action(context_figure(context)) is None:
-            cls.poll_message_set("The active figure has no baked turns")
+        if not any(bake.figure_action(f) is not None for f in selected_figures(context)):
+            cls.poll_message_set("The selected figures have no baked turns")
             return False
         return True
 
     def execute(self, context):
-        fig = context_figure(context)
-        bake.clear_bake(fig)
-        foot_track.remove_foot_track(fig)
-        reset_pose(fig)
-        self.report({"INFO"}, f"Cleared the bake of {fig.name}")
+        figs = [f for f in selected_figures(context) if bake.figure_action(f) is not None]
+        for fig in figs:
+            recorded = bake.REST in fig       # the pose before the bake, put back exactly
+            bake.clear_bake(fig)
+            foot_track.remove_foot_track(fig)
+            if not recorded:                  # baked before the pose was recorded
+                reset_pose(fig)
+        self.report({"INFO"}, f"Cleared the bake of {', '.join(f.name for f in figs)}")
         return {"FINISHED"}
 
 

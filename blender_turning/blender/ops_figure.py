@@ -1,4 +1,5 @@
-"""``turning.add_figure``: a sport preset's figure at the 3D cursor."""
+"""``turning.add_figure``: a sport preset's figure at the 3D cursor; also in the Add menu
+(Shift+A > Turning Figure > sport)."""
 from __future__ import annotations
 
 import math
@@ -61,5 +62,31 @@ class TURNING_OT_add_figure(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (TURNING_OT_add_figure,)
-register, unregister = bpy.utils.register_classes_factory(classes)
+class VIEW3D_MT_turning_figure_add(bpy.types.Menu):
+    """Shift+A > Turning Figure: one entry per sport."""
+
+    bl_idname = "VIEW3D_MT_turning_figure_add"
+    bl_label = "Turning Figure"
+
+    def draw(self, context):
+        for ident, name, description in SPORTS:
+            self.layout.operator(TURNING_OT_add_figure.bl_idname, text=name).sport = ident
+
+
+def draw_add_menu(self, context):
+    """The entry in the 3D viewport's Add menu (``VIEW3D_MT_add``)."""
+    self.layout.menu(VIEW3D_MT_turning_figure_add.bl_idname, icon="OUTLINER_OB_ARMATURE")
+
+
+classes = (TURNING_OT_add_figure, VIEW3D_MT_turning_figure_add)
+_register, _unregister = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    _register()
+    bpy.types.VIEW3D_MT_add.append(draw_add_menu)
+
+
+def unregister():
+    bpy.types.VIEW3D_MT_add.remove(draw_add_menu)
+    _unregister()

@@ -8,13 +8,41 @@ from dataclasses import replace
 
 import bpy
 
-from ..core.errors import TurningError
+from ..core.errors import PlanInfeasible
+from ..core.obstacles import Obstacles
+from . import bake
 from .follow_job import Cancelled, FollowJob
 from .ops_bake import apply_bake
-from .ops_common import context_figure, poll_figure
+from .ops_common import check_figure, context_figure, poll_figure, report_error
 from .pipeline import map_track
+from .props import figure_settings
 from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
                              figure_from_settings, obstacle_footprints)
+
+#: Distance the plan keeps from every obstacle footprint, m.
+CLEARANCE = 0.5
+
+
+def own_objects(fig) -> set:
+    """The figure's own objects, never its obstacles: its armature, body and equipment (children),
+    its foot track and its path curve."""
+    own = {fig, *fig.children_recursive}
+    s = fig.turning
+    own.update(o for o in (s.foot_track, s.path) if o is not None)
+    return own
+
+
+def check_start_clear(control, footprints, collection) -> None:
+    """Refuse a path that starts inside an obstacle (with the clearance), naming the obstacle."""
+    start = control[:1]
+    for name, poly in footprints:
+        gap = float(Obstacles(polygons=[poly], clearance=CLEARANCE).min_distance(start)[0])
+        if gap <= CLEARANCE:
+            raise SceneInputError(
+                f"the path starts {'inside' if gap < 0 else f'{gap:.2f} m from'} obstacle "
+                f"{name!r} (collection {collection.name!r}; the plan keeps {CLEARANCE} m from "
+                "every obstacle): move the path's first point or the obstacle, or take the "
+                "object out of the collection")
 
 
 def prepare(context, fig) -> FollowJob:
@@ -22,13 +50,26 @@ def prepare(context, fig) -> FollowJob:
     s = fig.turning
     if s.path is None:
         raise SceneInputError("no path curve set (Follow Path > Path)")
+    check_figure(fig)
     depsgraph = context.evaluated_depsgraph_get()      # also brings world matrices up to date
     control = bezier_control_points(s.path)
-    footprints = obstacle_footprints(s.obstacles, depsgraph)
+    footprints = obstacle_footprints(s.obstacles, depsgraph, exclude=own_objects(fig))
+    check_start_clear(control, footprints, s.obstacles)
     figure = figure_from_settings(s)
     if s.plan_curvature_rate > 0:
         figure = replace(figure, limits=replace(figure.limits, dC_f_max=s.plan_curvature_rate))
-    return FollowJob(figure, control, footprints)
+    job = FollowJob(figure, control, footprints, clearance=CLEARANCE)
+    job.footprints = footprints                        # names, for the report of a failed plan
+    return job
+
+
+def nearest_obstacle(exc, footprints) -> str:
+    """`` (nearest obstacle: 'Wall', 0.4 m away)`` for a plan that failed, or ``''``."""
+    if not isinstance(exc, PlanInfeasible) or not footprints:
+        return ""
+    gaps = [float(Obstacles(polygons=[p]).min_distance(exc.position)[0]) for _, p in footprints]
+    k = min(range(len(gaps)), key=gaps.__getitem__)
+    return f" (nearest obstacle: {footprints[k][0]!r}, {max(gaps[k], 0.0):.1f} m away)"
 
 
 def finish(context, fig, job, result):
@@ -39,7 +80,9 @@ def finish(context, fig, job, result):
     frames = FrameRange(scene.frame_start, scene.frame_start + max(n, 1), fps)
     traj = result.trajectory.resample(fps, start=0.0)
     traj = type(traj)(traj.data[:, :frames.end - frames.start + 1], traj.meta)
+    check_figure(fig)                     # the rig may have changed while the plan ran
     track = map_track(fig.turning.sport, traj, frames)        # may raise: nothing written yet
+    bake.check_track(fig, track)
     scene.frame_end = frames.end
     apply_bake(fig, traj, track)
     return frames
@@ -68,8 +111,8 @@ class TURNING_OT_follow_path(bpy.types.Operator):
         fig = context_figure(context)
         try:
             return fig, prepare(context, fig)
-        except (ValueError, TurningError) as exc:
-            self.report({"ERROR"}, f"Follow Path: {fig.name}: {exc}")
+        except Exception as exc:
+            report_error(self, "Follow Path", fig.name, exc)
             return fig, None
 
     def _complete(self, context, fig, job):
@@ -77,15 +120,12 @@ class TURNING_OT_follow_path(bpy.types.Operator):
             if isinstance(job.error, Cancelled):
                 self.report({"WARNING"}, "Follow Path cancelled; the scene is unchanged")
                 return {"CANCELLED"}
-            if isinstance(job.error, (ValueError, TurningError)):
-                self.report({"ERROR"}, f"Follow Path: {fig.name}: {job.error}")
-                return {"CANCELLED"}
-            raise job.error
+            note = nearest_obstacle(job.error, getattr(job, "footprints", ()))
+            return report_error(self, "Follow Path", fig.name, job.error, note)
         try:
             frames = finish(context, fig, job, job.result)
-        except (ValueError, TurningError) as exc:
-            self.report({"ERROR"}, f"Follow Path: {fig.name}: {exc}")
-            return {"CANCELLED"}
+        except Exception as exc:
+            return report_error(self, "Follow Path", fig.name, exc)
         note = "" if job.result.reached_end else " (stopped before the end of the path)"
         self.report({"INFO"}, f"Follow Path: baked {fig.name} over frames "
                               f"{frames.start}-{frames.end}{note}")
@@ -97,7 +137,7 @@ class TURNING_OT_follow_path(bpy.types.Operator):
             return {"CANCELLED"}
         try:
             job.result = job.run()
-        except (Cancelled, ValueError, TurningError) as exc:
+        except Exception as exc:
             job.error = exc
         return self._complete(context, fig, job)
 
@@ -107,7 +147,9 @@ class TURNING_OT_follow_path(bpy.types.Operator):
         fig, job = self._start(context)
         if job is None:
             return {"CANCELLED"}
-        self._fig_name, self._job = fig.name, job
+        # By session id, not name or Python reference: the user may rename the figure while it
+        # plans, and an undo step reloads every ID (a kept reference would dangle).
+        self._fig_uid, self._job = fig.session_uid, job
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.1, window=context.window)
@@ -122,7 +164,15 @@ class TURNING_OT_follow_path(bpy.types.Operator):
             wm.event_timer_remove(self._timer)
             self._timer = None
         wm.progress_end()
-        context.workspace.status_text_set(None)
+        if context.workspace is not None:       # None while a file is being opened
+            context.workspace.status_text_set(None)
+
+    def cancel(self, context):
+        """Blender ends the operator without an event (a file is opened, or Blender quits): stop
+        the planner thread and write nothing."""
+        if self._job is not None:
+            self._job.cancel(wait=True)
+        self._cleanup(context)
 
     def modal(self, context, event):
         job = self._job
@@ -138,9 +188,10 @@ class TURNING_OT_follow_path(bpy.types.Operator):
         if not finished:
             return {"RUNNING_MODAL"}
         self._cleanup(context)
-        fig = bpy.data.objects.get(self._fig_name)
-        if fig is None:
-            self.report({"ERROR"}, "Follow Path: the figure was deleted while planning")
+        fig = next((o for o in bpy.data.objects if o.session_uid == self._fig_uid), None)
+        if fig is None or figure_settings(fig) is None:
+            self.report({"ERROR"}, "Follow Path: the figure was deleted while planning; "
+                                   "the scene is unchanged")
             return {"CANCELLED"}
         return self._complete(context, fig, job)
 

@@ -1,13 +1,25 @@
-"""The sidebar tab "Turning" in the 3D viewport: figure, controller, bake and Follow Path."""
+"""The sidebar tab "Turning" in the 3D viewport.
+
+``VIEW3D_PT_turning`` (Add Figure, the sport presets) holds one sub-panel per group of settings,
+each a :class:`FigurePanel` (``bl_parent_id`` the root, ``use_property_split``): Turns, Bake,
+Body, Limits, Ground, Follow Path, and Rig.  Rig (``VIEW3D_PT_turning_rig``) also shows for an
+armature that is not a figure yet; modules of their own hang their panels under it
+(``bl_parent_id = RIG_PANEL``) and register after this one.
+"""
 from __future__ import annotations
 
 import bpy
 
 from . import bake
-from .ops_common import context_figure
+from .ops_common import context_figure, selected_figures
+
+ROOT_PANEL = "VIEW3D_PT_turning"
+RIG_PANEL = "VIEW3D_PT_turning_rig"
 
 
 class TurningPanel:
+    """Where every Turning panel lives."""
+
     bl_space_type = "VIEW_3D"
     bl_region_type = "UI"
     bl_category = "Turning"
@@ -29,8 +41,10 @@ class VIEW3D_PT_turning(TurningPanel, bpy.types.Panel):
         row.operator("turning.figure_preset_add", text="", icon="REMOVE").remove_active = True
 
 
-class _FigurePanel(TurningPanel):
-    bl_parent_id = "VIEW3D_PT_turning"
+class FigurePanel(TurningPanel):
+    """A sub-panel of the root showing settings of the active figure (``obj.turning``)."""
+
+    bl_parent_id = ROOT_PANEL
 
     @classmethod
     def poll(cls, context):
@@ -38,71 +52,106 @@ class _FigurePanel(TurningPanel):
 
     def settings(self, context):
         self.layout.use_property_split = True
-        self.layout.use_property_decorate = True     # the keyframe dots: these are animatable
+        self.layout.use_property_decorate = True     # the keyframe dots of animatable settings
         return context_figure(context).turning
 
+    def draw_props(self, context, names):
+        s = self.settings(context)
+        col = self.layout.column()
+        for name in names:
+            col.prop(s, name)
+        return s, col
 
-class VIEW3D_PT_turning_controller(_FigurePanel, bpy.types.Panel):
+
+class VIEW3D_PT_turning_controller(FigurePanel, bpy.types.Panel):
     bl_label = "Turns"
 
     def draw(self, context):
-        s = self.settings(context)
-        col = self.layout.column()
-        col.prop(s, "period")
-        col.prop(s, "lean")
+        s, col = self.draw_props(context, ("period", "lean"))
         row = col.row(heading="Heading")
         row.prop(s, "use_heading", text="")
         sub = row.row()
         sub.active = s.use_heading
         sub.prop(s, "heading", text="")
+        col.prop(s, "speed")
 
 
-class VIEW3D_PT_turning_body(_FigurePanel, bpy.types.Panel):
-    bl_label = "Body and Limits"
-    bl_options = {"DEFAULT_CLOSED"}
-
-    def draw(self, context):
-        s = self.settings(context)
-        col = self.layout.column()
-        for name in ("mass", "com_height", "inertia", "speed"):
-            col.prop(s, name)
-        col.separator()
-        for name in ("curvature_max", "curvature_rate_max", "fall_angle"):
-            col.prop(s, name)
-        col.separator()
-        col.prop(s, "start")
-        col.prop(s, "start_heading")
-
-
-class VIEW3D_PT_turning_bake(_FigurePanel, bpy.types.Panel):
+class VIEW3D_PT_turning_bake(FigurePanel, bpy.types.Panel):
     bl_label = "Bake"
 
     def draw(self, context):
-        fig = context_figure(context)
         layout = self.layout
         scene = context.scene
-        layout.label(text=f"Frames {scene.frame_start}-{scene.frame_end}", icon="TIME")
+        text = f"Scene frames {scene.frame_start}-{scene.frame_end}"
+        if scene.use_preview_range:
+            text += f", preview {scene.frame_preview_start}-{scene.frame_preview_end}"
+        layout.label(text=text, icon="TIME")
+        count = len(selected_figures(context))
         row = layout.row(align=True)
-        row.operator("turning.bake_turns", icon="REC")
+        row.operator("turning.bake_turns", icon="REC",
+                     text="Bake Turns" if count < 2 else f"Bake {count} Figures")
+        row.operator_menu_enum("turning.bake_turns", "frame_range", text="", icon="PREVIEW_RANGE")
         row.operator("turning.clear_bake", text="", icon="TRASH")
+        fig = context_figure(context)
+        layout.prop(fig.turning, "show_foot_track")
         action = bake.figure_action(fig)
         if action is not None:
             layout.label(text=f"Action: {action.name}", icon="ACTION")
 
 
-class VIEW3D_PT_turning_path(_FigurePanel, bpy.types.Panel):
+class VIEW3D_PT_turning_body(FigurePanel, bpy.types.Panel):
+    bl_label = "Body"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        self.draw_props(context, ("mass", "com_height", "inertia"))
+
+
+class VIEW3D_PT_turning_limits(FigurePanel, bpy.types.Panel):
+    bl_label = "Limits"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        self.draw_props(context, ("curvature_max", "curvature_rate_max", "fall_angle"))
+
+
+class VIEW3D_PT_turning_ground(FigurePanel, bpy.types.Panel):
+    bl_label = "Ground"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        self.draw_props(context, ("start", "start_heading"))
+
+
+class VIEW3D_PT_turning_path(FigurePanel, bpy.types.Panel):
     bl_label = "Follow Path"
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
-        s = self.settings(context)
-        layout = self.layout
-        layout.prop(s, "path")
-        layout.prop(s, "obstacles")
-        layout.prop(s, "plan_curvature_rate")
-        layout.operator("turning.follow_path", icon="CURVE_PATH")
+        self.draw_props(context, ("path", "obstacles", "plan_curvature_rate"))
+        self.layout.operator("turning.follow_path", icon="CURVE_PATH")
 
 
-classes = (VIEW3D_PT_turning, VIEW3D_PT_turning_controller, VIEW3D_PT_turning_body,
-           VIEW3D_PT_turning_bake, VIEW3D_PT_turning_path)
+class VIEW3D_PT_turning_rig(FigurePanel, bpy.types.Panel):
+    """The figure's armature; also shown for an armature that is not a figure yet."""
+
+    bl_label = "Rig"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context):
+        obj = getattr(context, "active_object", None)
+        return context_figure(context) is not None or (obj is not None and obj.type == "ARMATURE")
+
+    def draw(self, context):
+        fig = context_figure(context)
+        obj = fig or context.active_object
+        text = (f"{obj.name}: {fig.turning.sport.title()} figure, {len(obj.data.bones)} bones"
+                if fig is not None else f"{obj.name} is not a turning figure")
+        self.layout.label(text=text, icon="ARMATURE_DATA")
+
+
+classes = (VIEW3D_PT_turning, VIEW3D_PT_turning_controller, VIEW3D_PT_turning_bake,
+           VIEW3D_PT_turning_body, VIEW3D_PT_turning_limits, VIEW3D_PT_turning_ground,
+           VIEW3D_PT_turning_path, VIEW3D_PT_turning_rig)
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -6,9 +6,11 @@ touched.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 from ..core import DEFAULT_DT, simulate
 from .scene_adapters import (FrameRange, controller_from_settings, figure_from_settings,
-                             start_state)
+                             speed_schedule, start_state)
 
 
 def map_track(sport: str, traj, frames: FrameRange, options=None):
@@ -30,10 +32,14 @@ def simulate_figure(obj, frames: FrameRange, start=None):
     """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames`` from ``start``
     (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.  Raises
     ``ValueError`` or the core's ``FellOver``."""
+    speed = speed_schedule(obj, frames)
     figure = figure_from_settings(obj.turning)
+    # The body at the first frame's speed (a keyed speed's property value is the current frame's).
+    figure = replace(figure, body=replace(figure.body, V_cm=speed(0.0)))
     controller = controller_from_settings(obj, figure, frames)
     traj = simulate(figure, controller, frames.duration + 2 * DEFAULT_DT,
-                    state0=start_state(obj, controller, start), meta={"figure": obj.name})
+                    state0=start_state(obj, controller, start), meta={"figure": obj.name},
+                    speed=speed)
     return resampled(traj, frames)
 
 

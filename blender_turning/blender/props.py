@@ -1,8 +1,10 @@
 """Per-figure settings: a property group on the armature object (``Object.turning``).
 
 Body parameters and limits are plain settings; the controller's ``period``, ``lean`` and
-``heading`` are animatable: key them in the Graph Editor and the bake follows them over time
-(Section 5's parameters "specified over time").  Angles are radians (``subtype='ANGLE'``).
+``heading`` and the body's ``speed`` are animatable: key them in the Graph Editor and the bake
+follows them over time (Section 5's parameters "specified over time"; the speed as Section 6's
+speed profile).  Angles are radians (``subtype='ANGLE'``).  Tooltips say what a setting does,
+then the paper's symbol and the unit; settings without a Blender unit carry theirs in the label.
 """
 from __future__ import annotations
 
@@ -21,74 +23,104 @@ SPORTS = (
 _STATIC = set()            # options: not animatable (the bake reads these once)
 
 
+def _show_foot_track(settings, context):
+    from .foot_track import update_visibility   # a sibling module, imported when used
+    update_visibility(settings, context)
+
+
 def _is_curve(self, obj):
     return obj.type == "CURVE"
 
 
 class TurningFigureSettings(bpy.types.PropertyGroup):
+    """``Object.turning``.  The Python names below are API (scripts and users' F-curves on
+    ``turning.<name>`` use them): never rename or move one.  New concepts go into nested groups
+    of their own (``turning.<group>.<name>``, a ``PointerProperty`` line at the end of this class,
+    the group registered before this class), drawn in their own sub-panel of ``panel.py``."""
+
     is_figure: BoolProperty(name="Is Figure", options=_STATIC,
                             description="This armature is a turning figure")
     sport: EnumProperty(name="Sport", items=SPORTS, default="SKIER", options=_STATIC,
                         description="Which figure and mapping (Section 7) the bake uses")
     # -- body (Fig. 2) ----------------------------------------------------------------------
-    mass: FloatProperty(name="Mass", description="Mass of the body, m (kg)", default=75.0,
-                        min=1.0, max=1000.0, unit="MASS", options=_STATIC)
-    com_height: FloatProperty(name="COM Height", default=1.0, min=0.2, max=3.0, unit="LENGTH",
-                              description="Height of the centre of mass above the foot, l (m)",
-                              options=_STATIC)
-    inertia: FloatProperty(name="Roll Inertia", default=12.0, min=0.0, max=1000.0,
-                           description="Roll moment of inertia about the centre of mass, "
-                                       "I_v (kg m^2, Eq. 13)", options=_STATIC)
-    speed: FloatProperty(name="Speed", default=10.0, min=0.5, max=60.0, unit="VELOCITY",
-                         description="Forward speed of the centre of mass, V_cm (m/s)",
-                         options=_STATIC)
+    mass: FloatProperty(name="Mass", default=75.0, min=1.0, max=1000.0, soft_min=20.0,
+                        soft_max=150.0, unit="MASS", options=_STATIC,
+                        description="How heavy the body is, with its equipment (m, kg)")
+    com_height: FloatProperty(name="COM Height", default=1.0, min=0.2, max=3.0, soft_min=0.4,
+                              soft_max=1.5, unit="LENGTH", options=_STATIC,
+                              description="How high the body's centre of mass is above the "
+                                          "foot (l, m)")
+    inertia: FloatProperty(name="Roll Inertia (kg m^2)", default=12.0, min=0.0, max=1000.0,
+                           soft_min=1.0, soft_max=40.0, options=_STATIC,
+                           description="How hard the body is to tip sideways about its centre "
+                                       "of mass (I_v, kg m^2, Eq. 13)")
+    speed: FloatProperty(name="Speed", default=10.0, min=0.5, max=60.0, soft_min=2.0,
+                         soft_max=30.0, unit="VELOCITY",
+                         description="How fast the body moves forward (V_cm, m/s); animatable: "
+                                     "key it to speed up or brake")
     # -- limits (Sections 3, 5.1) -----------------------------------------------------------
-    curvature_max: FloatProperty(name="Max Curvature", default=1 / 6, min=0.001, max=10.0,
-                                 description="Largest |C_f| the foot can steer (1/m)",
-                                 options=_STATIC)
-    curvature_rate_max: FloatProperty(name="Max Curvature Rate", default=0.67, min=0.001,
-                                      max=100.0, options=_STATIC,
-                                      description="Largest |dC_f/dt| (1/(m s))")
+    curvature_max: FloatProperty(name="Max Curvature (1/m)", default=1 / 6, min=0.001,
+                                 max=10.0, soft_min=0.02, soft_max=1.0, options=_STATIC,
+                                 description="How sharply the foot can steer: one over the "
+                                             "tightest turn radius (C_f max, 1/m)")
+    curvature_rate_max: FloatProperty(name="Max Curvature Rate (1/(m s))", default=0.67,
+                                      min=0.001, max=100.0, soft_min=0.05, soft_max=5.0,
+                                      options=_STATIC,
+                                      description="How fast the steering can change, e.g. edge "
+                                                  "to edge (dC_f/dt max, 1/(m s))")
     fall_angle: FloatProperty(name="Fall Angle", default=math.radians(60), min=math.radians(5),
-                              max=math.radians(85), subtype="ANGLE", options=_STATIC,
-                              description="Lean beyond which the figure has fallen")
+                              max=math.radians(85), soft_min=math.radians(30),
+                              soft_max=math.radians(80), subtype="ANGLE", options=_STATIC,
+                              description="How far the body can lean before it falls over "
+                                          "(theta_fall)")
     # -- the parametric controller (Section 5), animatable ----------------------------------
-    period: FloatProperty(name="Turn Period", default=2.0, min=0.3, max=20.0, unit="TIME_ABSOLUTE",
-                          description="Time of one left-right turn cycle, 2 pi / omega0 (s); "
-                                      "animatable")
+    period: FloatProperty(name="Turn Period", default=2.0, min=0.3, max=20.0, soft_min=0.6,
+                          soft_max=8.0, unit="TIME_ABSOLUTE",
+                          description="How long one left-right pair of turns takes "
+                                      "(2 pi / omega0, s); animatable")
     lean: FloatProperty(name="Lean", default=math.radians(23), min=math.radians(1),
-                        max=math.radians(60), subtype="ANGLE",
-                        description="Sharpness of the turns: the peak lean theta_max; animatable")
+                        max=math.radians(60), soft_min=math.radians(3),
+                        soft_max=math.radians(45), subtype="ANGLE",
+                        description="How far the body leans at the apex of a turn (theta_max); "
+                                    "animatable")
     use_heading: BoolProperty(name="Hold Heading", default=True, options=_STATIC,
-                              description="Steer the mean direction of travel (Section 5.2)")
+                              description="Steer so the turns keep to the Heading on average "
+                                          "(directional control, Section 5.2)")
     heading: FloatProperty(name="Heading", default=math.radians(90), subtype="ANGLE",
-                           description="Mean direction of travel, counter-clockwise from +X; "
-                                       "animatable")
+                           soft_min=-2 * math.pi, soft_max=2 * math.pi,
+                           description="Which way the turns go on average, counter-clockwise "
+                                       "from +X (theta_h); animatable")
     # -- placement and Follow Path ----------------------------------------------------------
     start: FloatVectorProperty(name="Start", size=3, subtype="TRANSLATION", unit="LENGTH",
-                               options=_STATIC, description="Where the foot starts (world)")
+                               options=_STATIC,
+                               description="Where the foot is at the first frame (world)")
     start_heading: FloatProperty(name="Start Direction", default=math.radians(90),
                                  subtype="ANGLE", options=_STATIC,
-                                 description="Direction of travel at the first frame, "
-                                             "counter-clockwise from +X")
+                                 description="Which way the figure moves at the first frame, "
+                                             "counter-clockwise from +X (theta_dir)")
     path: PointerProperty(name="Path", type=bpy.types.Object, poll=_is_curve, options=_STATIC,
                           description="Bezier curve the figure follows (Follow Path)")
     obstacles: PointerProperty(name="Obstacles", type=bpy.types.Collection, options=_STATIC,
-                               description="Objects whose ground footprints are obstacles")
+                               description="Objects whose ground footprints the figure steers "
+                                           "around (Follow Path)")
     plan_curvature_rate: FloatProperty(
-        name="Planner Curvature Rate", default=0.0, min=0.0, max=100.0, options=_STATIC,
-        description="Largest |dC_f/dt| the path planner tries (1/(m s)); 0 uses Max Curvature "
-                    "Rate.  The sport presets set a gentler rate than the figure's limit")
+        name="Planner Curvature Rate (1/(m s))", default=0.0, min=0.0, max=100.0, soft_min=0.0,
+        soft_max=2.0, options=_STATIC,
+        description="How fast the path planner may change the steering (dC_f/dt, 1/(m s)); 0 "
+                    "uses Max Curvature Rate.  The sport presets set a gentler rate than the "
+                    "figure's limit")
     foot_track: PointerProperty(name="Foot Track", type=bpy.types.Object, options=_STATIC,
                                 description="Curve object drawn along the foot's path")
+    show_foot_track: BoolProperty(name="Show Foot Track", default=True, options=_STATIC,
+                                  update=_show_foot_track,
+                                  description="Draw the foot's path in the viewport (a guide: it "
+                                              "never renders and is not exported to glTF)")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.
 BODY_FIELDS = {"mass": "m", "com_height": "l", "inertia": "I_v", "speed": "V_cm"}
 LIMIT_FIELDS = {"curvature_max": "C_f_max", "curvature_rate_max": "dC_f_max",
                 "fall_angle": "theta_fall"}
-#: The animatable controller settings (their F-curves are ``turning.<name>``).
-ANIMATED = ("period", "lean", "heading")
 
 
 def figure_settings(obj):

@@ -3,8 +3,8 @@
 The state of a figure is ``(x, y, theta_dir, theta_v, omega_v)`` (rows named by ``STATE``): foot
 position (m), heading (rad, CCW from +x), lean (rad, > 0 leans left) and lean rate (rad/s).  The
 control is the foot curvature ``C_f`` (1/m, > 0 curves left).  Sign conventions:
-``shared/DESIGN.md`` Section 1.  Every function takes Python floats (one figure) or numpy arrays
-(a batch, state shape ``(5, n)``); see :mod:`.xp`.
+``docs/ARCHITECTURE.md`` Section 4.  Every function takes Python floats (one figure) or numpy
+arrays (a batch, state shape ``(5, n)``); see :mod:`.xp`.
 """
 from __future__ import annotations
 
@@ -24,12 +24,14 @@ PHYSICAL_MARGIN = 0.9
 _TINY = 1e-300
 
 
-def forward_alpha(body: BodyParams, theta_v, C_f, sin_t=None, cos_t=None):
-    """Eq. (2): lean acceleration ``alpha_v`` (rad/s^2) produced by the foot curvature ``C_f``."""
+def forward_alpha(body: BodyParams, theta_v, C_f, sin_t=None, cos_t=None, V_cm=None):
+    """Eq. (2): lean acceleration ``alpha_v`` (rad/s^2) produced by the foot curvature ``C_f``.
+    ``V_cm`` overrides ``body.V_cm`` (per sample, for a speed that varies)."""
     xp = backend(theta_v, C_f)
     s = xp.sin(theta_v) if sin_t is None else sin_t
     c = xp.cos(theta_v) if cos_t is None else cos_t
-    k = C_f * body.V_cm ** 2 * c / (1.0 - C_f * body.l * s)
+    V = body.V_cm if V_cm is None else V_cm
+    k = C_f * V * V * c / (1.0 - C_f * body.l * s)
     return (body.g * s - k) / body.J
 
 
@@ -70,10 +72,10 @@ def bound_cf(body: BodyParams, limits: Limits, C_f, sin_t, anchor=None, tau=0.0,
     return cf
 
 
-def foot_speed(body: BodyParams, theta_v, C_f, sin_t=None):
-    """Eq. (21): ``V_f = V_cm / (1 - C_f l sin theta_v)``, m/s."""
+def foot_speed(body: BodyParams, theta_v, C_f, sin_t=None, V_cm=None):
+    """Eq. (21): ``V_f = V_cm / (1 - C_f l sin theta_v)``, m/s (``V_cm`` overrides ``body.V_cm``)."""
     s = backend(theta_v).sin(theta_v) if sin_t is None else sin_t
-    return body.V_cm / (1.0 - C_f * body.l * s)
+    return (body.V_cm if V_cm is None else V_cm) / (1.0 - C_f * body.l * s)
 
 
 def leg_force(body: BodyParams, theta_v, omega_v, alpha_v, C_f, V_cm=None):

@@ -9,8 +9,10 @@ class TurningError(Exception):
 class FellOver(TurningError):
     """The lean exceeded the fall bound. Carries the time and the trajectory up to there."""
 
-    def __init__(self, t: float, theta_v: float, trajectory=None):
-        super().__init__(f"the figure fell over at t = {t:.2f} s (lean {theta_v * 57.29578:.1f} deg)")
+    def __init__(self, t: float, theta_v: float, trajectory=None, cause: str | None = None):
+        super().__init__(f"the figure fell over at t = {t:.2f} s (lean {theta_v * 57.29578:.1f} deg)"
+                         + (f"; {cause}" if cause else ""))
+        self.cause = cause
         self.t = t
         self.theta_v = theta_v
         self.trajectory = trajectory

@@ -9,6 +9,7 @@ as locals.  ``tests/test_one_figure.py`` holds the two to agreement at round-off
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from .dynamics import PHYSICAL_MARGIN
 from .params import BodyParams, Limits
@@ -68,11 +69,18 @@ def rhs(body: BodyParams, limits: Limits, cf_law):
 
 
 def integrate(body: BodyParams, limits: Limits, controller, state, n: int, dt: float, anchor,
-              theta_fall: float | None):
+              theta_fall: float | None, speed=None):
     """Up to ``n`` samples of RK4 from ``state`` (5 floats); C_f is bounded at every stage
     relative to the curvature at the step's start.  Returns ``(rows, fell_at)`` where each row is
     ``(x, y, theta_dir, theta_v, omega_v, alpha_v, C_f, V_f, omega0, theta_max)``; the run stops
-    at the first sample with ``|theta_v| > theta_fall`` (``None``: never)."""
+    at the first sample with ``|theta_v| > theta_fall`` (``None``: never).
+
+    ``speed`` (``V_cm`` at each of the ``n`` step starts, m/s) makes the speed vary: it is held
+    over each step at its value at the step's start, as the planner's ``SpeedProfile`` does
+    (Section 6), and the controller steers with it
+    (:meth:`~.controllers.base.Controller.follow_speed`)."""
+    controller.begin_run(limits)
+    V_now = body.V_cm
     stage = rhs(body, limits, controller.scalar_cf_law())
     begin, target = controller.begin_step, controller.target
     h, w6 = 0.5 * dt, dt / 6.0
@@ -81,6 +89,11 @@ def integrate(body: BodyParams, limits: Limits, controller, state, n: int, dt: f
     append = rows.append
     for i in range(n):
         t = i * dt
+        if speed is not None and speed[i] != V_now:
+            V_now = speed[i]
+            steered = controller.follow_speed(V_now)        # the controller's own body model
+            moved = steered if controller.nominal_body is body else replace(body, V_cm=V_now)
+            stage = rhs(moved, limits, controller.scalar_cf_law())
         begin(t, (x0, x1, x2, x3, x4))
         a0, a1, a2, a3, a4, cf, alpha, V_f = stage(t, x0, x1, x2, x3, x4, anchor, dt)
         append((x0, x1, x2, x3, x4, alpha, cf, V_f, *target(t)))

@@ -1,7 +1,7 @@
 """The simulation loop of Fig. 4: control, bound, integrate, record.
 
 :func:`run` steps any batch shape; :func:`simulate` is the one-figure front end that returns a
-:class:`Trajectory`.  Integration is classical RK4 (DESIGN.md Section 2: explicit Euler drifts);
+:class:`Trajectory`.  Integration is classical RK4 (docs/ARCHITECTURE.md Section 5: Euler drifts);
 ``C_f`` is evaluated and bounded at every stage, so the recorded ``alpha_v`` is the one the
 bounded curvature produces (Section 3).
 """
@@ -13,13 +13,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from .controllers import Controller
+from .controllers.feasible import fall_cause
 from .dynamics import THETA_V, leg_force, rk4_step, stage
 from .errors import FellOver
 from .heading_table import heading_table
 from .one_figure import integrate
 from .params import BodyParams, Figure, Limits, check_range
 from .phase import phase
-from .trajectory import COLUMNS, Trajectory
+from .schedule import Schedule
+from .trajectory import COLUMNS, Trajectory, body_meta
 
 DEFAULT_DT = 0.02
 """Default integration step, s.  RK4 at 50 Hz tracks a 2 s turn to ~1e-6 rad (tests measure it)."""
@@ -27,20 +29,31 @@ DEFAULT_DT = 0.02
 
 @dataclass(frozen=True)
 class Run:
-    """Raw result of :func:`run`: ``columns[name]`` has shape ``(n_samples,) + batch_shape``."""
+    """Raw result of :func:`run`: ``columns[name]`` has shape ``(n_samples,) + batch_shape``.
+
+    ``falls`` lists ``(index, t)`` for every figure that fell, in the order they fell (index 0
+    for one figure); ``fell_at`` is the first of those times (``None``: nobody fell).  A fallen
+    figure of a batch holds NaN from the sample after its fall on."""
 
     columns: dict
     fell_at: float | None = None
+    falls: tuple = ()
 
 
 def run(body: BodyParams, limits: Limits, controller: Controller, state0, duration: float,
-        dt: float = DEFAULT_DT, C_f0=None, stop_on_fall: bool = True) -> Run:
+        dt: float = DEFAULT_DT, C_f0=None, stop_on_fall: bool = True, speed=None) -> Run:
     """Integrate ``state0`` (shape ``(5,)`` for one figure, ``(5, n)`` for a batch).
 
     One figure is stepped on Python floats (:mod:`.one_figure`), a batch on numpy arrays; the
-    formulas are the same and tests hold the two to round-off.  ``C_f0`` is the curvature just before the start (for the rate
-    bound); ``None`` lets the first demand through unrated.  With ``stop_on_fall`` the run ends at
-    the first sample where any ``|theta_v|`` exceeds ``limits.theta_fall`` (``fell_at``).
+    formulas are the same and tests hold the two to round-off.  ``C_f0`` is the curvature just
+    before the start (for the rate bound); ``None`` lets the first demand through unrated.  With
+    ``stop_on_fall`` a figure stops at the first sample where its ``|theta_v|`` exceeds
+    ``limits.theta_fall``: one figure ends the run there, a figure of a batch stops alone (its
+    later samples NaN) while the others go on; the run ends early only when
+    every figure has fallen.  :attr:`Run.falls` reports who fell and when.
+    ``speed`` (a :class:`~.schedule.Schedule` of ``V_cm`` in m/s, one figure only) makes the
+    forward speed vary over time, held over each step at its value at the step's start (as the
+    planner's speed profile, Section 6); ``None`` or a constant keeps ``body.V_cm``.
     """
     check_range("duration", duration, 0.0, 1e6, lo_open=True)
     check_range("dt", dt, 1e-5, 1.0)
@@ -48,16 +61,31 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     arr = np.array(state0, float)
     if arr.shape[0] != 5 or arr.ndim > 2 or not np.all(np.isfinite(arr)):
         raise ValueError("state0 must be finite with shape (5,) or (5, n)")
+    speed = None if speed is None else Schedule.of(speed)
+    if speed is not None and speed.constant_value is not None:
+        speed = None if speed.constant_value == body.V_cm else speed
+    if speed is not None and arr.ndim != 1:
+        raise ValueError("a speed schedule is for one figure: state0 must have shape (5,)")
     if arr.ndim == 1:
+        V_cm = None
+        if speed is not None:
+            V_cm = np.array([speed(i * dt) for i in range(n)], float)
+            for i in np.nonzero(~(V_cm > 0) | ~(V_cm <= 100.0))[0][:1]:
+                check_range(f"speed at t = {i * dt:g} s", V_cm[i], 0.0, 100.0, lo_open=True)
         rows, fell_at = integrate(body, limits, controller, arr, n, dt,
                                   None if C_f0 is None else float(C_f0),
-                                  limits.theta_fall if stop_on_fall else None)
-        return _columns(body, np.array(rows, float), dt, fell_at)
+                                  limits.theta_fall if stop_on_fall else None,
+                                  None if V_cm is None else V_cm.tolist())
+        rec = np.array(rows, float)
+        return _columns(body, rec, dt, () if fell_at is None else ((0, fell_at),),
+                        None if V_cm is None else V_cm[:len(rec)])
+    controller.begin_run(limits)
     state = arr
     anchor = None if C_f0 is None else np.asarray(C_f0, float)
     # Per sample: state, alpha_v, C_f, V_f, omega0, theta_max.
     rec = np.empty((n, 10) + arr.shape[1:])
-    fell_at = None
+    fell = np.full(arr.shape[1:], np.inf)              # time of each figure's fall
+    anyone = False                                     # has any figure fallen yet?
     desired = controller.desired_cf
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for i in range(n):
@@ -67,17 +95,24 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
             rec[i, :5] = state
             rec[i, 5], rec[i, 6], rec[i, 7], rec[i, 8], rec[i, 9] = alpha, cf, V_f, \
                 *controller.target(t)
-            if stop_on_fall and np.any(np.abs(state[THETA_V]) > limits.theta_fall):
-                fell_at, n = t, i + 1
-                break
+            if stop_on_fall and (anyone or np.any(np.abs(state[THETA_V]) > limits.theta_fall)):
+                anyone = True
+                fell[(np.abs(state[THETA_V]) > limits.theta_fall) & (fell == np.inf)] = t
+                rec[i][:, fell < t] = np.nan    # stepped on (cheaper than masking), not shown
+                if np.all(fell <= t):
+                    n = i + 1
+                    break
             if i + 1 < n:
                 state = rk4_step(body, limits, state, t, dt, desired, cf, k1)
                 anchor = cf
-    return _columns(body, rec[:n], dt, fell_at)
+    order = np.argsort(fell, kind="stable")
+    falls = tuple((int(k), float(fell[k])) for k in order if fell[k] != np.inf)
+    return _columns(body, rec[:n], dt, falls)
 
 
-def _columns(body: BodyParams, rec: np.ndarray, dt: float, fell_at) -> Run:
-    """The DESIGN.md columns from the per-sample records ``(n, 10, ...)``."""
+def _columns(body: BodyParams, rec: np.ndarray, dt: float, falls: tuple, V_cm=None) -> Run:
+    """The columns of docs/ARCHITECTURE.md Section 3 from the records ``(n, 10, ...)``; ``V_cm``
+    the speed at each sample when it varies."""
     n = rec.shape[0]
     cols = {"t": np.broadcast_to((np.arange(n) * dt).reshape((n,) + (1,) * (rec.ndim - 2)),
                                  rec.shape[:1] + rec.shape[2:]).copy()}
@@ -86,11 +121,11 @@ def _columns(body: BodyParams, rec: np.ndarray, dt: float, fell_at) -> Run:
         cols[name] = rec[:, j]
     cols["phi"] = phase(cols["theta_v"], cols["omega_v"], rec[:, 9], rec[:, 8])
     cols["F_leg"] = leg_force(body, cols["theta_v"], cols["omega_v"], cols["alpha_v"],
-                              cols["C_f"])[0]
+                              cols["C_f"], V_cm)[0]
     # Foot distance travelled: trapezoid on V_f (the foot moves at V_f, Eq. 21).
     ds = 0.5 * (cols["V_f"][1:] + cols["V_f"][:-1]) * dt
     cols["s"] = np.concatenate([np.zeros((1,) + ds.shape[1:]), np.cumsum(ds, axis=0)])
-    return Run(cols, fell_at)
+    return Run(cols, falls[0][1] if falls else None, falls)
 
 
 def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: float = 0.0,
@@ -103,17 +138,18 @@ def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: flo
 
 
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
-             state0=None, C_f0=None, meta: dict | None = None) -> Trajectory:
-    """Simulate one figure; raise :class:`FellOver` (with the trajectory so far) if it falls."""
+             state0=None, C_f0=None, meta: dict | None = None, speed=None) -> Trajectory:
+    """Simulate one figure; raise :class:`FellOver` (with the trajectory so far) if it falls.
+    ``speed``: ``V_cm`` over time (see :func:`run`)."""
     if state0 is None:
         w, tm = controller.target(0.0)
         state0 = (0.0, 0.0, 0.0, 0.0, w * tm)
-    r = run(figure.body, figure.limits, controller, state0, duration, dt, C_f0)
-    info = {"preset": figure.name, "dt": dt, **{f"body.{k}": v for k, v in
-                                                figure.body.__dict__.items()}, **(meta or {})}
+    r = run(figure.body, figure.limits, controller, state0, duration, dt, C_f0, speed=speed)
+    info = {"preset": figure.name, "dt": dt, **body_meta(figure.body), **(meta or {})}
     traj = Trajectory.from_columns(r.columns, info)
     if r.fell_at is not None:
-        raise FellOver(r.fell_at, float(traj.theta_v[-1]), traj)
+        raise FellOver(r.fell_at, float(traj.theta_v[-1]), traj,
+                       fall_cause(figure.limits, traj.C_f, traj.t))
     return traj
 
 

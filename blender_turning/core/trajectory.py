@@ -11,20 +11,17 @@ import csv
 import io
 import json
 import math
-import os
-import tempfile
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
-from .phase import TWO_PI
+from .dynamics import foot_speed, forward_alpha, leg_force
+from .files import atomic_write_text
+from .params import BodyParams
+from .phase import phase
 
 COLUMNS = ("t", "x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f", "F_leg", "phi",
            "V_f", "s")
-
-#: Columns resampled with cubic Hermite interpolation, with the column holding their derivative.
-_HERMITE = {"theta_v": "omega_v", "omega_v": "alpha_v"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,37 +61,73 @@ class Trajectory:
     def duration(self) -> float:
         return float(self.t[-1] - self.t[0]) if len(self) else 0.0
 
-    # -- resampling ----------------------------------------------------------------------------
-    def resample(self, fps: float, start: float | None = None) -> "Trajectory":
-        """Samples at ``start + k / fps`` over the trajectory's span.
+    # -- frame output --------------------------------------------------------------------------
+    def resample(self, fps: float, start: float | None = None,
+                 body: BodyParams | None = None) -> "Trajectory":
+        """Samples at ``start + k / fps`` over the trajectory's span, each a state of the model.
 
-        Position and heading use cubic Hermite interpolation with their exact derivatives
-        (``V_f cos theta_dir``, ``V_f sin theta_dir``, ``V_f C_f``), the lean with ``omega_v``;
-        the phase is unwrapped, interpolated and wrapped again, so it stays continuous.
+        The state ``(x, y, theta_dir, theta_v, omega_v)`` and ``s`` between two samples is the
+        integrator's dense output: the cubic Hermite interpolant through both samples with the
+        model's derivatives there (``V_f cos theta_dir``, ``V_f sin theta_dir``, ``V_f C_f``,
+        ``omega_v``, ``alpha_v``; ``V_f`` for ``s``), the continuous extension of RK4 that needs
+        no extra evaluation (Hairer, Norsett, Wanner, *Solving ODEs I*, Section II.6).  Its
+        error is ``h^4 max|y''''| / 384`` per step, the order of RK4's own global error;
+        ``tests/test_frame_rows.py`` measures both.  Landing steps on frames would need the
+        controller, which a finished trajectory (the Blender bake, the path follower) does not
+        carry.
+
+        Between samples ``C_f`` is the chord of the two samples' values.  RK4 has no single
+        ``C_f`` inside a step (its stages evaluate the law at different trial states), so this is
+        a choice: the chord keeps every Section 3 bound both samples meet (``|C_f| <= C_f_max``;
+        ``|dC_f/dt| <= dC_f_max``, its slope being the samples' difference quotient) without
+        knowing the limits, and is second-order accurate.  ``V_cm`` is recovered per sample from
+        Eq. (21) and interpolated the same way (constant on flat ground).  Every other column
+        is computed from the row's state and control, never interpolated: ``alpha_v`` by
+        Eq. (2), ``V_f`` by Eq. (21), ``F_leg`` by Appendix A and ``phi`` by Section 4's atan2.
+        So each row obeys the model's relations to round-off, and its phase lies in the quadrant
+        of its own ``(theta_v, omega_v)``.
+
+        ``phi`` depends on the ellipse only through ``omega0``: it is recovered per sample from
+        ``tan phi = theta_v omega0 / omega_v`` and held over the step that starts there, as the
+        controllers hold it (the phase-ellipse controller changes its beta only at a step's
+        start; Section 6.2's estimate is constant per quadrant visit).  A sample on an axis of
+        the phase plane, where the phase does not depend on ``omega0``, takes the next sample's.
+
+        ``body`` defaults to the one recorded in ``meta`` (:func:`body_meta`).
         """
         if not (fps > 0 and math.isfinite(fps)):
             raise ValueError(f"fps = {fps!r} is outside the allowed range (0, inf)")
-        t = self.t
+        body = body_from_meta(self.meta) if body is None else body
+        if body is None:
+            raise ValueError("resample needs the figure's body: pass body= or keep the meta "
+                             "entries body.m, body.l, body.I_v, body.V_cm and body.g")
+        t, c = self.t, self.columns()
+        if len(t) == 0 or np.any(np.diff(t) <= 0):
+            raise ValueError("a trajectory to resample needs samples at increasing times")
         t0 = t[0] if start is None else float(start)
         n = int(math.floor((t[-1] - t0) * fps + 1e-9)) + 1
         tn = t0 + np.arange(max(n, 0)) / fps
-        c = self.columns()
-        deriv = {
-            "x": c["V_f"] * np.cos(c["theta_dir"]),
-            "y": c["V_f"] * np.sin(c["theta_dir"]),
-            "theta_dir": c["V_f"] * c["C_f"],
-            "s": c["V_f"],
-            **{k: c[v] for k, v in _HERMITE.items()},
-        }
-        out = {"t": tn}
-        for name in COLUMNS[1:]:
-            if name in deriv:
-                out[name] = _hermite(t, c[name], deriv[name], tn)
-            elif name == "phi":
-                out[name] = np.mod(np.interp(tn, t, np.unwrap(c[name])), TWO_PI)
-            else:
-                out[name] = np.interp(tn, t, c[name])
         meta = dict(self.meta, fps=float(fps))
+        if len(t) == 1:
+            at = np.zeros(int(np.sum(np.abs(tn - t[0]) <= 1e-9)), int)     # the one sample
+            return Trajectory(self.data[:, at], meta)
+        j = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 1)  # frame's step
+        i = np.minimum(j, len(t) - 2)
+        u = (tn - t[i]) / (t[i + 1] - t[i])
+        V_f, C_f = c["V_f"], c["C_f"]
+        slope = {"x": V_f * np.cos(c["theta_dir"]), "y": V_f * np.sin(c["theta_dir"]),
+                 "theta_dir": V_f * C_f, "theta_v": c["omega_v"], "omega_v": c["alpha_v"],
+                 "s": V_f}
+        out = {"t": tn, **{k: _hermite(t, c[k], dy, i, u) for k, dy in slope.items()}}
+        V_cm = V_f * (1.0 - C_f * body.l * np.sin(c["theta_v"]))              # Eq. (21)
+        V = (1.0 - u) * V_cm[i] + u * V_cm[i + 1]
+        th, om = out["theta_v"], out["omega_v"]
+        cf = out["C_f"] = (1.0 - u) * C_f[i] + u * C_f[i + 1]
+        sin_t = np.sin(th)
+        out["alpha_v"] = forward_alpha(body, th, cf, sin_t, np.cos(th), V)     # Eq. (2)
+        out["V_f"] = foot_speed(body, th, cf, sin_t, V)                         # Eq. (21)
+        out["F_leg"] = leg_force(body, th, om, out["alpha_v"], cf, V)[0]       # Appendix A
+        out["phi"] = phase(th, om, 1.0, _ellipse_rate(c["theta_v"], c["omega_v"], c["phi"])[j])
         return Trajectory.from_columns(out, meta)
 
     # -- I/O -----------------------------------------------------------------------------------
@@ -104,7 +137,7 @@ class Trajectory:
         w.writerow(COLUMNS)
         for row in self.data.T:
             w.writerow([repr(float(v)) for v in row])
-        _atomic_write(path, buf.getvalue())
+        atomic_write_text(path, buf.getvalue())
 
     @classmethod
     def from_csv(cls, path) -> "Trajectory":
@@ -121,7 +154,7 @@ class Trajectory:
     def to_json(self, path) -> None:
         doc = {"columns": list(COLUMNS), "meta": self.meta,
                "data": {c: self.data[i].tolist() for i, c in enumerate(COLUMNS)}}
-        _atomic_write(path, json.dumps(doc))
+        atomic_write_text(path, json.dumps(doc))
 
     @classmethod
     def from_json(cls, path) -> "Trajectory":
@@ -130,24 +163,40 @@ class Trajectory:
         return cls.from_columns(doc["data"], doc.get("meta", {}))
 
 
-def _hermite(t, y, dy, tn):
-    """Cubic Hermite interpolation of samples ``y`` with derivatives ``dy`` at times ``tn``."""
-    i = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 2)
+def body_meta(body: BodyParams) -> dict:
+    """The ``meta`` entries that record ``body``: ``body.m``, ``body.l``, ... (SI units)."""
+    return {f"body.{f.name}": float(getattr(body, f.name)) for f in fields(body)}
+
+
+def body_from_meta(meta: dict) -> BodyParams | None:
+    """The body :func:`body_meta` recorded, or ``None`` if ``meta`` holds none."""
+    try:
+        return BodyParams(**{f.name: float(meta[f"body.{f.name}"]) for f in fields(BodyParams)})
+    except KeyError:
+        return None
+
+
+def _hermite(t, y, dy, i, u):
+    """Cubic Hermite interpolation of samples ``y`` with derivatives ``dy`` on step ``i``
+    (from ``t[i]`` to ``t[i + 1]``) at the fraction ``u`` of it."""
     h = t[i + 1] - t[i]
-    u = (tn - t[i]) / h
     u2, u3 = u * u, u * u * u
     return ((2 * u3 - 3 * u2 + 1) * y[i] + (u3 - 2 * u2 + u) * h * dy[i]
             + (-2 * u3 + 3 * u2) * y[i + 1] + (u3 - u2) * h * dy[i + 1])
 
 
-def _atomic_write(path, text: str) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=".tmp-",
-                               suffix=path.suffix)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
+def _ellipse_rate(theta_v, omega_v, phi):
+    """The ``omega0`` of each sample's phase, from ``tan phi = theta_v omega0 / omega_v``.
+
+    A sample with ``|sin phi cos phi| < 1e-6`` lies on an axis of the phase plane, where the
+    phase does not depend on ``omega0`` and the inversion loses digits: it takes the next
+    recoverable sample's value (the last one's at the end), 1 if there is none (a straight run).
+    """
+    sp, cp = np.sin(phi), np.cos(phi)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        w = (omega_v * sp) / (theta_v * cp)
+    ok = np.flatnonzero(np.isfinite(w) & (w > 0.0) & (np.abs(sp * cp) > 1e-6))
+    if len(ok) == 0:
+        return np.ones(len(w))
+    return w[ok[np.minimum(np.searchsorted(ok, np.arange(len(w))), len(ok) - 1)]]
+

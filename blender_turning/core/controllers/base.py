@@ -1,12 +1,15 @@
 """The contract every steering controller meets.
 
-A controller is stepped by :func:`blender_turning.core.simulate.simulate`: once per accepted
+A controller is stepped by :func:`blender_turning.core.simulate.simulate`: once before the first
+step it is given the figure's limits (``begin_run``), once per accepted
 step it is told the time and state (``begin_step``, where it may update its memory), and during
 the step's integrator stages it is asked for the demanded foot curvature (``desired_cf``, pure:
 no memory change).  The integrator bounds the demand (``dynamics.bound_cf``).  States have shape
 ``(5, n)`` or ``(5,)``; every method works on either.
 """
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -20,6 +23,21 @@ class Controller:
 
     def __init__(self, body: BodyParams):
         self.body = body
+        self.nominal_body = body
+        """The body the controller was made for; :attr:`body` carries the current speed."""
+
+    def follow_speed(self, V_cm: float) -> BodyParams:
+        """Steer at the forward speed ``V_cm`` from now on (a speed that varies over time);
+        returns the body at that speed.
+
+        Eq. (1) is solved with the current ``V_cm``; the paper keeps ``V_cm`` constant in
+        Sections 3-5, and lets it vary along the path in Section 6 (the planner's speed profile)."""
+        self.body = replace(self.nominal_body, V_cm=float(V_cm))
+        return self.body
+
+    def begin_run(self, limits) -> None:
+        """Called once before the first step with the figure's :class:`..params.Limits` (a
+        controller may keep its demand within them)."""
 
     def begin_step(self, t: float, state: np.ndarray) -> None:
         """Called once at the start of each step with the accepted state."""

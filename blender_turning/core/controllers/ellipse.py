@@ -1,202 +1,363 @@
 """The parameterized controller of Section 5: phase-ellipse control (5.1) with directional
 control (5.2).  Works on one figure (floats) or a batch (arrays).
 
-Section 5.1, read geometrically (``shared/DESIGN.md`` Section 2): the controlling ellipse through
-the current state shares the target's lean intercept ``theta_max`` in quadrants 1 and 3 (Fig. 7a)
-and its rate intercept ``omega0 theta_max`` in quadrants 2 and 4 (Fig. 7b).  On any ellipse of
-Eq. (3) ``alpha_v = -omega0'^2 theta_v`` (Eq. 5), so
+**The law (default, ``law="smooth"``).**  In the normalised phase plane of Section 4,
+``y = theta_v / theta_max``, ``x = omega_v / (omega0 theta_max)`` (the target ellipse of Eq. 3 is
+``r = hypot(x, y) = 1``), the lean obeys ``dy/dt = omega0 x`` and
+``dx/dt = alpha_v / (omega0 theta_max)``.  Write the demand as the on-ellipse law of Eq. (5) plus a
+correction, ``alpha_v = -omega0^2 theta_v + u``.  Then ``dy/dt = omega0 x``,
+``dx/dt = -omega0 y + u / (omega0 theta_max)`` and
 
-- Q1/Q3: ``omega0'^2 = omega_v^2 / (theta_max^2 - theta_v^2)``;
-- Q2/Q4: ``beta^2 = y^2 / (1 - x^2)``, ``omega0' = omega0 / beta``
-  (``y = theta_v/theta_max``, ``x = omega_v/(omega0 theta_max)``).
+    d(r^2)/dt = 2 x u / (omega0 theta_max):
 
-The paper's ``omega0' = omega_v / (theta_max cos phi)`` uses the phase on the *controlling*
-ellipse, ``cos phi' = sqrt(1 - y^2)``; with the target's phase it would not pass through the state.
-Beyond the paper: in Q1/Q3 a Fig. 7a ellipse more than ``SLOW_FACTOR`` times slower than the
-target is replaced by the Fig. 7b ellipse through the state.  Otherwise a state with little lean
-rate creeps toward ``theta_max`` on an ever slower ellipse and never arrives when ``theta_max``
-grows over time; and ``(0 < theta_v < theta_max, omega_v = 0)`` is a fixed point of the paper's
-law (a steady circle).  The Fig. 7b ellipse turns back at once and meets the target at the
-``omega_v`` axis.
+only ``u`` changes the ellipse's "radius" (its energy), and only through ``x``.  Energy shaping
+with ``u = K omega0^2 theta_max (1 - r) x / max(r, 1)`` (``K = GAIN = 3``) gives
 
-Also beyond the paper: a state just outside the target in Q1/Q3 (``|y| >= 1``) is steered by the
-Fig. 7b ellipse through it, and one in Q2/Q4 with ``|x| >= 1`` by the Fig. 7a ellipse, where those
-exist.  Both meet the target at the next axis and agree with the on-ellipse law at ``r = 1``, so
-the demand is continuous across the target ellipse; the paper's ``+-alpha_max`` right outside it
-made the lean chatter at every turn's apex (period jitter of ~0.2% at dt = 0.02 s).  Only states
-on neither family get ``alpha_v = -alpha_max sign(omega_v)`` (+ in Q2, Q3; - in Q1, Q4).  A small
-disc around the origin gets a fixed push, and every demand is clipped to ``|alpha_v| <= alpha_max``.
+    dr/dt = K omega0 (1 - r) cos^2(phi) * min(r, 1),    phi = atan2(y, x) (Section 4's phase),
+
+so ``r`` moves monotonically toward 1 from any state: outside the ellipse ``1 - r`` decays by
+``exp(-K omega0 t / 2)`` on average (e^-3pi per period), inside ``r`` grows logistically at the
+same rate.  ``u = 0`` on the ellipse: there the demand is exactly Eq. (5), the open-loop law of
+the same ellipse.  The demand is a smooth function of the state (C1 across the ellipse, where
+both forms of ``u`` have slope ``-K omega0^2 theta_max x`` in ``r``): nothing switches at the
+apex (``phi = 90, 270 deg``, where the correction passes through zero with ``cos phi``) or at the
+axes.  The paper's geometric law (Fig. 7, :mod:`.ellipse_paper`) switches between two families
+of controlling ellipses whose ``omega0'^2 = omega_v^2 / (theta_max^2 - theta_v^2)`` is 0/0 at
+the apex; tiny state errors there flip it between branches, and C_f and F_leg twitch twice per
+turn (issue 7).
+
+Inside the ellipse the correction is a negative damping ``K omega0 (1 - r) omega_v`` (``x / r``
+would be a direction undefined at ``r = 0``, and its large gain near the origin asked for faster
+C_f changes than the bounds allow: a snowboarder at 20 m/s fell from the origin).  The origin
+itself is an equilibrium of both terms; Section 5.1: "a fixed arbitrary value is assigned to
+alpha_v for a small region around the origin"; here it fades in smoothly,
+``+ 0.5 alpha_max (1 - r / origin_radius)^2`` inside ``origin_radius``.
+
+The demand is clipped to ``|alpha_v| <= alpha_max`` (a continuous clip), and Section 3's bounds
+on C_f then act on it (in the integrator).  Convergence onto the target from the origin, from half
+and 1.5 times the rate, and from 40 deg of lean is measured in ``tests/test_ellipse_law.py``.
+
+**The ellipse followed.**  The commanded ``(omega0, theta_max)`` is made feasible for the body's
+bounds (:mod:`.feasible`: same period, lean lowered when the bounds cannot hold it), then
+modified per half-turn by directional control's beta (Section 5.2, Eqs. 6-8, exact half-turn
+change from :mod:`..heading_table`), with beta bounded so that the modified half-turn stays
+feasible.  At a zero crossing the old and the modified ellipse share the rate intercept
+``omega0 theta_max`` (Fig. 9), so a state on one is on the other and the demand stays continuous.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 from ..dynamics import OMEGA_V, THETA_DIR, THETA_V
+from ..heading_table import BETA_MAX, BETA_MIN, heading_table, linear_beta
 from ..one_figure import scalar_inverse_cf
-from ..heading_table import SMALL_OMEGA0, SMALL_THETA, heading_table, linear_beta
-from ..params import BodyParams
+from ..params import BodyParams, Limits
 from ..schedule import Schedule
 from ..xp import Scalar, backend
 from .base import Controller
+from .ellipse_paper import paper_alpha, paper_alpha_one
+from .feasible import FeasibleTurn, feasible_turns
 
-
-SLOW_FACTOR = 3.0
-NEAR = 1.1
+GAIN = 3.0
+HEADROOM = 0.85
+SPEED_GRID = 0.5
+"""m/s: a speed that varies is followed by feasibility tables at multiples of this (rounded down)."""
 
 
 def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=0.05):
-    """Section 5.1: the lean acceleration that takes the state onto the target ellipse (arrays;
-    floats go to :func:`ellipse_alpha_one`, the same law as branches)."""
+    """The smooth law of the module docstring (arrays; floats go to :func:`ellipse_alpha_one`)."""
     if backend(theta_v, omega_v, theta_max, omega0, alpha_max) is Scalar:
         return ellipse_alpha_one(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius)
-    th, om = theta_v, omega_v
-    y = th / theta_max
-    x = om / (omega0 * theta_max)
-    den = theta_max * theta_max - th * th
-    w13_sq = om * om / np.where(den > 0.0, den, 1.0)           # omega0'^2 of the Fig. 7a ellipse
-    on_a = den > 0.0                           # |y| < 1: a Fig. 7a ellipse passes through
-    on_b = (np.abs(x) < 1.0) & (th != 0.0)     # |x| < 1: a Fig. 7b ellipse passes through
-    slow = (w13_sq * SLOW_FACTOR ** 2 < omega0 * omega0) & (th != 0.0) & on_a
-    # Preferred family: Fig. 7a in quadrants 1, 3 (and on the axes) unless slow, else Fig. 7b.
-    prefer_b = (th * om < 0.0) | slow
-    prefer_a = ~prefer_b
-    a13 = -w13_sq * th
-    a24 = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / np.where(th != 0.0, th, 1.0)
-    # The other family only for states near the target (within NEAR on the preferred family's
-    # axis): far outside, the paper's +-alpha_max is what brings the lean back.
-    near = np.where(prefer_a, np.abs(y) < NEAR, np.abs(x) < NEAR)
-    use_a = on_a & (prefer_a | near)
-    use_b = on_b & (prefer_b | near)
-    away = -alpha_max * np.where(om != 0.0, np.sign(om), np.sign(th))
-    a = np.where(prefer_a & on_a, a13, np.where(use_b, a24, np.where(use_a, a13, away)))
-    a = np.where(np.hypot(x, y) < origin_radius, 0.5 * alpha_max, a)
+    w2 = omega0 * omega0
+    x = omega_v / (omega0 * theta_max)
+    r = np.hypot(x, theta_v / theta_max)
+    a = -w2 * theta_v + (GAIN * w2 * theta_max) * (1.0 - r) * x / np.maximum(r, 1.0)
+    a = a + 0.5 * alpha_max * np.square(np.maximum(1.0 - r / origin_radius, 0.0))
     return np.minimum(np.maximum(a, -alpha_max), alpha_max)
 
 
 def ellipse_alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius=0.05):
-    """:func:`ellipse_alpha` for one figure on Python floats, as branches (the same law; one
-    figure is stepped ~12,000 times a minute of motion, so it skips the branches not taken)."""
-    y = th / theta_max
+    """:func:`ellipse_alpha` on Python floats (one figure is stepped ~12,000 times a minute)."""
+    w2 = omega0 * omega0
     x = om / (omega0 * theta_max)
-    if math.hypot(x, y) < origin_radius:
-        return 0.5 * alpha_max
-    den = theta_max * theta_max - th * th
-    on_a = den > 0.0
-    w13_sq = om * om / den if on_a else om * om
-    prefer_b = th * om < 0.0 or (on_a and th != 0.0 and w13_sq * SLOW_FACTOR ** 2 < omega0 * omega0)
-    if on_a and not prefer_b:
-        a = -w13_sq * th
-    else:
-        near = abs(x) < NEAR if prefer_b else abs(y) < NEAR
-        if abs(x) < 1.0 and th != 0.0 and (prefer_b or near):
-            a = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / th
-        elif on_a and near:
-            a = -w13_sq * th
-        else:
-            a = -alpha_max * ((om > 0.0) - (om < 0.0) if om != 0.0 else (th > 0.0) - (th < 0.0))
+    y = th / theta_max
+    r = math.sqrt(x * x + y * y)
+    a = -w2 * th + GAIN * w2 * theta_max * (1.0 - r) * x / (r if r > 1.0 else 1.0)
+    if r < origin_radius:
+        f = 1.0 - r / origin_radius
+        a += 0.5 * alpha_max * f * f
     return -alpha_max if a < -alpha_max else (alpha_max if a > alpha_max else a)
+
+
+LAWS = {"smooth": (ellipse_alpha, ellipse_alpha_one), "paper": (paper_alpha, paper_alpha_one)}
 
 
 class PhaseEllipse(Controller):
     """Turn frequency ``omega0(t)``, sharpness ``theta_max(t)`` and optionally heading
     ``theta_h(t)``, each a number, a callable of time or a :class:`Schedule`.
 
-    ``alpha_max`` (rad/s^2) defaults to ``2 omega0^2 theta_max``: twice the peak of the target's own
-    ``alpha_v``.  ``directional`` picks how beta is found: ``"auto"`` (Eq. 11/12 where the
-    small-angle approximation holds, else the table), ``"linear"`` or ``"table"``.
+    ``alpha_max`` (rad/s^2) defaults to ``2 omega0^2 theta_max`` of the ellipse followed (after
+    beta): twice the peak of its own ``alpha_v``.  ``law``: ``"smooth"`` (the module docstring)
+    or ``"paper"`` (Section 5.1 as written, :mod:`.ellipse_paper`).  ``directional``: how beta is
+    found, ``"exact"`` (the closed form of :mod:`..heading_table`) or ``"linear"`` (the paper's
+    Eqs. 11/12).  ``limits``: the figure's bounds; the ellipse followed is kept feasible for them (:mod:`.feasible`).  ``None``
+    takes them from the run (:meth:`begin_run`).  :attr:`achieved` reports the turn followed.
     """
 
     def __init__(self, body: BodyParams, omega0, theta_max, heading=None, alpha_max=None,
-                 origin_radius: float = 0.05, directional: str = "auto"):
+                 origin_radius: float = 0.05, directional: str = "exact", law: str = "smooth",
+                 limits: Limits | None = None):
         super().__init__(body)
-        if directional not in ("auto", "linear", "table"):
-            raise ValueError(f"directional = {directional!r} is not one of auto, linear, table")
+        if directional not in ("exact", "linear"):
+            raise ValueError(f"directional = {directional!r} is not one of exact, linear")
+        if law not in LAWS:
+            raise ValueError(f"law = {law!r} is not one of {', '.join(LAWS)}")
         self.omega0 = Schedule.of(omega0)
         self.theta_max = Schedule.of(theta_max)
         self.heading = None if heading is None else Schedule.of(heading)
         self.alpha_max = alpha_max
         self.origin_radius = origin_radius
         self.directional = directional
-        self._beta = None          # modifier of the current half-turn, per figure
-        self._side = None          # +1 during a left half-turn (theta_v >= 0), -1 right
+        self.law = law
+        self._alpha, self._alpha_one = LAWS[law]
+        self._limits_given = limits is not None
+        self._limits = limits
+        self._feasible = None if limits is None else feasible_turns(body, limits)
+        self._bp = self._bn = None  # beta of the left (theta_v >= 0) and right half-turns
+        self._side = None           # +1 during a left half-turn, -1 right, per figure
+        self._planned = False       # the coming half-turn's beta was set in this step
+        self._t_prev = None
+        self._memo = {}
+        self.achieved: FeasibleTurn | None = None
+        """The most limited turn followed so far (the first one if none was limited)."""
+
+    def begin_run(self, limits: Limits) -> None:
+        """A new run: forget the last run's half-turns; take the figure's limits unless given."""
+        if not self._limits_given:
+            self._limits = limits
+            self._feasible = feasible_turns(self.body, limits)
+        self._bp = self._bn = self._side = self._t_prev = None
+        self._planned = False
+        self._memo = {}
+        self.achieved = None
+
+    def follow_speed(self, V_cm: float) -> BodyParams:
+        """Steer at ``V_cm`` (:meth:`.Controller.follow_speed`) and keep the turn feasible at it.
+
+        What is feasible depends on the speed (a slower figure needs more ``C_f`` for the same
+        lean), so the table follows it, taken at the speed rounded *down* to ``SPEED_GRID``
+        (never promising more than the current speed allows; a few tables, not one a step)."""
+        body = super().follow_speed(V_cm)
+        if self._limits is not None:
+            grid = max(SPEED_GRID, math.floor(V_cm / SPEED_GRID) * SPEED_GRID)
+            self._feasible = feasible_turns(replace(self.nominal_body, V_cm=grid), self._limits)
+        return body
+
+    # -- the feasible ellipse (items 3, 3b of issue 7) -----------------------------------------
+    def feasible_lean(self, omega0: float, theta_max: float) -> float:
+        """The lean followed for a commanded ``(omega0, theta_max)``: at most the largest the
+        body's bounds allow at that period (:mod:`.feasible`), and with directional control at
+        most ``HEADROOM`` of it: on the feasible boundary itself no modified half-turn is
+        feasible (a sharper one needs more C_f, a shallower and faster one more C_f rate), so
+        directional control could not steer."""
+        if self._feasible is None:
+            return theta_max
+        room = 1.0 if self.heading is None else HEADROOM
+        if np.ndim(omega0) or np.ndim(theta_max):                 # per-figure ellipses
+            top = np.vectorize(self._feasible.max_lean, otypes=[float])(omega0)
+            return np.minimum(theta_max, room * top)
+        return min(theta_max, room * self._feasible.max_lean(omega0))
+
+    def _note(self, t, w, tm, tmf):
+        if np.ndim(tmf):           # a batch of per-figure ellipses: no single report
+            return
+        bound = self._feasible.bound(w) if tmf < tm else None
+        a = self.achieved
+        if a is None or (bound is not None and tmf / tm < a.lean / a.commanded_lean):
+            self.achieved = FeasibleTurn(tm, tmf, 2 * math.pi / w, bound, t)
 
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):
-        """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad."""
-        return heading_table(self.body).value_one(float(theta_max), float(omega0))
+        """``dtheta_dir(theta_max, omega0)`` of Eq. (6), rad, at the current speed."""
+        table = heading_table(self.nominal_body)
+        if np.ndim(theta_max) or np.ndim(omega0):                 # per-figure ellipses
+            return table(theta_max, omega0) * self._speed_scale()
+        return table.value_one(float(theta_max), float(omega0)) * self._speed_scale()
 
-    def _solve_beta(self, theta_max, omega0, wanted):
-        use_linear = self.directional == "linear" or (
-            self.directional == "auto" and omega0 <= SMALL_OMEGA0 + 1e-12
-            and theta_max <= SMALL_THETA + 1e-12)
-        if use_linear:
+    def _speed_scale(self):
+        """``dtheta_dir(V) / dtheta_dir(V_nominal) = V_nominal / V``: the closed form of
+        :mod:`..heading_table` is ``1 / V`` times a function of the ellipse alone, so one table
+        per body serves every speed (exactly 1.0 at the nominal speed)."""
+        return self.nominal_body.V_cm / self.body.V_cm
+
+    def _solve_beta(self, theta_max, omega0, wanted, lo, hi):
+        if self.directional == "linear":
             extra = wanted - self.half_turn_change(theta_max, omega0)
-            return linear_beta(self.body, theta_max, omega0, extra)
-        return heading_table(self.body).solve_beta(theta_max, omega0, wanted)
+            return np.clip(linear_beta(self.body, theta_max, omega0, extra), lo, hi)
+        return heading_table(self.nominal_body).solve_beta(theta_max, omega0,
+                                                           wanted / self._speed_scale(), lo, hi)
 
     def begin_step(self, t, state):
+        """Directional control at the zero crossings of the lean (Section 5.2).  The next
+        half-turn's beta is planned in the step *before* its crossing (from the heading predicted
+        at the crossing), and the law picks beta by the side of the lean at every stage, so the
+        modified ellipse starts exactly at the crossing, not at the next step's start (which left a
+        kink in C_f inside that step)."""
         th, om = state[THETA_V], state[OMEGA_V]
-        if type(th) is float and self._beta is not None:     # one figure, most steps: no crossing
-            if (1.0 if th > 0 else -1.0 if th < 0 else 1.0 if om >= 0 else -1.0) == self._side:
+        dt = 0.0 if self._t_prev is None else t - self._t_prev
+        self._t_prev = t
+        first = self._bp is None
+        if type(th) is float:
+            side = 1.0 if th > 0 else -1.0 if th < 0 else 1.0 if om >= 0 else -1.0
+            soon = (th + om * dt) * side < 0.0           # a crossing within this step
+            if first:
+                self._bp = self._bn = 1.0
+                self._side = -side if abs(th) < 0.05 * self.theta_max(t) else side
+            elif side == self._side and not soon:        # most steps of one figure
+                self._planned = False
                 return
-        xp = backend(th)
-        side = xp.where(th > 0, 1.0, xp.where(th < 0, -1.0, xp.where(om >= 0, 1.0, -1.0)))
-        if self._beta is None:
-            self._beta = 1.0 if xp is Scalar else np.ones_like(th)
-            near_axis = xp.abs(th) < 0.05 * self.theta_max(t)
-            self._side = xp.where(near_axis, -side, side)     # a start on the axis is a crossing
+            any_crossed = side != self._side
+        else:
+            side = np.where(th > 0, 1.0, np.where(th < 0, -1.0, np.where(om >= 0, 1.0, -1.0)))
+            soon = (th + om * dt) * side < 0.0
+            if first:
+                self._bp, self._bn = np.ones_like(th), np.ones_like(th)
+                self._side = np.where(np.abs(th) < 0.05 * self.theta_max(t), -side, side)
+                self._planned = np.zeros(th.shape, bool)
+            any_crossed = bool(np.any(side != self._side))
         crossed = side != self._side
         self._side = side
-        if self.heading is None or not xp.any(crossed):
-            self._beta = xp.where(crossed, 1.0, self._beta)
-            return
         w, tm = self.omega0(t), self.theta_max(t)
-        change = self.half_turn_change(tm, w)
-        if xp is Scalar:
-            self._beta = float(self._modifier(state[THETA_DIR], side, t, tm, w, change))
-        else:                                   # solve only for the figures that crossed
-            idx = np.nonzero(crossed)[0]
-            beta = np.array(self._beta, float)
-            beta[idx] = self._modifier(state[THETA_DIR][idx], side[idx], t, tm, w, change)
-            self._beta = beta
+        tmf = self.feasible_lean(w, tm)
+        if self._feasible is not None and (any_crossed or first):
+            self._note(t, w, tm, tmf)
+        if self.heading is None:
+            return
+        # A crossing not planned in the step before (a start on the axis, a lean that turned
+        # faster than predicted): the half-turn on ``side`` starts now.
+        late = crossed & ~np.asarray(self._planned) if any_crossed else False
+        self._planned = soon
+        if np.any(late):
+            self._plan(t, state[THETA_DIR], side, late, w, tmf)
+        if np.any(soon):
+            # Heading at the crossing, tau = -th/om ahead: on the ellipse near th = 0,
+            # V_f C_f = k / (V cos th) ~ (g + omega0'^2 J) th / V (module heading_table).
+            w_now = w / self._b(th)
+            k = (self.body.g + w_now * w_now * self.body.J) * th * th / (2.0 * self.body.V_cm)
+            if type(th) is float:
+                swing = -k / om if om != 0.0 else 0.0
+            else:
+                swing = np.where(om != 0, -k / np.where(om != 0, om, 1.0), 0.0)
+            self._plan(t, state[THETA_DIR] + swing, -side, soon, w, tmf)
 
-    def _modifier(self, theta_dir, side, t, tm, w, change):
-        """beta of the half-turn starting now on ``side`` (Eqs. 7-12)."""
+    def _plan(self, t, theta_dir, side, which, w, tmf):
+        """Set beta of the half-turn on ``side`` for the figures ``which`` (Eqs. 7-8), bounded so
+        that the modified half-turn stays feasible (:mod:`.feasible`)."""
+        if type(side) is not float:
+            idx = np.nonzero(which)[0]
+            tmf, w = (np.asarray(v)[idx] if np.ndim(v) else v for v in (tmf, w))
+        change = self.half_turn_change(tmf, w)
+        if self._feasible is None:
+            lo, hi = BETA_MIN, BETA_MAX
+        elif np.ndim(tmf) or np.ndim(w):                          # per-figure ellipses
+            lo, hi = np.vectorize(self._feasible.beta_range, otypes=[float, float])(tmf, w)
+        else:
+            lo, hi = self._feasible.beta_range(tmf, w)
+        if type(side) is float:
+            beta = float(self._modifier(theta_dir, side, t, tmf, w, change, lo, hi))
+            if side > 0:
+                self._bp = beta
+            else:
+                self._bn = beta
+            return
+        beta = self._modifier(np.asarray(theta_dir)[idx], side[idx], t, tmf, w, change, lo, hi)
+        left = side[idx] > 0
+        self._bp[idx[left]] = beta[left]
+        self._bn[idx[~left]] = beta[~left]
+
+    def _modifier(self, theta_dir, side, t, tm, w, change, lo, hi):
+        """beta of the half-turn starting on ``side`` with heading ``theta_dir`` (Eqs. 7-8),
+        within ``[lo, hi]``.
+
+        A half-turn that should turn *more* is made sharper (beta > 1, more lean) only by the part
+        of the error beyond ``spare``; the following half-turns, turning the other way, take the
+        rest by being shallower (beta < 1, less lean).  The paper allows either (Section 5.2,
+        Fig. 8).  So a start off the ellipse, whose transient leaves a heading error of at most
+        about one half-turn's change, does not lean past the target; a commanded change of
+        heading larger than that still sharpens the turn."""
         # Mean heading: the heading is at an extreme at a crossing (C_f is in phase with theta_v).
         mean = theta_dir + side * 0.5 * change
         err = (self.heading(t) - mean + math.pi) % (2 * math.pi) - math.pi
-        wanted = change + side * err                                # Eq. (7), in the turn's sense
-        return self._solve_beta(tm, w, wanted)
+        more = side * err
+        # Left to shallow half-turns: what one of them can take, and at least one half-turn's
+        # change (the most a start off the ellipse leaves, its first half-turn being partial).
+        spare = np.maximum(change - self.half_turn_change(lo * tm, w / lo), change)
+        if type(more) is float:
+            extra = more - spare if more > spare else min(more, 0.0)
+        else:
+            extra = np.where(more > spare, more - spare, np.minimum(more, 0.0))
+        wanted = change + extra                                     # Eq. (7), in the turn's sense
+        return self._solve_beta(tm, w, wanted, lo, hi)
 
     # -- Section 5.1 -------------------------------------------------------------------------
+    def _ellipse(self, w0, tm0, b):
+        """``(theta_max, omega0, alpha_max)`` of the half-turn's ellipse: the commanded one made
+        feasible, then modified by its beta ``b`` (Section 5.2)."""
+        key = (w0, tm0, b) if type(b) is float and type(w0) is float else None
+        if key is not None:
+            out = self._memo.get(key)
+            if out is not None:
+                return out
+        tmf = self.feasible_lean(w0, tm0)
+        w = w0 / b
+        amax = self.alpha_max if self.alpha_max is not None else 2.0 * w * w * (b * tmf)
+        out = (b * tmf, w, amax)
+        if key is not None:
+            if len(self._memo) > 16:
+                self._memo.clear()
+            self._memo[key] = out
+        return out
+
+    def _b(self, theta_v):
+        """beta for a lean: the planned half-turn on its side."""
+        if self._bp is None:
+            return 1.0
+        if type(theta_v) is float:
+            return self._bp if theta_v >= 0.0 else self._bn
+        return np.where(theta_v >= 0, self._bp, self._bn)
+
     def target(self, t):
-        b = 1.0 if self._beta is None else self._beta
-        return self.omega0(t) / b, b * self.theta_max(t)
+        b = 1.0 if self._side is None else self._b(self._side)
+        tm, w, _ = self._ellipse(self.omega0(t), self.theta_max(t), b)
+        return w, tm
 
     def scalar_cf_law(self):
-        """:meth:`desired_cf` for one figure on floats (:func:`ellipse_alpha_one`, Eq. 1),
-        with constant schedules read once."""
-        inverse, ellipse = scalar_inverse_cf(self.body), self._ellipse
+        """:meth:`desired_cf` for one figure on floats (:func:`ellipse_alpha_one` or the paper's,
+        Eq. 1), with constant schedules read once."""
+        inverse, ellipse, alpha = scalar_inverse_cf(self.body), self._ellipse, self._alpha_one
         w_s, tm_s, r0 = self.omega0, self.theta_max, self.origin_radius
         wc, tc = w_s.constant_value, tm_s.constant_value
+        fixed = {}                     # constant schedules: the ellipse per beta, computed once
 
         def law(t, state):
-            tm, w, amax = ellipse(wc if wc is not None else w_s(t),
-                                  tc if tc is not None else tm_s(t))
             th = state[3]
-            return inverse(th, ellipse_alpha_one(th, state[4], tm, w, amax, r0))
+            b = (self._bp if th >= 0.0 else self._bn) if self._bp is not None else 1.0
+            if wc is not None and tc is not None:
+                e = fixed.get(b)
+                if e is None:
+                    if len(fixed) > 8:
+                        fixed.clear()
+                    e = fixed[b] = ellipse(wc, tc, b)
+            else:
+                e = ellipse(wc if wc is not None else w_s(t), tc if tc is not None else tm_s(t), b)
+            return inverse(th, alpha(th, state[4], e[0], e[1], e[2], r0))
 
         return law
 
-    def _ellipse(self, w0, tm0):
-        """``(theta_max, omega0, alpha_max)`` of the half-turn's ellipse: the target modified
-        by its beta (Section 5.2)."""
-        b = 1.0 if self._beta is None else self._beta
-        amax = self.alpha_max if self.alpha_max is not None else 2.0 * w0 * w0 * tm0
-        return b * tm0, w0 / b, amax
-
     def desired_alpha(self, t, state):
-        tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t))
-        return ellipse_alpha(state[THETA_V], state[OMEGA_V], tm, w, amax, self.origin_radius)
+        th = state[THETA_V]
+        tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t), self._b(th))
+        return self._alpha(th, state[OMEGA_V], tm, w, amax, self.origin_radius)

@@ -1,6 +1,6 @@
 """Receding-horizon path following (Section 6.1): plan N stages, apply the first, plan again.
 
-:func:`follow` returns a :class:`FollowResult`: the trajectory (the DESIGN.md columns, ``phi``
+:func:`follow` returns a :class:`FollowResult`: the trajectory (docs/ARCHITECTURE.md Sec. 3, ``phi``
 from the Section 6.2 post-pass) and one :class:`Replan` per planning step.  When no plan survives
 (every branch hits an obstacle or falls) it raises :class:`..errors.PlanInfeasible` with the time,
 the position and the trajectory up to there; when the time limit comes before the end of the
@@ -17,7 +17,7 @@ from ..dynamics import leg_force, steer
 from ..errors import PathNotFinished, PlanInfeasible
 from ..path import PathProgress
 from ..phase_estimate import estimate_phase
-from ..trajectory import Trajectory
+from ..trajectory import Trajectory, body_meta
 from .problem import Problem
 from .search import SearchStats, branch_and_bound, dead_end
 
@@ -140,7 +140,7 @@ def _trajectory(problem: Problem, rows, x, cf, t, s, meta) -> Trajectory:
     ds = 0.5 * (V[1:] + V[:-1]) * np.diff(T)
     cols["s"] = np.concatenate([[0.0], np.cumsum(ds)])
     cols["phi"] = estimate_phase(T, S[3], S[4]).phi if len(T) > 1 else np.zeros(len(T))
-    meta = {"preset": problem.figure.name, "dt": problem.settings.dt,
+    meta = {"preset": problem.figure.name, "dt": problem.settings.dt, **body_meta(body),
             "planner": "branch-and-bound (Section 6)", **(meta or {})}
     return Trajectory.from_columns(cols, meta)
 

@@ -1,0 +1,194 @@
+"""The turns a body can do: the nearest feasible ellipse (issue 7, items 3 and 3b).
+
+Section 5.1 notes that the bounds on ``C_f`` and ``dC_f/dt`` "usually lengthen the time required
+to reach the desired phase ellipse".  When the commanded ellipse itself needs more than the bounds
+allow, the figure never reaches it: the bounded curvature cannot hold the lean and it falls.  A
+skier in that case makes a wider turn.  On the ellipse ``(theta_max, omega0)`` the demand is
+Eq. (5), ``alpha_v = -omega0^2 theta_v`` with ``theta_v = theta_max sin u``, and Eq. (1) gives the
+curvature in closed form (``k = g sin th + omega0^2 J th``, ``J = (I_v + l^2 m)/(m l)``):
+
+    C_f(th) = k / (k l sin th + V^2 cos th),
+    dC_f/dt = C_f'(th) omega_v,  C_f'(th) = (k' V^2 cos th + k V^2 sin th - k^2 l cos th) / den^2,
+    k' = g cos th + omega0^2 J,  omega_v = omega0 theta_max cos u.
+
+An ellipse is *feasible* when over a quarter turn (sampled at 65 phases; ``C_f`` peaks at the apex)
+``|C_f| <= CF_SHARE C_f_max``, ``C_f l sin th <= CF_SHARE PHYSICAL_MARGIN`` (Section 3's physical
+branch), ``|dC_f/dt| <= RATE_SHARE dC_f_max`` and ``theta_max <= theta_fall - LEAN_MARGIN``.  The
+shares leave the law authority to correct errors (a start off the ellipse, a schedule change)
+without sitting on a bound for long.  Each need grows with ``theta_max`` at a fixed ``omega0``, so
+the feasible leans at a frequency are ``[0, max_lean(omega0)]``, tabulated once per body and
+limits on a log grid of ``omega0`` (bisection, interpolated linearly).
+
+The rule (documented for the user): **keep the commanded period, lower the lean** to
+``min(theta_max, max_lean(omega0))``.  The period is the animator's rhythm (gates, music); the
+lean always has a feasible value (the needs vanish with it), a longer period does not (the
+``g sin th`` part of ``C_f`` stays, so at low speed no period is slow enough).  Directional
+control's modified half-turn ``(beta theta_max, omega0 / beta)`` is kept feasible the same way:
+:meth:`FeasibleTurns.beta_range` bounds beta, and the rest of the heading change is left to the
+following half-turns (Eq. 7 measures it again at the next crossing).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+from ..dynamics import PHYSICAL_MARGIN
+from ..heading_table import BETA_MAX, BETA_MIN
+from ..params import BodyParams, Limits
+
+CF_SHARE = 0.9
+RATE_SHARE = 0.9
+LEAN_MARGIN = math.radians(8.0)
+BOUNDS = ("C_f_max", "physical branch", "dC_f_max", "theta_fall")
+_PHASES = np.linspace(0.0, 0.5 * math.pi, 65)
+_PERIODS = (0.02, 1000.0)           # s: the log grid of omega0 spans these periods
+_N_OMEGA = 256
+
+
+@dataclass(frozen=True)
+class FeasibleTurn:
+    """The turn the figure follows instead of a commanded one it cannot do (SI units)."""
+
+    commanded_lean: float
+    """theta_max asked for, rad."""
+    lean: float
+    """theta_max followed, rad (at most the commanded one)."""
+    period: float
+    """2 pi / omega0, s (the commanded period: the rule keeps it)."""
+    bound: str | None
+    """The bound that limits the lean (one of ``BOUNDS``), ``None`` when not limited."""
+    t: float = 0.0
+    """When it was (first) followed, s."""
+
+    @property
+    def limited(self) -> bool:
+        return self.bound is not None
+
+    def describe(self) -> str:
+        text = f"lean {math.degrees(self.lean):.2f} deg at period {self.period:.3f} s"
+        if self.limited:
+            text += (f" (asked {math.degrees(self.commanded_lean):.2f} deg; limited by "
+                     f"{self.bound} from t = {self.t:.2f} s)")
+        return text
+
+
+def fall_cause(limits: Limits, C_f, t, window: float = 1.0) -> str:
+    """Why a run fell, from its recorded curvature over the last ``window`` seconds: which of
+    Section 3's bounds held ``C_f`` (a controller that does not keep its demand feasible, like
+    the open-loop law of Section 4, falls when the bounds cut it)."""
+    C_f, t = np.asarray(C_f, float), np.asarray(t, float)
+    last = t >= t[-1] - window
+    causes = []
+    if np.abs(C_f[last]).max() >= limits.C_f_max * (1 - 1e-9):
+        causes.append(f"|C_f| held at C_f_max = {limits.C_f_max:g} 1/m")
+    if last.sum() > 1:
+        rate = np.abs(np.diff(C_f[last])) / np.diff(t[last])
+        if rate.max() >= limits.dC_f_max * (1 - 1e-6):
+            causes.append(f"|dC_f/dt| held at dC_f_max = {limits.dC_f_max:g} 1/(m s)")
+    if not causes:
+        return "no curvature bound was active: the motion commanded leans past theta_fall"
+    return "the turn needs more than the figure can do: " + " and ".join(causes)
+
+
+def ellipse_needs(body: BodyParams, theta_max, omega0):
+    """What following the ellipse needs, per bound of ``BOUNDS`` (in that order): peak ``C_f``
+    (1/m), peak ``C_f l sin th``, peak ``|dC_f/dt|`` (1/(m s)) and the lean (rad).  Arrays
+    broadcast; the last axis of the work is the quarter turn's phases."""
+    tm = np.asarray(theta_max, float)[..., None]
+    w2 = np.square(np.asarray(omega0, float))[..., None]
+    th = tm * np.sin(_PHASES)
+    s, c = np.sin(th), np.cos(th)
+    VV, l = body.V_cm ** 2, body.l
+    k = body.g * s + w2 * body.J * th
+    den = k * l * s + VV * c
+    cf = k / den
+    dcf = (body.g * c + w2 * body.J) * VV * c + k * VV * s - k * k * l * c
+    rate = np.abs(dcf) / (den * den) * np.sqrt(w2) * tm * np.cos(_PHASES)
+    return (cf.max(-1), (cf * l * s).max(-1), rate.max(-1), tm[..., 0])
+
+
+class FeasibleTurns:
+    """``max_lean(omega0)`` and the feasible range of beta for one body and its limits."""
+
+    def __init__(self, body: BodyParams, limits: Limits):
+        self.body, self.limits = body, limits
+        fall = limits.theta_fall
+        self.allowed = (CF_SHARE * limits.C_f_max, CF_SHARE * PHYSICAL_MARGIN,
+                        RATE_SHARE * limits.dC_f_max,
+                        fall - LEAN_MARGIN if fall > 2 * LEAN_MARGIN else 0.5 * fall)
+        self._lw = np.linspace(math.log(2 * math.pi / _PERIODS[1]),
+                               math.log(2 * math.pi / _PERIODS[0]), _N_OMEGA)
+        self._lean, self._bound = self._solve(np.exp(self._lw))
+        self._leans = self._lean.tolist()
+        self._lw0, self._dlw = float(self._lw[0]), float(self._lw[1] - self._lw[0])
+        self._ranges = {}
+
+    def _ratio(self, theta_max, omega0):
+        """Largest need / allowed over the bounds (<= 1: feasible) and which bound it is."""
+        r = np.stack([n / a for n, a in zip(ellipse_needs(self.body, theta_max, omega0),
+                                            self.allowed)])
+        return r.max(0), r.argmax(0)
+
+    def _solve(self, omega0):
+        """The largest feasible lean at each ``omega0`` (bisection, 1e-9 rad)."""
+        lo = np.zeros_like(omega0)
+        hi = np.full_like(omega0, self.allowed[3])
+        ok_top = self._ratio(hi, omega0)[0] <= 1.0
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            ok = self._ratio(mid, omega0)[0] <= 1.0
+            lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+        lean = np.where(ok_top, self.allowed[3], lo)
+        # The binding bound: the one that fails first just above the lean.
+        return lean, self._ratio(np.minimum(lean * (1 + 1e-6) + 1e-12, np.pi / 2 - 1e-6),
+                                 omega0)[1]
+
+    def max_lean(self, omega0: float) -> float:
+        """The largest feasible ``theta_max`` at ``omega0`` (rad), linear in ``log omega0``
+        between the grid's nodes (a frequency off the grid is solved directly)."""
+        f = (math.log(omega0) - self._lw0) / self._dlw
+        if not 0.0 <= f <= _N_OMEGA - 1:
+            return float(self._solve(np.array([float(omega0)]))[0][0])
+        i = min(int(f), _N_OMEGA - 2)
+        a = f - i
+        return self._leans[i] + a * (self._leans[i + 1] - self._leans[i])
+
+    def bound(self, omega0: float) -> str:
+        """The bound that limits the lean at ``omega0`` (nearest grid node)."""
+        f = (math.log(omega0) - self._lw0) / self._dlw
+        return BOUNDS[int(self._bound[min(max(int(round(f)), 0), _N_OMEGA - 1)])]
+
+    def beta_range(self, theta_max: float, omega0: float):
+        """``(lo, hi)``: the betas around 1 whose modified half-turn ``(beta theta_max,
+        omega0 / beta)`` is feasible, within ``[BETA_MIN, BETA_MAX]`` (Section 5.2 with the
+        bounds of Sections 3 and 6.1).  ``(theta_max, omega0)`` itself should be feasible."""
+        key = (theta_max, omega0)
+        if key in self._ranges:
+            return self._ranges[key]
+
+        def ok(b):
+            return b * theta_max <= self.max_lean(omega0 / b) * (1 + 1e-12)
+
+        ends = []
+        for end in (BETA_MIN, BETA_MAX):
+            if ok(end):
+                ends.append(end)
+                continue
+            good, bad = 1.0, end
+            for _ in range(40):
+                mid = math.sqrt(good * bad)
+                good, bad = (mid, bad) if ok(mid) else (good, mid)
+            ends.append(good)
+        if len(self._ranges) > 64:
+            self._ranges.clear()
+        self._ranges[key] = (ends[0], ends[1])
+        return ends[0], ends[1]
+
+
+@lru_cache(maxsize=32)
+def feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
+    """:class:`FeasibleTurns` for ``body`` and ``limits``, built once (about 30 ms)."""
+    return FeasibleTurns(body, limits)

@@ -1,0 +1,151 @@
+"""The turning pendulum on terrain, with speed as a state (docs/TERRAIN.md).
+
+The paper's model (Section 3, Eqs. 1, 2, 21) on a surface ``z = h(x, y)`` (:mod:`.terrain`):
+the state grows from ``(x, y, theta_dir, theta_v, omega_v)`` to
+``(x, y, theta_dir, theta_v, omega_v, V_cm)`` (rows named by :data:`TERRAIN_STATE`).  ``x, y``
+stay the foot's horizontal position and ``theta_dir`` its horizontal heading; ``theta_v`` is the
+lean from the surface normal in the plane across the travel direction; ``C_f`` is the foot
+path's curvature in the surface (its geodesic curvature).  In the foot's frame (tangent ``t``,
+left ``b``, normal ``n``; docs/TERRAIN.md Section 2):
+
+- Eq. (21) unchanged: ``V_f = V_cm / (1 - C_f l sin theta_v)``;
+- Eq. (2) with the effective gravity of the surface frame:
+  ``J alpha_v = G_n sin theta_v + (g_b - a_lat) cos theta_v`` with ``G_n = g_n + V_f^2 kappa_n``
+  (gravity into the surface plus the foot's normal acceleration over a curved surface),
+  ``g_b`` gravity to the left and ``a_lat = V_cm V_f C_f`` the centre of mass's centripetal
+  acceleration (the paper's ``k``); flat ground gives ``G_n = g``, ``g_b = 0``: Eq. (2);
+- Eq. (1) inverted the same way (its closed form with ``g sin th`` replaced by
+  ``G_n sin th + g_b cos th``; ``kappa_n`` is taken at ``V_f = V_cm`` there, and the forward law
+  recomputes ``alpha_v`` from the bounded ``C_f`` exactly, as Section 3 does for every bound);
+- speed: ``dV_cm/dt = g_t - mu N / m - rho C_d A V_cm^2 / (2 m)`` with ``N`` the normal
+  contact force ``m (G_n - l (alpha_v sin theta_v + omega_v^2 cos theta_v))``;
+- the foot moves along ``t`` at ``V_f``; its horizontal heading turns at
+  ``V_f (C_f turn_gain + kappa_n bend_gain)`` (the Darboux frame's ``dt/ds = C_f b + kappa_n n``
+  seen from above).
+
+Flat ground without friction or drag reduces to :func:`.dynamics.steer` (to round-off).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .dynamics import bound_cf
+from .params import BodyParams, Limits, check_range
+from .terrain import surface_frame
+
+__all__ = ["TERRAIN_STATE", "V_CM", "Resistance", "RESISTANCE", "terrain_steer",
+           "terrain_inverse_cf", "terrain_leg_force", "terrain_rk4_step"]
+
+TERRAIN_STATE = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
+V_CM = 5
+
+
+@dataclass(frozen=True)
+class Resistance:
+    """What slows the figure down: snow or rolling friction and air drag."""
+
+    mu: float = 0.0
+    """Coefficient of kinetic friction on snow, or of rolling resistance, dimensionless."""
+    CdA: float = 0.0
+    """Drag area ``C_d A``, m^2."""
+    rho: float = 1.225
+    """Air density, kg/m^3 (1.225: the ISA standard atmosphere at sea level)."""
+
+    def __post_init__(self):
+        check_range("mu", self.mu, 0.0, 1.0)
+        check_range("CdA", self.CdA, 0.0, 10.0)
+        check_range("rho", self.rho, 0.0, 2.0)
+
+    def drag_k(self, m: float) -> float:
+        """``rho C_d A / (2 m)``, 1/m: the drag deceleration over ``V^2``."""
+        return self.rho * self.CdA / (2.0 * m)
+
+
+RESISTANCE: dict[str, Resistance] = {
+    # Waxed skis on groomed snow: kinetic friction 0.02-0.1 (Colbeck 1992, "A review of the
+    # processes that control snow friction", CRREL Monograph 92-2); 0.05 for a ski carving
+    # at speed.  Drag area of an alpine skier turning in a giant-slalom stance 0.4-0.6 m^2
+    # (Meyer, Le Pelley & Borrani 2012, Med. Sci. Sports Exerc. 44(6)); air at ~2000 m, the
+    # ISA density there (1.007 kg/m^3).
+    "skier": Resistance(mu=0.05, CdA=0.5, rho=1.007),
+    # A snowboard's base slides like a ski's (Colbeck 1992); the rider stands sideways and
+    # higher: the top of Meyer et al.'s range.
+    "snowboarder": Resistance(mu=0.05, CdA=0.6, rho=1.007),
+    # Telemark: the skier's skis and air, a more upright lunge.
+    "telemark": Resistance(mu=0.05, CdA=0.55, rho=1.007),
+    # Road tyres on smooth asphalt: rolling resistance 0.003-0.006; a rider on the hoods
+    # 0.3-0.4 m^2 (Wilson & Papadopoulos 2004, "Bicycling Science", 3rd ed., Ch. 4-5); sea level.
+    "cyclist": Resistance(mu=0.005, CdA=0.36, rho=1.225),
+}
+
+
+def terrain_inverse_cf(body: BodyParams, frame, theta_v, alpha_v, V):
+    """Eq. (1) on terrain: the ``C_f`` that gives ``alpha_v`` (closed form, physical root).
+
+    ``J alpha = G_n sin th + g_b cos th - V V_f C_f cos th``, with ``V V_f = V^2 / (1 - C_f l
+    sin th)``, factors like Eq. (1): ``C_f = K / (K l sin th + V^2 cos th)``,
+    ``K = G_n sin th + g_b cos th - J alpha``.  Off the physical branch: ``sign(K) inf``.
+    """
+    s, c = np.sin(theta_v), np.cos(theta_v)
+    G_n = frame.g_normal + V * V * frame.kappa_n
+    k = G_n * s + frame.g_lateral * c - alpha_v * body.J
+    den = k * body.l * s + V * V * c
+    ok = den > 0.0
+    return np.where(ok, k / np.where(ok, den, 1.0), np.copysign(math.inf, k))
+
+
+def terrain_steer(body: BodyParams, limits: Limits, resistance: Resistance, ground, C_f,
+                  state, anchor=None, tau=0.0):
+    """The right-hand side on terrain under a demanded curvature (bounded as in Section 3).
+
+    ``state`` is ``(x, y, theta_dir, theta_v, omega_v, V_cm)`` (floats or arrays).  Returns
+    ``(derivatives, C_f, alpha_v, V_f, N, frame)`` with ``N`` the normal contact force, N.
+    """
+    x, y, d, th, om, V = state
+    fr = surface_frame(ground, x, y, d, body.g)
+    s, c = np.sin(th), np.cos(th)
+    cf = bound_cf(body, limits, C_f, s, anchor, tau, np)
+    ratio = 1.0 / (1.0 - cf * body.l * s)                      # Eq. (21): V_f / V_cm
+    V_f = V * ratio
+    G_n = fr.g_normal + V_f * V_f * fr.kappa_n
+    alpha = (G_n * s + (fr.g_lateral - V * V_f * cf) * c) / body.J     # Eq. (2) on terrain
+    N = body.m * (G_n - body.l * (alpha * s + om * om * c))
+    dV = fr.g_along - resistance.mu * N / body.m - resistance.drag_k(body.m) * V * V
+    turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)
+    deriv = (V_f * fr.t[0], V_f * fr.t[1], turn, om, alpha, dV)
+    return deriv, cf, alpha, V_f, N, fr
+
+
+def terrain_leg_force(body: BodyParams, theta_v, omega_v, alpha_v, C_f, V, V_f, frame):
+    """Appendix A's leg force on terrain: ``(F_leg, F_along)``, N.
+
+    The ground reaction ``m (a_cm - g)`` in the leg's frame: along the leg
+    ``m (G_n cos th + (a_lat - g_b) sin th - l omega_v^2)``, across it ``I_v alpha_v / l``
+    (Eq. 13); flat ground gives :func:`.dynamics.leg_force`.
+    """
+    s, c = np.sin(theta_v), np.cos(theta_v)
+    G_n = frame.g_normal + V_f * V_f * frame.kappa_n
+    along = body.m * (G_n * c + (V * V_f * C_f - frame.g_lateral) * s
+                      - body.l * omega_v * omega_v)
+    return np.hypot(along, body.I_v * alpha_v / body.l), along
+
+
+def terrain_rk4_step(body, limits, resistance, ground, state, t, dt, desired_cf, anchor):
+    """One classical RK4 step of the terrain state under the steering law
+    ``desired_cf(t, state)``, ``C_f`` bounded at every stage relative to ``anchor`` (the
+    curvature at the start of the step), as :func:`.dynamics.rk4_step` does on flat ground."""
+    state = np.asarray(state, dtype=float)
+
+    def f(tt, st, tau):
+        return np.asarray(terrain_steer(body, limits, resistance, ground, desired_cf(tt, st),
+                                        st, anchor, tau)[0])
+
+    h = 0.5 * dt
+    k1 = f(t, state, 0.0)
+    k2 = f(t + h, state + h * k1, h)
+    k3 = f(t + h, state + h * k2, h)
+    k4 = f(t + dt, state + dt * k3, dt)
+    return state + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
