@@ -206,10 +206,10 @@ MUTANTS = [
       [T + "test_path.py", T + "test_cli_follow.py"]),
     M("progress_jumps_ahead", "core/path.py",
       "p + 2.0 * travel + self.spacing", "p + self.near", [T + "test_path.py"]),
-    M("dead_ends_not_avoided", "core/planner/search.py",
+    M("dead_ends_not_avoided", "core/planner/viable.py",
       "    if not problem.settings.viable_stages:\n        return np.zeros(len(C_f), bool)\n"
-      "    return _no_way_on(", "    if True:\n        return np.zeros(len(C_f), bool)\n"
-      "    return _no_way_on(", [T + "test_planner_search.py"]),
+      "    return no_way_on(", "    if True:\n        return np.zeros(len(C_f), bool)\n"
+      "    return no_way_on(", [T + "test_planner_search.py"]),
     # -- mapping (Section 7) -------------------------------------------------------------------
     M("leg_twist_reversed", "mapping/skier.py",
       "twist = {s: np.clip(-o.leg_twist_gain * (tilts[s] - th)",

@@ -9,8 +9,7 @@ from blender_turning.core import preset
 from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
-from blender_turning.core.planner import search
-from blender_turning.core.planner.search import dead_end
+from blender_turning.core.planner.viable import dead_end, doomed_nodes
 from blender_turning.core.planner.spacing import PairFloor
 
 
@@ -135,7 +134,7 @@ def test_proven_bounds_are_admissible(seed):
         togo = proof.togo[proof.root, c]
         if kids.collided[c] or kids.fell[c]:
             continue
-        if search._doomed(problem, kids.state[:, [c]], kids.C_f[[c]], 2)[0]:
+        if doomed_nodes(problem, kids.state[:, [c]], kids.C_f[[c]], 2)[0]:
             assert togo == math.inf     # not a node of any allowed plan (module docstring)
             continue
         f_ref, _ = exhaustive(rest, kids.state[:, c], float(kids.C_f[c]), 0.6, float(kids.s[c]),

@@ -19,7 +19,8 @@ from ..path import PathProgress
 from ..phase_estimate import estimate_phase
 from ..trajectory import Trajectory, body_meta
 from .problem import Problem
-from .search import SearchStats, branch_and_bound, dead_end
+from .search import SearchStats, branch_and_bound
+from .viable import dead_end
 
 __all__ = ["Replan", "FollowResult", "follow"]
 

@@ -25,11 +25,11 @@ Beyond the paper (each switchable, for the benchmarks and the exactness tests):
 - batches: ``batch`` queue nodes are expanded together, their ``batch * q`` children simulated as
   one array operation.
 
-The problem solved (``viable_stages = M > 0``; with M = 0 it is the paper's): the receding horizon
-applies only the first stage of a plan, so a plan whose last node cannot go on is a poor choice
-however close it keeps to the path (in the paper's problem about four in five executed plans
-ended so on the shipped scenes: BENCHMARKS.md).  A plan is *allowed* when none of its nodes
-collides or falls (the paper's condition) and
+The problem solved (``viable_stages = M > 0``, the tests in ``viable.py``; with M = 0 it is the
+paper's): the receding horizon applies only the first stage of a plan, so a plan whose last node
+cannot go on is a poor choice however close it keeps to the path (in the paper's problem about
+four in five executed plans ended so on the shipped scenes: BENCHMARKS.md).  A plan is *allowed*
+when none of its nodes collides or falls (the paper's condition) and
 
 - no node of it, at depth ``d``, is *doomed*: proved by the fall table (``fall_table.py``; its
   conservative grid lookup, exactly as ``FallTable.doomed`` computes it) to pass the lean bound
@@ -60,8 +60,9 @@ import numpy as np
 
 from .problem import Problem
 from .proof import ProvenBounds, back_up
+from .viable import dead_leaves, doomed_nodes, paper_problem
 
-__all__ = ["SearchStats", "Plan", "branch_and_bound", "exhaustive", "dead_end"]
+__all__ = ["SearchStats", "Plan", "branch_and_bound", "exhaustive"]
 
 _REL_TOL = 1e-9
 
@@ -215,59 +216,25 @@ def _root(q, state, C_f, t0, s0, old):
     return nodes
 
 
-def _doomed(problem, state, C_f, depth):
-    """Nodes at ``depth`` that the fall table proves will fall within the horizon or the
-    ``viable_stages`` after it whatever they do (module docstring); with ``viable_stages`` 0,
-    within the horizon (only where ``fall_table`` is set: then it is a pure speed-up)."""
-    st = problem.settings
-    C_f = np.atleast_1d(np.asarray(C_f, float))
-    table = problem.fall_table() if (st.fall_table or st.viable_stages) else None
-    if table is None or not len(C_f):
-        return np.zeros(len(C_f), bool)
-    steps = (st.n_stages - np.asarray(depth) + st.viable_stages) * st.steps_per_stage
-    return table.doomed(state, C_f, steps)
-
-
-def _dead_leaves(problem, state, C_f, t, s):
-    """Which last nodes are dead ends, when ``viable_stages`` is set (else none)."""
-    C_f = np.atleast_1d(np.asarray(C_f, float))
-    if not problem.settings.viable_stages:
-        return np.zeros(len(C_f), bool)
-    return _no_way_on(problem, state, C_f, t, s)
-
-
-def _no_way_on(problem, state, C_f, t, s):
-    """Nodes each of whose q children collides or falls within one more stage (dead ends)."""
-    C_f = np.atleast_1d(np.asarray(C_f, float))
-    if not len(C_f):
-        return np.zeros(0, bool)
-    q, m = problem.settings.q, len(C_f)
-    t = np.broadcast_to(np.asarray(t, float), C_f.shape)
-    s = np.broadcast_to(np.asarray(s, float), C_f.shape)
-    r = problem.simulate_stage(np.repeat(state, q, 1), np.repeat(C_f, q),
-                               np.tile(problem.u_values, m), np.repeat(t, q), np.repeat(s, q))
-    return (r.collided | r.fell).reshape(m, q).all(axis=1)
-
-
 def _follow_choices(problem, state, C_f, t0, s0, choices):
     """Simulate one fixed plan (all q choices at its last stage when ``choices`` is one short).
     Returns ``(cost, full choices, nodes whose children were simulated, leaf)`` of its best
-    feasible completion (a viable last node: :func:`_dead_leaves`), or ``(inf, None, nodes,
+    feasible completion (a viable last node: :func:`.viable.dead_leaves`), or ``(inf, None, nodes,
     None)``."""
     st = problem.settings
     x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
     f = np.zeros(1)
     for k, c in enumerate(choices):
         r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
-        if r.collided[0] or r.fell[0] or _doomed(problem, r.state, r.C_f, k + 1)[0]:
+        if r.collided[0] or r.fell[0] or doomed_nodes(problem, r.state, r.C_f, k + 1)[0]:
             return np.inf, None, k + 1, None
         x, cf, s, f, t = r.state, r.C_f, r.s, f + r.cost, t + st.t_stage
     if len(choices) < st.n_stages:
         q = st.q
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
-        bad = r.collided | r.fell | _doomed(problem, r.state, r.C_f, st.n_stages)
-        bad[~bad] = _dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
+        bad = r.collided | r.fell | doomed_nodes(problem, r.state, r.C_f, st.n_stages)
+        bad[~bad] = dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
                                  r.s[~bad])
         fc = np.where(bad, np.inf, f[0] + r.cost)
         j = int(np.argmin(fc))
@@ -276,7 +243,7 @@ def _follow_choices(problem, state, C_f, t0, s0, choices):
             return np.inf, None, n, None
         return float(fc[j]), list(choices) + [j], n, (r.state[:, j].copy(), float(r.C_f[j]),
                                                       t + st.t_stage, float(r.s[j]))
-    if _dead_leaves(problem, x, cf, t, s)[0]:
+    if dead_leaves(problem, x, cf, t, s)[0]:
         return np.inf, None, len(choices), None
     return float(f[0]), list(choices), len(choices), (x[:, 0].copy(), float(cf[0]), t,
                                                       float(s[0]))
@@ -284,7 +251,7 @@ def _follow_choices(problem, state, C_f, t0, s0, choices):
 
 def _greedy_dive(problem, state, C_f, t0, s0):
     """A first complete plan: at each stage take the child with the least ``f + lower bound``
-    (at the last, only viable ones: :func:`_dead_leaves`).  Returns ``(cost, choices, nodes
+    (at the last, only viable ones: :func:`.viable.dead_leaves`).  Returns ``(cost, choices, nodes
     expanded, leaf)``, or ``(inf, None, nodes expanded, None)``."""
     st = problem.settings
     q = st.q
@@ -295,9 +262,9 @@ def _greedy_dive(problem, state, C_f, t0, s0):
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
         key = f + r.cost + problem.lower_bound(r.d_last, depth, r.state, r.C_f)
-        bad = r.collided | r.fell | _doomed(problem, r.state, r.C_f, depth)
+        bad = r.collided | r.fell | doomed_nodes(problem, r.state, r.C_f, depth)
         if depth == st.n_stages:
-            bad[~bad] = _dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
+            bad[~bad] = dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
                                      r.s[~bad])
         key = np.where(bad, np.inf, key)
         j = int(np.argmin(key))
@@ -374,7 +341,7 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         clip_fall += int(np.count_nonzero(r.fell & ~r.collided))
         alive = ~(r.collided | r.fell)
         doomed = np.zeros(len(par), bool)
-        doomed[alive] = _doomed(problem, r.state[:, alive], r.C_f[alive], depth[alive])
+        doomed[alive] = doomed_nodes(problem, r.state[:, alive], r.C_f[alive], depth[alive])
         clip_doom += int(np.count_nonzero(doomed))
         alive &= ~doomed
         leaf = alive & (depth == N)
@@ -382,7 +349,7 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         if leaf.any() and st.viable_stages:       # dead-end last nodes are not plans here
             # Only those that could be the best plan need the (costly) check.
             j = np.flatnonzero(leaf & ~(f > ub + tol()))
-            dead[j] = _dead_leaves(problem, r.state[:, j], r.C_f[j],
+            dead[j] = dead_leaves(problem, r.state[:, j], r.C_f[j],
                                    nodes.cols["t"][par[j]] + st.t_stage, r.s[j])
             clip_doom += int(np.count_nonzero(dead))
             leaf &= ~dead
@@ -437,7 +404,7 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         if st.viable_stages:
             # No plan ends viably: the paper's problem (its own proof; the one handed in was
             # proved for the restricted problem and may mark its plans infeasible).
-            plan = branch_and_bound(_paper_problem(problem), state, C_f, t0, s0, previous)
+            plan = branch_and_bound(paper_problem(problem), state, C_f, t0, s0, previous)
             stats = SearchStats(**{**plan.stats.as_dict(), **{
                 k: getattr(stats, k) + getattr(plan.stats, k) for k in _COUNTS},
                 "wall_time": time.perf_counter() - clock})
@@ -449,21 +416,6 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
 
 _COUNTS = ("expanded", "generated", "clipped_collision", "clipped_fall", "clipped_bound",
            "clipped_doomed", "leaves")
-
-
-def dead_end(problem: Problem, leaf) -> bool:
-    """Does the plan's last node ``leaf`` (``Plan.leaf``) end in a dead end: does each of its q
-    children collide or fall within one more stage?  (A measurement: one stage of q children.)"""
-    x, cf, t, s = leaf
-    return bool(_no_way_on(problem, np.reshape(x, (5, 1)), cf, t, s)[0])
-
-
-def _paper_problem(problem: Problem) -> Problem:
-    """The same problem with ``viable_stages = 0`` (sharing its tables: none depends on it)."""
-    p = Problem.__new__(Problem)
-    p.__dict__.update(problem.__dict__)
-    p.settings = replace(problem.settings, viable_stages=0)
-    return p
 
 
 def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
@@ -486,12 +438,12 @@ def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float =
         alive = ~(r.collided | r.fell)
         if not alive.any():
             return np.inf, None
-        ok = (ok[par] & ~_doomed(problem, r.state, r.C_f, depth))[alive]
+        ok = (ok[par] & ~doomed_nodes(problem, r.state, r.C_f, depth))[alive]
         x, cf, s = r.state[:, alive], r.C_f[alive], r.s[alive]
         f = (f[par] + r.cost)[alive]
         t = t[par][alive] + st.t_stage
         paths = np.concatenate([paths[par], ch[:, None]], axis=1)[alive]
-    viable = ok & ~_dead_leaves(problem, x, cf, t, s)
+    viable = ok & ~dead_leaves(problem, x, cf, t, s)
     if st.viable_stages and (viable.any() or not fallback):
         f, paths = f[viable], paths[viable]
         if not len(f):
