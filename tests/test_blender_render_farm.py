@@ -76,6 +76,9 @@ def test_bake_once_move_the_blend_render_chunks_next_to_it(tmp_path):
     assert saved == ["//frames/frame_", 1, 7, 1, "CPU"]     # relative, the whole range, Cycles CPU
     render_chunk(blend, 5, 5)
     assert pngs(farm) == ["frame_0003.png", "frame_0004.png", "frame_0005.png"]
+    # the figures moved: their animation is in the .blend (keyframes; no add-on is registered)
+    assert (farm / "frames" / "frame_0003.png").read_bytes() != \
+        (farm / "frames" / "frame_0005.png").read_bytes()
     assert not (tmp_path / "bake" / "frames").exists()
 
 
