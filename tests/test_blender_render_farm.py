@@ -66,7 +66,8 @@ def pngs(folder):
 def test_bake_once_move_the_blend_render_chunks_next_to_it(tmp_path):
     cfg = tmp_path / "shot.toml"
     cfg.write_text(TINY)
-    r = run_job("--config", cfg, "--no-render", "--engine", "CYCLES", "--output", tmp_path / "bake")
+    r = run_job("--config", cfg, "--no-render", "--engine", "CYCLES", "--output",
+                tmp_path / "bake")
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
     farm = tmp_path / "farm" / "shots"
     farm.mkdir(parents=True)
