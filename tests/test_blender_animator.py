@@ -12,21 +12,12 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat, ops_figure, panel  # noqa: E402
 from blender_turning.blender.props import TurningFigureSettings  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 DATA = Path(__file__).parent / "data"
-
-
-@pytest.fixture(scope="module", autouse=True)
-def registered():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    addon.register()
-    yield
-    addon.unregister()
 
 
 @pytest.fixture

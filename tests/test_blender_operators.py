@@ -13,14 +13,13 @@ bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import snapshot  # noqa: E402
 
-from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat, ops_path, presets  # noqa: E402
 from blender_turning.blender.follow_job import Cancelled  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import PLAN_CURVATURE_RATE, FrameRange  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 OPERATORS = ("add_figure", "bake_turns", "follow_path", "clear_bake")
 
 
@@ -33,14 +32,6 @@ def have_mapping():
 
 
 needs_mapping = pytest.mark.skipif(not have_mapping(), reason="the mapping layer is not there")
-
-
-@pytest.fixture(scope="module", autouse=True)
-def registered():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    addon.register()
-    yield
-    addon.unregister()
 
 
 @pytest.fixture
