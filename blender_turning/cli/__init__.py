@@ -12,7 +12,7 @@ import sys
 
 from ..core.errors import TurningError
 
-COMMANDS = ("simulate", "figures", "follow")
+COMMANDS = ("simulate", "figures", "follow", "crowd")
 
 
 class _Parser(argparse.ArgumentParser):
