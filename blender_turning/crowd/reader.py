@@ -189,7 +189,9 @@ def _scene(f: _Doc, fig_doc: dict, base: Path):
                 loaded = json.load(fh)
         except (OSError, json.JSONDecodeError) as exc:
             follow.fail("scene", f"= {ref!r} cannot be read ({exc})")
-        doc = {**loaded, **{k: v for k, v in doc.items() if k != "scene"}}
+        # The file's objects (planner, start ...) take the overlay's keys one level deep.
+        doc = {**loaded, **{k: {**loaded[k], **v} if isinstance(v, dict) and isinstance(
+            loaded.get(k), dict) else v for k, v in doc.items() if k != "scene"}}
     if fig_doc:
         doc["figure"] = fig_doc
     doc.setdefault("name", f.doc["name"])
