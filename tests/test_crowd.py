@@ -218,3 +218,37 @@ def test_crowd_command_bad_file_and_failed_figure_exit_2_with_one_line(tmp_path)
     assert "1 of 2 figures failed" in r.stderr and "b: fell over at t =" in r.stderr
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert summary["failed"] == ["b"] and (tmp_path / "out" / "a.csv").exists()
+
+
+def test_crowds_need_neither_bpy_nor_dask_nor_tqdm(tmp_path):
+    """The core stays importable and usable without the optional extras: with dask and tqdm
+    made unimportable a crowd runs, and --scheduler names what is missing."""
+    scene = tmp_path / "crowd.json"
+    scene.write_text(json.dumps({"duration": 2, "figures": [TURNS]}))
+    code = f"""
+import sys
+class Block:
+    def find_spec(self, name, path=None, target=None):
+        if name.split('.')[0] in ('dask', 'distributed', 'tqdm'):
+            raise ImportError(name)
+sys.meta_path.insert(0, Block())
+from blender_turning.cli import main
+assert main(['crowd', {str(scene)!r}, '--out', {str(tmp_path / 'o')!r}]) == 0
+assert main(['crowd', {str(scene)!r}, '--out', {str(tmp_path / 'o')!r},
+             '--scheduler', 'tcp://127.0.0.1:1']) == 2
+bad = [m for m in sys.modules if m.split('.')[0] in ('bpy', 'mathutils', 'dask', 'tqdm')]
+print(bad)
+sys.exit(1 if bad else 0)
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "--scheduler needs dask.distributed" in r.stderr
+
+
+def test_the_readme_crowd_example_is_a_valid_crowd_file():
+    from pathlib import Path
+    root = Path(__file__).resolve().parent.parent
+    text = (root / "README.md").read_text()
+    block = text[text.index("### Crowds: `crowd`"):].split("```json\n", 1)[1].split("```")[0]
+    crowd = crowd_from_dict(json.loads(block), root / "scenes" / "crowds")
+    assert len(crowd.figures) == 2 + 8 + 2 + 6 and crowd["guide"].figure.name == "telemark"
