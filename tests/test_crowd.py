@@ -70,6 +70,12 @@ def test_synchronized_pair_turns_in_antiphase_as_mirror_images_or_together(antip
         assert np.count_nonzero(np.diff(np.sign(a.y - b.y)) != 0) >= 9    # crossings: 8s
 
 
+def test_synchronized_gap_starts_each_one_later_in_the_same_place():
+    pair = synchronized(replace(LEADER, time_offset=0.5), 3, gap=1.25)
+    assert [f.time_offset for f in pair] == [0.5, 1.75, 3.0]
+    assert {f.position for f in pair} == {(0.0, 0.0)}
+
+
 def test_synchronized_line_is_centred_across_the_heading():
     line = synchronized(replace(LEADER, controller=Turns(2.0, 0.3, math.pi / 2)), 3,
                         spacing=2.0)
@@ -200,6 +206,9 @@ def test_crowd_command_writes_a_csv_per_figure_and_a_summary(tmp_path):
     assert r.stderr == ""                                 # no progress bar into a pipe
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert [f["name"] for f in summary["figures"]] == ["a1", "a2"]
+    # The antiphase pair on one line cross each other's tracks: they touch (distance 0).
+    assert summary["figures"][0]["closest"]["to"] == "a2"
+    assert summary["figures"][0]["closest"]["distance_m"] == 0.0
     assert summary["failed"] == []
     lines = (tmp_path / "out" / "a2.csv").read_text().splitlines()
     assert lines[0].startswith("t,x,y") and len(lines) == 1 + 3 * 24 + 1

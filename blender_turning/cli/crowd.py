@@ -15,6 +15,7 @@ from pathlib import Path
 from ..core.params import check_range
 from ..core.trajectory import _atomic_write
 from ..crowd import load_crowd, run_crowd
+from ..crowd.moving import MovingBodies, closest_approach
 from .progress import Progress
 
 
@@ -45,6 +46,10 @@ def run(args) -> int:
     with Progress(len(crowd.figures), "figure", "crowd") as bar:
         result = run_crowd(crowd, workers=args.workers, scheduler=args.scheduler, progress=bar)
     out.mkdir(exist_ok=True)
+    tracks = [(f.name, r.trajectory, f.figure.body.l) for f, r in zip(crowd.figures,
+                                                                    result.figures)]
+    near = closest_approach(MovingBodies.from_tracks(tracks, dt=0.1)) \
+        if any(tr is not None and len(tr) for _, tr, _ in tracks) else {}
     rows = []
     for f, r in zip(crowd.figures, result.figures):
         traj = r.trajectory
@@ -55,6 +60,10 @@ def run(args) -> int:
             csv = f"{f.name}.csv"
             traj.to_csv(out / csv)
         rows.append(_row(f, r, traj, csv))
+        if f.name in near:           # foot-CM segments sampled every 0.1 s (crowd/moving.py)
+            d, other, t = near[f.name]
+            rows[-1]["closest"] = {"distance_m": d if math.isfinite(d) else None,
+                                   "to": other, "t": t}
     doc = {"crowd": crowd.name, "seed": crowd.seed, "duration": crowd.duration, "dt": crowd.dt,
            "fps": args.fps, "figures": rows, "failed": [r.name for r in result.failed],
            "wall_time": result.wall_time,

@@ -141,22 +141,27 @@ def follow_leader(leader: CrowdFigure, count: int, gap: float, by: str = "time",
 
 
 def synchronized(template: CrowdFigure, count: int = 2, spacing: float = 0.0,
-                 antiphase: bool = True, name: str | None = None) -> tuple:
+                 antiphase: bool = True, name: str | None = None, gap: float = 0.0) -> tuple:
     """``count`` figures turning together on a line across the heading, ``spacing`` m apart
     (centred on the template's start); with ``antiphase`` every other one starts with the
-    opposite turn (``count = 2, spacing = 0``: the figure-8s of Fig. 10, track 1).  Named
-    ``<name>1 ...`` (default: the template's name)."""
+    opposite turn (``count = 2, spacing = 0``: the figure-8s of Fig. 10, track 1).  ``gap``
+    (s): each one starts that much after the one before, in the same place (synchronised
+    skiers drawing figure-8s ski one behind the other; ``gap = 0`` starts them together, on
+    top of each other when ``spacing`` is 0).  Named ``<name>1 ...`` (default: the template's
+    name)."""
     if template.is_path:
         raise ValueError("synchronized needs a turns template (the parametric controller)")
     check_range("count", count, 1, 10000)
     check_range("spacing", spacing, 0.0, 1e3)
+    check_range("gap", gap, 0.0, 1e4)
     prefix = template.name if name is None else name
     flip = {"left": "right", "right": "left"}
     out = []
     for k in range(int(count)):
         first = flip[template.first_turn] if antiphase and k % 2 else template.first_turn
         out.append(_moved(template, f"{prefix}{k + 1}", template.figure,
-                          (k - 0.5 * (count - 1)) * spacing, first_turn=first))
+                          (k - 0.5 * (count - 1)) * spacing, first_turn=first,
+                          time_offset=template.time_offset + k * gap))
     return tuple(out)
 
 

@@ -24,7 +24,7 @@ _FIGURE = {"name", "preset", "body", "limits", "turns", "follow", "start", "time
 _FORMATIONS = {
     "follow_leader": {"type", "leader", "count", "gap_s", "gap_m", "lateral_m", "body_jitter",
                       "timing_jitter_s", "period_jitter", "name", "seed"},
-    "synchronized": {"type", "template", "count", "spacing_m", "antiphase", "name"},
+    "synchronized": {"type", "template", "count", "spacing_m", "antiphase", "gap_s", "name"},
     "peloton": {"type", "template", "count", "gap_m", "abreast", "spacing_m", "body_jitter",
                 "name", "seed"},
 }
@@ -201,6 +201,11 @@ def _scene(f: _Doc, fig_doc: dict, base: Path):
         raise ValueError(f"crowd field {follow.where}: {exc}") from None
 
 
+def _name(f: _Doc):
+    """A formation's optional ``name`` (the prefix of its figures' names)."""
+    return f.string("name") if f.has("name") else None
+
+
 def _formation(doc, where: str, figures: list, seed: int, base: Path) -> tuple:
     kind = _Doc(doc, where).string("type", choices=tuple(_FORMATIONS))
     f = _Doc(doc, where, _FORMATIONS[kind])
@@ -220,18 +225,20 @@ def _formation(doc, where: str, figures: list, seed: int, base: Path) -> tuple:
                 lateral, f.integer("seed", seed, 0, 2**63 - 1),
                 f.number("body_jitter", 0.0, 0.0, 0.3),
                 f.number("timing_jitter_s", 0.0, 0.0, 1e3),
-                f.number("period_jitter", 0.0, 0.0, 0.3), (f.string("name") if f.has("name") else None))
+                f.number("period_jitter", 0.0, 0.0, 0.3), _name(f))
         template = _figure(f.obj("template", _FIGURE, required=True), base)
         if kind == "synchronized":
             return formations_.synchronized(template, f.integer("count", 2, 1, 10000),
                                             f.number("spacing_m", 0.0, 0.0, 1e3),
-                                            f.boolean("antiphase", True), (f.string("name") if f.has("name") else None))
+                                            f.boolean("antiphase", True),
+                                            _name(f),
+                                            f.number("gap_s", 0.0, 0.0, 1e4))
         return formations_.peloton(template, f.integer("count", None, 1, 10000),
                                    f.number("gap_m", lo=0.0, hi=1e3, lo_open=True),
                                    f.integer("abreast", 2, 1, 100),
                                    f.number("spacing_m", 0.8, 0.0, 1e2),
                                    f.integer("seed", seed, 0, 2**63 - 1),
-                                   f.number("body_jitter", 0.0, 0.0, 0.3), (f.string("name") if f.has("name") else None))
+                                   f.number("body_jitter", 0.0, 0.0, 0.3), _name(f))
     except ValueError as exc:
         msg = str(exc)
         raise ValueError(msg if msg.startswith("crowd") else f"crowd field {where}: {msg}") \
