@@ -52,8 +52,9 @@ def main():
     ap.add_argument("--skip-dask", action="store_true")
     ap.add_argument("--course", type=float, default=8.0, help="s of the slalom planned")
     args = ap.parse_args()
+    now = datetime.datetime.now(datetime.timezone.utc)
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"load {os.getloadavg()[0]:.1f}; {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC")
+          f"load average {os.getloadavg()[0]:.1f} before; {now:%Y-%m-%d %H:%M} UTC")
     crowd = path_crowd(args.course)
     rows = []
     one, w1, _ = timed(lambda: run_crowd(crowd))
@@ -71,10 +72,12 @@ def main():
             dk, wd, _ = timed(lambda: run_crowd(crowd, scheduler=cluster.scheduler_address))
         rows.append(("8 path figures, Dask LocalCluster 2 workers", wd,
                      sum(r.cpu_time for r in dk.figures), w1 / wd))
+    print(f"load average {os.getloadavg()[0]:.1f} after the path figures")
     print(f"\ncourse {args.course:g} s per figure ({8 * args.course:g} figure-seconds)\n")
-    print("| run | wall s | task CPU s | speed-up vs 1 worker |\n|---|---|---|---|")
+    print("| run | wall s | task CPU s | task CPU / wall | speed-up vs 1 worker |\n"
+          "|---|---|---|---|---|")
     for name, wall, cpu, sp in rows:
-        print(f"| {name} | {wall:.2f} | {cpu:.2f} | {sp:.2f}x |")
+        print(f"| {name} | {wall:.2f} | {cpu:.2f} | {cpu / wall:.2f} | {sp:.2f}x |")
 
     fig = preset("skier")
     lead = CrowdFigure("lead", fig, Turns(2.0, math.radians(20), 0.0))
@@ -83,7 +86,7 @@ def main():
     res, ws, cs = timed(lambda: run_crowd(big))
     assert not res.failed
     solo = Crowd("10", big.figures[:10], 60.0)
-    _, w10, _ = timed(lambda: [run_crowd(Crowd("1", (f,), 60.0)) for f in solo.figures])
+    _, w10, c10 = timed(lambda: [run_crowd(Crowd("1", (f,), 60.0)) for f in solo.figures])
     poses, wm, cm = timed(lambda: [map_trajectory("skier", r.trajectory, fps=24)
                                    for r in res.figures])
     frames = sum(len(p.frames) for p in poses)
@@ -91,7 +94,7 @@ def main():
           f"{frames} frames mapped\n")
     print("| step | wall s | CPU s |\n|---|---|---|")
     print(f"| simulate, one batch of 100 | {ws:.2f} | {cs:.2f} |")
-    print(f"| simulate one by one (baseline: 10 figures x 10) | {10 * w10:.2f} | - |")
+    print(f"| simulate one by one (baseline: 10 figures, x 10) | {10 * w10:.2f} | {10 * c10:.2f} |")
     print(f"| resample at 24 fps + map onto the skier rig, 100 figures | {wm:.2f} | {cm:.2f} |")
     print(f"| simulate + map | {ws + wm:.2f} | {cs + cm:.2f} |")
 
