@@ -26,6 +26,11 @@ if str(ROOT) not in sys.path:                      # inside a Blender binary: fi
     sys.path.insert(0, str(ROOT))
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-job-"))
 
+from blender_turning.core.files import temp_beside  # noqa: E402
+from blender_turning.core.params import PRESETS  # noqa: E402
+from blender_turning.core.ranges import RANGES  # noqa: E402
+from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
+
 ENGINES = ("WORKBENCH", "EEVEE", "CYCLES")
 SPORTS = ("skier", "snowboarder", "telemark", "cyclist")
 
@@ -35,126 +40,172 @@ class ConfigError(ValueError):
 
 
 # -- config --------------------------------------------------------------------------------------
+# Every value is checked here, before anything is built, against the core's table of ranges
+# (blender_turning/core/ranges.py) with the field validator every file format uses.
 
-_REQUIRED = object()
-
-
-def _get(table, key, kind, default=_REQUIRED, where=""):
-    """``table[key]`` checked to be a ``kind``; ``default`` when absent (required if not given)."""
-    if key not in table:
-        if default is _REQUIRED:
-            raise ConfigError(f"{where}{key} is missing")
-        return default
-    v = table[key]
-    if kind is float and isinstance(v, int) and not isinstance(v, bool):
-        v = float(v)
-    if not isinstance(v, kind) or (kind is int and isinstance(v, bool)):
-        raise ConfigError(f"{where}{key} = {v!r} should be a {kind.__name__}")
-    return v
+_KNOWN = {
+    "": {"job", "render", "camera", "ground", "figures", "paths", "obstacles"},
+    "job": {"name", "seconds", "fps", "frame_step", "output"},
+    "render": {"engine", "resolution", "format", "samples"},
+    "camera": {"follow", "distance", "height", "lens"},
+    "ground": {"kind"},
+    "path": {"points"},
+    "obstacle": {"group", "kind", "at", "size", "height"},
+    "figure": {"sport", "control", "name", "start", "direction_deg", "period", "lean_deg",
+               "heading_deg", "path", "obstacles", "plan_curvature_rate"},
+}
 
 
-def _xy(v, where):
-    if not (isinstance(v, list) and len(v) == 2 and all(isinstance(a, (int, float)) for a in v)):
-        raise ConfigError(f"{where} = {v!r} should be [x, y] in metres")
-    return float(v[0]), float(v[1])
+def _file_name(f, key, default):
+    """A plain file name (the job's .blend and video are named after it): no folders, so the
+    output stays inside the output folder."""
+    name = f.string(key, default)
+    if (not name.strip() or name in (".", "..") or any(c in name for c in "/\\\0")
+            or name.startswith(".")):
+        f.fail(key, f"= {name!r} is not a plain file name (no folders, not hidden)")
+    return name
+
+
+def _resolution(given, where):
+    """``[width, height]`` from a list or a ``WIDTHxHEIGHT`` string, each in pixels."""
+    size = given
+    if isinstance(given, str):
+        try:
+            size = [int(v) for v in given.lower().split("x")]
+        except ValueError:
+            size = None
+    if not isinstance(size, list) or len(size) != 2:
+        raise ConfigError(f"{where} = {given!r} should be "
+                          f"{'WIDTHxHEIGHT' if isinstance(given, str) else '[width, height]'} "
+                          "in pixels")
+    return [check(f"{where}[{i}]", v, "pixels") for i, v in enumerate(size)]
+
+
+def check_output(out: Path, flag: str) -> None:
+    """The output folder can be created and written (checked before anything is built): it is a
+    folder or does not exist yet, and its nearest existing folder takes a new file."""
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"{flag} = {str(out)!r} is a file, not a folder")
+    probe = out
+    while not probe.exists():
+        probe = probe.parent
+    if not probe.is_dir():
+        raise ConfigError(f"{flag} = {str(out)!r}: {str(probe)!r} is a file, not a folder")
+    try:
+        tmp = temp_beside(probe / "probe")
+    except OSError as exc:
+        raise ConfigError(f"{flag} = {str(out)!r} cannot be written: "
+                          f"{exc.strerror or exc}") from None
+    tmp.unlink()
 
 
 def load_config(path: Path, overrides) -> dict:
+    src = str(path)
     try:
-        with open(path, "rb") as fh:
-            doc = tomllib.load(fh)
-    except OSError as exc:
-        raise ConfigError(f"cannot read config {str(path)!r}: {exc.strerror}") from None
+        doc = tomllib.loads(read_text(path, "config"))
     except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"config {str(path)!r} is not valid TOML: {exc}") from None
-    unknown = set(doc) - {"job", "render", "camera", "ground", "figures", "paths", "obstacles"}
-    if unknown:
-        raise ConfigError(f"unknown section [{sorted(unknown)[0]}]")
-    job = doc.get("job", {})
-    cfg = {"name": _get(job, "name", str, path.stem, "job."),
-           "seconds": _get(job, "seconds", float, 5.0, "job."),
-           "fps": _get(job, "fps", int, 24, "job."),
-           "frame_step": _get(job, "frame_step", int, 1, "job.")}
-    if not 0 < cfg["seconds"] <= 600:
-        raise ConfigError(f"job.seconds = {cfg['seconds']} is outside (0, 600]")
-    if not 1 <= cfg["fps"] <= 240 or cfg["frame_step"] < 1:
-        raise ConfigError("job.fps must be in [1, 240] and job.frame_step at least 1")
-    out = overrides.output or _get(job, "output", str, f"out/{cfg['name']}", "job.")
-    cfg["output"] = Path(out).resolve()
-    r = doc.get("render", {})
-    engine = (overrides.engine or _get(r, "engine", str, "WORKBENCH", "render.")).upper()
+        raise ConfigError(f"config {src!r} is not valid TOML: {exc}") from None
+    except RecursionError:
+        raise ConfigError(f"config {src!r} is nested too deeply") from None
+    top = Fields(doc, src).only(_KNOWN[""])
+    job = top.table("job", _KNOWN["job"])
+    cfg = {"name": _file_name(job, "name", path.stem),
+           "seconds": job.number("seconds", "job_seconds", 5.0),
+           "fps": job.number("fps", "job_fps", 24),
+           "frame_step": job.number("frame_step", "frame_step", 1)}
+    if overrides.seconds is not None:
+        cfg["seconds"] = check("--seconds", overrides.seconds, "job_seconds")
+    if overrides.frame_step is not None:
+        cfg["frame_step"] = check("--frame-step", overrides.frame_step, "frame_step")
+    out = job.string("output", f"out/{cfg['name']}")
+    if not out.strip():
+        job.fail("output", f"= {out!r} is not a folder path")
+    cfg["output"], flag = Path(out).resolve(), f"{src}: job.output"
+    if overrides.output is not None:
+        if not overrides.output.strip():
+            raise ConfigError(f"--output = {overrides.output!r} is not a folder path")
+        cfg["output"], flag = Path(overrides.output).resolve(), "--output"
+    check_output(cfg["output"], flag)
+
+    r = top.table("render", _KNOWN["render"])
+    engine = r.string("engine", "WORKBENCH").upper()
     if engine not in ENGINES:
-        raise ConfigError(f"render.engine = {engine!r} is not one of {', '.join(ENGINES)}")
-    res = overrides.resolution or _get(r, "resolution", list, [640, 360], "render.")
-    if isinstance(res, str):
-        try:
-            res = [int(v) for v in res.lower().split("x")]
-        except ValueError:
-            raise ConfigError(f"--resolution {res!r} should be WIDTHxHEIGHT") from None
-    if len(res) != 2 or not all(isinstance(v, int) and 4 <= v <= 8192 for v in res):
-        raise ConfigError(f"render.resolution = {res!r} should be [width, height] in pixels")
-    fmt = _get(r, "format", str, "PNG", "render.").upper()
+        r.fail("engine", f"= {engine!r} is not one of {', '.join(ENGINES)}")
+    if overrides.engine is not None:
+        engine = overrides.engine.upper()
+        if engine not in ENGINES:
+            raise ConfigError(f"--engine = {engine!r} is not one of {', '.join(ENGINES)}")
+    res = _resolution(r.value("resolution", [640, 360]), f"{src}: render.resolution")
+    if overrides.resolution is not None:
+        res = _resolution(overrides.resolution, "--resolution")
+    fmt = r.string("format", "PNG").upper()
     if fmt not in ("PNG", "VIDEO"):
-        raise ConfigError(f"render.format = {fmt!r} is not PNG or VIDEO")
+        r.fail("format", f"= {fmt!r} is not PNG or VIDEO")
     cfg["render"] = {"engine": engine, "resolution": res, "format": fmt,
-                     "samples": _get(r, "samples", int, 16, "render.")}
-    cam = doc.get("camera", {})
-    cfg["camera"] = {"follow": _get(cam, "follow", str, "all", "camera."),
-                     "distance": _get(cam, "distance", float, 16.0, "camera."),
-                     "height": _get(cam, "height", float, 6.0, "camera."),
-                     "lens": _get(cam, "lens", float, 35.0, "camera.")}
-    cfg["ground"] = _get(doc.get("ground", {}), "kind", str, "snow", "ground.")
-    if cfg["ground"] not in ("snow", "road"):
-        raise ConfigError(f"ground.kind = {cfg['ground']!r} is not snow or road")
+                     "samples": r.number("samples", "render_samples", 16)}
+    cam = top.table("camera", _KNOWN["camera"])
+    cfg["camera"] = {"follow": cam.string("follow", "all"),
+                     "distance": cam.number("distance", "camera_distance", 16.0),
+                     "height": cam.number("height", "camera_height", 6.0),
+                     "lens": cam.number("lens", "lens", 35.0)}
+    cfg["ground"] = top.table("ground", _KNOWN["ground"]).string("kind", "snow",
+                                                                choices=("snow", "road"))
     paths = {}
-    for name, p in doc.get("paths", {}).items():
-        pts = p.get("points") if isinstance(p, dict) else None
-        if not isinstance(pts, list) or len(pts) < 2:
-            raise ConfigError(f"paths.{name}.points needs at least two [x, y] points")
-        paths[name] = [_xy(v, f"paths.{name}.points[{i}]") for i, v in enumerate(pts)]
+    pt = top.table("paths")
+    for name in pt.keys():
+        pts = pt.table(name, _KNOWN["path"], required=True).points("points", 2)
+        for i in range(1, len(pts)):
+            if (pts[i] == pts[i - 1]).all():
+                raise ConfigError(f"{src}: paths.{name}.points[{i}] = {pts[i].tolist()} is the "
+                                  f"same point as paths.{name}.points[{i - 1}]; a path needs "
+                                  "distinct consecutive points")
+        paths[name] = [(float(x), float(y)) for x, y in pts]
     obstacles = []
-    for i, o in enumerate(doc.get("obstacles", [])):
-        w = f"obstacles[{i}]."
-        kind = _get(o, "kind", str, "pole", w)
-        if kind not in ("pole", "box"):
-            raise ConfigError(f"{w}kind = {kind!r} is not pole or box")
-        obstacles.append({"group": _get(o, "group", str, "obstacles", w), "kind": kind,
-                          "at": _xy(o.get("at"), w + "at"),
-                          "size": _get(o, "size", float, 0.6, w),
-                          "height": _get(o, "height", float, 1.8, w)})
-    figures = doc.get("figures", [])
+    for o in top.tables("obstacles", _KNOWN["obstacle"]):
+        obstacles.append({"group": o.string("group", "obstacles"),
+                          "kind": o.string("kind", "pole", choices=("pole", "box")),
+                          "at": tuple(float(v) for v in o.xy("at")),
+                          "size": o.number("size", "object_size", 0.6),
+                          "height": o.number("height", "object_height", 1.8)})
+    figures = top.tables("figures", _KNOWN["figure"])
     if not figures:
-        raise ConfigError("the config has no [[figures]]")
+        raise ConfigError(f"{src}: the config has no [[figures]]")
     cfg["figures"] = []
-    for i, f in enumerate(figures):
-        w = f"figures[{i}]."
-        sport = _get(f, "sport", str, where=w).lower()
+    lean, heading = RANGES["theta_max"].deg(), RANGES["heading"].deg()
+    for f in figures:
+        sport = f.string("sport").lower()
         if sport not in SPORTS:
-            raise ConfigError(f"{w}sport = {sport!r} is not one of {', '.join(SPORTS)}")
-        control = _get(f, "control", str, "turns", w)
-        if control not in ("turns", "path"):
-            raise ConfigError(f"{w}control = {control!r} is not turns or path")
-        fig = {"sport": sport, "control": control, "name": _get(f, "name", str, sport.title(), w),
-               "start": _xy(f.get("start", [0, 0]), w + "start"),
-               "direction_deg": _get(f, "direction_deg", float, 90.0, w),
-               "period": _get(f, "period", float, 2.0, w),
-               "lean_deg": _get(f, "lean_deg", float, 20.0, w),
-               "heading_deg": _get(f, "heading_deg", float, None, w),
-               "path": _get(f, "path", str, None, w),
-               "obstacles": _get(f, "obstacles", str, None, w),
-               "plan_curvature_rate": _get(f, "plan_curvature_rate", float, None, w)}
-        if control == "path" and fig["path"] not in paths:
-            raise ConfigError(f"{w}path = {fig['path']!r} is not a [paths.<name>] of the config")
+            f.fail("sport", f"= {sport!r} is not one of {', '.join(SPORTS)}")
+        fig = {"sport": sport, "control": f.string("control", "turns", choices=("turns", "path")),
+               "name": f.string("name", sport.title()),
+               "start": tuple(float(v) for v in f.xy("start", [0.0, 0.0])),
+               "direction_deg": f.number("direction_deg", heading, 90.0),
+               "period": f.number("period", "period", 2.0),
+               "lean_deg": f.number("lean_deg", lean, 20.0),
+               "heading_deg": f.number("heading_deg", heading, None),
+               "path": f.string("path", None),
+               "obstacles": f.string("obstacles", None),
+               "plan_curvature_rate": f.number("plan_curvature_rate", "plan_curvature_rate",
+                                               None)}
+        fall = math.degrees(PRESETS[sport].limits.theta_fall)
+        if fig["lean_deg"] >= fall:
+            f.fail("lean_deg", f"= {fig['lean_deg']:g} is not below the {sport}'s fall angle "
+                               f"({fall:g} deg)")
+        if not fig["name"].strip():
+            f.fail("name", "= '' is empty")
+        if any(fig["name"] == g["name"] for g in cfg["figures"]):
+            f.fail("name", f"= {fig['name']!r} is the name of an earlier figure")
+        if fig["control"] == "path" and fig["path"] not in paths:
+            f.fail("path", f"= {fig['path']!r} is not a [paths.<name>] of the config"
+                           f"{nearest(fig['path'], paths) if paths and fig['path'] else ''}")
         if fig["obstacles"] and not any(o["group"] == fig["obstacles"] for o in obstacles):
-            raise ConfigError(f"{w}obstacles = {fig['obstacles']!r} names no obstacle group")
+            f.fail("obstacles", f"= {fig['obstacles']!r} names no obstacle group")
         cfg["figures"].append(fig)
+    names = [fig["name"] for fig in cfg["figures"]]
+    if cfg["camera"]["follow"] not in ("all", *names):
+        cam.fail("follow", f"= {cfg['camera']['follow']!r} is not 'all' or a figure's name "
+                           f"({', '.join(names)})")
     cfg["paths"], cfg["obstacles"] = paths, obstacles
-    if overrides.seconds:
-        cfg["seconds"] = overrides.seconds
-    if overrides.frame_step:
-        if overrides.frame_step < 1:
-            raise ConfigError("--frame-step must be at least 1")
-        cfg["frame_step"] = overrides.frame_step
     return cfg
 
 
@@ -413,9 +464,14 @@ def _run(bpy, cfg, render):
     return result
 
 
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):          # one line, exit 2, like every other bad input
+        self.exit(2, f"render_job: error: {message}\n")
+
+
 def parse_args(argv):
     argv = argv[argv.index("--") + 1:] if "--" in argv else argv[1:]
-    p = argparse.ArgumentParser(prog="render_job.py", description=__doc__.split("\n\n")[0])
+    p = _Parser(prog="render_job.py", description=__doc__.split("\n\n")[0])
     p.add_argument("--config", required=True, type=Path, help="the job's TOML file")
     p.add_argument("--output", help="output folder (overrides job.output)")
     p.add_argument("--engine", help="WORKBENCH, EEVEE or CYCLES (overrides render.engine)")
@@ -431,7 +487,7 @@ def main(argv=None) -> int:
     args = parse_args(sys.argv if argv is None else argv)
     try:
         cfg = load_config(args.config, args)
-    except ConfigError as exc:
+    except ValueError as exc:                     # ConfigError, FieldError: names the key
         print(f"render_job: error: {exc}", file=sys.stderr, flush=True)
         return 2
     log(f"job {cfg['name']!r}: {len(cfg['figures'])} figure(s), {cfg['seconds']:g} s at "
@@ -445,6 +501,10 @@ def main(argv=None) -> int:
     except RuntimeError as exc:                   # an operator's report (fell over, no plan)
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else "bake failed"
         print(f"render_job: error: {reason}", file=sys.stderr, flush=True)
+        return 1
+    except OSError as exc:                        # the disk filled up, the folder went away
+        print(f"render_job: error: cannot write to {str(cfg['output'])!r}: "
+              f"{exc.strerror or exc}", file=sys.stderr, flush=True)
         return 1
     log(f"blend: {res['blend']}")
     if res["frames"] is not None:

@@ -2,8 +2,15 @@ import math
 from dataclasses import replace
 
 import pytest
+from hypothesis import settings
 
 from blender_turning.core import Limits, preset
+
+# Fixed seeds (CONTRIBUTING.md): Hypothesis draws the same examples on every run, so a test does
+# not pass one run and fail the next; no example database is written.  Tests that set their own
+# @settings (max_examples, deadline) inherit these.
+settings.register_profile("turning", derandomize=True, database=None)
+settings.load_profile("turning")
 
 
 @pytest.fixture

@@ -75,3 +75,21 @@ def test_cycles_renders_too(tmp_path):
     frames = sorted((tmp_path / "frames").glob("frame_*.png"))
     assert len(frames) == 2 and all(png_size(f) == (32, 24) for f in frames)
     assert "with CYCLES" in r.stdout
+
+
+def test_a_failed_bake_is_one_line_exit_1_and_creates_no_output(tmp_path):
+    """A config that is valid but whose figure cannot do what it asks (a path straight into a
+    wall as wide as the world: no feasible plan): the operator's report, exit 1, and the output
+    folder never created (it is made only after the bakes).  (A slalom too sharp for the body no
+    longer fails: the controller follows the nearest feasible turn, issue 7 item 3b.)"""
+    cfg = tmp_path / "walled.toml"
+    cfg.write_text('[paths.straight]\npoints = [[0.0, 0.0], [0.0, 30.0]]\n'
+                   '[[obstacles]]\ngroup = "wall"\nkind = "box"\nat = [0.0, 60.0]\n'
+                   'size = 100.0\nheight = 1.0\n'
+                   '[[figures]]\nsport = "skier"\ncontrol = "path"\npath = "straight"\n'
+                   'obstacles = "wall"\n')
+    r = run_job("--config", cfg, "--seconds", "2", "--no-render", "--output", tmp_path / "out")
+    assert r.returncode == 1, r.stdout[-2000:] + r.stderr[-2000:]
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "no feasible plan" in lines[0] and "Traceback" not in r.stderr
+    assert not (tmp_path / "out").exists()

@@ -61,9 +61,9 @@ def test_closed_corridor_is_one_line_with_the_position(tmp_path):
 
 
 @pytest.mark.parametrize("doc_change, field", [
-    ({"clearance": -1}, "scene field clearance = -1"),
-    ({"planner": {"choices": 1}}, "scene field planner.choices = 1"),
-    ({"start": {"lean_deg": 100}}, "scene field start.lean_deg = 100"),
+    ({"clearance": -1}, "scene.json: clearance = -1"),
+    ({"planner": {"choices": 1}}, "scene.json: planner.choices = 1"),
+    ({"start": {"lean_deg": 100}}, "scene.json: start.lean_deg = 100"),
 ])
 def test_bad_scene_is_one_line_naming_the_field(tmp_path, capsys, doc_change, field):
     scene = small_scene(tmp_path, **doc_change)

@@ -68,7 +68,7 @@ def test_bad_schedule_contents(tmp_path):
     assert r.returncode == 2 and "lean_deg = 95" in r.stderr and len(r.stderr.splitlines()) == 1
     sched.write_text("time,foo\n1,2\n")
     r = cli("simulate", "--schedule", str(sched), "--duration", "2")
-    assert r.returncode == 2 and "t, period, lean_deg" in r.stderr
+    assert r.returncode == 2 and "column 'time' in the header is not known" in r.stderr
 
 
 def test_missing_output_folder_is_reported_before_work(tmp_path):

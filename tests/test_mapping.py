@@ -27,8 +27,9 @@ def mirrored(traj):
 
 @pytest.mark.parametrize("sport", ["skier", "telemark"])
 def test_mirrored_turn_gives_the_mirrored_pose(sport):
-    """DESIGN.md: mirroring (theta_v, C_f, theta_dir) maps solutions to solutions; the symmetric
-    rigs must then mirror too: bone X.L of the mirrored run is bone X.R reflected in x = 0."""
+    """docs/ARCHITECTURE.md Section 4: mirroring (theta_v, C_f, theta_dir) maps solutions to
+    solutions; the symmetric rigs must then mirror too: bone X.L of the mirrored run is bone X.R
+    reflected in x = 0."""
     traj = run(sport, seconds=4.0)
     sk = Skeleton.from_spec(load_rig(sport))
     a = sk.fk(map_trajectory(sport, traj).bones, len(traj))

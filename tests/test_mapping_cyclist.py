@@ -84,13 +84,14 @@ def test_steer_angle_function():
 def test_feet_on_pedals_and_hands_on_the_handlebar(cyclist):
     traj, track, spec, sk, P = cyclist
     for s in "LR":
-        # the ball of the foot (the foot's tail) on the pedal, within 1 cm over the 10 s run
+        # the ball of the foot (the foot's tail) on the pedal over the 10 s run (IK onto the
+        # pedal: round-off, measured <= 6.7e-16 m; the hands 7.8e-16 m)
         ball = P[f"foot.{s}"][:, :3, 3] + P[f"foot.{s}"][:, :3, 1] * spec.bone(f"foot.{s}").length
         on_pedal = sk.carry(P, f"pedal.{s}", spec.bone(f"foot.{s}").tail)
-        assert np.abs(ball - on_pedal).max() < 0.01
+        assert np.abs(ball - on_pedal).max() < 1e-9
         # the hand grips the bar where it held it at rest (the hand's midpoint)
         mid = 0.5 * (np.add(spec.bone(f"hand.{s}").head, spec.bone(f"hand.{s}").tail))
-        assert np.abs(sk.carry(P, f"hand.{s}", mid) - sk.carry(P, "fork", mid)).max() < 0.01
+        assert np.abs(sk.carry(P, f"hand.{s}", mid) - sk.carry(P, "fork", mid)).max() < 1e-9
         # the pedals stay level with the frame
         rel = np.linalg.inv(P["frame"]) @ P[f"pedal.{s}"]
         want = np.linalg.inv(sk.rest_of("frame")) @ sk.rest_of(f"pedal.{s}")

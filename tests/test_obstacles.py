@@ -16,8 +16,11 @@ def test_segment_distance_against_brute_force():
     rng = np.random.default_rng(0)
     for _ in range(60):
         a, b, c, d = rng.uniform(-5, 5, (4, 2))
-        assert segment_distance(a, b, c, d) == pytest.approx(dense_distance(a, b, c, d),
-                                                             abs=3e-2)
+        # The dense minimum never underestimates, and overestimates by at most half a sample
+        # spacing on each segment (the nearest samples to the true closest points).
+        exact, dense = segment_distance(a, b, c, d), dense_distance(a, b, c, d)
+        slack = 0.5 * (np.linalg.norm(b - a) + np.linalg.norm(d - c)) / 800
+        assert exact <= dense + 1e-12 and dense - exact <= slack + 1e-12
 
 
 def test_crossing_segments_have_distance_zero():

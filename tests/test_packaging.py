@@ -1,12 +1,15 @@
-"""`pip install .` carries the whole core: every package of the source tree and the rigs, which
-live at the top of the repository (the Blender extension ships them from there) and go into the
-wheel as blender_turning/rigs."""
+"""Packaging.  `pip install .` carries the whole core: every package of the source tree and the
+rigs, which live at the top of the repository (the Blender extension ships them from there) and go
+into the wheel as blender_turning/rigs.  The Blender extension is built from the manifest's
+[build] paths (exactly the add-on's files), with the README's command, on a fresh copy (issue 9)."""
 import shutil
 import subprocess
 import sys
 import tomllib
 import zipfile
 from pathlib import Path
+
+import pytest
 
 from blender_turning.mapping.rig_spec import RIG_NAMES
 
@@ -45,3 +48,85 @@ def test_the_wheel_carries_the_rigs_and_the_mapping_finds_them(tmp_path):
                          text=True, env={"PYTHONPATH": str(tmp_path / "site")}, timeout=120)
     assert out.returncode == 0, out.stderr
     assert Path(out.stdout.strip()) == tmp_path / "site" / "blender_turning" / "rigs"
+
+
+# -- the Blender extension -------------------------------------------------------------------------
+# The package is built from the manifest's [build] paths: exactly the add-on's files.
+
+CLI_ONLY = ("blender_turning/cli/", "blender_turning/figures/", "blender_turning/__main__.py")
+STRAYS = ("foo.blend", "foo.blend1", ".DS_Store", "blender_turning/notes.txt",
+          "blender_turning/core/.DS_Store", "rigs/notes.txt", "presets/turning_figure/old.py~")
+
+
+def addon_files(root: Path) -> set:
+    """What the add-on needs: its modules (not the command line), the rigs, the sport presets."""
+    mods = {p.relative_to(root).as_posix() for p in (root / "blender_turning").rglob("*.py")
+            if "__pycache__" not in p.parts}
+    mods = {m for m in mods if not m.startswith(CLI_ONLY)}
+    return (mods | {"__init__.py"}
+            | {f"rigs/{p.name}" for p in (root / "rigs").glob("*.json")}
+            | {f"presets/turning_figure/{p.name}"
+               for p in (root / "presets" / "turning_figure").glob("*.py")})
+
+
+def manifest():
+    return tomllib.loads((ROOT / "blender_manifest.toml").read_text())
+
+
+def test_the_manifest_lists_exactly_the_addon_files():
+    listed = set(manifest()["build"]["paths"])
+    need = addon_files(ROOT)
+    assert not need - listed, f"add to [build] paths: {sorted(need - listed)}"
+    assert not listed - need, f"not add-on files: {sorted(listed - need)}"
+
+
+def test_the_manifest_names_a_website_and_a_contact():
+    m = manifest()
+    assert m["website"].startswith("https://")
+    name, _, mail = m["maintainer"].partition("<")
+    assert name.strip() and "@" in mail and mail.endswith(">")
+
+
+def fresh_copy(dest: Path) -> Path:
+    """The files a clone would have (tracked and not ignored), and the shared .venv beside them,
+    as scripts/env.sh makes it."""
+    out = subprocess.run(["git", "-C", str(ROOT), "ls-files", "-z", "--cached", "--others",
+                          "--exclude-standard"], capture_output=True, check=True)
+    for rel in filter(None, out.stdout.decode().split("\0")):
+        if (ROOT / rel).is_file():
+            (dest / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / rel, dest / rel)
+    (dest / ".venv").symlink_to((ROOT / ".venv").resolve(), target_is_directory=True)
+    return dest
+
+
+def readme_build_commands() -> list:
+    """The shell commands of the README's extension build block, continuation lines joined."""
+    text = (ROOT / "README.md").read_text()
+    block = text.split("## Install into Blender", 1)[1].split("```bash\n", 1)[1].split("```")[0]
+    block = block.replace("\\\n", " ")
+    return [line.split("#", 1)[0].strip() for line in block.splitlines()
+            if line.split("#", 1)[0].strip()]
+
+
+def test_the_readme_build_command_works_on_a_fresh_copy(tmp_path):
+    tool = ROOT / ".venv/lib/python3.11/site-packages/bpy/5.0/scripts/addons_core/bl_pkg/cli"
+    if not (tool / "blender_ext.py").is_file():
+        pytest.skip("no .venv with the bpy 5.0 wheel (scripts/env.sh makes it)")
+    src = fresh_copy(tmp_path / "clone")
+    for stray in STRAYS:                      # lying in the tree; none of them may be shipped
+        (src / stray).parent.mkdir(parents=True, exist_ok=True)
+        (src / stray).write_text("stray")
+    commands = readme_build_commands()
+    assert any(c.startswith(".venv/bin/python") for c in commands), commands
+    for cmd in commands:
+        if cmd.split()[0] == "blender" and shutil.which("blender") is None:
+            continue                          # the binary variant: no Blender binary here
+        r = subprocess.run(["bash", "-c", cmd], cwd=src, capture_output=True, text=True,
+                           timeout=300)
+        assert r.returncode == 0 and "FATAL" not in r.stdout, cmd + "\n" + r.stdout + r.stderr
+    with zipfile.ZipFile(src / "dist" / "blender_turning-0.1.0.zip") as zf:
+        names = set(zf.namelist())
+    assert names == addon_files(ROOT) | {"blender_manifest.toml"}
+    assert not any(n.endswith((".blend", ".blend1", ".DS_Store", ".txt", "~")) for n in names)
+    assert not any(n.startswith(("scenes/", "tests/", "scripts/")) for n in names)

@@ -122,17 +122,17 @@ def test_speed_may_vary_with_distance():
 
 @pytest.mark.parametrize("change, message", [
     (lambda d: d["obstacles"].append({"type": "circle", "center": [1, 2], "radius": -1}),
-     "scene field obstacles[3].radius = -1 is outside the allowed range (0, inf)"),
+     "scene: obstacles[3].radius = -1 is outside the allowed range (0, 10000] m"),
     (lambda d: d["obstacles"].append({"type": "tree", "center": [1, 2]}),
-     "scene field obstacles[3].type = 'tree' is not one of circle, segment, polygon"),
-    (lambda d: d["planner"].update(stages=0), "scene field planner.stages = 0"),
-    (lambda d: d["planner"].update(speling=3), "scene field planner.speling is not known"),
-    (lambda d: d.update(path={"points": [[0, 0], [1, 0]]}), "scene field path.tangents"),
-    (lambda d: d.update(path={"bezier": [[0, 0], [1, 0], [2, 0]]}), "scene field path.bezier"),
-    (lambda d: d["figure"].update(preset="unicyclist"), "scene field figure.preset"),
-    (lambda d: d.update(clearance="wide"), "scene field clearance = 'wide' is not a number"),
+     "scene: obstacles[3].type = 'tree' is not one of circle, segment, polygon"),
+    (lambda d: d["planner"].update(stages=0), "scene: planner.stages = 0"),
+    (lambda d: d["planner"].update(speling=3), "scene: planner.speling is not a known field"),
+    (lambda d: d.update(path={"points": [[0, 0], [1, 0]]}), "scene: path.tangents"),
+    (lambda d: d.update(path={"bezier": [[0, 0], [1, 0], [2, 0]]}), "scene: path.bezier"),
+    (lambda d: d["figure"].update(preset="unicyclist"), "scene: figure.preset"),
+    (lambda d: d.update(clearance="wide"), "scene: clearance = 'wide' is not a number"),
     (lambda d: d.update(speed={"by": "time", "at": [0, 1], "V_cm": [5, -1]}),
-     "scene field speed.V_cm[1] = -1"),
+     "scene: speed.V_cm[1] = -1"),
 ])
 def test_bad_scenes_name_the_field(change, message):
     doc = closed_corridor()

@@ -2,7 +2,8 @@
 
 Each command is a module with ``register(subparsers)`` (adds its parser and sets
 ``func=run``) and ``run(args) -> int``; ``COMMANDS`` lists them in help order.  A domain error or a
-bad value (``ValueError``, ``TurningError``, ``OSError``) becomes one line on stderr and exit 2.
+bad value (``ValueError``, ``TurningError``, ``OSError``) becomes one line on stderr and exit 2,
+and no output is left half-written (``common.Outputs``).
 """
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import importlib
 import sys
 
 from ..core.errors import TurningError
+from .common import discard_pending
 
 COMMANDS = ("simulate", "figures", "follow", "crowd")
 
@@ -43,3 +45,5 @@ def main(argv=None) -> int:
     except (ValueError, TurningError, OSError) as exc:
         print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        discard_pending()          # outputs a failed command reserved but did not write

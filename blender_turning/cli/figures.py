@@ -5,6 +5,7 @@ import importlib
 from pathlib import Path
 
 from ..figures import FIGURES
+from ..core.validate import FieldError
 from .common import require_matplotlib
 
 
@@ -17,8 +18,16 @@ def register(sub):
 
 def run(args) -> int:
     require_matplotlib("figures")
+    if not args.out.strip():
+        raise FieldError(f"--out = {args.out!r} is not a folder path")
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise FieldError(f"--out = {args.out!r} is a file, not a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise FieldError(f"--out = {args.out!r} cannot be created: "
+                         f"{exc.strerror or exc}") from None
     for stem in (args.only or FIGURES):
         module, func = FIGURES[stem]
         getattr(importlib.import_module(f"..figures.{module}", __package__), func)(out)

@@ -1,6 +1,6 @@
 """``follow``: path following around obstacles (Section 6) from a scene file.
 
-Writes the trajectory CSV (DESIGN.md columns, ``phi`` from the Section 6.2 post-pass), the search
+Writes the trajectory CSV (docs/ARCHITECTURE.md Sec. 3, ``phi`` from the 6.2 post-pass), the search
 statistics (JSON: one entry per replanning and totals) and a plot of path, obstacles and track.
 When no plan survives, the error names the time and the position (one line, exit 2).
 """
@@ -10,10 +10,9 @@ import json
 import math
 
 from ..core.errors import PlanInfeasible
-from ..core.params import check_range
-from ..core.scene import load_scene
-from ..core.trajectory import _atomic_write
-from .common import atomic_plot, check_out_path, require_matplotlib
+from ..core.scene import check_horizon, load_scene
+from ..core.validate import check
+from .common import Outputs, require_matplotlib
 
 
 def register(sub):
@@ -32,41 +31,44 @@ def register(sub):
 
 
 def run(args) -> int:
-    for flag in ("out", "stats", "plot"):
-        check_out_path(f"--{flag}", getattr(args, flag))
     if args.plot:
         require_matplotlib("--plot")
-    scene = load_scene(args.scene)
     changes = {}
     if args.stages is not None:
-        check_range("--stages", args.stages, 1, 64)
-        changes["n_stages"] = args.stages
+        changes["n_stages"] = check("--stages", args.stages, "n_stages")
     if args.choices is not None:
-        check_range("--choices", args.choices, 2, 64)
-        changes["q"] = args.choices
+        changes["q"] = check("--choices", args.choices, "q")
     if args.stage_time is not None:
-        changes["t_stage"] = check_range("--stage-time", args.stage_time, 0.0, 60.0,
-                                         lo_open=True)
+        changes["t_stage"] = check("--stage-time", args.stage_time, "t_stage")
+    scene = load_scene(args.scene)
     if changes:
         try:
             scene = scene.with_settings(**changes)
         except ValueError as exc:
             raise ValueError(f"planner settings: {exc}") from None
+        check_horizon(scene.settings, "with --stages, --choices, --stage-time: ")
+    outputs = Outputs()                       # every output path checked before the work
+    for flag in ("out", "stats", "plot"):
+        outputs.reserve(f"--{flag}", getattr(args, flag))
     try:
         result = scene.run()
     except PlanInfeasible as exc:
+        # The plot of the failed run (where it got stuck) is the one output written.
         if args.plot and exc.trajectory is not None:
-            _plot(args.plot, scene, exc.trajectory, failed_at=exc.position)
+            _plot(outputs, scene, exc.trajectory, failed_at=exc.position)
+            outputs.commit(only=("--plot",))
         raise
     traj = result.trajectory
     if args.out:
-        traj.to_csv(args.out)
+        outputs.write("--out", traj.to_csv)
     if args.stats:
         doc = {"scene": scene.name, "settings": _settings(scene.settings),
                "replans": [r.as_dict() for r in result.replans], "totals": result.totals()}
-        _atomic_write(args.stats, json.dumps(doc, indent=1))
+        text = json.dumps(doc, indent=1)
+        outputs.write("--stats", lambda path: path.write_text(text))
     if args.plot:
-        _plot(args.plot, scene, traj)
+        _plot(outputs, scene, traj)
+    outputs.commit()
     tot = result.totals()
     st = scene.settings
     print(f"follow: {scene.name}, {scene.figure.name}, N = {st.n_stages}, q = {st.q}, "
@@ -85,7 +87,7 @@ def _settings(st) -> dict:
             "lookahead": st.lookahead, "fall_table": st.fall_table, "batch": st.batch}
 
 
-def _plot(path, scene, traj, failed_at=None):
+def _plot(outputs, scene, traj, failed_at=None):
     from ..figures.planner import plot_scene
-    atomic_plot(path, lambda tmp: plot_scene(scene, [(traj, "track", "-")], tmp,
-                                             failed_at=failed_at))
+    outputs.write("--plot", lambda path: plot_scene(scene, [(traj, "track", "-")], path,
+                                                    failed_at=failed_at))

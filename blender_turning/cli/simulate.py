@@ -5,26 +5,21 @@ import math
 
 from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, slalom_start
 from ..core.controllers import PhaseEllipse
-from ..core.params import check_range
+from ..core.ranges import RANGES
 from ..core.schedule import Schedule
 from ..core.simulate import DEFAULT_DT
-from .common import atomic_plot, check_out_path, require_matplotlib
+from ..core.validate import check
+from .common import Outputs, check_steps, require_matplotlib
 
-# flag -> (BodyParams field, allowed range); the ranges are the core's, named by the flag.
-BODY_FLAGS = {"mass": ("m", 0.0, 1e4), "com_height": ("l", 0.0, 10.0),
-              "inertia": ("I_v", 0.0, 1e5), "speed": ("V_cm", 0.0, 100.0),
-              "gravity": ("g", 0.0, 100.0)}
-
-
-#: Steps where the rows obey the model to 1e-3 of scale under the trapezoid rule for a 2 s turn
-#: ((2 pi dt / period)^2 / 12 <= 1e-3 up to 0.034 s; BENCHMARKS.md "Turn control accuracy").
-DT_RANGE = (0.001, 0.03)
+# flag -> BodyParams field; the ranges are the core's table (core/ranges.py), named by the flag.
+BODY_FLAGS = {"mass": "m", "com_height": "l", "inertia": "I_v", "speed": "V_cm", "gravity": "g"}
 
 
 def register(sub):
     p = sub.add_parser("simulate", help="simulate a slalom and write its trajectory",
                        description="Simulate one figure (Sections 3-5) and write the trajectory "
-                                   "CSV (columns of DESIGN.md, SI units, radians).")
+                                   "CSV (columns of docs/ARCHITECTURE.md Section 3, SI units, "
+                                   "radians).")
     p.add_argument("--preset", default="skier", choices=sorted(PRESETS))
     p.add_argument("--mass", type=float, help="kg")
     p.add_argument("--com-height", type=float, help="height of the centre of mass, m")
@@ -46,7 +41,7 @@ def register(sub):
                    help="initial lean rate, deg/s (default: on the ellipse, omega0 theta_max)")
     p.add_argument("--duration", type=float, default=20.0, help="s")
     p.add_argument("--dt", type=float, default=DEFAULT_DT,
-                   help=f"integration step, s ({DT_RANGE[0]:g}-{DT_RANGE[1]:g}; BENCHMARKS.md: "
+                   help=f"integration step, s ({RANGES['dt'].lo:g}-{RANGES['dt'].hi:g}; BENCHMARKS.md: "
                         "accuracy per step)")
     p.add_argument("--fps", type=float, help="resample to this frame rate (24, 25, 30, 60 ...)")
     p.add_argument("--out", help="trajectory CSV to write")
@@ -54,23 +49,21 @@ def register(sub):
     p.set_defaults(func=run)
 
 
-def _flag(name: str, value, lo, hi, **kw) -> float:
-    return check_range(f"--{name.replace('_', '-')}", value, lo, hi, **kw)
+def _flag(name: str, value, key: str, deg: bool = False) -> float:
+    """The flag ``--name``'s value checked against ``RANGES[key]`` (in degrees if ``deg``)."""
+    rng = RANGES[key].deg() if deg else RANGES[key]
+    return check(f"--{name.replace('_', '-')}", value, rng)
 
 
 def run(args) -> int:
-    overrides = {}
-    for flag, (field, lo, hi) in BODY_FLAGS.items():
-        v = getattr(args, flag)
-        if v is not None:
-            overrides[field] = _flag(flag, v, lo, hi, lo_open=(flag != "inertia"))
+    overrides = {field: _flag(flag, getattr(args, flag), field)
+                 for flag, field in BODY_FLAGS.items() if getattr(args, flag) is not None}
     fig = preset(args.preset, **overrides)
-    duration = _flag("duration", args.duration, 0.0, 1e5, lo_open=True)
-    dt = _flag("dt", args.dt, *DT_RANGE)
+    duration = _flag("duration", args.duration, "duration")
+    dt = _flag("dt", args.dt, "dt")
     if args.fps is not None:
-        _flag("fps", args.fps, 0.0, 1000.0, lo_open=True)
-    check_out_path("--out", args.out)
-    check_out_path("--plot", args.plot)
+        _flag("fps", args.fps, "fps")
+    check_steps(duration, dt, args.fps)
     if args.plot:
         require_matplotlib("--plot")
 
@@ -81,17 +74,19 @@ def run(args) -> int:
             raise ValueError(f"--schedule replaces --{given[0].replace('_', '-')}; give one or "
                              "the other")
         sched = read_schedule_csv(args.schedule)
-        omega0, theta_max, heading = sched.omega0, sched.theta_max, sched.heading
+        omega0, theta_max = sched.omega0, sched.theta_max
+        # No heading_deg column: the heading is held at 0 deg, as without --heading-deg.
+        heading = sched.heading or Schedule.constant(0.0)
     else:
         if args.omega0 is not None:
-            w = _flag("omega0", args.omega0, 0.0, 1e3, lo_open=True)
+            w = _flag("omega0", args.omega0, "omega0")
         else:
             w = 2 * math.pi / _flag("period", 2.0 if args.period is None else args.period,
-                                    0.0, 1e3, lo_open=True)
-        lean = _flag("lean_deg", 23.0 if args.lean_deg is None else args.lean_deg, 0.0, 90.0,
-                     lo_open=True, hi_open=True)
+                                    "period")
+        lean = _flag("lean_deg", 23.0 if args.lean_deg is None else args.lean_deg, "theta_max",
+                     deg=True)
         head = _flag("heading_deg", 0.0 if args.heading_deg is None else args.heading_deg,
-                     -3600.0, 3600.0)
+                     "heading", deg=True)
         omega0, theta_max = Schedule.constant(w), Schedule.constant(math.radians(lean))
         heading = Schedule.constant(math.radians(head))
 
@@ -100,10 +95,12 @@ def run(args) -> int:
     else:
         ctl = CONTROLLERS[args.controller](fig.body, omega0, theta_max)
     w0, tm0 = ctl.target(0.0)           # the ellipse followed (made feasible for the figure)
-    theta0 = math.radians(_flag("theta0_deg", args.theta0_deg or 0.0, -90.0, 90.0,
-                                lo_open=True, hi_open=True))
+    theta0 = math.radians(_flag("theta0_deg", args.theta0_deg or 0.0, "theta_v0", deg=True))
     omega_v0 = (w0 * tm0 if args.omega_v0_deg is None else
-                math.radians(_flag("omega_v0_deg", args.omega_v0_deg, -1e4, 1e4)))
+                math.radians(_flag("omega_v0_deg", args.omega_v0_deg, "omega_v0", deg=True)))
+    outputs = Outputs()                       # every output path checked before the work
+    outputs.reserve("--out", args.out)
+    outputs.reserve("--plot", args.plot)
     # Start so that the slalom is centred on the heading (with the lean and rate asked for).
     state0 = slalom_start(fig.body, w0, tm0, heading(0.0))[:3] + (theta0, omega_v0)
     traj = simulate(fig, ctl, duration, dt, state0,
@@ -112,10 +109,11 @@ def run(args) -> int:
         traj = traj.resample(args.fps)
     if args.plot:
         from ..figures.plots import plot_trajectory
-        atomic_plot(args.plot, lambda path: plot_trajectory(traj, path, title=(
+        outputs.write("--plot", lambda path: plot_trajectory(traj, path, title=(
             f"{fig.name}, {args.controller} controller")))
     if args.out:
-        traj.to_csv(args.out)
+        outputs.write("--out", traj.to_csv)
+    outputs.commit()
     print(f"simulate: {fig.name}, {args.controller}, {traj.duration:.2f} s, {len(traj)} samples"
           f"{f' at {args.fps:g} fps' if args.fps else ''}; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg, |C_f| max "

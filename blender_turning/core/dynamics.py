@@ -3,8 +3,8 @@
 The state of a figure is ``(x, y, theta_dir, theta_v, omega_v)`` (rows named by ``STATE``): foot
 position (m), heading (rad, CCW from +x), lean (rad, > 0 leans left) and lean rate (rad/s).  The
 control is the foot curvature ``C_f`` (1/m, > 0 curves left).  Sign conventions:
-``shared/DESIGN.md`` Section 1.  Every function takes Python floats (one figure) or numpy arrays
-(a batch, state shape ``(5, n)``); see :mod:`.xp`.
+``docs/ARCHITECTURE.md`` Section 4.  Every function takes Python floats (one figure) or numpy
+arrays (a batch, state shape ``(5, n)``); see :mod:`.xp`.
 """
 from __future__ import annotations
 

@@ -2,8 +2,9 @@
 
 The physical model is the inverted pendulum of Section 3 (Fig. 2): a mass ``m`` at height ``l``
 above a steerable "foot", roll inertia ``I_v`` about the centre of mass (Eq. 13), moving forward
-at a constant ``V_cm``.  Everything here is a frozen dataclass validated in ``__post_init__``:
-a bad value raises ``ValueError`` naming the field, the value and the allowed range.
+at a constant ``V_cm``.  Everything here is a frozen dataclass validated in ``__post_init__``
+against the one table of ranges (:mod:`.ranges`): a bad value raises ``ValueError`` naming the
+field, the value and the allowed range.
 """
 from __future__ import annotations
 
@@ -11,23 +12,10 @@ import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
+from .ranges import RANGES
+from .validate import check, check_range
+
 __all__ = ["BodyParams", "Limits", "Figure", "PRESETS", "preset", "check_range"]
-
-
-def check_range(name: str, value: float, lo: float, hi: float, *, lo_open: bool = False,
-                hi_open: bool = False) -> float:
-    """Return ``float(value)`` or raise ``ValueError`` naming ``name``, the value and the range."""
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r} is not a number; allowed range "
-                         f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}") from None
-    ok = not math.isnan(v)
-    ok = ok and (v > lo if lo_open else v >= lo) and (v < hi if hi_open else v <= hi)
-    if not ok:
-        raise ValueError(f"{name} = {value!r} is outside the allowed range "
-                         f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}")
-    return v
 
 
 @dataclass(frozen=True)
@@ -46,11 +34,12 @@ class BodyParams:
     """Gravitational acceleration, m/s^2."""
 
     def __post_init__(self):
-        check_range("m", self.m, 0.0, 1e4, lo_open=True)
-        check_range("l", self.l, 0.0, 10.0, lo_open=True)
-        check_range("I_v", self.I_v, 0.0, 1e5)
-        check_range("V_cm", self.V_cm, 0.0, 100.0, lo_open=True)
-        check_range("g", self.g, 0.0, 100.0, lo_open=True)
+        for name in ("m", "l", "I_v", "V_cm", "g"):
+            check(name, getattr(self, name), name)
+        if not RANGES["J"].contains(self.J):
+            raise ValueError(f"I_v = {self.I_v:g} kg m^2 with m = {self.m:g} kg and l = "
+                             f"{self.l:g} m gives J = (I_v + l^2 m) / (m l) = {self.J:.4g} m, "
+                             f"outside the allowed range {RANGES['J']}")
 
     @cached_property
     def J(self) -> float:
@@ -70,9 +59,10 @@ class Limits:
     """|theta_v| beyond which the figure has fallen, rad."""
 
     def __post_init__(self):
-        check_range("C_f_max", self.C_f_max, 0.0, math.inf, lo_open=True)
-        check_range("dC_f_max", self.dC_f_max, 0.0, math.inf, lo_open=True)
-        check_range("theta_fall", self.theta_fall, 0.0, math.pi / 2, lo_open=True, hi_open=True)
+        for name in ("C_f_max", "dC_f_max"):       # +inf: no bound (a research setting)
+            if getattr(self, name) != math.inf:
+                check(name, getattr(self, name), name)
+        check("theta_fall", self.theta_fall, "theta_fall")
 
 
 @dataclass(frozen=True)

@@ -2,9 +2,9 @@
 
 A scene holds the path, the obstacles, the start state, the figure preset and the planner settings
 (the format is documented in README.md, "Path following").  Every problem with a file is one
-``ValueError`` naming the field: ``scene field obstacles[2].radius = -1 is outside the allowed
-range (0, inf)``.  Lengths are metres, times seconds, angles degrees (``*_deg``) at this edge and
-radians inside.
+``ValueError`` naming the file and the field, with the ranges of :mod:`.ranges`:
+``slalom.json: obstacles[2].radius = -1 is outside the allowed range (0, 10000] m``.
+Lengths are metres, times seconds, angles degrees (``*_deg``) at this edge and radians inside.
 """
 from __future__ import annotations
 
@@ -15,111 +15,23 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .obstacles import Obstacles
-from .params import Figure, check_range, preset
+from .params import PRESETS, Figure, preset
 from .path import HermitePath, PathDistance
 from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile, follow
+from .ranges import RANGES
+from .validate import FieldError, Fields, read_text
 
 __all__ = ["Scene", "load_scene", "scene_from_dict"]
 
 _TOP = {"name", "description", "figure", "path", "obstacles", "clearance", "start", "speed",
         "planner", "duration", "run_out"}
-
-
-class _Field:
-    """Reads fields of a JSON object, naming them fully in every error."""
-
-    def __init__(self, doc, where=""):
-        self.doc = doc
-        self.where = where
-
-    def name(self, key):
-        return f"{self.where}.{key}" if self.where else str(key)
-
-    def fail(self, key, msg):
-        raise ValueError(f"scene field {self.name(key)} {msg}")
-
-    def obj(self, key, required=False, allowed=None):
-        v = self.doc.get(key) if isinstance(self.doc, dict) else None
-        if v is None:
-            if required:
-                self.fail(key, "is missing")
-            v = {}
-        if not isinstance(v, dict):
-            self.fail(key, f"= {v!r} is not an object")
-        f = _Field(v, self.name(key))
-        if allowed is not None:
-            f.only(allowed)
-        return f
-
-    def only(self, allowed):
-        for k in self.doc:
-            if k not in allowed:
-                raise ValueError(f"scene field {self.name(k)} is not known "
-                                 f"(expected one of: {', '.join(sorted(allowed))})")
-
-    def has(self, key):
-        return key in self.doc
-
-    def number(self, key, default=None, lo=-math.inf, hi=math.inf, lo_open=False, hi_open=False):
-        v = self.doc.get(key, default)
-        if v is None:
-            self.fail(key, "is missing")
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            self.fail(key, f"= {v!r} is not a number")
-        try:
-            return check_range(f"scene field {self.name(key)}", v, lo, hi,
-                               lo_open=lo_open or lo == -math.inf,
-                               hi_open=hi_open or hi == math.inf)
-        except ValueError as exc:
-            raise ValueError(str(exc)) from None
-
-    def integer(self, key, default, lo, hi):
-        v = self.number(key, default, lo, hi)
-        if v != int(v):
-            self.fail(key, f"= {self.doc.get(key)!r} is not a whole number")
-        return int(v)
-
-    def boolean(self, key, default):
-        v = self.doc.get(key, default)
-        if not isinstance(v, bool):
-            self.fail(key, f"= {v!r} is not true or false")
-        return v
-
-    def string(self, key, default=None):
-        v = self.doc.get(key, default)
-        if v is None:
-            self.fail(key, "is missing")
-        if not isinstance(v, str):
-            self.fail(key, f"= {v!r} is not a string")
-        return v
-
-    def points(self, key, min_rows=1, default=None):
-        v = self.doc.get(key, default)
-        if v is None:
-            self.fail(key, "is missing")
-        try:
-            a = np.array(v, float)
-        except (TypeError, ValueError):
-            self.fail(key, "is not a list of [x, y] pairs of numbers")
-        if a.ndim != 2 or a.shape[1] != 2:
-            self.fail(key, "is not a list of [x, y] pairs of numbers")
-        if len(a) < min_rows:
-            self.fail(key, f"has {len(a)} points; at least {min_rows} are needed")
-        if not np.all(np.isfinite(a)):
-            self.fail(key, "has a value that is not a finite number")
-        return a
-
-    def xy(self, key, default):
-        v = self.doc.get(key, default)
-        if v is None:
-            self.fail(key, "is missing")
-        try:
-            a = np.array(v, float)
-        except (TypeError, ValueError):
-            a = None
-        if a is None or a.shape != (2,) or not np.all(np.isfinite(a)):
-            self.fail(key, f"= {v!r} is not an [x, y] pair of numbers")
-        return a
+# planner key -> (PlannerSettings field, key of RANGES or None for a switch, default)
+_PLANNER = {"stages": ("n_stages", "n_stages", 10), "choices": ("q", "q", 5),
+            "stage_time": ("t_stage", "t_stage", 0.3),
+            "lean_bound_deg": ("theta_bound", "theta_bound", 30.0),
+            "sample_dt": ("sample_dt", "sample_dt", 0.1), "dt": ("dt", "planner_dt", 0.05),
+            "batch": ("batch", "batch", 128), "warm_start": ("warm_start", None, True),
+            "lower_bound": ("lower_bound", None, True), "fall_table": ("fall_table", None, True)}
 
 
 @dataclass(frozen=True)
@@ -165,154 +77,173 @@ class Scene:
         return follow(self.problem(), self.state0, self.C_f0, duration, meta={"scene": self.name})
 
 
+def check_horizon(settings: PlannerSettings, where: str = "") -> None:
+    """One planning search must stay a bounded amount of work (``RANGES['search_size']``,
+    ``RANGES['horizon_*']``)."""
+    size = float(settings.q) ** settings.n_stages
+    if not RANGES["search_size"].contains(size):
+        raise FieldError(f"{where}the search q^N = {settings.q}^{settings.n_stages} = "
+                         f"{size:.3g} leaves is outside the allowed range [1, 7^16 = "
+                         f"{7.0 ** 16:.3g}]: lower the stages or the choices")
+    horizon = settings.n_stages * settings.t_stage
+    for key, step, name in (("horizon_steps", settings.dt, "dt"),
+                            ("horizon_samples", settings.sample_dt, "sample_dt")):
+        n = horizon / step
+        if not RANGES[key].contains(round(n)):
+            raise FieldError(f"{where}the horizon N t_stage / {name} = {settings.n_stages} x "
+                             f"{settings.t_stage:g} s / {step:g} s = {n:.0f} is outside the "
+                             f"allowed range {RANGES[key]}")
+
+
 def load_scene(path) -> Scene:
-    """Read and validate a scene file."""
+    """Read and validate a scene file; every error names the file and the field."""
+    text = read_text(path, "scene file")
     try:
-        with open(path) as fh:
-            doc = json.load(fh)
-    except OSError as exc:
-        raise ValueError(f"scene file {str(path)!r} cannot be read: {exc.strerror}") from None
+        doc = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise ValueError(f"scene file {str(path)!r} is not valid JSON ({exc})") from None
-    return scene_from_dict(doc)
+        raise FieldError(f"scene file {str(path)!r} is not valid JSON ({exc})") from None
+    except RecursionError:
+        raise FieldError(f"scene file {str(path)!r} is nested too deeply to be a scene") \
+            from None
+    return scene_from_dict(doc, str(path))
 
 
-def scene_from_dict(doc) -> Scene:
-    if not isinstance(doc, dict):
-        raise ValueError("scene must be a JSON object")
-    top = _Field(doc)
-    top.only(_TOP)
-    name = top.string("name", "scene")
-
-    # Figure: a preset, with optional body and limit overrides.
-    fig_f = top.obj("figure", required=True, allowed={"preset", "body", "limits"})
-    try:
-        fig = preset(fig_f.string("preset"))
-    except ValueError as exc:
-        raise ValueError(f"scene field figure.{exc}") from None
-    body_f = fig_f.obj("body", allowed={"m", "l", "I_v", "V_cm", "g"})
-    lim_f = fig_f.obj("limits", allowed={"C_f_max", "dC_f_max", "theta_fall_deg"})
-    body = {k: body_f.number(k, lo=0.0, hi=1e5, lo_open=True) for k in body_f.doc}
-    lims = {k: lim_f.number(k, lo=0.0, hi=1e3, lo_open=True) for k in ("C_f_max", "dC_f_max")
-            if lim_f.has(k)}
-    if lim_f.has("theta_fall_deg"):
-        lims["theta_fall"] = math.radians(lim_f.number("theta_fall_deg", lo=0, hi=90,
-                                                       lo_open=True, hi_open=True))
-    try:
-        fig = replace(fig, body=replace(fig.body, **body), limits=replace(fig.limits, **lims))
-    except ValueError as exc:
-        raise ValueError(f"scene field figure.{exc}") from None
-
-    # Path: points + tangents, Bezier control points, or a polyline.
-    pf = top.obj("path", required=True, allowed={"points", "tangents", "bezier", "polyline",
-                                                   "samples_per_segment", "exact_distance"})
+def _path(pf: Fields) -> HermitePath:
+    """Section 6's path: points + tangents, Bezier control points, or a polyline."""
     kinds = [k for k in ("points", "bezier", "polyline") if pf.has(k)]
     if len(kinds) != 1:
         pf.fail("points", "or path.bezier or path.polyline: exactly one is needed")
-    if kinds[0] == "points":
+    kind = kinds[0]
+    if kind == "points":
         pts = pf.points("points", 2)
         tan = pf.points("tangents", len(pts))
         if len(tan) != len(pts):
             pf.fail("tangents", f"has {len(tan)} entries; path.points has {len(pts)}")
-        path = HermitePath.from_points(pts, tan)
-    elif kinds[0] == "bezier":
+        knots, step = pts, 1
+    elif kind == "bezier":
         ctrl = pf.points("bezier", 4)
         if (len(ctrl) - 1) % 3:
             pf.fail("bezier", f"has {len(ctrl)} points; 3 n + 1 are needed")
-        path = HermitePath.from_bezier(ctrl)
+        knots, step = ctrl[0::3], 3
     else:
-        path = HermitePath.from_polyline(pf.points("polyline", 2))
-    per = pf.integer("samples_per_segment", 12, 1, 10000)
-    exact = pf.boolean("exact_distance", False)
+        knots, step = pf.points("polyline", 2), 1
+    # A segment of zero length has no direction (the run-out and the end test need one).
+    for i in range(1, len(knots)):
+        if np.array_equal(knots[i], knots[i - 1]):
+            Fields(pf.doc[kind], pf.source, pf.name(kind)).fail(
+                i * step, f"= {knots[i].tolist()} is the same point as path.{kind}"
+                          f"[{(i - 1) * step}]; a path needs distinct consecutive points")
+    if kind == "points":
+        return HermitePath.from_points(pts, tan)
+    if kind == "bezier":
+        return HermitePath.from_bezier(ctrl)
+    return HermitePath.from_polyline(knots)
 
-    # Obstacles.
-    clearance = top.number("clearance", 0.0, 0.0, 1e3)
-    obs = doc.get("obstacles", [])
-    if not isinstance(obs, list):
-        top.fail("obstacles", "is not a list")
+
+def _obstacles(top: Fields) -> Obstacles:
+    clearance = top.number("clearance", "clearance", 0.0)
     segs, circles, polys = [], [], []
-    for i, o in enumerate(obs):
-        of = _Field(o, f"obstacles[{i}]")
-        if not isinstance(o, dict):
-            raise ValueError(f"scene field obstacles[{i}] is not an object")
-        kind = of.string("type")
+    for of in top.tables("obstacles"):
+        kind = of.string("type", choices=("circle", "segment", "polygon"))
         if kind == "circle":
             of.only({"type", "center", "radius"})
-            c = of.xy("center", None)
-            circles.append([c[0], c[1], of.number("radius", lo=0.0, lo_open=True)])
+            c = of.xy("center")
+            circles.append([c[0], c[1], of.number("radius", "radius")])
         elif kind == "segment":
             of.only({"type", "from", "to"})
-            segs.append([of.xy("from", None), of.xy("to", None)])
-        elif kind == "polygon":
+            segs.append([of.xy("from"), of.xy("to")])
+        else:
             of.only({"type", "points"})
             polys.append(of.points("points", 3))
-        else:
-            of.fail("type", f"= {kind!r} is not one of circle, segment, polygon")
-    obstacles = Obstacles(np.array(segs).reshape(-1, 2, 2), np.array(circles).reshape(-1, 3),
-                          polys, clearance)
+    return Obstacles(np.array(segs).reshape(-1, 2, 2), np.array(circles).reshape(-1, 3),
+                     polys, clearance)
+
+
+def scene_from_dict(doc, source: str = "scene") -> Scene:
+    """Validate a parsed scene document; errors name ``source`` and the field."""
+    if not isinstance(doc, dict):
+        raise FieldError(f"{source}: the scene must be a JSON object, not {type(doc).__name__}")
+    top = Fields(doc, source).only(_TOP)
+    name = top.string("name", "scene")
+    description = top.string("description", "")
+
+    # Figure: a preset, with optional body and limit overrides (ranges: core/ranges.py).
+    fig_f = top.table("figure", {"preset", "body", "limits"}, required=True)
+    fig = preset(fig_f.string("preset", choices=tuple(PRESETS)))
+    body_f = fig_f.table("body", {"m", "l", "I_v", "V_cm", "g"})
+    lim_f = fig_f.table("limits", {"C_f_max", "dC_f_max", "theta_fall_deg"})
+    body = {k: body_f.number(k, k) for k in body_f.keys()}
+    lims = {k: lim_f.number(k, k) for k in ("C_f_max", "dC_f_max") if lim_f.has(k)}
+    if lim_f.has("theta_fall_deg"):
+        lims["theta_fall"] = math.radians(lim_f.number("theta_fall_deg",
+                                                       RANGES["theta_fall"].deg()))
+    fig = replace(fig, body=replace(fig.body, **body), limits=replace(fig.limits, **lims))
+
+    pf = top.table("path", {"points", "tangents", "bezier", "polyline", "samples_per_segment",
+                            "exact_distance"}, required=True)
+    path = _path(pf)
+    per = pf.number("samples_per_segment", "samples_per_segment", 12)
+    exact = pf.boolean("exact_distance", False)
+    obstacles = _obstacles(top)
 
     # Start state.
-    sf = top.obj("start", allowed={"position", "heading_deg", "lean_deg", "lean_rate_deg",
-                                   "speed", "C_f"})
-    pos = sf.xy("position", list(path.knots[0]))
+    sf = top.table("start", {"position", "heading_deg", "lean_deg", "lean_rate_deg", "speed",
+                             "C_f"})
+    pos = sf.xy("position", path.knots[0].tolist())
     if sf.has("heading_deg"):
-        heading = math.radians(sf.number("heading_deg"))
+        heading = math.radians(sf.number("heading_deg", RANGES["heading"].deg()))
     else:
         d = path.evaluate(0, 0.0, 1)
         heading = math.atan2(d[1], d[0])
-    lean = math.radians(sf.number("lean_deg", 0.0, -89.0, 89.0))
-    rate = math.radians(sf.number("lean_rate_deg", 0.0, -3600.0, 3600.0))
+    lean = math.radians(sf.number("lean_deg", RANGES["theta_v0"].deg(), 0.0))
+    rate = math.radians(sf.number("lean_rate_deg", RANGES["omega_v0"].deg(), 0.0))
     if sf.has("speed"):
-        fig = replace(fig, body=replace(fig.body, V_cm=sf.number("speed", lo=0, hi=100,
-                                                                 lo_open=True)))
-    cf0 = sf.number("C_f", 0.0, -fig.limits.C_f_max, fig.limits.C_f_max)
+        fig = replace(fig, body=replace(fig.body, V_cm=sf.number("speed", "V_cm")))
+    c_max = fig.limits.C_f_max
+    cf0 = sf.number("C_f", replace(RANGES["C_f0"], lo=-c_max, hi=c_max), 0.0)
     state0 = np.array([pos[0], pos[1], heading, lean, rate])
 
     # Speed profile (Section 6: "a function of the terrain").
-    spf = top.obj("speed", allowed={"by", "at", "V_cm"})
-    if spf.doc:
-        by = spf.string("by")
-        if by not in ("time", "distance"):
-            spf.fail("by", f"= {by!r} is not one of time, distance")
-        at, vs = spf.doc.get("at"), spf.doc.get("V_cm")
-        if not (isinstance(at, list) and isinstance(vs, list) and len(at) == len(vs) and at):
-            spf.fail("at", "and speed.V_cm must be lists of numbers of the same, non-zero length")
-        for key, values in (("at", at), ("V_cm", vs)):
-            for i, v in enumerate(values):
-                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise ValueError(f"scene field speed.{key}[{i}] = {v!r} is not a number")
-        try:
-            speed = SpeedProfile(by, at, vs)
-        except ValueError as exc:
-            raise ValueError(f"scene field {exc}") from None
+    spf = top.table("speed", {"by", "at", "V_cm"})
+    if spf.keys():
+        by = spf.string("by", choices=("time", "distance"))
+        at = spf.numbers("at", "schedule_t" if by == "time" else "distance")
+        vs = spf.numbers("V_cm", "V_cm")
+        if len(at) != len(vs):
+            spf.fail("V_cm", f"has {len(vs)} values; speed.at has {len(at)}")
+        for i in range(1, len(at)):
+            if at[i] <= at[i - 1]:
+                spf.fail("at", f"[{i}] = {at[i]!r} does not come after speed.at[{i - 1}] = "
+                               f"{at[i - 1]!r}")
+        speed = SpeedProfile(by, at, vs)
     else:
         speed = SpeedProfile.constant(fig.body.V_cm)
 
     # Planner settings (Section 6.1).
-    pl = top.obj("planner", allowed={"stages", "choices", "stage_time", "lean_bound_deg",
-                                     "sample_dt", "dt", "warm_start", "lower_bound", "fall_table",
-                                     "batch"})
-    kw = dict(n_stages=pl.integer("stages", 10, 1, 64), q=pl.integer("choices", 5, 2, 64),
-              t_stage=pl.number("stage_time", 0.3, 0.0, 60.0, lo_open=True),
-              theta_bound=math.radians(pl.number("lean_bound_deg", 30.0, 0.0, 90.0, lo_open=True,
-                                                 hi_open=True)),
-              sample_dt=pl.number("sample_dt", 0.1, 0.0, 60.0, lo_open=True),
-              dt=pl.number("dt", 0.05, 1e-4, 1.0),
-              warm_start=pl.boolean("warm_start", True),
-              lower_bound=pl.boolean("lower_bound", True),
-              fall_table=pl.boolean("fall_table", True),
-              batch=pl.integer("batch", 128, 1, 4096))
+    pl = top.table("planner", set(_PLANNER))
+    kw = {}
+    for key, (field, rng, default) in _PLANNER.items():
+        if rng is None:
+            kw[field] = pl.boolean(key, default)
+        elif key.endswith("_deg"):
+            kw[field] = math.radians(pl.number(key, RANGES[rng].deg(), default))
+        else:
+            kw[field] = pl.number(key, rng, default)
     try:
         settings = PlannerSettings(**kw)
     except ValueError as exc:
-        raise ValueError(f"scene field planner: {exc}") from None
+        raise FieldError(f"{source}: planner: {exc}") from None
+    check_horizon(settings, f"{source}: planner: ")
 
-    duration = top.number("duration", lo=0.0, hi=1e5, lo_open=True) if top.has("duration") \
-        else None
-    run_out = top.number("run_out", lo=0.0, hi=1e5) if top.has("run_out") else None
+    duration = top.number("duration", "plan_duration", None)
+    run_out = top.number("run_out", "run_out", None)
+    if duration is None:         # Scene.run's safety net (3 L / V) must be a bounded run too
+        longest = 3.0 * path.length() / min(speed.V.min(), fig.body.V_cm)
+        if not RANGES["plan_duration"].contains(longest):
+            top.fail("duration", f"is missing and the path ({path.length():.0f} m) could take "
+                                 f"up to {longest:.0f} s to follow; give a duration in "
+                                 f"{RANGES['plan_duration']} or a shorter path")
     if not math.isfinite(fig.limits.dC_f_max) or not math.isfinite(fig.limits.C_f_max):
-        raise ValueError("scene field figure.limits: the planner needs finite C_f_max and "
-                         "dC_f_max")
+        top.fail("figure", "limits: the planner needs finite C_f_max and dC_f_max")
     return Scene(name, fig, path, obstacles, state0, cf0, speed, settings, per, exact, duration,
-                 run_out, doc.get("description", "") if isinstance(doc.get("description", ""),
-                                                                  str) else "")
+                 run_out, description)

@@ -3,12 +3,14 @@ time"): a constant, samples linearly interpolated (held beyond the ends), or any
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from .ranges import RANGES
+from .validate import FieldError, check, nearest, read_text
 
 
 class Schedule:
@@ -70,35 +72,72 @@ class TurnSchedule:
     heading: Schedule | None = None
 
 
+_COLUMNS = {"t": "schedule_t", "period": "period", "lean_deg": "theta_max",
+            "heading_deg": "heading"}
+
+
 def read_schedule_csv(path: str | Path) -> TurnSchedule:
-    """Read a CSV with the header ``t, period, lean_deg, heading_deg`` (heading may be blank)."""
-    path = Path(path)
+    """Read a CSV with the header ``t, period, lean_deg[, heading_deg]`` (s, s, deg, deg).
+
+    Spaces around names and values and a UTF-8 byte-order mark are allowed; ``heading_deg`` is
+    optional (absent or blank on every row: ``heading`` is None).  Each value is checked against
+    the table of ranges; an error names the file, the row (and its line), the column and the
+    value.
+    """
+    src = str(path)
+    lines = read_text(path, "schedule file").splitlines()
     try:
-        with path.open(newline="") as fh:
-            rows = list(csv.DictReader(fh))
-    except OSError as exc:
-        raise ValueError(f"schedule file {str(path)!r} cannot be read: {exc.strerror}") from None
-    need = ("t", "period", "lean_deg")
-    if not rows or any(k not in rows[0] for k in need):
-        raise ValueError(f"schedule file {str(path)!r} needs a header with columns t, period, "
-                         "lean_deg (and optionally heading_deg) and at least one row")
-    try:
-        t = [float(r["t"]) for r in rows]
-        period = [float(r["period"]) for r in rows]
-        lean = [float(r["lean_deg"]) for r in rows]
-        has_heading = all(r.get("heading_deg") not in (None, "") for r in rows)
-        heading = [float(r["heading_deg"]) for r in rows] if has_heading else None
-    except ValueError:
-        raise ValueError(f"schedule file {str(path)!r} holds a value that is not a number") from None
-    for p in period:
-        if not (p > 0 and math.isfinite(p)):
-            raise ValueError(f"schedule period = {p!r} is outside the allowed range (0, inf) s")
-    for d in lean:
-        if not (0 < d < 90):
-            raise ValueError(f"schedule lean_deg = {d!r} is outside the allowed range (0, 90)")
-    t_arr = np.asarray(t)
+        rows = [(n, [c.strip() for c in r]) for n, r in enumerate(csv.reader(lines), 1)
+                if any(c.strip() for c in r)]
+    except csv.Error as exc:
+        raise FieldError(f"{src}: is not a CSV file ({exc})") from None
+    if not rows:
+        raise FieldError(f"{src}: the file is empty; it needs a header t, period, lean_deg "
+                         "(and optionally heading_deg) and at least one row")
+    (_, header), data = rows[0], rows[1:]
+    for name in header:
+        if name not in _COLUMNS:
+            raise FieldError(f"{src}: column {name!r} in the header is not known"
+                             f"{nearest(name, _COLUMNS)}")
+    missing = [c for c in ("t", "period", "lean_deg") if c not in header]
+    if missing or len(set(header)) != len(header):
+        raise FieldError(f"{src}: the header {','.join(header)!r} needs the columns t, period, "
+                         "lean_deg (and optionally heading_deg), each once")
+    if not data:
+        raise FieldError(f"{src}: the header t, period, lean_deg needs at least one row below "
+                         "it")
+    cols = {name: [] for name in header}
+    for k, (line, cells) in enumerate(data, 1):
+        where = f"row {k} (line {line})"
+        if len(cells) != len(header):
+            raise FieldError(f"{src}: {where} has {len(cells)} values; the header has "
+                             f"{len(header)} ({', '.join(header)})")
+        for name, text in zip(header, cells):
+            if name == "heading_deg" and text == "":
+                cols[name].append(None)
+                continue
+            try:
+                value = float(text)
+            except ValueError:
+                value = text
+            rng = RANGES[_COLUMNS[name]]
+            cols[name].append(check(f"{where}, column {name}", value,
+                                    rng.deg() if name.endswith("_deg") else rng, src))
+    heading = cols.get("heading_deg")
+    if heading is not None and None in heading:
+        if any(h is not None for h in heading):
+            k = heading.index(None) + 1
+            raise FieldError(f"{src}: row {k} (line {data[k - 1][0]}), column heading_deg is "
+                             "blank; give heading_deg on every row or on none")
+        heading = None
+    t = np.asarray(cols["t"])
+    bad = np.flatnonzero(np.diff(t) <= 0)
+    if bad.size:
+        k = int(bad[0]) + 2
+        raise FieldError(f"{src}: row {k} (line {data[k - 1][0]}), column t = {t[k - 1]!r} "
+                         f"does not come after the row before it (t = {t[k - 2]!r})")
     return TurnSchedule(
-        omega0=Schedule.sampled(t_arr, 2 * np.pi / np.asarray(period)),
-        theta_max=Schedule.sampled(t_arr, np.radians(lean)),
-        heading=Schedule.sampled(t_arr, np.radians(heading)) if heading else None,
+        omega0=Schedule.sampled(t, 2 * np.pi / np.asarray(cols["period"])),
+        theta_max=Schedule.sampled(t, np.radians(cols["lean_deg"])),
+        heading=Schedule.sampled(t, np.radians(heading)) if heading else None,
     )

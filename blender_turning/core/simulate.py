@@ -1,7 +1,7 @@
 """The simulation loop of Fig. 4: control, bound, integrate, record.
 
 :func:`run` steps any batch shape; :func:`simulate` is the one-figure front end that returns a
-:class:`Trajectory`.  Integration is classical RK4 (DESIGN.md Section 2: explicit Euler drifts);
+:class:`Trajectory`.  Integration is classical RK4 (docs/ARCHITECTURE.md Section 5: Euler drifts);
 ``C_f`` is evaluated and bounded at every stage, so the recorded ``alpha_v`` is the one the
 bounded curvature produces (Section 3).
 """
@@ -111,8 +111,8 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
 
 
 def _columns(body: BodyParams, rec: np.ndarray, dt: float, falls: tuple, V_cm=None) -> Run:
-    """The DESIGN.md columns from the per-sample records ``(n, 10, ...)``; ``V_cm`` the speed
-    at each sample when it varies."""
+    """The columns of docs/ARCHITECTURE.md Section 3 from the records ``(n, 10, ...)``; ``V_cm``
+    the speed at each sample when it varies."""
     n = rec.shape[0]
     cols = {"t": np.broadcast_to((np.arange(n) * dt).reshape((n,) + (1,) * (rec.ndim - 2)),
                                  rec.shape[:1] + rec.shape[2:]).copy()}

@@ -11,14 +11,12 @@ import csv
 import io
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field, fields
-from pathlib import Path
 
 import numpy as np
 
 from .dynamics import foot_speed, forward_alpha, leg_force
+from .files import atomic_write_text
 from .params import BodyParams
 from .phase import phase
 
@@ -139,7 +137,7 @@ class Trajectory:
         w.writerow(COLUMNS)
         for row in self.data.T:
             w.writerow([repr(float(v)) for v in row])
-        _atomic_write(path, buf.getvalue())
+        atomic_write_text(path, buf.getvalue())
 
     @classmethod
     def from_csv(cls, path) -> "Trajectory":
@@ -156,7 +154,7 @@ class Trajectory:
     def to_json(self, path) -> None:
         doc = {"columns": list(COLUMNS), "meta": self.meta,
                "data": {c: self.data[i].tolist() for i, c in enumerate(COLUMNS)}}
-        _atomic_write(path, json.dumps(doc))
+        atomic_write_text(path, json.dumps(doc))
 
     @classmethod
     def from_json(cls, path) -> "Trajectory":
@@ -202,15 +200,3 @@ def _ellipse_rate(theta_v, omega_v, phi):
         return np.ones(len(w))
     return w[ok[np.minimum(np.searchsorted(ok, np.arange(len(w))), len(ok) - 1)]]
 
-
-def _atomic_write(path, text: str) -> None:
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=".tmp-",
-                               suffix=path.suffix)
-    try:
-        with os.fdopen(fd, "w", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise

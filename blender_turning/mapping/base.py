@@ -113,7 +113,7 @@ class Mapping:
             bones[name] = BoneChannels(location=loc,
                                        rotation=None if rot is None else quat_continuous(rot))
         # The object carries the foot point and the heading: the rig faces +Y, theta_dir is
-        # measured counter-clockwise from +x (DESIGN.md Section 1).
+        # measured counter-clockwise from +x (docs/ARCHITECTURE.md Section 4).
         zeros = np.zeros(n)
         location = np.stack([traj.x, traj.y, zeros], axis=1)
         rotation = np.stack([zeros, zeros, traj.theta_dir - np.pi / 2], axis=1)

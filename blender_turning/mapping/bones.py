@@ -1,4 +1,4 @@
-"""Bone names, in one place (STYLE.md rule 6).
+"""Bone names, in one place (docs/ARCHITECTURE.md Section 7, rule 6).
 
 Human bones carry Rigify's metarig names so animators know them; equipment bones are named after
 the equipment.  ``root`` stays on the ground under the foot point (the object carries position

@@ -84,7 +84,8 @@ def add_local_rotation(b: PoseBuilder, bone: str, axis_rest, angle):
 def lean(b: PoseBuilder, theta_v):
     """Lean the body about the line of the foot (the rig's Y axis at z = 0).
 
-    ``theta_v > 0`` leans left of travel (DESIGN.md), i.e. a rotation by ``-theta_v`` about +Y.
+    ``theta_v > 0`` leans left of travel (docs/ARCHITECTURE.md Section 4), i.e. a rotation by
+    ``-theta_v`` about +Y.
     """
     add_local_rotation(b, B.LEAN, (0.0, 1.0, 0.0), -np.asarray(theta_v, float))
 

@@ -43,6 +43,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..core.ranges import RANGES, Range
+from ..core.validate import FieldError, Fields, check, read_text
 from .bones import REQUIRED, MissingBoneError
 
 __all__ = ["BoneSpec", "MeshSpec", "RigSpec", "RIGS_DIR", "RIG_NAMES", "MATERIALS", "SHAPES",
@@ -110,76 +112,77 @@ class RigSpec:
         return tuple(m for m in self.meshes if m.bone == bone)
 
 
-def _vec(where: str, value, n: int) -> tuple:
-    try:
-        v = tuple(float(x) for x in value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{where} = {value!r} is not a list of {n} numbers") from None
-    if len(v) != n or not all(math.isfinite(x) for x in v):
-        raise ValueError(f"{where} = {value!r} is not a list of {n} finite numbers")
-    return v
+_BONE_KEYS = {"name", "head", "tail", "roll", "parent", "connected", "deform"}
+_MESH_KEYS = {"name", "bone", "shape", "size", "offset", "rotation", "material"}
+_RIG_RANGES = {                       # rig data, armature space (see the module docstring)
+    "point": RANGES["coordinate"],
+    "roll": Range(-2 * math.pi, 2 * math.pi, "rad", "an edit bone's roll"),
+    "size": Range(1e-4, 10.0, "m", "a primitive's extent"),
+    "rotation": Range(-10.0, 10.0, "", "a quaternion component (then checked to be unit)"),
+}
+
+
+def _vec(f: Fields, key, n: int, kind: str, default=None) -> tuple:
+    """``f[key]``: a list of ``n`` numbers, each in ``_RIG_RANGES[kind]``."""
+    v = f.value(key, default)
+    if not isinstance(v, (list, tuple)) or len(v) != n:
+        f.fail(key, f"= {v!r} is not a list of {n} numbers")
+    sub = Fields(list(v), f.source, f.name(key))
+    return tuple(check(sub.name(i), x, _RIG_RANGES[kind], f.source) for i, x in enumerate(v))
 
 
 def parse_rig(doc: dict, source: str = "rig") -> RigSpec:
-    """Validate a rig document (the parsed JSON) and build a :class:`RigSpec`."""
-    for key in ("name", "sport", "bones", "meshes"):
-        if key not in doc:
-            raise ValueError(f"{source}: missing key {key!r}")
-    sport = doc["sport"]
-    if sport not in REQUIRED:
-        raise ValueError(f"{source}: sport = {sport!r} is not one of {', '.join(REQUIRED)}")
+    """Validate a rig document (the parsed JSON) and build a :class:`RigSpec`.  Errors name the
+    source and the field (``skier.json: bones[3].head[0] = 'x' is not a number ...``)."""
+    if not isinstance(doc, dict):
+        raise FieldError(f"{source}: a rig must be a JSON object, not {type(doc).__name__}")
+    top = Fields(doc, source).only({"name", "sport", "bones", "meshes"})
+    rig_name = top.string("name")
+    sport = top.string("sport", choices=tuple(REQUIRED))
+    top.value("meshes")
     bones, seen = [], {}
-    for k, b in enumerate(doc["bones"]):
-        name = b.get("name")
-        if not isinstance(name, str) or not name:
-            raise ValueError(f"{source}: bone #{k} has no name")
+    for b in top.tables("bones", _BONE_KEYS):
+        name = b.string("name")
+        if not name:
+            b.fail("name", "is empty")
         if name in seen:
-            raise ValueError(f"{source}: bone {name!r} appears twice")
-        where = f"{source}: bone {name!r}"
-        head = _vec(f"{where} head", b.get("head"), 3)
-        tail = _vec(f"{where} tail", b.get("tail"), 3)
+            b.fail("name", f"= {name!r}: bone {name!r} appears twice")
+        head, tail = _vec(b, "head", 3, "point"), _vec(b, "tail", 3, "point")
         if np.linalg.norm(np.subtract(tail, head)) < 1e-4:
-            raise ValueError(f"{where}: head and tail coincide (length < 0.1 mm)")
-        parent = b.get("parent")
+            b.fail("tail", f"= {list(tail)}: head and tail of bone {name!r} coincide "
+                           "(length < 0.1 mm)")
+        parent = b.string("parent", None)
         if parent is not None and parent not in seen:
-            raise ValueError(f"{where}: parent {parent!r} is not a bone defined before it")
-        connected = bool(b.get("connected", False))
+            b.fail("parent", f"= {parent!r} is not a bone defined before {name!r}")
+        connected = b.boolean("connected", False)
         if connected:
             if parent is None:
-                raise ValueError(f"{where}: connected but has no parent")
+                b.fail("connected", f"is true but bone {name!r} has no parent")
             gap = np.linalg.norm(np.subtract(head, seen[parent].tail))
             if gap > 1e-6:
-                raise ValueError(f"{where}: connected but its head is {gap:.3g} m from the "
-                                 f"tail of {parent!r}")
-        bone = BoneSpec(name, head, tail, float(b.get("roll", 0.0)), parent, connected,
-                        bool(b.get("deform", True)))
+                b.fail("connected", f"is true but the head of {name!r} is {gap:.3g} m from "
+                                    f"the tail of {parent!r}")
+        roll = b.number("roll", _RIG_RANGES["roll"], 0.0)
+        bone = BoneSpec(name, head, tail, roll, parent, connected, b.boolean("deform", True))
         seen[name] = bone
         bones.append(bone)
     missing = [n for n in REQUIRED[sport] if n not in seen]
     if missing:
         raise MissingBoneError(f"{source}: bone {missing[0]!r} is missing (a {sport} rig needs it)")
     meshes = []
-    for k, m in enumerate(doc["meshes"]):
-        where = f"{source}: mesh {m.get('name', '#' + str(k))!r}"
-        if m.get("bone") not in seen:
-            raise ValueError(f"{where}: bone {m.get('bone')!r} is not in the rig")
-        shape = m.get("shape")
-        if shape not in SHAPES:
-            raise ValueError(f"{where}: shape = {shape!r} is not one of {', '.join(SHAPES)}")
-        size = _vec(f"{where} size", m.get("size"), SHAPES[shape])
-        if min(size) <= 0:
-            raise ValueError(f"{where}: size = {list(size)} must be positive")
-        rot = _vec(f"{where} rotation", m.get("rotation", (1, 0, 0, 0)), 4)
+    for m in top.tables("meshes", _MESH_KEYS):
+        bone = m.string("bone", choices=None)
+        if bone not in seen:
+            m.fail("bone", f"= {bone!r} is not a bone of the rig")
+        shape = m.string("shape", choices=tuple(SHAPES))
+        size = _vec(m, "size", SHAPES[shape], "size")
+        rot = _vec(m, "rotation", 4, "rotation", (1.0, 0.0, 0.0, 0.0))
         if abs(np.linalg.norm(rot) - 1.0) > 1e-3:
-            raise ValueError(f"{where}: rotation = {list(rot)} is not a unit quaternion")
-        material = m.get("material", "suit")
-        if material not in MATERIALS:
-            raise ValueError(f"{where}: material = {material!r} is not one of "
-                             f"{', '.join(MATERIALS)}")
-        meshes.append(MeshSpec(str(m.get("name", m["bone"])), m["bone"], shape, size,
-                               _vec(f"{where} offset", m.get("offset", (0, 0, 0)), 3),
-                               rot, material))
-    return RigSpec(str(doc["name"]), sport, tuple(bones), tuple(meshes))
+            m.fail("rotation", f"= {list(rot)} is not a unit quaternion")
+        meshes.append(MeshSpec(m.string("name", bone), bone, shape, size,
+                               _vec(m, "offset", 3, "point", (0.0, 0.0, 0.0)), rot,
+                               m.string("material", "suit", choices=MATERIALS)))
+    return RigSpec(rig_name, sport, tuple(bones), tuple(meshes))
 
 
 @lru_cache(maxsize=None)
@@ -188,5 +191,8 @@ def load_rig(name: str) -> RigSpec:
     if name not in RIG_NAMES:
         raise ValueError(f"rig = {name!r} is not one of {', '.join(RIG_NAMES)}")
     path = RIGS_DIR / f"{name}.json"
-    with open(path) as fh:
-        return parse_rig(json.load(fh), str(path.name))
+    try:
+        doc = json.loads(read_text(path, "rig file"))
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise FieldError(f"rig file {str(path)!r} is not valid JSON ({exc})") from None
+    return parse_rig(doc, str(path.name))

@@ -1,7 +1,7 @@
 """The paper's phase-ellipse law of Section 5.1 (``PhaseEllipse(..., law="paper")``, CLI
 ``--law paper``), kept to compare with the default smooth law of :mod:`.ellipse`.
 
-Section 5.1, read geometrically (``shared/DESIGN.md`` Section 2): the controlling ellipse through
+Section 5.1, read geometrically (docs/ARCHITECTURE.md Section 5): the controlling ellipse through
 the current state shares the target's lean intercept ``theta_max`` in quadrants 1 and 3 (Fig. 7a)
 and its rate intercept ``omega0 theta_max`` in quadrants 2 and 4 (Fig. 7b).  On any ellipse of
 Eq. (3) ``alpha_v = -omega0'^2 theta_v`` (Eq. 5), so

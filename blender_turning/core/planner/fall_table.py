@@ -6,7 +6,8 @@ gives the largest ``C_f`` at every instant of any plan, and (Eq. 2) ``alpha_v`` 
 ``C_f``.  Where ``alpha_v`` also increases with ``theta_v`` (checked on the whole range, else the
 table is not used), the lean system is cooperative, and so is each RK4 step (all its stages are
 monotone), so that plan's lean is the smallest of all plans at every step: if even it passes the
-bound, every plan does, no later.  The right side is the mirror image (DESIGN.md Section 1).
+bound, every plan does, no later.  The right side is the mirror image (docs/ARCHITECTURE.md
+Section 4).
 
 ``T[i, j, k]`` is the first step at which the hardest-steering plan from grid state
 ``(theta[i], omega[j], C_f[k])`` passes ``theta_bound + 1e-9``.  A node is looked up at the grid

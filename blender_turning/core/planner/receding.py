@@ -1,6 +1,6 @@
 """Receding-horizon path following (Section 6.1): plan N stages, apply the first, plan again.
 
-:func:`follow` returns a :class:`FollowResult`: the trajectory (the DESIGN.md columns, ``phi``
+:func:`follow` returns a :class:`FollowResult`: the trajectory (docs/ARCHITECTURE.md Sec. 3, ``phi``
 from the Section 6.2 post-pass) and one :class:`Replan` per planning step.  When no plan survives
 (every branch hits an obstacle or falls) it raises :class:`..errors.PlanInfeasible` with the time,
 the position and the trajectory up to there: never a silent fall-through.

@@ -1,0 +1,152 @@
+"""The one table of allowed ranges: every value a user can give (a command-line flag, a scene
+file, a schedule, a render-job config, a Blender property) is checked against the range here.
+
+Ranges are in SI units (radians for angles, as Blender's ``subtype='ANGLE'`` properties store
+them); :meth:`Range.deg` gives the same range in degrees for the ``*_deg`` fields and flags.
+Each range is what the model handles -- no overflow, no NaN, no numpy warning inside it -- and
+its ``reason`` says where the bound comes from.  A Blender property reads its limits from here::
+
+    from ..core.ranges import RANGES
+    mass: FloatProperty(min=RANGES["m"].lo, max=RANGES["m"].hi, ...)
+
+(``RANGES["theta_max"].lo`` is in radians, as an ``ANGLE`` property wants it.)  Values are checked
+with :func:`.validate.check`, which names the field, the value and the range.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+__all__ = ["Range", "RANGES", "MAX_STEPS", "MAX_SAMPLES"]
+
+
+@dataclass(frozen=True)
+class Range:
+    """An interval of allowed values, in ``unit``."""
+
+    lo: float
+    hi: float
+    unit: str = ""
+    reason: str = ""
+    lo_open: bool = False
+    hi_open: bool = False
+    integer: bool = False
+    """Only whole numbers (counts: stages, choices, pixels)."""
+
+    def contains(self, v: float) -> bool:
+        if not math.isfinite(v) and not (math.isinf(v) and v in (self.lo, self.hi)):
+            return False
+        ok = (v > self.lo if self.lo_open else v >= self.lo) and \
+            (v < self.hi if self.hi_open else v <= self.hi)
+        return ok and (not self.integer or v == int(v))
+
+    def deg(self) -> "Range":
+        """The same range in degrees (for ``*_deg`` fields and flags)."""
+        unit = {"rad": "deg", "rad/s": "deg/s"}.get(self.unit, self.unit)
+        return replace(self, lo=_round(math.degrees(self.lo)), hi=_round(math.degrees(self.hi)),
+                       unit=unit)
+
+    def __str__(self) -> str:
+        text = (f"{'(' if self.lo_open else '['}{self.lo:g}, {self.hi:g}"
+                f"{')' if self.hi_open else ']'}")
+        text = f"{text} {self.unit}".rstrip()
+        return f"{text} (whole numbers)" if self.integer else text
+
+
+def _round(v: float) -> float:
+    return round(v, 9)
+
+
+_DEG = math.pi / 180.0
+
+RANGES: dict[str, Range] = {
+    # -- the body (Section 3, Fig. 2) -----------------------------------------------------------
+    "m": Range(1.0, 1000.0, "kg", "a child on a sledge to a loaded motorbike; below 1 kg "
+               "I_v / m in Eq. (2) grows without bound (at 1e-300 kg it overflows to NaN)"),
+    "l": Range(0.2, 3.0, "m", "a crouched child to a rider on a tall vehicle; the pendulum of "
+               "Fig. 2 needs l well above zero (I_v / (m l) in Eq. 2)"),
+    "I_v": Range(0.0, 1000.0, "kg m^2", "up to a radius of gyration of 3.6 m at 75 kg; far "
+                 "beyond it the body cannot lean within the curvature bounds and the run "
+                 "overflows as it falls (1e5 kg m^2: NaN)"),
+    "V_cm": Range(0.5, 60.0, "m/s", "walking pace to a speed skier; near 0 m/s Eq. (1) asks for "
+                  "a curvature of order g / V^2 (1e-300 m/s: NaN)"),
+    "J": Range(0.0, 100.0, "m", "the inertia term (I_v + l^2 m) / (m l) of Eqs. (1), (2), (9), "
+               "1.2 m for the presets; near 300 m the half-turns of the heading table overflow",
+               lo_open=True),
+    "g": Range(1.0, 30.0, "m/s^2", "the Moon (1.6) to beyond Jupiter (24.8)"),
+    # -- the limits (Sections 3, 5.1) ------------------------------------------------------------
+    "C_f_max": Range(0.001, 10.0, "1/m", "a 1 km turning radius to a 10 cm one (in the core, "
+                     "inf means no bound)"),
+    "dC_f_max": Range(0.001, 100.0, "1/(m s)", "how fast the foot may change its curvature (in "
+                      "the core, inf means no bound)"),
+    "theta_fall": Range(5 * _DEG, 85 * _DEG, "rad", "the pendulum of Fig. 2 is lying on the "
+                        "ground at 90 deg"),
+    # -- the parametric controller (Section 5) ---------------------------------------------------
+    "period": Range(0.3, 20.0, "s", "a quick edge change to a long carve; 2 pi / omega0"),
+    "omega0": Range(2 * math.pi / 20.0, 2 * math.pi / 0.3, "rad/s", "2 pi / period"),
+    "theta_max": Range(1 * _DEG, 60 * _DEG, "rad", "a gentle wiggle to a racer's lean; past "
+                       "60 deg every preset falls (theta_fall 50-60 deg)"),
+    "heading": Range(-3600 * _DEG, 3600 * _DEG, "rad", "ten full turns either way"),
+    # -- the start state --------------------------------------------------------------------------
+    "theta_v0": Range(-89 * _DEG, 89 * _DEG, "rad", "the body must start above the ground"),
+    "omega_v0": Range(-3600 * _DEG, 3600 * _DEG, "rad/s", "ten turns a second of lean rate"),
+    "C_f0": Range(-10.0, 10.0, "1/m", "within the largest C_f_max"),
+    "schedule_t": Range(0.0, 1e5, "s", "times of a schedule or speed profile, within a run"),
+    # -- a run ------------------------------------------------------------------------------------
+    "duration": Range(0.0, 1e5, "s", "a day; the number of steps is bounded too (MAX_STEPS)",
+                      lo_open=True),
+    "dt": Range(1e-3, 0.03, "s", "RK4 step (Section 3) where the rows obey the model to 1e-3 "
+                "of scale under the trapezoid rule for a 2 s turn ((2 pi dt / period)^2 / 12 "
+                "<= 1e-3 up to 0.034 s; BENCHMARKS.md 'Turn control accuracy'); a step count "
+                "bound applies too"),
+    "fps": Range(1.0, 1000.0, "1/s", "frame rates from 1 to 1000"),
+    # -- path following (Section 6.1) ------------------------------------------------------------
+    "n_stages": Range(1, 16, "", "N; the paper uses 10-12 (Section 6.1) and the search grows "
+                      "as q^N", integer=True),
+    "q": Range(2, 9, "", "q; the paper uses 5-7 (Section 6.1); on scenes/slalom.json N = 12, "
+               "q = 9 plans in 23 s while q = 11 runs for minutes", integer=True),
+    "t_stage": Range(0.0, 60.0, "s", "one stage of constant dC_f/dt", lo_open=True),
+    "theta_bound": Range(0.0, 90 * _DEG, "rad", "the lean bound of the search", lo_open=True,
+                         hi_open=True),
+    "sample_dt": Range(0.0, 60.0, "s", "the interval of the path-distance samples",
+                       lo_open=True),
+    "planner_dt": Range(1e-4, 1.0, "s", "the planner's RK4 step"),
+    "batch": Range(1, 4096, "", "nodes expanded together", integer=True),
+    "search_size": Range(1, 7.0 ** 16, "", "q^N, the leaves of the full search tree: N = 16, "
+                         "q = 7 plans scenes/slalom.json in 24 s, N = 12, q = 9 in 23 s, while "
+                         "N = 16, q = 9 takes 183 s and 340 MB (BENCHMARKS.md)"),
+    "horizon_steps": Range(1, 2000, "", "RK4 steps in one horizon, N t_stage / dt: the paper's "
+                           "is 12 x 0.3 s / 0.05 s = 72", integer=True),
+    "horizon_samples": Range(1, 1000, "", "path-distance samples in one horizon, N t_stage / "
+                             "sample_dt: the paper's is 36", integer=True),
+    "plan_duration": Range(0.0, 3600.0, "s", "an hour of planned motion (a replanning every "
+                           "stage)", lo_open=True),
+    # -- scenes: places and shapes ---------------------------------------------------------------
+    "coordinate": Range(-1e5, 1e5, "m", "100 km from the origin, larger than any ski area; "
+                        "squared distances overflow near 1e154 m"),
+    "distance": Range(0.0, 1e6, "m", "a distance travelled along the path"),
+    "radius": Range(0.0, 1e4, "m", "an obstacle's radius", lo_open=True),
+    "clearance": Range(0.0, 100.0, "m", "the distance the track keeps from obstacles"),
+    "run_out": Range(0.0, 1e4, "m", "the straight added after the path's end"),
+    "samples_per_segment": Range(1, 1000, "", "path samples per spline segment", integer=True),
+    # -- the headless render job (scripts/render_job.py) -----------------------------------------
+    "job_seconds": Range(0.0, 600.0, "s", "ten minutes of animation a job", lo_open=True),
+    "job_fps": Range(1, 240, "1/s", "Blender's frame rates", integer=True),
+    "frame_step": Range(1, 1000, "", "render every n-th frame", integer=True),
+    "pixels": Range(4, 8192, "px", "Blender renders 4 to 8192 pixels a side", integer=True),
+    "render_samples": Range(1, 4096, "", "EEVEE/Cycles samples a pixel", integer=True),
+    "camera_distance": Range(0.1, 1e4, "m", "how far behind the figures the camera follows"),
+    "camera_height": Range(-1e4, 1e4, "m", "the camera's height above the ground"),
+    "lens": Range(1.0, 5000.0, "mm", "Blender's focal-length range"),
+    "object_size": Range(0.01, 100.0, "m", "an obstacle object's width"),
+    "object_height": Range(0.01, 1000.0, "m", "an obstacle object's height"),
+    "plan_curvature_rate": Range(0.0, 100.0, "1/(m s)", "the planner's dC_f/dt (0: the sport "
+                                 "preset's); as dC_f_max"),
+}
+
+MAX_STEPS = 200_000
+"""Most integration steps (``duration / dt``) or output samples of one run: 4000 s of motion at
+the default dt of 0.02 s.  Measured (BENCHMARKS.md): 200,000 steps take 4.7 s and 160 MB, 9.4 s
+with the 44 MB CSV written; ``--duration 100000 --dt 0.0001`` would be 1e9 steps, hours and
+hundreds of GB."""
+MAX_SAMPLES = MAX_STEPS

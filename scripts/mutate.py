@@ -1,0 +1,369 @@
+"""Mutation check: does the test suite catch broken physics?
+
+Applies each mutant below (a flipped sign, a dropped term, a loosened bound, a skipped check) to
+the core, the mapping and the bake, one at a time, in a temporary copy of the tree (never in
+place: other tools may be reading the tree), runs the test files that guard that module
+(``pytest -x``, with a per-mutant timeout) and reports which mutants the tests caught, the score
+and the survivors.  TESTING.md lists the survivors of the last run and why each is left.
+
+Each mutant is located by an exact snippet that must occur exactly once in its file; if the code
+has changed so that a snippet is gone (or is no longer unique), the script says which mutant and
+file and stops before running anything (``--skip-stale`` runs the others and lists the stale).
+
+    PYTHONPATH=$PWD .venv/bin/python scripts/mutate.py               # all, 2-7 minutes
+    PYTHONPATH=$PWD .venv/bin/python scripts/mutate.py --only leg_force_no_omega2 ski_tilt_halved
+    PYTHONPATH=$PWD .venv/bin/python scripts/mutate.py --list
+    .venv/bin/python scripts/mutate.py --group bake --python .venv-bpy42/bin/python
+
+Exit status: 0 when the score reaches ``--goal`` (0.9), 1 below it, 2 for stale mutants or a
+baseline (unmutated) test run that fails.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PKG = "blender_turning"
+
+# -- which tests guard which module --------------------------------------------------------------
+T = "tests/"
+DYNAMICS = [T + "test_mutation_guards_core.py", T + "test_dynamics.py", T + "test_one_figure.py",
+            T + "test_controllers.py"]
+SIMULATE = [T + "test_mutation_guards_core.py", T + "test_one_figure.py", T + "test_controllers.py",
+            T + "test_trajectory.py"]
+PARAMS = [T + "test_dynamics.py", T + "test_mutation_guards_core.py", T + "test_cli_simulate.py"]
+OBSTACLES = [T + "test_obstacles.py", T + "test_mutation_guards_planner.py"]
+TRAJ = [T + "test_mutation_guards_core.py", T + "test_trajectory.py", T + "test_cli_simulate.py"]
+PLANNER = [T + "test_mutation_guards_planner.py", T + "test_planner_search.py",
+           T + "test_planner_fall_table.py"]
+MAPPING = [T + "test_mutation_guards_mapping.py", T + "test_mapping_skier.py",
+           T + "test_mapping.py", T + "test_mapping_snowboarder.py",
+           T + "test_mapping_telemark.py", T + "test_mapping_cyclist.py"]
+BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
+        T + "test_blender_operators.py"]
+
+
+@dataclass(frozen=True)
+class Mutant:
+    name: str
+    file: str          # relative to blender_turning/
+    find: str          # exact snippet, must occur once
+    replace: str
+    tests: tuple
+    group: str = "core"
+
+
+def M(name, file, find, replace, tests, group="core"):
+    return Mutant(name, file, find, replace, tuple(tests), group)
+
+
+MUTANTS = [
+    # -- dynamics (Section 3, Appendix A) --------------------------------------------------------
+    M("forward_alpha_sign", "core/dynamics.py",
+      "return (body.g * s - k) / body.J", "return (body.g * s + k) / body.J", DYNAMICS),
+    M("forward_alpha_no_cos", "core/dynamics.py",
+      "k = C_f * body.V_cm ** 2 * c / (1.0 - C_f * body.l * s)",
+      "k = C_f * body.V_cm ** 2 / (1.0 - C_f * body.l * s)", DYNAMICS),
+    M("inverse_cf_alpha_sign", "core/dynamics.py",
+      "k = body.g * s - alpha_v * body.J", "k = body.g * s + alpha_v * body.J", DYNAMICS),
+    M("inverse_cf_drop_k_term", "core/dynamics.py",
+      "den = k * body.l * s + body.V_cm ** 2 * c", "den = body.V_cm ** 2 * c", DYNAMICS),
+    M("physical_margin_loosened", "core/dynamics.py",
+      "PHYSICAL_MARGIN = 0.9", "PHYSICAL_MARGIN = 0.99", DYNAMICS),
+    M("bound_cf_rate_doubled", "core/dynamics.py",
+      "step = limits.dC_f_max * tau", "step = 2.0 * limits.dC_f_max * tau", DYNAMICS),
+    M("bound_cf_skip_physical", "core/dynamics.py",
+      "cf = xp.clip(C_f, xp.where(sin_t < 0, -lim, -cmax), xp.where(sin_t > 0, lim, cmax))",
+      "cf = xp.clip(C_f, -cmax, cmax)", DYNAMICS),
+    M("foot_speed_sign", "core/dynamics.py",
+      "return body.V_cm / (1.0 - C_f * body.l * s)",
+      "return body.V_cm / (1.0 + C_f * body.l * s)", DYNAMICS),
+    M("leg_force_no_omega2", "core/dynamics.py",
+      "along = body.m * (body.g * c + V * V_f * C_f * s - body.l * omega_v * omega_v)",
+      "along = body.m * (body.g * c + V * V_f * C_f * s)", DYNAMICS),
+    M("leg_force_lateral_sign", "core/dynamics.py",
+      "along = body.m * (body.g * c + V * V_f * C_f * s - body.l * omega_v * omega_v)",
+      "along = body.m * (body.g * c - V * V_f * C_f * s - body.l * omega_v * omega_v)", DYNAMICS),
+    M("leg_force_across_times_l", "core/dynamics.py",
+      "across = body.I_v * alpha_v / body.l", "across = body.I_v * alpha_v * body.l", DYNAMICS),
+    M("batch_heading_rate_C_f", "core/dynamics.py",
+      "return (V_f * xp.cos(d), V_f * xp.sin(d), V_f * cf, state[OMEGA_V], alpha)",
+      "return (V_f * xp.cos(d), V_f * xp.sin(d), cf, state[OMEGA_V], alpha)", DYNAMICS),
+    M("batch_alpha_no_ratio", "core/dynamics.py",
+      "alpha = (body.g * s - cf * V * V * c * ratio) / body.J",
+      "alpha = (body.g * s - cf * V * V * c) / body.J", DYNAMICS),
+    M("rk4_to_euler", "core/dynamics.py",
+      "return state + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)", "return state + dt * k1",
+      DYNAMICS),
+    # -- one figure on floats ------------------------------------------------------------------
+    M("one_alpha_sign", "core/one_figure.py",
+      "alpha = (g * s - cf * VV * cos(x3) * ratio) / J",
+      "alpha = (g * s + cf * VV * cos(x3) * ratio) / J", DYNAMICS),
+    M("one_heading_rate_C_f", "core/one_figure.py",
+      "return V_f * cos(x2), V_f * sin(x2), V_f * cf, x4, alpha, cf, alpha, V_f",
+      "return V_f * cos(x2), V_f * sin(x2), cf, x4, alpha, cf, alpha, V_f", DYNAMICS),
+    M("one_fall_right_undetected", "core/one_figure.py",
+      "if theta_fall is not None and abs(x3) > theta_fall:",
+      "if theta_fall is not None and x3 > theta_fall:", DYNAMICS),
+    M("one_rate_doubled", "core/one_figure.py",
+      "step = rate * tau", "step = 2.0 * rate * tau", DYNAMICS),
+    M("one_skip_physical_low", "core/one_figure.py",
+      "lo = -cmax if ls >= 0.0 else max(-cmax, PHYSICAL_MARGIN / ls)", "lo = -cmax", DYNAMICS),
+    M("one_inverse_sign", "core/one_figure.py",
+      "k = g * s - alpha * J", "k = g * s + alpha * J", DYNAMICS),
+    # -- simulate, phase -----------------------------------------------------------------------
+    M("batch_fall_right_undetected", "core/simulate.py",
+      "np.any(np.abs(state[THETA_V]) > limits.theta_fall)",
+      "np.any(state[THETA_V] > limits.theta_fall)", SIMULATE),
+    M("s_at_V_cm", "core/simulate.py",
+      'ds = 0.5 * (cols["V_f"][1:] + cols["V_f"][:-1]) * dt',
+      'ds = np.full_like(cols["V_f"][1:], body.V_cm * dt)', SIMULATE),
+    M("F_leg_along_only", "core/simulate.py",
+      'cols["C_f"])[0]', 'cols["C_f"])[1]', SIMULATE),
+    M("phase_arctan", "core/phase.py",
+      "return np.mod(np.arctan2(y, x), TWO_PI)", "return np.mod(np.arctan(y / x), TWO_PI)",
+      SIMULATE + [T + "test_phase_estimate.py"]),
+    M("open_loop_alpha_sign", "core/phase.py",
+      "return -omega0 * omega0 * theta_max * backend(phi).sin(phi)",
+      "return omega0 * omega0 * theta_max * backend(phi).sin(phi)", SIMULATE),
+    # -- params --------------------------------------------------------------------------------
+    M("l_unchecked", "core/params.py",
+      'check_range("l", self.l, 0.0, 10.0, lo_open=True)', "pass", PARAMS),
+    M("J_drops_l", "core/params.py",
+      "return (self.I_v + self.l * self.l * self.m) / (self.m * self.l)",
+      "return (self.I_v + self.l * self.m) / (self.m * self.l)", PARAMS),
+    M("mass_zero_allowed", "core/params.py",
+      'check_range("m", self.m, 0.0, 1e4, lo_open=True)', 'check_range("m", self.m, -1.0, 1e4)',
+      PARAMS),
+    M("theta_fall_unchecked", "core/params.py",
+      'check_range("theta_fall", self.theta_fall, 0.0, math.pi / 2, lo_open=True, hi_open=True)',
+      "pass", PARAMS),
+    # -- obstacles (Section 6) -----------------------------------------------------------------
+    M("edge_clearance_ignored", "core/obstacles.py",
+      "hit[i[d <= cl]] = True", "hit[i[d <= 0.0]] = True", OBSTACLES),
+    M("circle_clearance_ignored", "core/obstacles.py",
+      "hit |= np.any(d <= self.circles[None, :, 2] + cl, axis=1)",
+      "hit |= np.any(d <= self.circles[None, :, 2], axis=1)", OBSTACLES),
+    M("polygon_inside_skipped", "core/obstacles.py",
+      "hit |= _inside(a, p)", "pass", OBSTACLES),
+    M("near_drops_clearance", "core/obstacles.py",
+      "r = radius + self.clearance", "r = radius", OBSTACLES),
+    M("box_prefilter_no_clearance", "core/obstacles.py",
+      "lo = np.minimum(a, b)[:, None] - cl", "lo = np.minimum(a, b)[:, None]", OBSTACLES),
+    M("point_segment_unclipped", "core/obstacles.py",
+      "t = np.clip(np.where(den > 0, t, 0.0), 0.0, 1.0)", "t = np.where(den > 0, t, 0.0)",
+      OBSTACLES),
+    M("collinear_counts_as_crossing", "core/obstacles.py",
+      "crossing = (d1 * d2 <= 0) & (d3 * d4 <= 0) & "
+      "((d1 != 0) | (d2 != 0) | (d3 != 0) | (d4 != 0))",
+      "crossing = (d1 * d2 <= 0) & (d3 * d4 <= 0)", OBSTACLES),
+    M("min_distance_inside_positive", "core/obstacles.py",
+      "d = np.where(_inside(p, poly), -np.abs(d), d)", "d = d", OBSTACLES),
+    # -- trajectory I/O (the contract) ---------------------------------------------------------
+    M("csv_header_unchecked", "core/trajectory.py",
+      "if not rows or tuple(rows[0]) != COLUMNS:", "if not rows:", TRAJ),
+    M("csv_low_precision", "core/trajectory.py",
+      "w.writerow([repr(float(v)) for v in row])", "w.writerow([f'{v:.6g}' for v in row])", TRAJ),
+    M("resample_heading_rate_C_f", "core/trajectory.py",
+      '"theta_dir": c["V_f"] * c["C_f"],', '"theta_dir": c["C_f"],', TRAJ),
+    # -- planner (Section 6) -------------------------------------------------------------------
+    M("v_max_without_eq21", "core/planner/problem.py",
+      "self.v_max = self.speed.max / (1.0 - slip)", "self.v_max = self.speed.max", PLANNER),
+    M("lipschitz_step_halved", "core/planner/problem.py",
+      "b = self.v_max * st.sample_dt\n", "b = 0.5 * self.v_max * st.sample_dt\n", PLANNER),
+    M("lower_bound_doubled", "core/planner/problem.py",
+      "return self.total_bound(terms, d_last, depth, state).reshape(d_last.shape)",
+      "return 2.0 * self.total_bound(terms, d_last, depth, state).reshape(d_last.shape)",
+      PLANNER),
+    M("planner_fall_right_undetected", "core/planner/problem.py",
+      "fell |= ~(np.abs(x[THETA_V]) <= st.theta_bound)",
+      "fell |= ~(x[THETA_V] <= st.theta_bound)", PLANNER),
+    M("arc_radius_halved", "core/planner/problem.py",
+      "return r[:, per - 1::per] * (1 + 1e-6) + 1e-9",
+      "return 0.5 * r[:, per - 1::per] * (1 + 1e-6) + 1e-9", PLANNER),
+    M("reach_support_halved", "core/planner/reach.py",
+      "self.H = H * (1 + 1e-9) + 1e-9", "self.H = 0.5 * H", PLANNER),
+    M("pair_floor_a_doubled", "core/planner/spacing.py",
+      "self.a = st.sample_dt * v_min", "self.a = 2.0 * st.sample_dt * v_min", PLANNER),
+    M("queue_clip_too_early", "core/planner/search.py",
+      "if prio > ub + tol():", "if prio > 0.8 * ub + tol():", PLANNER),
+    # -- mapping (Section 7) -------------------------------------------------------------------
+    M("leg_twist_reversed", "mapping/skier.py",
+      "twist = {s: np.clip(-o.leg_twist_gain * (tilts[s] - th)",
+      "twist = {s: np.clip(o.leg_twist_gain * (tilts[s] - th)", MAPPING, "mapping"),
+    M("ski_tilt_halved", "mapping/skier.py",
+      "base = tilt_gain(traj, o.tilt_gain) * traj.C_f",
+      "base = 0.5 * tilt_gain(traj, o.tilt_gain) * traj.C_f", MAPPING, "mapping"),
+    M("outside_ski_swapped", "mapping/skier.py",
+      "outside_is_right = traj.C_f > 0", "outside_is_right = traj.C_f < 0", MAPPING, "mapping"),
+    M("upper_twist_sign", "mapping/skier.py",
+      "twist_upper_body(b, up, -o.twist_amp * np.sin(traj.phi + o.twist_phase))",
+      "twist_upper_body(b, up, o.twist_amp * np.sin(traj.phi + o.twist_phase))", MAPPING,
+      "mapping"),
+    M("spring_sign", "mapping/snow.py",
+      "return np.clip(static - (traj.F_leg - static_force(traj)) / k_s, lo, hi)",
+      "return np.clip(static + (traj.F_leg - static_force(traj)) / k_s, lo, hi)", MAPPING,
+      "mapping"),
+    M("lean_sign", "mapping/common.py",
+      "add_local_rotation(b, B.LEAN, (0.0, 1.0, 0.0), -np.asarray(theta_v, float))",
+      "add_local_rotation(b, B.LEAN, (0.0, 1.0, 0.0), np.asarray(theta_v, float))", MAPPING,
+      "mapping"),
+    M("object_heading_offset", "mapping/base.py",
+      "traj.theta_dir - np.pi / 2", "traj.theta_dir", MAPPING, "mapping"),
+    M("crank_not_geared", "mapping/cyclist.py",
+      "crank_angle = wheel_angle / o.gear_ratio", "crank_angle = wheel_angle", MAPPING, "mapping"),
+    M("steer_no_lean", "mapping/cyclist.py",
+      "return np.clip(np.arctan2(k * np.cos(theta_v),", "return np.clip(np.arctan2(k,",
+      MAPPING, "mapping"),
+    # -- bake (Blender; the bpy wheel) ---------------------------------------------------------
+    M("nan_track_baked", "blender/bake.py",
+      "if not all(np.all(np.isfinite(a)) for a in arrays):", "if False:", BAKE, "bake"),
+    M("clear_bake_drops_user_keys", "blender/bake.py",
+      "keep = bag is not None and len(bag.fcurves) > 0", "keep = False", BAKE, "bake"),
+    M("bake_drops_keyed_params", "blender/bake.py",
+      "params = [fc for fc in (bag.fcurves if bag else ())", "params = [fc for fc in ()",
+      BAKE, "bake"),
+    M("rebake_ignores_start", "blender/ops_bake.py",
+      "start = start_from_object(fig) if bake.figure_action(fig) is None else None",
+      "start = start_from_object(fig)", BAKE, "bake"),
+    M("rebake_removes_all_curves", "blender/bake.py",
+      "for fc in [fc for fc in bag.fcurves if fc.data_path in paths]:",
+      "for fc in list(bag.fcurves):", BAKE, "bake"),
+]
+
+IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",
+                                "out", "dist", "*.egg-info", "build")
+
+
+def stale(mutants) -> list:
+    """``(mutant, reason)`` for each mutant whose snippet is not exactly once in its file."""
+    out = []
+    for m in mutants:
+        path = ROOT / PKG / m.file
+        if not path.exists():
+            out.append((m, f"{PKG}/{m.file} does not exist"))
+            continue
+        n = path.read_text().count(m.find)
+        if n != 1:
+            out.append((m, f"snippet found {n} times in {PKG}/{m.file} (need exactly 1): "
+                           f"{m.find!r}"))
+    return out
+
+
+def pytest_cmd(python, tests):
+    return [python, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider", "-o", "addopts=",
+            "--no-header", *tests]
+
+
+def run_tests(python, tree, tests, timeout):
+    """``(status, seconds, tail)``: status 'pass', 'fail' or 'timeout'."""
+    env = dict(os.environ, PYTHONPATH=str(tree), PYTHONDONTWRITEBYTECODE="1",
+               BLENDER_USER_RESOURCES=str(tree / ".blender-user"))
+    t0 = time.perf_counter()
+    try:
+        r = subprocess.run(pytest_cmd(python, tests), cwd=tree, env=env, capture_output=True,
+                           text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return "timeout", time.perf_counter() - t0, ""
+    tail = (r.stdout.strip().splitlines() or [""])[-1]
+    return ("pass" if r.returncode == 0 else "fail"), time.perf_counter() - t0, tail
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--only", nargs="+", metavar="NAME", help="run only these mutants")
+    ap.add_argument("--group", choices=("core", "mapping", "bake"), action="append",
+                    help="run only these groups (repeatable; default all)")
+    ap.add_argument("--list", action="store_true", help="list the mutants and exit")
+    ap.add_argument("--python", default=sys.executable, help="interpreter for pytest")
+    ap.add_argument("--timeout", type=float, default=300.0, help="seconds per mutant")
+    ap.add_argument("--skip-stale", action="store_true",
+                    help="run the mutants still found; list the stale ones")
+    ap.add_argument("--goal", type=float, default=0.9)
+    ap.add_argument("--json", metavar="FILE", help="write the results as JSON")
+    ap.add_argument("--exclude-tests", metavar="SUBSTRING",
+                    help="leave out the test files whose name contains this (for example "
+                         "mutation_guards: the score without the guards)")
+    args = ap.parse_args(argv)
+    args.python = str(Path(args.python).absolute())    # pytest runs in the copy (not resolved:
+    #                                                    a venv's python is a symlink)
+
+    mutants = [m for m in MUTANTS if (not args.only or m.name in args.only)
+               and (not args.group or m.group in args.group)]
+    if args.only:
+        unknown = set(args.only) - {m.name for m in MUTANTS}
+        if unknown:
+            print(f"mutate: no mutant named {', '.join(sorted(unknown))}", file=sys.stderr)
+            return 2
+    if args.list:
+        for m in mutants:
+            print(f"{m.name:32s} {m.group:8s} {PKG}/{m.file}")
+        print(f"{len(mutants)} mutants")
+        return 0
+    bad = stale(mutants)
+    for m, why in bad:
+        print(f"mutate: STALE mutant {m.name}: {why}", file=sys.stderr)
+    if bad and not args.skip_stale:
+        print("mutate: update the snippets above (the code changed), or run with --skip-stale",
+              file=sys.stderr)
+        return 2
+    mutants = [m for m in mutants if m not in {b for b, _ in bad}]
+    if args.exclude_tests:
+        mutants = [replace(m, tests=tuple(t for t in m.tests if args.exclude_tests not in t))
+                   for m in mutants]
+
+    with tempfile.TemporaryDirectory(prefix="turning-mutate-") as tmp:
+        tree = Path(tmp) / "tree"
+        shutil.copytree(ROOT, tree, ignore=IGNORE)
+        # Baseline: every test set must pass on the unmutated copy.
+        for tests in sorted({m.tests for m in mutants}):
+            status, sec, tail = run_tests(args.python, tree, tests, args.timeout * 2)
+            print(f"baseline {status:7s} {sec:6.1f} s  {' '.join(Path(t).name for t in tests)}")
+            if status != "pass":
+                print(f"mutate: the unmutated tree fails these tests ({tail}); fix that first",
+                      file=sys.stderr)
+                return 2
+        results = []
+        for k, m in enumerate(mutants, 1):
+            path = tree / PKG / m.file
+            original = path.read_text()
+            path.write_text(original.replace(m.find, m.replace, 1))
+            try:
+                status, sec, tail = run_tests(args.python, tree, m.tests, args.timeout)
+            finally:
+                path.write_text(original)
+            caught = status != "pass"
+            results.append({"name": m.name, "file": f"{PKG}/{m.file}", "group": m.group,
+                            "status": "caught" if caught else "SURVIVED",
+                            "how": status if caught else "", "seconds": round(sec, 1),
+                            "tail": tail})
+            print(f"[{k:2d}/{len(mutants)}] {'caught' if caught else 'SURVIVED':8s} "
+                  f"{status:7s} {sec:6.1f} s  {m.name}  ({PKG}/{m.file})", flush=True)
+
+    caught = sum(r["status"] == "caught" for r in results)
+    score = caught / len(results) if results else 0.0
+    print(f"\nscore: {caught}/{len(results)} caught = {100 * score:.1f}%  "
+          f"(goal {100 * args.goal:.0f}%)")
+    survivors = [r["name"] for r in results if r["status"] != "caught"]
+    if survivors:
+        print("survivors: " + ", ".join(survivors))
+    if bad:
+        print("stale (not run): " + ", ".join(m.name for m, _ in bad))
+    if args.json:
+        Path(args.json).write_text(json.dumps({"score": score, "caught": caught,
+                                               "total": len(results), "results": results,
+                                               "stale": [m.name for m, _ in bad]}, indent=1))
+    return 0 if score >= args.goal else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
