@@ -169,7 +169,7 @@ TURNS = {"name": "a", "preset": "skier", "turns": {"period": 2, "lean_deg": 20}}
     ({"duration": 5, "figures": [{**TURNS, "colour": "red"}]}, "figures[0].colour"),
     ({"duration": 5, "figures": [{"name": "a", "preset": "skier"}]}, "figures[0].turns"),
     ({"duration": 5, "figures": [{"name": "a", "preset": "skier", "follow": {
-        "path": {"polyline": [[0, 0]]}}}]}, ("figures[0].follow: scene", "path.polyline")),
+        "path": {"polyline": [[0, 0]]}}}]}, "crowd: figures[0].follow: path.polyline has 1 points"),
     ({"duration": 5, "figures": [TURNS], "formations": [{"type": "follow_leader",
                                                          "leader": "b", "count": 2,
                                                          "gap_s": 1}]}, "formations[0].leader"),

@@ -13,9 +13,10 @@ import math
 from pathlib import Path
 
 from ..core.params import check_range
-from ..core.trajectory import _atomic_write
+from ..core.ranges import MAX_SAMPLES
 from ..crowd import load_crowd, run_crowd
 from ..crowd.moving import MovingBodies, closest_approach
+from .common import Outputs
 from .progress import Progress
 
 
@@ -38,14 +39,29 @@ def run(args) -> int:
     check_range("--workers", args.workers, 1, 1024)
     if args.fps is not None:
         check_range("--fps", args.fps, 0.0, 1000.0, lo_open=True)
+    crowd = load_crowd(args.scene)
+    if args.fps is not None and crowd.duration * args.fps > MAX_SAMPLES:
+        raise ValueError(f"--fps {args.fps:g} x duration {crowd.duration:g} s is more than "
+                         f"{MAX_SAMPLES:,} frames a figure")
     out = Path(args.out)
-    if not out.parent.resolve().is_dir():
+    made = not out.exists()
+    if made and not out.parent.resolve().is_dir():
         raise ValueError(f"--out = {args.out!r}: the folder {str(out.parent.resolve())!r} "
                          f"does not exist")
-    crowd = load_crowd(args.scene)
-    with Progress(len(crowd.figures), "figure", "crowd") as bar:
-        result = run_crowd(crowd, workers=args.workers, scheduler=args.scheduler, progress=bar)
     out.mkdir(exist_ok=True)
+    outputs = Outputs()                       # every file checked before the work
+    try:
+        for f in crowd.figures:
+            outputs.reserve(f"--out {f.name}.csv", out / f"{f.name}.csv")
+        outputs.reserve("--out summary.json", out / "summary.json")
+        with Progress(len(crowd.figures), "figure", "crowd") as bar:
+            result = run_crowd(crowd, workers=args.workers, scheduler=args.scheduler,
+                               progress=bar)
+    except BaseException:
+        outputs.discard()
+        if made:
+            out.rmdir()
+        raise
     tracks = [(f.name, r.trajectory, f.figure.body.l) for f, r in zip(crowd.figures,
                                                                     result.figures)]
     near = closest_approach(MovingBodies.from_tracks(tracks, dt=0.1)) \
@@ -58,7 +74,7 @@ def run(args) -> int:
         csv = None
         if traj is not None and len(traj):
             csv = f"{f.name}.csv"
-            traj.to_csv(out / csv)
+            outputs.write(f"--out {csv}", traj.to_csv)
         rows.append(_row(f, r, traj, csv))
         if f.name in near:           # foot-CM segments sampled every 0.1 s (crowd/moving.py)
             d, other, t = near[f.name]
@@ -68,7 +84,10 @@ def run(args) -> int:
            "fps": args.fps, "figures": rows, "failed": [r.name for r in result.failed],
            "wall_time": result.wall_time,
            "engine": {"workers": args.workers, "scheduler": args.scheduler}}
-    _atomic_write(out / "summary.json", json.dumps(doc, indent=1))
+    text = json.dumps(doc, indent=1)
+    outputs.write("--out summary.json", lambda path: path.write_text(text))
+    outputs.commit(only=[f"--out {f.name}.csv" for f, row in zip(crowd.figures, rows)
+                         if row["csv"]] + ["--out summary.json"])
     n_path = sum(f.is_path for f in crowd.figures)
     print(f"crowd: {crowd.name}, {len(crowd.figures)} figures ({n_path} following paths), "
           f"{result.wall_time:.2f} s -> {out}")

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.params import Figure, check_range
+from ..core.ranges import MAX_STEPS
+from ..core.validate import check
 from ..core.simulate import slalom_start
 
 __all__ = ["Turns", "FollowPath", "CrowdFigure", "Crowd", "FIRST_TURNS"]
@@ -41,10 +43,10 @@ class Turns:
     directional control (the heading drifts as it will)."""
 
     def __post_init__(self):
-        check_range("period", self.period, 0.0, 1e3, lo_open=True)
-        check_range("lean", self.lean, 0.0, math.pi / 2, lo_open=True, hi_open=True)
+        check("period", self.period, "period")
+        check("lean", self.lean, "theta_max")
         if self.heading is not None:
-            check_range("heading", self.heading, -1e3, 1e3)
+            check("heading", self.heading, "heading")
 
     @property
     def omega0(self) -> float:
@@ -126,8 +128,11 @@ class Crowd:
         object.__setattr__(self, "figures", tuple(self.figures))
         if not self.figures:
             raise ValueError("a crowd needs at least one figure")
-        check_range("duration", self.duration, 0.0, 1e5, lo_open=True)
-        check_range("dt", self.dt, 1e-4, 0.1)
+        check("duration", self.duration, "duration")
+        check("dt", self.dt, "dt")
+        if self.duration / self.dt > MAX_STEPS:
+            raise ValueError(f"duration {self.duration:g} s / dt {self.dt:g} s = "
+                             f"{self.duration / self.dt:.3g} steps; at most {MAX_STEPS:,}")
         seen = set()
         for f in self.figures:
             if f.name in seen:
