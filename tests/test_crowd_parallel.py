@@ -1,10 +1,13 @@
 """A crowd's result does not depend on the engine: this process, a process pool of 1 or 2
 workers, a real Dask LocalCluster of 2 worker processes (issue 11).  Exact equality."""
+import io
 import math
+import sys
 
 import numpy as np
 import pytest
 
+from blender_turning.cli.progress import Progress
 from blender_turning.crowd import crowd_from_dict, run_crowd
 
 PATH = {"path": {"points": [[0, 0], [15, 1.5], [30, 0]], "tangents": [[10, 0], [10, 0], [10, 0]]},
@@ -70,3 +73,21 @@ def test_bad_engine_arguments_name_the_parameter(serial):
     with pytest.raises(ValueError, match="at most one of"):
         run_crowd(crowd, workers=2, scheduler="tcp://127.0.0.1:1")
     assert math.isfinite(run_crowd(crowd).wall_time)
+
+
+class _Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+@pytest.mark.parametrize("tqdm", [True, False])
+def test_progress_draws_on_a_terminal_and_stays_quiet_in_a_pipe(tqdm, monkeypatch):
+    if not tqdm:                                   # the plain counter when tqdm is missing
+        monkeypatch.setitem(sys.modules, "tqdm", None)
+    pipe, tty = io.StringIO(), _Terminal()
+    for stream in (pipe, tty):
+        with Progress(3, "figure", "crowd", stream) as bar:
+            bar(1, 3)
+            bar(3, 3)
+    assert pipe.getvalue() == ""
+    assert "3/3" in tty.getvalue() and tty.getvalue().endswith("\n")
