@@ -68,6 +68,7 @@ def test_built_zip_holds_the_addon_only(built_zip):
     assert "__init__.py" in names and "blender_manifest.toml" in names
     assert "blender_turning/blender/bake.py" in names
     assert any(n.startswith("rigs/") for n in names)
+    assert any(n.startswith("rigs/bone_maps/") for n in names)
     assert "presets/turning_figure/skier.py" in names
     assert not [n for n in names if n.startswith((".venv", "tests/", "scripts/", ".git/"))]
 

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import pytest
 
+from blender_turning.mapping.bone_map import BONE_MAPS
 from blender_turning.mapping.rig_spec import RIG_NAMES
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -40,10 +41,12 @@ def test_the_wheel_carries_the_rigs_and_the_mapping_finds_them(tmp_path):
         names = set(zf.namelist())
         zf.extractall(tmp_path / "site")
     assert {f"blender_turning/rigs/{n}.json" for n in RIG_NAMES} <= names
+    assert {f"blender_turning/rigs/bone_maps/{n}.json" for n in BONE_MAPS} <= names
     assert not any(n.startswith(("tests/", "scripts/", "rigs/")) for n in names)
     # From the unpacked wheel alone (not the repository): the mapping loads every rig.
-    code = ("import blender_turning.mapping.rig_spec as r; "
-            "[r.load_rig(n) for n in r.RIG_NAMES]; print(r.RIGS_DIR)")
+    code = ("import blender_turning.mapping.rig_spec as r, blender_turning.mapping.bone_map as b; "
+            "[r.load_rig(n) for n in r.RIG_NAMES]; [b.load_bone_map(n) for n in b.BONE_MAPS]; "
+            "print(r.RIGS_DIR)")
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
                          text=True, env={"PYTHONPATH": str(tmp_path / "site")}, timeout=120)
     assert out.returncode == 0, out.stderr
@@ -64,7 +67,7 @@ def addon_files(root: Path) -> set:
             if "__pycache__" not in p.parts}
     mods = {m for m in mods if not m.startswith(CLI_ONLY)}
     return (mods | {"__init__.py"}
-            | {f"rigs/{p.name}" for p in (root / "rigs").glob("*.json")}
+            | {p.relative_to(root).as_posix() for p in (root / "rigs").rglob("*.json")}
             | {f"presets/turning_figure/{p.name}"
                for p in (root / "presets" / "turning_figure").glob("*.py")})
 

@@ -16,6 +16,10 @@ SLOTTED_ACTIONS = VERSION >= (4, 4, 0)
 _ENGINES = {e.identifier for e in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items}
 EEVEE_ENGINE = "BLENDER_EEVEE" if "BLENDER_EEVEE" in _ENGINES else "BLENDER_EEVEE_NEXT"
 
+# Before 5.0 add-on (bpy.props) values are stored as the ID's custom properties (obj["turning"]),
+# and reading obj.turning creates that group; 5.0 keeps them apart from obj.keys().
+ADDON_PROPS_IN_ID_PROPERTIES = VERSION < (5, 0, 0)
+
 _LINEAR = None
 
 

@@ -15,7 +15,7 @@ from bpy.props import EnumProperty, IntProperty
 
 from ..core.errors import TurningError
 from ..mapping.base import BoneChannels, PoseTrack
-from . import bake, compat, foot_track
+from . import bake, compat, foot_track, retarget_adapter
 from .ops_common import check_figure, context_figure, poll_figure, report_error, selected_figures
 from .pipeline import figure_pose_track
 from .scene_adapters import FrameRange, start_from_object
@@ -107,7 +107,11 @@ def apply_bake(fig, traj, track, step: int = 1):
 
 
 def reset_pose(fig):
-    """Put a figure without baked keys back at its start, in its rest pose."""
+    """Put a figure without baked keys back at its start, in its rest pose (a user's rig: as it
+    was before it became a figure)."""
+    if retarget_adapter.is_user_rig(fig):
+        retarget_adapter.reset_user_rig(fig)
+        return
     s = fig.turning
     fig.location = s.start
     fig.rotation_euler = (0.0, 0.0, s.start_heading - math.pi / 2)

@@ -79,6 +79,16 @@ def check_figure(obj) -> None:
             f"the rig was built for the {sport_label(built)} but Sport is {sport_label(sport)}: "
             f"choose the {sport_label(built)} preset again, or add a new figure with "
             f"Add Figure > {sport_label(sport)}")
+    from . import retarget_adapter                   # a user's rig: its bone map's joints
+    if retarget_adapter.is_user_rig(obj):
+        from ..mapping.bone_map import require_joints
+        try:
+            require_joints(retarget_adapter.figure_bone_map(obj), obj.data.bones.keys(),
+                           f"armature {obj.data.name!r}")
+        except ValueError as exc:
+            raise RigMismatch(f"{exc}: undo the change, or map the joints again in Your Rig") \
+                from None
+        return
     missing = [b for b in rig_bones(sport) if b not in obj.data.bones]
     if missing:
         more = f" (and {len(missing) - 1} more)" if len(missing) > 1 else ""

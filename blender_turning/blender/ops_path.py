@@ -81,7 +81,7 @@ def finish(context, fig, job, result):
     traj = result.trajectory.resample(fps, start=0.0)
     traj = type(traj)(traj.data[:, :frames.end - frames.start + 1], traj.meta)
     check_figure(fig)                     # the rig may have changed while the plan ran
-    track = map_track(fig.turning.sport, traj, frames)        # may raise: nothing written yet
+    track = map_track(fig.turning.sport, traj, frames, obj=fig)   # may raise: nothing written
     bake.check_track(fig, track)
     scene.frame_end = frames.end
     apply_bake(fig, traj, track)

@@ -13,9 +13,13 @@ from .scene_adapters import (FrameRange, controller_from_settings, figure_from_s
                              speed_schedule, start_state)
 
 
-def map_track(sport: str, traj, frames: FrameRange, options=None):
-    """The sport's Section 7 mapping of ``traj`` (already at ``frames.fps``) to a pose track."""
+def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None):
+    """The sport's Section 7 mapping of ``traj`` (already at ``frames.fps``) to a pose track;
+    retargeted onto ``obj`` when it is a figure made from the user's own rig (issue 8)."""
     from ..mapping import map_trajectory      # the mapping layer's entry point
+    from . import retarget_adapter
+    if obj is not None and (retarget_adapter.is_user_rig(obj) or retarget_adapter.mirrored(obj)):
+        return retarget_adapter.figure_track(obj, traj, frames, options)
     return map_trajectory(sport.lower(), traj, options, frame_start=frames.start, fps=frames.fps)
 
 
@@ -46,4 +50,4 @@ def simulate_figure(obj, frames: FrameRange, start=None):
 def figure_pose_track(obj, frames: FrameRange, options=None, start=None):
     """``(trajectory, pose track)`` of the figure ``obj`` over ``frames``."""
     traj = simulate_figure(obj, frames, start)
-    return traj, map_track(obj.turning.sport, traj, frames, options)
+    return traj, map_track(obj.turning.sport, traj, frames, options, obj)

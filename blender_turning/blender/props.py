@@ -14,6 +14,8 @@ import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty,
                        PointerProperty)
 
+from .props_rig import TurningRigSettings
+
 SPORTS = (
     ("SKIER", "Skier", "Alpine skier on slalom skis"),
     ("SNOWBOARDER", "Snowboarder", "Carving snowboarder"),
@@ -115,6 +117,9 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                                   update=_show_foot_track,
                                   description="Draw the foot's path in the viewport (a guide: it "
                                               "never renders and is not exported to glTF)")
+    rig: PointerProperty(type=TurningRigSettings, options=_STATIC,
+                         description="Your own rig as a figure: its bone map, stance and "
+                                     "equipment (issue 8)")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.

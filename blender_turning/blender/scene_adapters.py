@@ -177,9 +177,11 @@ def start_state(obj, controller, start=None) -> tuple:
 
 
 def start_from_object(obj):
-    """``(x, y, theta_dir)`` of where the figure's armature stands now (the rest pose faces +Y),
-    rounded as the Start settings store them (float32), so a re-bake from those is identical."""
-    x, y, heading = obj.location[0], obj.location[1], obj.rotation_euler[2] + math.pi / 2
+    """``(x, y, theta_dir)`` of where the figure's armature stands now (the built-in rest pose
+    faces +Y; a user's rig faces where it was measured to), rounded as the Start settings store
+    them (float32), so a re-bake from those is identical."""
+    from .retarget_adapter import facing
+    x, y, heading = obj.location[0], obj.location[1], obj.rotation_euler[2] + facing(obj)
     if not np.all(np.isfinite([x, y, heading])):
         raise SceneInputError(f"{obj.name!r} stands at location ({x:g}, {y:g}), rotation Z "
                               f"{math.degrees(obj.rotation_euler[2]):g} deg: not finite numbers; "
