@@ -23,6 +23,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning.blender import bake, rig_builder  # noqa: E402
+from blender_turning.blender import props_rig  # noqa: E402
 from blender_turning.blender import props as props_mod  # noqa: E402
 from blender_turning.core import preset  # noqa: E402
 from blender_turning.crowd import Crowd, CrowdFigure, Turns, follow_leader, run_crowd  # noqa
@@ -36,7 +37,8 @@ def main() -> int:
     ap.add_argument("--fps", type=int, default=24)
     args = ap.parse_args()
     registered = not hasattr(bpy.types.Object, "turning")
-    if registered:
+    if registered:                     # the figure settings and their nested groups
+        props_rig.register()
         props_mod.register()
     try:
         bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -64,6 +66,7 @@ def main() -> int:
     finally:
         if registered:
             props_mod.unregister()
+            props_rig.unregister()
     frames = sum(len(tr.frames) for tr in tracks)
     print(f"crowd bake: {len(objs)} skiers x {args.seconds:g} s x {args.fps} fps ({frames} "
           f"frames); Blender {bpy.app.version_string}, Python {platform.python_version()}, "
