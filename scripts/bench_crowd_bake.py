@@ -1,8 +1,9 @@
 """Benchmark: a crowd of 100 parametric figures, 60 s at 24 fps: simulate (one batch), map
-(``mapping.map_trajectory``) and bake (``blender.bake.bake_pose_track``, whole F-curves with
-``foreach_set``, as ``scripts/bench_bake.py``), each step timed; the rigs are built untimed.
+(``crowd.map_crowd``: ``mapping.map_trajectory`` per figure, on ``--workers`` processes) and
+bake (``blender.bake.bake_pose_track``, whole F-curves with ``foreach_set``, as
+``scripts/bench_bake.py``), each step timed; the rigs are built untimed.
 
-    PYTHONPATH=$PWD .venv/bin/python scripts/bench_crowd_bake.py [--figures 100]
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_crowd_bake.py [--figures 100] [--workers 2]
 """
 from __future__ import annotations
 
@@ -26,8 +27,8 @@ from blender_turning.blender import bake, rig_builder  # noqa: E402
 from blender_turning.blender import props_rig  # noqa: E402
 from blender_turning.blender import props as props_mod  # noqa: E402
 from blender_turning.core import preset  # noqa: E402
-from blender_turning.crowd import Crowd, CrowdFigure, Turns, follow_leader, run_crowd  # noqa
-from blender_turning.mapping import map_trajectory  # noqa: E402
+from blender_turning.crowd import (Crowd, CrowdFigure, Turns, follow_leader,  # noqa: E402
+                                   map_crowd, run_crowd)
 
 
 def main() -> int:
@@ -35,6 +36,7 @@ def main() -> int:
     ap.add_argument("--figures", type=int, default=100)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--fps", type=int, default=24)
+    ap.add_argument("--workers", type=int, default=1, help="processes mapping the figures")
     args = ap.parse_args()
     registered = not hasattr(bpy.types.Object, "turning")
     if registered:                     # the figure settings and their nested groups
@@ -56,9 +58,9 @@ def main() -> int:
         res = run_crowd(crowd)
         t_sim = time.perf_counter() - t
         t = time.perf_counter()
-        tracks = [map_trajectory("skier", r.trajectory, frame_start=1 + round(
-            f.time_offset * args.fps), fps=args.fps) for f, r in zip(crowd.figures, res.figures)]
+        poses = map_crowd(res, args.fps, workers=args.workers)
         t_map = time.perf_counter() - t
+        tracks = [poses[f.name] for f in crowd.figures]
         t = time.perf_counter()
         for obj, track in zip(objs, tracks):
             bake.bake_pose_track(obj, track)
@@ -72,7 +74,8 @@ def main() -> int:
           f"frames); Blender {bpy.app.version_string}, Python {platform.python_version()}, "
           f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}")
     print(f"  rigs built (untimed) {t_build:.2f} s")
-    print(f"  simulate {t_sim:.2f} s, map {t_map:.2f} s, bake {t_bake:.2f} s; "
+    print(f"  simulate {t_sim:.2f} s, map ({args.workers} worker(s)) {t_map:.2f} s, "
+          f"bake {t_bake:.2f} s; "
           f"total {t_sim + t_map + t_bake:.2f} s")
     return 0
 

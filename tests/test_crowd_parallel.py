@@ -91,3 +91,35 @@ def test_progress_draws_on_a_terminal_and_stays_quiet_in_a_pipe(tqdm, monkeypatc
             bar(3, 3)
     assert pipe.getvalue() == ""
     assert "3/3" in tty.getvalue() and tty.getvalue().endswith("\n")
+
+
+def _same_tracks(a, b):
+    assert a.keys() == b.keys()
+    for name in a:
+        x, y = a[name], b[name]
+        for attr in ("frames", "location", "rotation"):
+            np.testing.assert_array_equal(getattr(x, attr), getattr(y, attr))
+        assert x.bones.keys() == y.bones.keys() and x.props.keys() == y.props.keys()
+        for bone in x.bones:
+            for attr in ("location", "rotation"):
+                u, v = getattr(x.bones[bone], attr), getattr(y.bones[bone], attr)
+                assert (u is None) == (v is None)
+                if u is not None:
+                    np.testing.assert_array_equal(u, v)
+        for prop in x.props:
+            np.testing.assert_array_equal(x.props[prop], y.props[prop])
+
+
+def test_crowd_poses_are_on_the_crowds_frames_and_the_same_on_two_workers(serial):
+    from blender_turning.crowd import map_crowd
+    from blender_turning.mapping import map_trajectory
+    crowd, res = serial
+    here = map_crowd(res, 24.0)
+    assert list(here) == [f.name for f in crowd.figures]
+    lead1 = crowd["lead-1"]                                  # starts 1 s after the leader
+    assert here["lead-1"].frames[0] == 1 + 24 and here["lead"].frames[0] == 1
+    traj = res["lead-1"].trajectory
+    alone = map_trajectory("snowboarder", traj.resample(24.0, start=lead1.time_offset),
+                           frame_start=25)
+    _same_tracks({"x": here["lead-1"]}, {"x": alone})
+    _same_tracks(here, map_crowd(res, 24.0, workers=2))

@@ -25,7 +25,7 @@ from ..core.simulate import run
 from ..core.trajectory import Trajectory, body_meta
 from .model import Crowd, CrowdFigure
 
-__all__ = ["FigureResult", "CrowdResult", "run_crowd", "crowd_tasks", "run_task"]
+__all__ = ["FigureResult", "CrowdResult", "run_crowd", "crowd_tasks", "run_task", "execute"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -145,10 +145,6 @@ def run_crowd(crowd: Crowd, workers: int = 1, scheduler: str | None = None, exec
     ``workers > 1``, ``scheduler`` and ``executor``.  ``progress(done, total)`` is called with
     the number of figures done after each task.  Failures (a fall, no feasible plan) are
     reported per figure in :attr:`CrowdResult.figures`, not raised."""
-    if int(workers) != workers or not 1 <= workers <= 1024:
-        raise ValueError(f"workers = {workers!r} is outside the allowed range [1, 1024]")
-    if sum((workers > 1, scheduler is not None, executor is not None)) > 1:
-        raise ValueError("give at most one of workers > 1, scheduler and executor")
     clock = time.perf_counter()
     tasks = crowd_tasks(crowd)
     total = len(crowd.figures)
@@ -161,27 +157,39 @@ def run_crowd(crowd: Crowd, workers: int = 1, scheduler: str | None = None, exec
         if progress is not None:
             progress(done, total)
 
-    if scheduler is not None:
-        client = _dask_client(scheduler)
-        try:
-            _fan_out(client.get_executor(), tasks, collect)
-        finally:
-            client.close()
-    elif executor is not None:
-        _fan_out(executor, tasks, collect)
-    elif workers > 1:
-        with ProcessPoolExecutor(max_workers=int(workers)) as pool:
-            _fan_out(pool, tasks, collect)
-    else:
-        for i, task in enumerate(tasks):
-            collect(i, run_task(task))
+    execute(run_task, tasks, collect, workers, scheduler, executor)
     by_name = {r.name: r for i in range(len(tasks)) for r in results[i]}
     return CrowdResult(crowd, tuple(by_name[f.name] for f in crowd.figures),
                        time.perf_counter() - clock)
 
 
-def _fan_out(executor, tasks, collect) -> None:
-    futures = {executor.submit(run_task, task): i for i, task in enumerate(tasks)}
+def execute(fn, tasks, collect, workers: int = 1, scheduler: str | None = None,
+            executor=None) -> None:
+    """``collect(i, fn(tasks[i]))`` for every task, as they finish, on the engine chosen as in
+    :func:`run_crowd` (``fn`` must be a module-level function, so other processes can import
+    it)."""
+    if isinstance(workers, bool) or int(workers) != workers or not 1 <= workers <= 1024:
+        raise ValueError(f"workers = {workers!r} is outside the allowed range [1, 1024]")
+    if sum((workers > 1, scheduler is not None, executor is not None)) > 1:
+        raise ValueError("give at most one of workers > 1, scheduler and executor")
+    if scheduler is not None:
+        client = _dask_client(scheduler)
+        try:
+            _fan_out(client.get_executor(), fn, tasks, collect)
+        finally:
+            client.close()
+    elif executor is not None:
+        _fan_out(executor, fn, tasks, collect)
+    elif workers > 1:
+        with ProcessPoolExecutor(max_workers=int(workers)) as pool:
+            _fan_out(pool, fn, tasks, collect)
+    else:
+        for i, task in enumerate(tasks):
+            collect(i, fn(task))
+
+
+def _fan_out(executor, fn, tasks, collect) -> None:
+    futures = {executor.submit(fn, task): i for i, task in enumerate(tasks)}
     for fut in as_completed(futures):
         collect(futures[fut], fut.result())
 
