@@ -1,6 +1,8 @@
 """Benchmark of the physics core (issue 2). Prints a Markdown table; timings are best of N.
 
     .venv/bin/python scripts/bench_core.py [--repeat 5]
+    .venv/bin/python scripts/bench_core.py --terrain [--repeat 3]
+
 
 - One figure: 60 s of a 2 s / 23 deg slalom under the phase-ellipse controller with heading
   control, at the default step (the accuracy the tests demand): simulated seconds per wall second;
@@ -9,6 +11,11 @@
 - A batch of 1,000 figures stepped together: figure-steps per second.  Baseline in the same run:
   50 of the figures one after another on floats.  Also the numpy floor: the cheapest RK4 step
   numpy can take for the batch (no controller, no bounds), and its sines and cosines alone.
+- ``--terrain`` (issue 10): 60 s of the same slalom through ``simulate`` on flat ground (today's
+  path, the baseline), through the terrain loop on flat ground, down an 18 deg plane and down
+  the demo's mogul slope (``terrain_gen.ski_slope``, a height field), with the skier's snow
+  friction and drag.  Warm: the feasibility tables the phase-ellipse controller builds per
+  0.5 m/s of speed are cached across runs; the cold first run is reported too.
 """
 from __future__ import annotations
 
@@ -72,11 +79,69 @@ def numpy_floor(n, repeat, dt=DEFAULT_DT):
             best(lambda: [trig() for _ in range(100)], repeat) / 100)
 
 
+def terrain(repeat):
+    """The ``--terrain`` table."""
+    from blender_turning.core import simulate, slalom_start
+    from blender_turning.core.terrain import FLAT, Plane
+    from blender_turning.core.terrain_dynamics import RESISTANCE
+    from blender_turning.core.terrain_gen import ski_slope
+    from blender_turning.core.terrain_sim import NO_RESISTANCE, simulate_terrain
+
+    fig = preset("skier")
+    w, tm = 2 * math.pi / 2.0, math.radians(23)
+    fall = -math.pi / 2
+    slope = ski_slope(length=1600.0, width=400.0, cell=2.0)
+    res = RESISTANCE["skier"]
+
+    def case(**kw):
+        def go():
+            s0 = slalom_start(fig.body, w, tm, fall, -40.0, 790.0)
+            return simulate(fig, PhaseEllipse(fig.body, w, tm, heading=fall), 60.0, DEFAULT_DT,
+                            s0, **kw)
+        return go
+
+    def terrain_flat():
+        s0 = slalom_start(fig.body, w, tm, fall)
+        return simulate_terrain(fig, PhaseEllipse(fig.body, w, tm, heading=fall), 60.0,
+                                DEFAULT_DT, s0, FLAT, NO_RESISTANCE)
+
+    cases = [("flat ground, `simulate` (today's path): baseline", case()),
+             ("flat ground through the terrain loop", terrain_flat),
+             ("18 deg plane, fall line, skier's friction and drag", case(
+                 ground=Plane(math.radians(18), fall), resistance=res)),
+             ("mogul slope (height field 201 x 801, 2 m), fall line", case(ground=slope,
+                                                                          resistance=res)),
+             ("mogul slope, target speed 12 m/s", case(ground=slope, resistance=res,
+                                                       target_speed=12.0))]
+    print(f"date: {datetime.date.today()}, machine: {os.cpu_count()} cores, "
+          f"Python {platform.python_version()}, numpy {np.__version__}, dt = {DEFAULT_DT} s")
+    print()
+    print("| 60 s phase-ellipse slalom | cold (first run) | warm (best) | rate | vs flat |")
+    print("|---|---|---|---|---|")
+    base = None
+    for name, fn in cases:
+        t0 = time.perf_counter()
+        try:
+            fn()
+        except Exception as exc:                       # noqa: BLE001 (reported, not hidden)
+            print(f"| {name} | failed: {exc} | | | |")
+            continue
+        cold = time.perf_counter() - t0
+        warm = best(fn, repeat)
+        base = warm if base is None else base
+        print(f"| {name} | {cold * 1e3:.0f} ms | {warm * 1e3:.0f} ms | {60 / warm:.0f}x real time "
+              f"| {warm / base:.1f}x |")
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--batch", type=int, default=1000)
+    ap.add_argument("--terrain", action="store_true", help="the terrain table (issue 10)")
     args = ap.parse_args()
+    if args.terrain:
+        terrain(args.repeat)
+        return
     fig = preset("skier")
     w, tm = 2 * math.pi / 2.0, math.radians(23)
     heading_table(fig.body)                               # built once per body, not timed

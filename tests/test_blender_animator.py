@@ -322,6 +322,19 @@ def test_tooltips_units_and_soft_limits():
             assert props[name].soft_min <= value <= props[name].soft_max, (fig.name, name)
 
 
+def test_settings_take_their_ranges_from_the_core_table():
+    """Issue 9: one table of ranges (core/ranges.py) for flags, files, job keys and these
+    settings; Blender holds its floats in single precision."""
+    from blender_turning.core.ranges import RANGES
+    props = TurningFigureSettings.bl_rna.properties
+    for name, key in (("mass", "m"), ("com_height", "l"), ("inertia", "I_v"), ("speed", "V_cm"),
+                      ("curvature_max", "C_f_max"), ("curvature_rate_max", "dC_f_max"),
+                      ("fall_angle", "theta_fall"), ("period", "period"), ("lean", "theta_max"),
+                      ("heading", "heading"), ("plan_curvature_rate", "plan_curvature_rate")):
+        assert props[name].hard_min == pytest.approx(RANGES[key].lo, rel=1e-6), name
+        assert props[name].hard_max == pytest.approx(RANGES[key].hi, rel=1e-6), name
+
+
 def test_sub_panels(scene):
     subs = [c for c in panel.classes if c is not panel.VIEW3D_PT_turning]
     assert {c.bl_label for c in subs} == {"Turns", "Bake", "Body", "Limits", "Ground",

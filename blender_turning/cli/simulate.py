@@ -10,6 +10,7 @@ from ..core.schedule import Schedule
 from ..core.simulate import DEFAULT_DT
 from ..core.validate import check
 from .common import Outputs, check_steps, require_matplotlib
+from .terrain_flags import add_terrain_flags, terrain_options
 
 # flag -> BodyParams field; the ranges are the core's table (core/ranges.py), named by the flag.
 BODY_FLAGS = {"mass": "m", "com_height": "l", "inertia": "I_v", "speed": "V_cm", "gravity": "g"}
@@ -46,6 +47,7 @@ def register(sub):
     p.add_argument("--fps", type=float, help="resample to this frame rate (24, 25, 30, 60 ...)")
     p.add_argument("--out", help="trajectory CSV to write")
     p.add_argument("--plot", help="PNG of the track, lean, curvature and phase diagram")
+    add_terrain_flags(p)
     p.set_defaults(func=run)
 
 
@@ -66,6 +68,7 @@ def run(args) -> int:
     check_steps(duration, dt, args.fps)
     if args.plot:
         require_matplotlib("--plot")
+    terrain = terrain_options(args, fig.name)
 
     if args.schedule:
         given = [f for f in ("period", "omega0", "lean_deg", "heading_deg")
@@ -96,17 +99,20 @@ def run(args) -> int:
         ctl = CONTROLLERS[args.controller](fig.body, omega0, theta_max)
     w0, tm0 = ctl.target(0.0)           # the ellipse followed (made feasible for the figure)
     theta0 = math.radians(_flag("theta0_deg", args.theta0_deg or 0.0, "theta_v0", deg=True))
-    omega_v0 = (w0 * tm0 if args.omega_v0_deg is None else
+    straight = args.controller == "straight"
+    omega_v0 = (w0 * tm0 * (not straight) if args.omega_v0_deg is None else
                 math.radians(_flag("omega_v0_deg", args.omega_v0_deg, "omega_v0", deg=True)))
     outputs = Outputs()                       # every output path checked before the work
     outputs.reserve("--out", args.out)
     outputs.reserve("--plot", args.plot)
-    # Start so that the slalom is centred on the heading (with the lean and rate asked for).
-    state0 = slalom_start(fig.body, w0, tm0, heading(0.0))[:3] + (theta0, omega_v0)
-    traj = simulate(fig, ctl, duration, dt, state0,
-                    meta={"controller": args.controller})
+    # Start so that the slalom is centred on the heading (with the lean and rate asked for);
+    # a straight run starts on the heading.
+    state0 = ((0.0, 0.0, heading(0.0)) if straight else
+              slalom_start(fig.body, w0, tm0, heading(0.0))[:3]) + (theta0, omega_v0)
+    traj = simulate(fig, ctl, duration, dt, state0, meta={"controller": args.controller},
+                    **terrain)
     if args.fps:
-        traj = traj.resample(args.fps)
+        traj = traj.resample(args.fps, ground=terrain.get("ground"))
     if args.plot:
         from ..figures.plots import plot_trajectory
         outputs.write("--plot", lambda path: plot_trajectory(traj, path, title=(
@@ -118,6 +124,7 @@ def run(args) -> int:
           f"{f' at {args.fps:g} fps' if args.fps else ''}; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg, |C_f| max "
           f"{abs(traj.C_f).max():.3f} 1/m, distance {traj.s[-1]:.1f} m"
+          f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if terrain else ''}"
           f"{'; turn ' + ctl.achieved.describe() if getattr(ctl, 'achieved', None) else ''}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0

@@ -1,12 +1,13 @@
 """The physics and control core: numpy and the standard library only (no bpy, no mathutils)."""
-from .controllers import CONTROLLERS, OpenLoop, PhaseEllipse
+from .controllers import CONTROLLERS, OpenLoop, PhaseEllipse, Straight
 from .errors import FellOver, TurningError
 from .params import PRESETS, BodyParams, Figure, Limits, preset
 from .schedule import Schedule, TurnSchedule, read_schedule_csv
 from .simulate import DEFAULT_DT, run, simulate, slalom_start
+from .terrain_sim import TargetSpeed
 from .trajectory import COLUMNS, Trajectory
 
-__all__ = ["CONTROLLERS", "OpenLoop", "PhaseEllipse", "FellOver", "TurningError", "PRESETS",
-           "BodyParams", "Figure", "Limits", "preset", "Schedule", "TurnSchedule",
+__all__ = ["CONTROLLERS", "OpenLoop", "PhaseEllipse", "Straight", "TargetSpeed", "FellOver",
+           "TurningError", "PRESETS", "BodyParams", "Figure", "Limits", "preset", "Schedule", "TurnSchedule",
            "read_schedule_csv", "DEFAULT_DT", "run", "simulate", "slalom_start", "COLUMNS",
            "Trajectory"]

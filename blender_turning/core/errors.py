@@ -30,3 +30,41 @@ class PlanInfeasible(TurningError):
         self.position = (x, y)
         self.trajectory = trajectory
         self.stats = stats
+
+
+class Stopped(TurningError):
+    """On terrain (speed a state): the figure slowed below the speed the turning model needs
+    (friction and drag beat the slope).  Carries the time and the trajectory up to there."""
+
+    def __init__(self, t: float, V_cm: float, trajectory=None):
+        super().__init__(f"the figure stopped at t = {t:.2f} s (speed {V_cm:.2f} m/s): the slope "
+                         "is too gentle for the friction and drag")
+        self.t = t
+        self.V_cm = V_cm
+        self.trajectory = trajectory
+
+
+class LeftTerrain(TurningError):
+    """The figure ran off the edge of the terrain (a height field covers a finite area).
+    Carries the time, the last position on it and the trajectory up to there."""
+
+    def __init__(self, t: float, position, trajectory=None):
+        x, y = float(position[0]), float(position[1])
+        super().__init__(f"the figure left the terrain at t = {t:.2f} s near ({x:.1f}, {y:.1f}) m")
+        self.t = t
+        self.position = (x, y)
+        self.trajectory = trajectory
+
+
+class PathNotFinished(TurningError):
+    """Path following (Section 6) stopped at its time limit before reaching the end of the path.
+    Carries how far along the path it got (arc length, m), the path's length and the trajectory."""
+
+    def __init__(self, t: float, progress: float, length: float, trajectory=None):
+        super().__init__(f"the end of the path was not reached within the time limit of "
+                         f"{t:.1f} s: got {progress:.1f} m of {length:.1f} m along the path "
+                         f"({100.0 * progress / max(length, 1e-12):.0f}%)")
+        self.t = t
+        self.progress = progress
+        self.length = length
+        self.trajectory = trajectory

@@ -8,7 +8,7 @@ bounded curvature produces (Section 3).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -21,6 +21,8 @@ from .one_figure import integrate
 from .params import BodyParams, Figure, Limits, check_range
 from .phase import phase
 from .schedule import Schedule
+from .terrain import FLAT
+from .terrain_sim import NO_RESISTANCE, simulate_terrain
 from .trajectory import COLUMNS, Trajectory, body_meta
 
 DEFAULT_DT = 0.02
@@ -125,6 +127,8 @@ def _columns(body: BodyParams, rec: np.ndarray, dt: float, falls: tuple, V_cm=No
     # Foot distance travelled: trapezoid on V_f (the foot moves at V_f, Eq. 21).
     ds = 0.5 * (cols["V_f"][1:] + cols["V_f"][:-1]) * dt
     cols["s"] = np.concatenate([np.zeros((1,) + ds.shape[1:]), np.cumsum(ds, axis=0)])
+    cols["z"] = np.zeros_like(cols["t"])                # flat ground
+    cols["V_cm"] = np.full_like(cols["t"], body.V_cm) if V_cm is None else np.asarray(V_cm, float)
     return Run(cols, falls[0][1] if falls else None, falls)
 
 
@@ -138,9 +142,35 @@ def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: flo
 
 
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
-             state0=None, C_f0=None, meta: dict | None = None, speed=None) -> Trajectory:
+             state0=None, C_f0=None, meta: dict | None = None, speed=None, ground=None,
+             resistance=None, target_speed=None) -> Trajectory:
     """Simulate one figure; raise :class:`FellOver` (with the trajectory so far) if it falls.
-    ``speed``: ``V_cm`` over time (see :func:`run`)."""
+    ``speed``: ``V_cm`` over time (see :func:`run`).
+
+    On terrain (docs/TERRAIN.md): ``ground`` (a :class:`.terrain.Plane` or
+    :class:`.terrain.HeightField`), ``resistance`` (:class:`.terrain_dynamics.Resistance`) and
+    ``target_speed`` (m/s or :class:`.terrain_sim.TargetSpeed`) send the run to
+    :func:`.terrain_sim.simulate_terrain`, where the speed is a state (``state0`` may carry
+    ``V_cm`` as a sixth entry).  Flat ground without friction, drag or a target speed stays here:
+    today's model, bit for bit."""
+    if ground is not None or resistance is not None or target_speed is not None:
+        flat = ground is None or getattr(ground, "flat", False)
+        free = resistance is None or (resistance.mu == 0.0 and resistance.CdA == 0.0)
+        if not (flat and free and target_speed is None):
+            if speed is not None:
+                raise ValueError("speed is a state on terrain (it follows the slope): give a "
+                                 "speed schedule or a ground, not both")
+            return simulate_terrain(figure, controller, duration, dt, state0,
+                                    FLAT if ground is None else ground,
+                                    NO_RESISTANCE if resistance is None else resistance,
+                                    C_f0, meta, target_speed)
+        if ground is not None and ground.z0 != 0.0:          # flat ground at a height
+            traj = simulate(figure, controller, duration, dt, state0, C_f0, meta)
+            return Trajectory.from_columns({**traj.columns(), "z": traj.z + ground.z0},
+                                           traj.meta)
+    if state0 is not None and len(state0) == 6:          # a terrain state on flat ground
+        figure = replace(figure, body=replace(figure.body, V_cm=float(state0[5])))
+        state0 = tuple(state0)[:5]
     if state0 is None:
         w, tm = controller.target(0.0)
         state0 = (0.0, 0.0, 0.0, 0.0, w * tm)

@@ -26,7 +26,11 @@ import numpy as np
 
 from .params import check_range
 
-__all__ = ["Plane", "HeightField", "FLAT", "SurfaceFrame", "surface_frame"]
+__all__ = ["Plane", "HeightField", "FLAT", "SurfaceFrame", "surface_frame", "OffTerrain"]
+
+
+class OffTerrain(ValueError):
+    """A point off a :class:`HeightField`'s grid."""
 
 
 @dataclass(frozen=True)
@@ -55,6 +59,13 @@ class Plane:
     def flat(self) -> bool:
         """True for the paper's horizontal ground."""
         return self.slope == 0.0
+
+    def derivatives_one(self, x: float, y: float):
+        """:meth:`derivatives` on Python floats."""
+        m = math.tan(self.slope)
+        hx = -m * math.cos(self.downhill)
+        hy = -m * math.sin(self.downhill)
+        return self.z0 + hx * (x - self.x0) + hy * (y - self.y0), hx, hy, 0.0, 0.0, 0.0
 
     def derivatives(self, x, y):
         """``(h, h_x, h_y, h_xx, h_xy, h_yy)`` at ``(x, y)``."""
@@ -118,7 +129,7 @@ class HeightField:
         x = np.asarray(x, dtype=float)
         y = np.asarray(y, dtype=float)
         if not np.all(self.contains(x, y)):
-            raise ValueError(f"a point lies off the terrain; it covers x, y in "
+            raise OffTerrain(f"a point lies off the terrain; it covers x, y in "
                              f"[{self.extent[0]:g}, {self.extent[1]:g}] x "
                              f"[{self.extent[2]:g}, {self.extent[3]:g}] m")
         fx = (x - self.x0) / self.cell
@@ -138,6 +149,39 @@ class HeightField:
         c = self.cell
         return (ev(wy, wx), ev(wy, dwx) / c, ev(dwy, wx) / c,
                 ev(wy, ddwx) / (c * c), ev(dwy, dwx) / (c * c), ev(ddwy, wx) / (c * c))
+
+
+    def derivatives_one(self, x: float, y: float):
+        """:meth:`derivatives` on Python floats (one figure, ~10x faster than numpy on 0-d)."""
+        x_lo, x_hi, y_lo, y_hi = self.extent
+        if not (x_lo <= x <= x_hi and y_lo <= y <= y_hi):
+            return self.derivatives(x, y)                       # raises OffTerrain
+        fx = (x - self.x0) / self.cell
+        fy = (y - self.y0) / self.cell
+        i = min(int(fx), self.nx - 2)
+        j = min(int(fy), self.ny - 2)
+        wx, dwx, ddwx = _catmull_rom_one(fx - i)
+        wy, dwy, ddwy = _catmull_rom_one(fy - j)
+        rows = self._h[j + 1:j + 5, i + 1:i + 5].tolist()          # the 4 x 4 stencil
+
+        def dot(w, r):
+            return w[0] * r[0] + w[1] * r[1] + w[2] * r[2] + w[3] * r[3]
+
+        # Each stencil row against the x weights, then those against the y weights.
+        r0, r1, r2 = ([dot(w, r) for r in rows] for w in (wx, dwx, ddwx))
+        cc = self.cell
+        return (dot(wy, r0), dot(wy, r1) / cc, dot(dwy, r0) / cc, dot(wy, r2) / (cc * cc),
+                dot(dwy, r1) / (cc * cc), dot(ddwy, r0) / (cc * cc))
+
+
+def _catmull_rom_one(u: float):
+    """:func:`_catmull_rom` on a float: three 4-tuples."""
+    u2, u3 = u * u, u * u * u
+    return ((0.5 * (-u + 2 * u2 - u3), 0.5 * (2 - 5 * u2 + 3 * u3), 0.5 * (u + 4 * u2 - 3 * u3),
+             0.5 * (-u2 + u3)),
+            (0.5 * (-1 + 4 * u - 3 * u2), 0.5 * (-10 * u + 9 * u2), 0.5 * (1 + 8 * u - 9 * u2),
+             0.5 * (-2 * u + 3 * u2)),
+            (0.5 * (4 - 6 * u), 0.5 * (-10 + 18 * u), 0.5 * (8 - 18 * u), 0.5 * (-2 + 6 * u)))
 
 
 def _catmull_rom(u):
@@ -176,19 +220,34 @@ class SurfaceFrame(NamedTuple):
 
 
 def surface_frame(ground, x, y, theta_dir, g: float) -> SurfaceFrame:
-    """The frame of a foot at ``(x, y)`` heading ``theta_dir`` (horizontal, CCW from +x)."""
-    h, hx, hy, hxx, hxy, hyy = ground.derivatives(x, y)
-    c, s = np.cos(theta_dir), np.sin(theta_dir)
+    """The frame of a foot at ``(x, y)`` heading ``theta_dir`` (horizontal, CCW from +x).
+    Python floats in, floats (and 3-tuples) out: one figure is stepped on floats."""
+    scalar = type(x) is float and type(y) is float and type(theta_dir) is float
+    if scalar:
+        one = getattr(ground, "derivatives_one", None)
+        h, hx, hy, hxx, hxy, hyy = (one(x, y) if one is not None else
+                                    (float(v) for v in ground.derivatives(x, y)))
+    else:
+        h, hx, hy, hxx, hxy, hyy = ground.derivatives(x, y)
+    if scalar:
+        c, s, sqrt = math.cos(theta_dir), math.sin(theta_dir), math.sqrt
+    else:
+        c, s, sqrt = np.cos(theta_dir), np.sin(theta_dir), np.sqrt
     p = hx * c + hy * s                                   # slope along the heading
-    inv_t = 1.0 / np.sqrt(1.0 + p * p)
-    t = np.stack(np.broadcast_arrays(c * inv_t, s * inv_t, p * inv_t))
-    inv_n = 1.0 / np.sqrt(1.0 + hx * hx + hy * hy)
-    n = np.stack(np.broadcast_arrays(-hx * inv_n, -hy * inv_n, inv_n))
-    b = np.cross(n, t, axis=0)
+    inv_t = 1.0 / sqrt(1.0 + p * p)
+    inv_n = 1.0 / sqrt(1.0 + hx * hx + hy * hy)
+    if scalar:
+        tx, ty, tz = c * inv_t, s * inv_t, p * inv_t
+        nx, ny, nz = -hx * inv_n, -hy * inv_n, inv_n
+    else:
+        tx, ty, tz = np.broadcast_arrays(c * inv_t, s * inv_t, p * inv_t)
+        nx, ny, nz = np.broadcast_arrays(-hx * inv_n, -hy * inv_n, inv_n)
+    bx, by, bz = ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx        # n x t
     # Second fundamental form over the first along (c, s): Euler's normal curvature of a graph.
     kappa_n = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * inv_n * inv_t * inv_t
-    hor = t[0] * t[0] + t[1] * t[1]
+    hor = tx * tx + ty * ty
+    # The scalars stay floats for one figure; the vectors are arrays (3, ...) either way.
     return SurfaceFrame(
-        z=h, t=t, b=b, n=n,
-        g_normal=g * n[2], g_lateral=-g * b[2], g_along=-g * t[2], kappa_n=kappa_n,
-        turn_gain=(t[0] * b[1] - t[1] * b[0]) / hor, bend_gain=(t[0] * n[1] - t[1] * n[0]) / hor)
+        z=h, t=np.array([tx, ty, tz]), b=np.array([bx, by, bz]), n=np.array([nx, ny, nz]),
+        g_normal=g * nz, g_lateral=-g * bz, g_along=-g * tz, kappa_n=kappa_n,
+        turn_gain=(tx * by - ty * bx) / hor, bend_gain=(tx * ny - ty * nx) / hor)

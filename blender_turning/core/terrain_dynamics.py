@@ -34,9 +34,11 @@ import numpy as np
 
 from .dynamics import bound_cf
 from .params import BodyParams, Limits, check_range
+from .xp import Numpy, Scalar, backend
 from .terrain import surface_frame
 
-__all__ = ["TERRAIN_STATE", "V_CM", "Resistance", "RESISTANCE", "terrain_steer",
+__all__ = ["TERRAIN_STATE", "V_CM", "Resistance", "RESISTANCE", "plumb_lean", "plumb_lean_along",
+           "terrain_steer",
            "terrain_inverse_cf", "terrain_leg_force", "terrain_rk4_step"]
 
 TERRAIN_STATE = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
@@ -82,6 +84,27 @@ RESISTANCE: dict[str, Resistance] = {
 }
 
 
+def plumb_lean(frame):
+    """The equilibrium lean of a straight run (docs/TERRAIN.md Section 2): ``theta_v`` where
+    ``g_n sin th + g_b cos th = 0``, i.e. ``-atan(g_b / g_n)``, the plumb line seen from the
+    surface normal (0 on flat ground, leaning uphill on a traverse)."""
+    if type(frame.g_lateral) is float:
+        return math.atan2(-frame.g_lateral, frame.g_normal)
+    return np.arctan2(-frame.g_lateral, frame.g_normal)
+
+
+def plumb_lean_along(frame, heading, g: float):
+    """:func:`plumb_lean` for a foot at the frame's point heading ``heading`` (horizontal, rad)
+    instead of the frame's own heading: from the normal, ``g_b = -g b_z`` with
+    ``b_z = n_x t_y - n_y t_x`` and ``t`` the heading lifted onto the surface."""
+    xp = Scalar if type(frame.g_normal) is float and type(heading) is float else Numpy
+    n = frame.n.tolist() if xp is Scalar else frame.n
+    c, s = xp.cos(heading), xp.sin(heading)
+    p = -(n[0] * c + n[1] * s) / n[2]                       # slope along the heading
+    g_b = -g * (n[0] * s - n[1] * c) / (1.0 + p * p) ** 0.5
+    return xp.atan2(-g_b, frame.g_normal)
+
+
 def terrain_inverse_cf(body: BodyParams, frame, theta_v, alpha_v, V):
     """Eq. (1) on terrain: the ``C_f`` that gives ``alpha_v`` (closed form, physical root).
 
@@ -89,12 +112,13 @@ def terrain_inverse_cf(body: BodyParams, frame, theta_v, alpha_v, V):
     sin th)``, factors like Eq. (1): ``C_f = K / (K l sin th + V^2 cos th)``,
     ``K = G_n sin th + g_b cos th - J alpha``.  Off the physical branch: ``sign(K) inf``.
     """
-    s, c = np.sin(theta_v), np.cos(theta_v)
+    xp = backend(theta_v, alpha_v, V, frame.g_lateral)
+    s, c = xp.sin(theta_v), xp.cos(theta_v)
     G_n = frame.g_normal + V * V * frame.kappa_n
     k = G_n * s + frame.g_lateral * c - alpha_v * body.J
     den = k * body.l * s + V * V * c
     ok = den > 0.0
-    return np.where(ok, k / np.where(ok, den, 1.0), np.copysign(math.inf, k))
+    return xp.where(ok, k / xp.where(ok, den, 1.0), xp.copysign(math.inf, k))
 
 
 def terrain_steer(body: BodyParams, limits: Limits, resistance: Resistance, ground, C_f,
@@ -106,8 +130,9 @@ def terrain_steer(body: BodyParams, limits: Limits, resistance: Resistance, grou
     """
     x, y, d, th, om, V = state
     fr = surface_frame(ground, x, y, d, body.g)
-    s, c = np.sin(th), np.cos(th)
-    cf = bound_cf(body, limits, C_f, s, anchor, tau, np)
+    xp = Scalar if type(th) is float and type(C_f) is float else Numpy
+    s, c = xp.sin(th), xp.cos(th)
+    cf = bound_cf(body, limits, C_f, s, anchor, tau, xp)
     ratio = 1.0 / (1.0 - cf * body.l * s)                      # Eq. (21): V_f / V_cm
     V_f = V * ratio
     G_n = fr.g_normal + V_f * V_f * fr.kappa_n
@@ -115,7 +140,8 @@ def terrain_steer(body: BodyParams, limits: Limits, resistance: Resistance, grou
     N = body.m * (G_n - body.l * (alpha * s + om * om * c))
     dV = fr.g_along - resistance.mu * N / body.m - resistance.drag_k(body.m) * V * V
     turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)
-    deriv = (V_f * fr.t[0], V_f * fr.t[1], turn, om, alpha, dV)
+    tx, ty = (fr.t[0], fr.t[1]) if xp is Numpy else fr.t[:2].tolist()
+    deriv = (V_f * tx, V_f * ty, turn, om, alpha, dV)
     return deriv, cf, alpha, V_f, N, fr
 
 
@@ -139,9 +165,13 @@ def terrain_rk4_step(body, limits, resistance, ground, state, t, dt, desired_cf,
     curvature at the start of the step), as :func:`.dynamics.rk4_step` does on flat ground."""
     state = np.asarray(state, dtype=float)
 
+    one = state.ndim == 1                  # one figure: stepped on Python floats
+
     def f(tt, st, tau):
-        return np.asarray(terrain_steer(body, limits, resistance, ground, desired_cf(tt, st),
-                                        st, anchor, tau)[0])
+        st = st.tolist() if one else st
+        cf = desired_cf(tt, st)
+        return np.asarray(terrain_steer(body, limits, resistance, ground,
+                                        float(cf) if one else cf, st, anchor, tau)[0])
 
     h = 0.5 * dt
     k1 = f(t, state, 0.0)

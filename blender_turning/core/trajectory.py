@@ -1,8 +1,10 @@
 """The trajectory: the contract between the core, the mapping layer and Blender.
 
 A :class:`Trajectory` holds equal-length 1-D arrays, one per column of ``COLUMNS`` (SI units,
-radians; ``s`` is the foot's distance travelled), plus a small ``meta`` mapping (preset, body
-parameters) that travels with it in JSON.  CSV files have exactly these column names in a header
+radians; ``s`` is the foot's distance travelled, ``z`` the ground's height at the foot and
+``V_cm`` the body's speed: 0 and constant on flat ground at a constant speed), plus a small
+``meta`` mapping (preset, body parameters, the ground and resistance on terrain) that travels
+with it in JSON.  CSV files have exactly these column names in a header
 row.  Writers write to a temporary file and rename it, so a failure leaves no partial file.
 """
 from __future__ import annotations
@@ -17,11 +19,14 @@ import numpy as np
 
 from .dynamics import foot_speed, forward_alpha, leg_force
 from .files import atomic_write_text
-from .params import BodyParams
+from .params import BodyParams, Limits
+from .terrain import FLAT
 from .phase import phase
 
 COLUMNS = ("t", "x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f", "F_leg", "phi",
-           "V_f", "s")
+           "V_f", "s", "z", "V_cm")
+LEGACY_COLUMNS = COLUMNS[:-2]
+"""The columns before terrain (issue 10): still read, as flat ground (``z = 0``)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -40,6 +45,10 @@ class Trajectory:
 
     @classmethod
     def from_columns(cls, columns: dict, meta: dict | None = None) -> "Trajectory":
+        """From named columns.  Without ``z`` the ground is flat (``z = 0``); without ``V_cm``
+        the speed is recovered from Eq. (21), ``V_cm = V_f (1 - C_f l sin theta_v)``, with the
+        body recorded in ``meta`` (:func:`body_meta`)."""
+        columns = _complete(columns, meta or {})
         missing = [c for c in COLUMNS if c not in columns]
         if missing:
             raise ValueError(f"trajectory is missing columns: {', '.join(missing)}")
@@ -63,7 +72,8 @@ class Trajectory:
 
     # -- frame output --------------------------------------------------------------------------
     def resample(self, fps: float, start: float | None = None,
-                 body: BodyParams | None = None) -> "Trajectory":
+                 body: BodyParams | None = None, ground=None,
+                 resistance=None) -> "Trajectory":
         """Samples at ``start + k / fps`` over the trajectory's span, each a state of the model.
 
         The state ``(x, y, theta_dir, theta_v, omega_v)`` and ``s`` between two samples is the
@@ -94,6 +104,17 @@ class Trajectory:
         the phase plane, where the phase does not depend on ``omega0``, takes the next sample's.
 
         ``body`` defaults to the one recorded in ``meta`` (:func:`body_meta`).
+
+        **On terrain** (a trajectory from the terrain loop, ``meta["ground"]`` set; pass the
+        ``ground`` it ran on, :mod:`.terrain`, unless flat; or a trajectory without meta, e.g.
+        read from a CSV, given ``ground=`` and ``resistance=``) the state is ``(x, y, theta_dir, theta_v, omega_v,
+        V_cm)`` and all six, and ``s``, are Hermite-interpolated with the terrain model's
+        derivatives at the samples (:func:`.terrain_dynamics.terrain_steer` under the recorded
+        ``C_f``; the friction and drag recorded in ``meta``).  ``z`` is the ground's height at
+        the interpolated ``(x, y)``; ``alpha_v``, ``V_f``, ``F_leg`` come from the terrain
+        model at the row's state; ``phi`` (the controller's phase, about its equilibrium lean,
+        docs/TERRAIN.md Section 6, which the trajectory does not record) is interpolated along
+        the step the shorter way round the circle, exact at the samples.
         """
         if not (fps > 0 and math.isfinite(fps)):
             raise ValueError(f"fps = {fps!r} is outside the allowed range (0, inf)")
@@ -114,6 +135,15 @@ class Trajectory:
         j = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 1)  # frame's step
         i = np.minimum(j, len(t) - 2)
         u = (tn - t[i]) / (t[i + 1] - t[i])
+        ran_on = self.meta.get("ground")          # None: the paper's flat model
+        if ran_on is not None or ground is not None or resistance is not None:
+            if ground is None:
+                if ran_on not in (None, "flat"):
+                    raise ValueError(f"this trajectory ran on {ran_on}: pass ground= (the "
+                                     "surface it ran on) to resample it")
+                ground = FLAT
+            rows = _terrain_rows(body, ground, resistance, self.meta, t, c, tn, i, u)
+            return Trajectory.from_columns(rows, meta)
         V_f, C_f = c["V_f"], c["C_f"]
         slope = {"x": V_f * np.cos(c["theta_dir"]), "y": V_f * np.sin(c["theta_dir"]),
                  "theta_dir": V_f * C_f, "theta_v": c["omega_v"], "omega_v": c["alpha_v"],
@@ -128,6 +158,7 @@ class Trajectory:
         out["V_f"] = foot_speed(body, th, cf, sin_t, V)                         # Eq. (21)
         out["F_leg"] = leg_force(body, th, om, out["alpha_v"], cf, V)[0]       # Appendix A
         out["phi"] = phase(th, om, 1.0, _ellipse_rate(c["theta_v"], c["omega_v"], c["phi"])[j])
+        out["z"], out["V_cm"] = np.zeros(len(tn)), V
         return Trajectory.from_columns(out, meta)
 
     # -- I/O -----------------------------------------------------------------------------------
@@ -140,16 +171,25 @@ class Trajectory:
         atomic_write_text(path, buf.getvalue())
 
     @classmethod
-    def from_csv(cls, path) -> "Trajectory":
+    def from_csv(cls, path, body: BodyParams | None = None) -> "Trajectory":
+        """Read a CSV written by :meth:`to_csv`.  A file from before terrain (the header
+        ``LEGACY_COLUMNS``) is flat ground: ``z = 0``, ``V_cm`` from Eq. (21) with ``body``."""
         with open(path, newline="") as fh:
             rows = list(csv.reader(fh))
-        if not rows or tuple(rows[0]) != COLUMNS:
+        header = tuple(rows[0]) if rows else ()
+        if header not in (COLUMNS, LEGACY_COLUMNS):
             raise ValueError(f"{path}: the header must be exactly {','.join(COLUMNS)}")
         try:
             data = np.array([[float(v) for v in r] for r in rows[1:] if r], float).T
         except ValueError:
             raise ValueError(f"{path}: a value is not a number") from None
-        return cls(data.reshape(len(COLUMNS), -1))
+        data = data.reshape(len(header), -1)
+        if header == COLUMNS:
+            return cls(data)
+        if body is None:
+            raise ValueError(f"{path} has no V_cm column (written before terrain): pass body= to "
+                             "recover it from Eq. (21)")
+        return cls.from_columns(dict(zip(header, data)), body_meta(body))
 
     def to_json(self, path) -> None:
         doc = {"columns": list(COLUMNS), "meta": self.meta,
@@ -174,6 +214,57 @@ def body_from_meta(meta: dict) -> BodyParams | None:
         return BodyParams(**{f.name: float(meta[f"body.{f.name}"]) for f in fields(BodyParams)})
     except KeyError:
         return None
+
+
+def resistance_meta(resistance) -> dict:
+    """The ``meta`` entries that record a :class:`.terrain_dynamics.Resistance`."""
+    return {f"resistance.{f.name}": float(getattr(resistance, f.name))
+            for f in fields(resistance)}
+
+
+def _terrain_rows(body, ground, res, meta, t, c, tn, i, u) -> dict:
+    """:meth:`Trajectory.resample` on terrain: the rows at times ``tn`` (step ``i``, fraction
+    ``u``); ``res`` the resistance (``None``: the one recorded in ``meta``, else none)."""
+    from .terrain_dynamics import Resistance, terrain_leg_force, terrain_steer
+    if res is None:
+        res = Resistance(**{k: float(meta[f"resistance.{k}"]) for k in ("mu", "CdA", "rho")
+                            if f"resistance.{k}" in meta})
+    free = Limits()                         # the recorded C_f is already bounded
+    state = tuple(c[k] for k in ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm"))
+    deriv, _, _, V_f, _, _ = terrain_steer(body, free, res, ground, c["C_f"], state)
+    names = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
+    out = {"t": tn, **{k: _hermite(t, c[k], dy, i, u) for k, dy in zip(names, deriv)},
+           "s": _hermite(t, c["s"], V_f, i, u)}
+    cf = out["C_f"] = (1.0 - u) * c["C_f"][i] + u * c["C_f"][i + 1]
+    st = tuple(out[k] for k in names)
+    _, _, alpha, V_f, _, fr = terrain_steer(body, free, res, ground, cf, st)
+    out["alpha_v"], out["V_f"], out["z"] = alpha, V_f, fr.z
+    th, om, V = out["theta_v"], out["omega_v"], out["V_cm"]
+    out["F_leg"] = terrain_leg_force(body, th, om, alpha, cf, V, V_f, fr)[0]
+    # The controller's phase is about its equilibrium lean, which the trajectory does not
+    # record: interpolated along the step (the shorter way round), exact at the samples.
+    dphi = np.mod(c["phi"][i + 1] - c["phi"][i] + np.pi, 2 * np.pi) - np.pi
+    out["phi"] = np.mod(c["phi"][i] + u * dphi, 2 * np.pi)
+    return out
+
+
+def _complete(columns: dict, meta: dict) -> dict:
+    """``columns`` with ``z`` (flat: 0) and ``V_cm`` (Eq. 21 with the body in ``meta``) added
+    when missing."""
+    if "z" in columns and "V_cm" in columns:
+        return columns
+    out = dict(columns)
+    if "z" not in out and "x" in out:
+        out["z"] = np.zeros(np.shape(out["x"]))
+    if "V_cm" not in out and all(k in out for k in ("V_f", "C_f", "theta_v")):
+        body = body_from_meta(meta)
+        if body is None:
+            raise ValueError("trajectory is missing the column V_cm and its meta records no body "
+                             "to recover it from V_f (Eq. 21)")
+        out["V_cm"] = (np.asarray(out["V_f"], float)
+                       * (1.0 - np.asarray(out["C_f"], float) * body.l
+                          * np.sin(np.asarray(out["theta_v"], float))))
+    return out
 
 
 def _hermite(t, y, dy, i, u):

@@ -16,6 +16,8 @@ import numpy as np
 from ..dynamics import THETA_V, inverse_cf
 from ..one_figure import scalar_inverse_cf
 from ..params import BodyParams
+from ..terrain import surface_frame
+from ..terrain_dynamics import plumb_lean, plumb_lean_along, terrain_inverse_cf
 
 
 class Controller:
@@ -25,6 +27,10 @@ class Controller:
         self.body = body
         self.nominal_body = body
         """The body the controller was made for; :attr:`body` carries the current speed."""
+        self.lean_about_heading = False
+        """On terrain: lean about the plumb lean of the current heading, not of the commanded
+        one (:meth:`equilibrium_lean`; set while a target speed swings the command across the
+        hill)."""
 
     def follow_speed(self, V_cm: float) -> BodyParams:
         """Steer at the forward speed ``V_cm`` from now on (a speed that varies over time);
@@ -56,6 +62,41 @@ class Controller:
             return self.desired_cf
         inverse, alpha = scalar_inverse_cf(self.body), self.desired_alpha
         return lambda t, state: inverse(state[THETA_V], alpha(t, state))
+
+    def terrain_cf_law(self, ground):
+        """``f(t, state) -> C_f`` on terrain (``state`` = ``(x, y, theta_dir, theta_v, omega_v,
+        V_cm)``, docs/TERRAIN.md Section 6): the lean law is asked about the lean from the
+        local plumb lean (:meth:`equilibrium_lean`), so the lean oscillates about the
+        equilibrium, not about the surface normal; its ``alpha_v`` is turned into ``C_f`` by
+        Eq. (1) on terrain at the current speed.  :meth:`begin_step` sees the same relative
+        lean (:meth:`relative_state`).  One figure: the law gets Python floats."""
+        g = self.body.g
+
+        def law(t, st):
+            if type(st[0]) is not float:
+                st = [float(v) for v in st]
+            fr = surface_frame(ground, st[0], st[1], st[2], g)
+            rel = (st[0], st[1], st[2], float(st[3] - self.equilibrium_lean(fr, t)), st[4])
+            return terrain_inverse_cf(self.body, fr, st[3], self.desired_alpha(t, rel), st[5])
+
+        return law
+
+    def relative_state(self, ground, state, t=0.0):
+        """``state`` (6 terrain rows) as the lean law sees it at time ``t``: 5 floats, the lean
+        taken from :meth:`equilibrium_lean`."""
+        x, y, d, th, om = (float(v) for v in state[:5])
+        fr = surface_frame(ground, x, y, d, self.body.g)
+        return (x, y, d, float(th - self.equilibrium_lean(fr, t)), om)
+
+    def equilibrium_lean(self, frame, t):
+        """The lean the law oscillates about (docs/TERRAIN.md Section 6): the plumb lean of the
+        commanded mean heading when the controller holds one (it does not swing with each
+        turn's heading, which would force the lean at the turn's own frequency), else, or with
+        :attr:`lean_about_heading` set, of the current heading."""
+        heading = getattr(self, "heading", None)
+        if heading is None or self.lean_about_heading:
+            return plumb_lean(frame)
+        return plumb_lean_along(frame, heading(t), self.body.g)
 
     def target(self, t: float):
         """``(omega0, theta_max)`` of the ellipse the motion is following now (for the phase)."""

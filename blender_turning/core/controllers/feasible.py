@@ -188,7 +188,9 @@ class FeasibleTurns:
         return ends[0], ends[1]
 
 
-@lru_cache(maxsize=32)
+@lru_cache(maxsize=256)
 def feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
-    """:class:`FeasibleTurns` for ``body`` and ``limits``, built once (about 30 ms)."""
+    """:class:`FeasibleTurns` for ``body`` and ``limits``, built once (about 30 ms).  256: a run
+    down a slope passes through a table per 0.5 m/s of speed (10 to 27.5 m/s: 36), and a
+    cache smaller than one run's sweep would rebuild every table on every run."""
     return FeasibleTurns(body, limits)

@@ -1,0 +1,34 @@
+"""Straight running: ``C_f = 0`` (run-ins, and the closed-form checks of docs/TERRAIN.md).
+
+The foot path has no curvature in the surface; the lean does what gravity makes it do (Eq. 2
+with ``C_f = 0``): upright on flat ground or down the fall line it stays upright (an unstable
+equilibrium, held to round-off), on a traverse started at the plumb lean it stays there.
+"""
+from __future__ import annotations
+
+from ..schedule import Schedule
+from .base import Controller
+
+
+class Straight(Controller):
+    """``C_f = 0`` whatever the state.  ``omega0`` and ``theta_max`` only name the ellipse the
+    phase column is measured against (``phi`` of :mod:`..phase`); the motion ignores them."""
+
+    def __init__(self, body, omega0=1.0, theta_max=1.0):
+        super().__init__(body)
+        self.omega0, self.theta_max = Schedule.of(omega0), Schedule.of(theta_max)
+
+    def desired_alpha(self, t, state):
+        raise NotImplementedError("Straight demands a curvature (0), not a lean acceleration")
+
+    def desired_cf(self, t, state):
+        return 0.0 * state[3]
+
+    def scalar_cf_law(self):
+        return lambda t, state: 0.0
+
+    def terrain_cf_law(self, ground):
+        return lambda t, state: 0.0 * state[3]
+
+    def target(self, t):
+        return self.omega0(t), self.theta_max(t)
