@@ -263,3 +263,18 @@ def test_the_readme_crowd_example_is_a_valid_crowd_file():
     block = text[text.index("### Crowds: `crowd`"):].split("```json\n", 1)[1].split("```")[0]
     crowd = crowd_from_dict(json.loads(block), root / "scenes" / "crowds")
     assert len(crowd.figures) == 2 + 8 + 2 + 6 and crowd["guide"].figure.name == "telemark"
+
+
+def test_a_path_figure_that_fails_is_reported_not_raised(monkeypatch):
+    from blender_turning.core.errors import PathNotFinished
+    from blender_turning.core.scene import Scene
+
+    def unfinished(self):
+        raise PathNotFinished(9.0, 12.0, 30.0)
+
+    crowd = Crowd("c", (_path_figure(PATH, "g", "skier"), LEADER), duration=3.0)
+    monkeypatch.setattr(Scene, "run", unfinished)
+    res = run_crowd(crowd)
+    assert [r.status for r in res.figures] == ["failed", "ok"]
+    assert res["g"].trajectory is None and str(PathNotFinished(9.0, 12.0, 30.0)) == \
+        res["g"].message and res.failed == (res["g"],)

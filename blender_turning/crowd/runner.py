@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.controllers import PhaseEllipse
-from ..core.errors import PlanInfeasible
+from ..core.errors import PlanInfeasible, TurningError
 from ..core.simulate import run
 from ..core.trajectory import Trajectory, body_meta
 from .model import Crowd, CrowdFigure
@@ -32,7 +32,9 @@ __all__ = ["FigureResult", "CrowdResult", "run_crowd", "crowd_tasks", "run_task"
 class FigureResult:
     """One figure's outcome.  ``trajectory`` is on the crowd's clock (``t`` starts at the
     figure's ``time_offset``) and ends at the fall or where planning failed; ``status`` is
-    ``"ok"``, ``"fell"`` or ``"infeasible"`` (``message`` says when and where).  ``cpu_time``:
+    ``"ok"``, ``"fell"``, ``"infeasible"`` (no feasible plan) or ``"failed"`` (another domain
+    error of the planner, e.g. the path not finished in time; ``message`` says when and
+    where).  ``cpu_time``:
     CPU seconds of the task that computed it (shared by a batch), ``plan`` the planner's totals
     (path figures)."""
 
@@ -99,9 +101,11 @@ def _on_crowd_clock(traj: Trajectory, f: CrowdFigure) -> Trajectory:
 def _plan(f: CrowdFigure) -> FigureResult:
     try:
         res = f.controller.scene.run()
-    except PlanInfeasible as exc:
-        tr = None if exc.trajectory is None else _on_crowd_clock(exc.trajectory, f)
-        return FigureResult(f.name, tr, "infeasible", str(exc))
+    except TurningError as exc:      # no feasible plan, the path not finished in time, ...
+        tr = getattr(exc, "trajectory", None)
+        tr = None if tr is None else _on_crowd_clock(tr, f)
+        return FigureResult(f.name, tr, "infeasible" if isinstance(exc, PlanInfeasible)
+                            else "failed", str(exc))
     return FigureResult(f.name, _on_crowd_clock(res.trajectory, f),
                         plan={**res.totals(), "reached_end": res.reached_end})
 
