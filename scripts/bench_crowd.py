@@ -52,17 +52,17 @@ def timed(fn):
 
 
 def one_engine(engine: str, course: float) -> None:
-    """Plan the 8 figures once in this fresh process (cold: no table built yet) and print
-    its wall time and the tasks' CPU seconds as JSON (the LocalCluster starts before the
-    clock)."""
-    crowd = path_crowd(course)
+    """Read and plan the 8 figures once in this fresh process (cold: no table built yet) and
+    print the wall time and the tasks' CPU seconds as JSON (the LocalCluster starts before the
+    clock; reading the scenes is inside it, as in the command line)."""
     if engine == "dask":
         from dask.distributed import LocalCluster
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                           dashboard_address=None) as cluster:
-            res, wall, _ = timed(lambda: run_crowd(crowd, scheduler=cluster.scheduler_address))
+            res, wall, _ = timed(lambda: run_crowd(path_crowd(course),
+                                                   scheduler=cluster.scheduler_address))
     else:
-        res, wall, _ = timed(lambda: run_crowd(crowd, workers=int(engine)))
+        res, wall, _ = timed(lambda: run_crowd(path_crowd(course), workers=int(engine)))
     assert not res.failed, [r.message for r in res.failed]
     print(json.dumps({"wall": wall, "cpu": [r.cpu_time for r in res.figures]}))
 
