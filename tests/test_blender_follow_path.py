@@ -4,9 +4,9 @@ import pytest
 
 bpy = pytest.importorskip("bpy")
 
-from test_blender_operators import add, make_path, registered, scene, snapshot  # noqa: E402,F401
+from test_blender_operators import add, make_path, scene, snapshot  # noqa: E402,F401
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 
 
 def test_path_not_finished_in_time_is_reported_and_scene_unchanged(scene):  # noqa: F811
