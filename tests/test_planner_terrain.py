@@ -46,10 +46,10 @@ def _problem(ground, resistance=SKIER, N=4, q=4, obstacles=True, **kw):
     return TerrainProblem(fig, PathDistance(path, 12), obs, st, ground, resistance)
 
 
-def _root(V=8.0, heading=0.0, ground=None):
-    """At the origin; on ``ground``, leaning along the plumb line (a traverse's balance)."""
-    lean = 0.0 if ground is None else plumb_lean(surface_frame(ground, 0.0, 0.0, heading, 9.81))
-    return np.array([0.0, 0.0, heading, lean, 0.0, V])
+def _root(V=8.0, heading=0.0, ground=None, y=0.0):
+    """At ``(0, y)``; on ``ground``, leaning along the plumb line (a traverse's balance)."""
+    lean = 0.0 if ground is None else plumb_lean(surface_frame(ground, 0.0, y, heading, 9.81))
+    return np.array([0.0, y, heading, lean, 0.0, V])
 
 
 def test_stage_matches_terrain_rk4():
@@ -102,14 +102,58 @@ GROUNDS = {"plane": Plane(math.radians(18), 0.0), "traverse": Plane(math.radians
                                      {"lower_bound": False}])
 def test_search_equals_exhaustive_on_terrain(name, variant):
     """Branch and bound on terrain returns exhaustive search's optimum and plan."""
-    p = _problem(GROUNDS[name], **variant)
-    for heading, V in ((0.0, 8.0), (0.3, 5.0)):
-        x0 = _root(V, heading, p.ground)
+    p = _problem(GROUNDS[name], N=6, q=3, **variant)
+    # On the path, and 6 m off it (the foot closing on the path as fast as it can: an
+    # over-estimated lower bound clips the optimum there).
+    solved = 0
+    for heading, V, y in ((0.0, 8.0, 0.0), (0.3, 5.0, 0.0), (-0.9, 9.0, 6.0)):
+        x0 = _root(V, heading, p.ground, y)
         plan = branch_and_bound(p.local(x0[:2], x0), x0, 0.0)
         f, choices = exhaustive(p.local(x0[:2], x0), x0, 0.0)
-        assert math.isfinite(f)
+        if not math.isfinite(f):
+            assert not plan.feasible and choices is None
+            continue
+        solved += 1
         assert plan.f_opt == pytest.approx(f, rel=1e-9, abs=1e-12)
         assert plan.choices == choices
+    assert solved >= 1
+
+
+@pytest.mark.parametrize("name", sorted(GROUNDS))
+def test_lower_bound_is_admissible_on_terrain(name):
+    """At every node of the full tree, the lower bound (what the search adds to f) is at most the
+    cost still to come of each completion that neither collides nor falls."""
+    p = _problem(GROUNDS[name], N=5, q=4, obstacles=False)
+    p.limits = replace(p.limits, dC_f_max=0.15)
+    p.u_values = p.limits.dC_f_max * np.linspace(-1.0, 1.0, 4)
+    checked = 0
+    for heading, y in ((0.0, 0.0), (-0.9, 6.0), (0.6, -5.0)):
+        x0 = _root(9.0, heading, p.ground, y)
+        loc = p.local(x0[:2], x0)
+        st, q = loc.settings, 4
+        x, cf, f = x0.reshape(-1, 1), np.zeros(1), np.zeros(1)
+        levels = []                               # per depth: (parent index, f, h, alive)
+        for depth in range(1, st.n_stages + 1):
+            m = x.shape[1]
+            par = np.repeat(np.arange(m), q)
+            r = loc.simulate_stage(x[:, par], cf[par], np.tile(loc.u_values, m),
+                                   np.zeros(m * q), np.zeros(m * q))
+            f = f[par] + r.cost
+            h = loc.lower_bound(r.d_last, depth, r.state, r.C_f)
+            levels.append((par, f, h, ~(r.collided | r.fell)))
+            x, cf = r.state, r.C_f
+        # The least surviving leaf cost below each node, backed up level by level.
+        par, f, h, alive = levels[-1]
+        best = np.where(alive, f, np.inf)
+        for depth in range(len(levels) - 1, 0, -1):
+            up = np.full(len(levels[depth - 1][1]), np.inf)
+            np.minimum.at(up, par, best)
+            par, f, h, alive = levels[depth - 1]
+            best = np.where(alive, up, np.inf)
+            ok = np.isfinite(best)
+            assert np.all(f[ok] + h[ok] <= best[ok] * (1 + 1e-9) + 1e-12)
+            checked += int(ok.sum())
+    assert checked > 50
 
 
 def test_search_prunes_on_terrain():
