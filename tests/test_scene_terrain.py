@@ -96,7 +96,7 @@ def test_follow_cli_writes_z_and_speed(tmp_path, capsys):
     V = np.array([float(r["V_cm"]) for r in rows])
     np.testing.assert_allclose(z, 2.0 - math.tan(math.radians(6)) * x, atol=1e-9)
     assert V[0] == pytest.approx(6.0) and V[-1] > V[0] + 0.5
-    assert "follow: hill" in capsys.readouterr().out
+    assert f"speed 6.0-{V.max():.1f} m/s" in capsys.readouterr().out
 
 
 def test_follow_cli_bad_terrain_one_line(tmp_path, capsys):
