@@ -251,3 +251,35 @@ def test_follow_setup_terrain_start_state():
     res = setup.run(start_state(path), duration=0.6)
     assert res.trajectory.V_cm[0] == 8.0 and res.trajectory.V_cm[-1] > 8.0
     assert isinstance(setup.problem(), TerrainProblem)
+
+
+def test_runaways_counted_and_proof_dropped(monkeypatch):
+    """A search that clips a run-away counts it (its copies too), and the receding horizon
+    then hands no proof to the next search (its speed limit may be higher)."""
+    from blender_turning.core.planner import receding
+    p = _problem(GROUNDS["plane"], N=3, q=3, obstacles=False)
+    x0 = _root()
+    loc = p.local(x0[:2], x0)
+    assert loc.runaways == 0
+    branch_and_bound(loc, x0, 0.0)
+    assert loc.runaways == 0                          # no branch comes near the limit
+    loc.v_max = 9.0                                   # the foot reaches 9 m/s within the horizon
+    plan = branch_and_bound(loc, x0, 0.0)
+    assert loc.runaways > 0 and plan.stats.clipped_fall > 0
+    seen, clipped = [], []
+    real = receding.branch_and_bound
+
+    def spy(problem, state, C_f, t0=0.0, s0=0.0, previous=None, proof=None):
+        seen.append(proof is not None)
+        if limit is not None:                         # a limit some branches pass
+            problem.v_max = state[5] + limit
+        plan = real(problem, state, C_f, t0, s0, previous, proof)
+        clipped.append(problem.runaways)
+        return plan
+    monkeypatch.setattr(receding, "branch_and_bound", spy)
+    for limit in (2.5, None):
+        seen.clear(), clipped.clear()
+        receding.follow(p, x0, 0.0, 0.9)
+        assert seen[1:] == [c == 0 for c in clipped[:-1]]
+        assert (min(clipped) > 0) == (limit is not None)
+        assert seen[1:] == [limit is None] * 2

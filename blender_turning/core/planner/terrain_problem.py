@@ -21,6 +21,11 @@ Exactness.  Every lower bound of the flat search assumes a known speed profile; 
   *run-away* and is clipped (it does not happen on the shipped scenes: it would need the figure to
   gain speed faster than free fall along the steepest slope).  Then ``b`` bounds every surviving
   branch by construction, and the bound is admissible.
+- The receding horizon reuses a search's proof in the next one (``proof.py``), whose root is
+  faster or slower, so its speed limit higher or lower.  A lower limit only clips more (the old
+  bounds stay lower bounds, an infeasible subtree stays infeasible); a higher one could free a
+  branch the old proof counted out, so a search that clipped any run-away hands no proof on
+  (``runaways``; ``receding.py``).
 - Also clipped (rules of the problem, counted as falls): a branch whose speed drops below
   :data:`..terrain_sim.MIN_SPEED` (the model is a body carried by its speed) and one whose foot
   leaves a height field's grid.  Adding a clip only removes branches: every bound stays admissible.
@@ -92,6 +97,8 @@ class TerrainProblem(Problem):
         self._reach = None                        # a constant speed
         self._pairs = None                        # a least speed
         self.v_max = self.speed_limit(V0)
+        # Branches clipped as run-aways, shared by the copies of one search (paper_problem's).
+        self._runaways = np.zeros(1, np.int64)
         self._grid = ground.extent if isinstance(ground, HeightField) else None
 
     def speed_limit(self, V_root: float) -> float:
@@ -107,7 +114,14 @@ class TerrainProblem(Problem):
         p.__dict__.update(self.__dict__)
         if state is not None:
             p.v_max = self.speed_limit(float(state[V_CM]))
+        p._runaways = np.zeros(1, np.int64)
         return Problem.local(p, center)
+
+    @property
+    def runaways(self) -> int:
+        """Branches this search clipped as run-aways: the receding horizon hands no proof on
+        from a search that clipped any (module doc)."""
+        return int(self._runaways[0])
 
     def fall_table(self):
         return None
@@ -135,7 +149,10 @@ class TerrainProblem(Problem):
         for row, v in enumerate(d):
             out[row] = v
         if bad is not None:
-            bad |= ~(np.abs(V_f) <= self.v_max) | ~(x[V_CM] >= MIN_SPEED)
+            runaway = ~(np.abs(V_f) <= self.v_max)
+            if runaway.any():
+                self._runaways[0] += int(np.count_nonzero(runaway & ~bad))
+            bad |= runaway | ~(x[V_CM] >= MIN_SPEED)
             if off is not None:
                 bad |= off
         return cf, alpha, V_f
