@@ -80,6 +80,7 @@ def run(args) -> int:
           f"{traj.duration:.2f} s, {tot['replans']} replans, {tot['expanded']} nodes expanded, "
           f"{tot['wall_time']:.2f} s planning; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg"
+          f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if scene.ground else ''}"
           f"{'' if result.reached_end else ' (stopped at the given duration)'}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0

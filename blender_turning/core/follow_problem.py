@@ -12,6 +12,9 @@ the same inputs, with the same run-out, time limit, start state and end test.
   foot is within one horizon's reach of the path (what the planner can see).
 - Start: the path's first point, heading along its first non-degenerate tangent
   (:meth:`.path.HermitePath.start_direction`), upright, at rest in lean.
+- Terrain (issue 10): given a ``ground`` (:mod:`.terrain`), the problem is a
+  :class:`.planner.terrain_problem.TerrainProblem` with the speed a state (start: the body's
+  ``V_cm``, the sixth entry of the start state) and the time limit counts at the start speed.
 """
 from __future__ import annotations
 
@@ -60,6 +63,11 @@ class FollowSetup:
     exact_distance: bool = False
     run_out: float | None = None
     """Straight run-out beyond the path's end, m; ``None``: one horizon's reach."""
+    ground: object = None
+    """The terrain (:class:`.terrain.Plane`, :class:`.terrain.HeightField`); ``None``: flat
+    ground at the speed profile, the paper's problem."""
+    resistance: object = None
+    """Friction and drag on terrain (:class:`.terrain_dynamics.Resistance`; ``None``: none)."""
 
     @property
     def speed_profile(self) -> SpeedProfile:
@@ -70,12 +78,22 @@ class FollowSetup:
         subclass, if the caller needs one)."""
         speed = self.speed_profile
         run_out = self.run_out
+        if self.ground is not None:
+            from .planner.terrain_problem import TerrainProblem
+            from .terrain_dynamics import Resistance
+            res = self.resistance or Resistance(mu=0.0, CdA=0.0)
+
+            def make(dist, obstacles):
+                return TerrainProblem(self.figure, dist, obstacles, self.settings, self.ground,
+                                      res)
+        else:
+            def make(dist, obstacles):
+                return cls(self.figure, dist, obstacles, self.settings, speed)
         if run_out is None:
-            run_out = Problem(self.figure, PathDistance(self.path, 1), Obstacles(),
-                              self.settings, speed).reach()
+            run_out = make(PathDistance(self.path, 1), Obstacles()).reach()
         dist = PathDistance(self.path.extended(run_out), self.samples_per_segment,
                             self.exact_distance)
-        return cls(self.figure, dist, self.obstacles, self.settings, speed)
+        return make(dist, self.obstacles)
 
     def time_limit(self) -> float:
         """:data:`TIME_LIMIT_FACTOR` times the path's length over the slowest speed, s."""
@@ -93,7 +111,9 @@ class FollowSetup:
         :meth:`time_limit` (raises :class:`.errors.PathNotFinished` otherwise); or, given a
         ``duration``, for that long wherever it gets."""
         problem = problem or self.problem()
-        state0 = start_state(self.path) if state0 is None else state0
+        state0 = start_state(self.path) if state0 is None else np.asarray(state0, float)
+        if self.ground is not None and len(state0) == 5:         # the speed is a state
+            state0 = np.append(state0, self.figure.body.V_cm)
         if duration is not None:
             return follow(problem, state0, C_f0, duration, meta=meta, on_replan=on_replan)
         return follow(problem, state0, C_f0, self.time_limit(), self.progress(problem),

@@ -129,6 +129,18 @@ RANGES: dict[str, Range] = {
     "clearance": Range(0.0, 100.0, "m", "the distance the track keeps from obstacles"),
     "run_out": Range(0.0, 1e4, "m", "the straight added after the path's end"),
     "samples_per_segment": Range(1, 1000, "", "path samples per spline segment", integer=True),
+    # -- scenes: terrain (issue 10, docs/TERRAIN.md) ----------------------------------------------
+    "slope": Range(0.0, 60 * _DEG, "rad", "flat to steeper than any skiable or rideable slope "
+                   "(an extreme couloir is ~55 deg)"),
+    "friction": Range(0.0, 1.0, "", "snow friction or rolling resistance mu (0.005 to 0.1 for "
+                      "the sports, core.terrain_dynamics.RESISTANCE)"),
+    "drag_area": Range(0.0, 10.0, "m^2", "C_d A, 0.3-0.6 m^2 for a rider or skier"),
+    "air_density": Range(0.0, 2.0, "kg/m^3", "vacuum to well above sea level's 1.225"),
+    "cell": Range(0.0, 1e4, "m", "a height field's grid spacing", lo_open=True),
+    "height": Range(-1e4, 1e4, "m", "a terrain height: below the deepest sea floor to above "
+                    "the highest summit"),
+    "grid_points": Range(2, 4096, "", "heights per side of a height field (4096^2 doubles: "
+                         "134 MB)", integer=True),
     # -- the headless render job (scripts/render_job.py) -----------------------------------------
     "job_seconds": Range(0.0, 600.0, "s", "ten minutes of animation a job", lo_open=True),
     "job_fps": Range(1, 240, "1/s", "Blender's frame rates", integer=True),

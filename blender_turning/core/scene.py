@@ -20,12 +20,13 @@ from .params import PRESETS, Figure, preset
 from .path import HermitePath
 from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile
 from .ranges import RANGES
+from .scene_terrain import read_terrain
 from .validate import FieldError, Fields, read_text
 
 __all__ = ["Scene", "load_scene", "scene_from_dict"]
 
 _TOP = {"name", "description", "figure", "path", "obstacles", "clearance", "start", "speed",
-        "planner", "duration", "run_out"}
+        "planner", "duration", "run_out", "terrain"}
 # planner key -> (PlannerSettings field, key of RANGES or None for a switch, default)
 _PLANNER = {"stages": ("n_stages", "n_stages", 10), "choices": ("q", "q", 5),
             "stage_time": ("t_stage", "t_stage", 0.3),
@@ -37,7 +38,8 @@ _PLANNER = {"stages": ("n_stages", "n_stages", 10), "choices": ("q", "q", 5),
 
 @dataclass(frozen=True)
 class Scene:
-    """A validated scene.  ``state0`` is ``(x, y, theta_dir, theta_v, omega_v)`` in SI units."""
+    """A validated scene.  ``state0`` is ``(x, y, theta_dir, theta_v, omega_v)`` in SI units
+    (and ``V_cm`` on terrain, where ``ground`` is set: :mod:`.scene_terrain`)."""
 
     name: str
     figure: Figure
@@ -52,6 +54,8 @@ class Scene:
     duration: float | None = None
     run_out: float | None = None
     description: str = ""
+    ground: object = None
+    resistance: object = None
 
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))
@@ -59,7 +63,8 @@ class Scene:
     def setup(self) -> FollowSetup:
         """The shared path-following builder (:mod:`.follow_problem`) for this scene."""
         return FollowSetup(self.figure, self.path, self.obstacles, self.settings, self.speed,
-                           self.samples_per_segment, self.exact_distance, self.run_out)
+                           self.samples_per_segment, self.exact_distance, self.run_out,
+                           self.ground, self.resistance)
 
     def problem(self) -> Problem:
         """The planning problem (the path with its run-out: :mod:`.follow_problem`)."""
@@ -194,6 +199,12 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
     c_max = fig.limits.C_f_max
     cf0 = sf.number("C_f", replace(RANGES["C_f0"], lo=-c_max, hi=c_max), 0.0)
     state0 = start_state(path, pos, heading, lean, rate)
+    ground = resistance = None
+    if top.has("terrain"):      # the ground (issue 10); the speed becomes a state
+        ground, resistance = read_terrain(top.table("terrain"), fig.name)
+        if top.has("speed"):
+            top.fail("speed", "is computed along the way on terrain; give start.speed instead")
+        state0 = np.append(state0, fig.body.V_cm)
 
     # Speed profile (Section 6: "a function of the terrain").
     spf = top.table("speed", {"by", "at", "V_cm"})
@@ -238,4 +249,4 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
     if not math.isfinite(fig.limits.dC_f_max) or not math.isfinite(fig.limits.C_f_max):
         top.fail("figure", "limits: the planner needs finite C_f_max and dC_f_max")
     return Scene(name, fig, path, obstacles, state0, cf0, speed, settings, per, exact, duration,
-                 run_out, description)
+                 run_out, description, ground, resistance)

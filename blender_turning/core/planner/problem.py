@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics import PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, steer
+from ..dynamics import PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, leg_force, steer
 from ..obstacles import Obstacles
 from ..params import Figure
 from ..path import PathDistance
@@ -103,13 +103,13 @@ class Problem:
         """How far the foot can get within one horizon, m."""
         return self.v_max * self.settings.horizon * 1.001 + 1e-6
 
-    def local(self, center) -> "Problem":
+    def local(self, center, state=None) -> "Problem":
         """The same problem with the path samples and obstacles that cannot matter within one
         horizon of ``center`` dropped (exact: see :meth:`PathDistance.near` and
-        :meth:`Obstacles.near`)."""
+        :meth:`Obstacles.near`).  ``state``: the root's (used on terrain only)."""
         r = self.reach()
         self.fall_table()                       # built once, shared by the local copies
-        p = Problem.__new__(Problem)
+        p = type(self).__new__(type(self))
         p.__dict__.update(self.__dict__)
         p.distance = self.distance.near(center, r)
         # One stage more for the dead-end test (search.py), and the body's ground point.
@@ -248,9 +248,10 @@ class Problem:
             return float(self.speed.V[0])
         return self.speed(t, s)
 
-    def _rhs(self, x, V, tau, C0, u, anchor, rate_step, out):
+    def _rhs(self, x, V, tau, C0, u, anchor, rate_step, out, bad=None):
         """:func:`..dynamics.steer` under the stage's law ``C_f = C0 + u tau`` (Section 6.1),
-        written into ``out`` (shape (5, m)).  Returns ``(C_f, alpha_v, V_f)``."""
+        written into ``out`` (shape (5, m)).  Returns ``(C_f, alpha_v, V_f)``.  ``bad``: columns
+        the problem clips besides a fall (none on flat ground; on terrain: ``TerrainProblem``)."""
         d, cf, alpha, V_f = steer(self.body, self.limits, C0 + u * tau, x, anchor, rate_step, V)
         for row, v in enumerate(d):
             out[row] = v
@@ -273,6 +274,7 @@ class Problem:
         cost = np.zeros(m)
         d = np.zeros(m)
         fell = np.zeros(m, bool)
+        bad = np.zeros(m, bool)
         track = [x[:THETA_V + 1]]          # x, y, theta_dir, theta_v at every step's end
         rec = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")} if record else None
         h = st.dt
@@ -282,16 +284,16 @@ class Problem:
         for k in range(st.steps_per_stage):
             tau = k * h
             V = self._speed_at(t0 + tau, s)
-            cf, alpha, V_f = self._rhs(x, V, tau, C_f0, u, anchor, h, k1)
+            cf, alpha, V_f = self._rhs(x, V, tau, C_f0, u, anchor, h, k1, bad)
             if record:
                 rec["state"].append(x.copy())
                 rec["C_f"].append(cf)
                 rec["alpha_v"].append(alpha)
                 rec["V_f"].append(V_f)
                 rec["t"].append(np.asarray(t0, float) + tau)
-            self._rhs(x + half * k1, V, tau + half, C_f0, u, cf, half, k2)
-            self._rhs(x + half * k2, V, tau + half, C_f0, u, cf, half, k3)
-            self._rhs(x + h * k3, V, tau + h, C_f0, u, cf, h, k4)
+            self._rhs(x + half * k1, V, tau + half, C_f0, u, cf, half, k2, bad)
+            self._rhs(x + half * k2, V, tau + half, C_f0, u, cf, half, k3, bad)
+            self._rhs(x + h * k3, V, tau + h, C_f0, u, cf, h, k4, bad)
             new = x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
             if check:
                 track.append(new[:THETA_V + 1])
@@ -303,7 +305,8 @@ class Problem:
                 cost = cost + d
         # The curvature in force at the end of the stage (the next stage's C0).
         cf_end = self._rhs(x, self._speed_at(t0 + st.t_stage, s), st.t_stage, C_f0, u, anchor,
-                           h, k1)[0]
+                           h, k1, bad)[0]
+        fell |= bad
         if check:   # the foot's and the body's ground point's moves, step by step
             P = np.stack(track, axis=1)                          # (4, steps + 1, m)
             pts = np.concatenate([P[:2], self.body_point(P)], axis=1)
@@ -315,3 +318,19 @@ class Problem:
             collided = np.zeros(m, bool)
         return StageResult(x, np.asarray(cf_end, float) * np.ones(m), s, cost, d, collided,
                            fell, rec)
+
+    def end_rates(self, x, cf, t, s):
+        """``(alpha_v, V_f)`` of the state ``x`` (shape ``(5, 1)``) at curvature ``cf``."""
+        V = self._speed_at(np.array([t]), np.array([s]))
+        _, _, a, v = steer(self.body, self.limits, np.array([cf]), x, None, 0.0, V)
+        return a, v
+
+    def columns(self, S, A, C, V) -> dict:
+        """Trajectory columns beyond the state: ``F_leg`` (Appendix A) and ``V_cm``, recovered
+        from ``V_f`` by Eq. (21) so that a varying speed profile is honoured (``z``: flat, 0)."""
+        v_cm = V * (1.0 - C * self.body.l * np.sin(S[3]))
+        return {"V_cm": v_cm, "F_leg": leg_force(self.body, S[3], S[4], A, C, v_cm)[0]}
+
+    def meta(self) -> dict:
+        """What the trajectory's meta records of the problem beyond the body (flat: nothing)."""
+        return {}

@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics import leg_force, steer
 from ..errors import PathNotFinished, PlanInfeasible
 from ..path import PathProgress
 from ..phase_estimate import estimate_phase
@@ -68,7 +67,7 @@ class FollowResult:
 def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None = None,
            progress: PathProgress | None = None, meta: dict | None = None,
            on_replan=None) -> FollowResult:
-    """Follow the path from ``state0`` (shape ``(5,)``) for ``duration`` seconds or, given a
+    """Follow the path from ``state0`` (shape ``(5,)``; ``(6,)`` with ``V_cm`` on terrain) for ``duration`` seconds or, given a
     :class:`..path.PathProgress`, until the foot reaches the end of the path (progress along it
     by arc length, :meth:`PathProgress.at_end`), ``duration`` then being the time limit.
 
@@ -80,7 +79,7 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
     if duration is None:
         raise ValueError("follow needs a duration (with a path progress: the time limit)")
     st = problem.settings
-    x = np.asarray(state0, float).reshape(5, 1).copy()
+    x = np.asarray(state0, float).reshape(-1, 1).copy()
     cf, t, s = float(C_f0), 0.0, 0.0
     rows = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")}
     replans = []
@@ -91,7 +90,7 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
         if on_replan is not None:
             on_replan(t, x[:2, 0].copy(), p / progress.length if progress else 0.0)
         clock = time.perf_counter()
-        local = problem.local(x[:2, 0])
+        local = problem.local(x[:2, 0], x[:, 0])
         plan = branch_and_bound(local, x[:, 0], cf, t, s, previous, proof)
         if not plan.feasible:
             traj = _trajectory(problem, rows, x, cf, t, s, meta)
@@ -107,6 +106,8 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
         x, cf, s, t = r.state, float(r.C_f[0]), float(r.s[0]), t + st.t_stage
         previous = plan.choices
         proof = plan.proof.after(plan.choices[0])
+        if getattr(local, "runaways", 0):     # terrain: the next search's rules may be looser
+            proof = None
         if progress is not None:
             steps = [xs[:2, 0] for xs in r.record["state"]] + [x[:2, 0]]
             for a, b in zip(steps[:-1], steps[1:]):
@@ -121,27 +122,23 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
 
 
 def _trajectory(problem: Problem, rows, x, cf, t, s, meta) -> Trajectory:
-    """The recorded steps plus the final state, with F_leg, s and the post-pass phase."""
+    """The recorded steps plus the final state, with F_leg, s and the post-pass phase (the
+    problem gives the force, the speed and, on terrain, the height: ``Problem.columns``)."""
     body = problem.body
-    states = [np.asarray(v).reshape(5) for v in rows["state"]] + [x.reshape(5)]
+    states = [np.asarray(v).reshape(-1) for v in rows["state"]] + [x.reshape(-1)]
     S = np.array(states).T
     C = np.array([float(np.ravel(v)[0]) for v in rows["C_f"]] + [cf])
     T = np.array([float(np.ravel(v)[0]) for v in rows["t"]] + [t])
     V = np.array([float(np.ravel(v)[0]) for v in rows["V_f"]] + [np.nan])
     A = np.array([float(np.ravel(v)[0]) for v in rows["alpha_v"]] + [np.nan])
     # The final sample's alpha_v and V_f: from its own state and curvature.
-    V_end = problem._speed_at(np.array([t]), np.array([s]))
-    _, _, a_end, v_end = steer(body, problem.limits, np.array([cf]), x, None, 0.0, V_end)
+    a_end, v_end = problem.end_rates(x, cf, t, s)
     A[-1], V[-1] = float(np.ravel(a_end)[0]), float(np.ravel(v_end)[0])
     cols = {"t": T, "x": S[0], "y": S[1], "theta_dir": S[2], "theta_v": S[3], "omega_v": S[4],
-            "alpha_v": A, "C_f": C, "V_f": V}
-    # V_cm recovered from V_f (Eq. 21), so a varying speed profile is honoured.
-    v_cm = V * (1.0 - C * body.l * np.sin(S[3]))
-    cols["F_leg"] = leg_force(body, S[3], S[4], A, C, v_cm)[0]
+            "alpha_v": A, "C_f": C, "V_f": V, **problem.columns(S, A, C, V)}
     ds = 0.5 * (V[1:] + V[:-1]) * np.diff(T)
     cols["s"] = np.concatenate([[0.0], np.cumsum(ds)])
     cols["phi"] = estimate_phase(T, S[3], S[4]).phi if len(T) > 1 else np.zeros(len(T))
     meta = {"preset": problem.figure.name, "dt": problem.settings.dt, **body_meta(body),
-            "planner": "branch-and-bound (Section 6)", **(meta or {})}
+            "planner": "branch-and-bound (Section 6)", **problem.meta(), **(meta or {})}
     return Trajectory.from_columns(cols, meta)
-

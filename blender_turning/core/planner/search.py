@@ -116,9 +116,9 @@ class _Nodes:
     """Growable column store of search nodes.  Besides each node's state and ``f``: whether it
     was expanded and, per child, the bound recorded when the child was generated (``proof.py``)."""
 
-    def __init__(self, q, cap=1024):
+    def __init__(self, q, rows=5, cap=1024):
         self.n = 0
-        self.state = np.empty((5, cap))
+        self.state = np.empty((rows, cap))
         self.cols = {k: np.empty(cap) for k in ("cf", "f", "d", "t", "s")}
         self.ints = {k: np.empty(cap, np.int64) for k in ("depth", "parent", "choice", "old")}
         self.expanded = np.zeros(cap, bool)
@@ -143,7 +143,8 @@ class _Nodes:
                 if fill is not None:
                     extra[...] = fill
                 return np.concatenate([a, extra])
-            self.state = np.concatenate([self.state, np.empty((5, cap - self.state.shape[1]))], 1)
+            self.state = np.concatenate([self.state, np.empty((len(self.state),
+                                                              cap - self.state.shape[1]))], 1)
             self.cols = {k: grow(v) for k, v in self.cols.items()}
             self.ints = {k: grow(v) for k, v in self.ints.items()}
             self.expanded = grow(self.expanded, False)
@@ -210,8 +211,9 @@ def _bound(problem, r, depth, togo, reach, cols, pairs=None):
 
 
 def _root(q, state, C_f, t0, s0, old):
-    nodes = _Nodes(q)
-    nodes.add(np.asarray(state, float).reshape(5, 1), 0, -1, -1, old, cf=C_f, f=0.0, d=0.0, t=t0,
+    state = np.asarray(state, float).reshape(-1, 1)    # 5 rows, 6 on terrain (V_cm)
+    nodes = _Nodes(q, len(state))
+    nodes.add(state, 0, -1, -1, old, cf=C_f, f=0.0, d=0.0, t=t0,
               s=s0)
     return nodes
 
@@ -222,7 +224,7 @@ def _follow_choices(problem, state, C_f, t0, s0, choices):
     feasible completion (a viable last node: :func:`.viable.dead_leaves`), or ``(inf, None, nodes,
     None)``."""
     st = problem.settings
-    x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
+    x, cf, t, s = np.asarray(state, float).reshape(-1, 1), np.array([C_f]), t0, np.array([s0])
     f = np.zeros(1)
     for k, c in enumerate(choices):
         r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
@@ -255,7 +257,7 @@ def _greedy_dive(problem, state, C_f, t0, s0):
     expanded, leaf)``, or ``(inf, None, nodes expanded, None)``."""
     st = problem.settings
     q = st.q
-    x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
+    x, cf, t, s = np.asarray(state, float).reshape(-1, 1), np.array([C_f]), t0, np.array([s0])
     f = 0.0
     choices = []
     for depth in range(1, st.n_stages + 1):
@@ -426,7 +428,7 @@ def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float =
     ``(inf, None)`` when none survives."""
     st = problem.settings
     q = st.q
-    x = np.asarray(state, float).reshape(5, 1)
+    x = np.asarray(state, float).reshape(-1, 1)
     cf, t, s, f = np.array([C_f], float), np.array([t0], float), np.array([s0], float), np.zeros(1)
     paths = np.zeros((1, 0), np.int64)
     ok = np.ones(1, bool)           # no node so far is doomed within the horizon and M stages

@@ -52,12 +52,12 @@ def dead_end(problem: Problem, leaf) -> bool:
     """Does a plan's last node ``leaf`` (``Plan.leaf``) end in a dead end?  (The measurement of
     ``receding.py``: one stage of q children.)"""
     x, cf, t, s = leaf
-    return bool(no_way_on(problem, np.reshape(x, (5, 1)), cf, t, s)[0])
+    return bool(no_way_on(problem, np.reshape(x, (-1, 1)), cf, t, s)[0])
 
 
 def paper_problem(problem: Problem) -> Problem:
     """The same problem with ``viable_stages = 0`` (sharing its tables: none depends on it)."""
-    p = Problem.__new__(Problem)
+    p = type(problem).__new__(type(problem))
     p.__dict__.update(problem.__dict__)
     p.settings = replace(problem.settings, viable_stages=0)
     return p
