@@ -1,4 +1,6 @@
 import math
+import os
+import sys
 from dataclasses import replace
 
 import pytest
@@ -34,3 +36,22 @@ def registered():
     addon.register()
     yield
     addon.unregister()
+
+
+_EXIT_STATUS = []
+
+
+def pytest_sessionfinish(session, exitstatus):
+    _EXIT_STATUS.append(int(exitstatus))
+
+
+def pytest_unconfigure(config):
+    """The bpy 4.2 LTS wheel segfaults while Python tears it down at exit after some Blender test
+    sessions, every test having passed (the 4.5 and 5.0 wheels do not; the earlier finding:
+    "bpy 4.2 crashes at exit on a registered PointerProperty").  Pytest has reported by now: end
+    the process here with pytest's own status, so the crash cannot turn a green run red."""
+    bpy = sys.modules.get("bpy")
+    if bpy is not None and bpy.app.version < (4, 5, 0) and _EXIT_STATUS:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(_EXIT_STATUS[-1])

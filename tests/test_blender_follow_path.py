@@ -1,7 +1,11 @@
 """Follow Path on the bpy wheel (issue 7, item 5): a path the figure cannot finish within the time
 limit is reported, with how far along it got, and nothing is written."""
+import os
+import tempfile
+
 import pytest
 
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
 from test_blender_operators import add, make_path, scene, snapshot  # noqa: E402,F401
