@@ -29,7 +29,34 @@ def _world_triangles(obj, depsgraph):
     return world, tris.reshape(-1, 3)
 
 
+class MeshGround:
+    """A ground mesh read once: its smooth :attr:`field` for the physics and a BVH tree of its
+    triangles for exact heights (:meth:`heights`)."""
+
+    def __init__(self, name: str, field: HeightField, bvh):
+        self.name, self.field, self.bvh = name, field, bvh
+
+    def heights(self, x, y) -> np.ndarray:
+        """The mesh's height under each ``(x, y)`` by a ray cast from above (the smooth field's
+        where no ray hits, off the mesh's edge)."""
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
+        top = float(np.max(z)) + 1e3
+        cast = self.bvh.ray_cast
+        down = (0.0, 0.0, -1.0)
+        for k, (a, b) in enumerate(zip(x.tolist(), y.tolist())):
+            hit = cast((a, b, top), down)[0]
+            if hit is not None:
+                z[k] = hit[2]
+        return z
+
+
 def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
+    """:func:`read_ground`'s height field."""
+    return read_ground(obj, depsgraph, cell).field
+
+
+def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     """Sample the mesh object ``obj`` (with its modifiers) into a height field over its
     horizontal bounding box.  ``cell`` (m) defaults to a quarter of the median of each triangle's
     shortest side seen from above: the spline through the samples then rounds the mesh's creases by about a
@@ -69,7 +96,7 @@ def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
     if np.isnan(h).all():
         raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
     _fill_nearest(h)
-    return HeightField(h, float(xs[0]), float(ys[0]), float(cell))
+    return MeshGround(obj.name, HeightField(h, float(xs[0]), float(ys[0]), float(cell)), bvh)
 
 
 def _fill_nearest(h):

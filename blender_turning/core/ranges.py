@@ -142,6 +142,14 @@ RANGES: dict[str, Range] = {
     "object_height": Range(0.01, 1000.0, "m", "an obstacle object's height"),
     "plan_curvature_rate": Range(0.0, 100.0, "1/(m s)", "the planner's dC_f/dt (0: the sport "
                                  "preset's); as dC_f_max"),
+    # -- terrain (docs/TERRAIN.md Section 3; as core.terrain_dynamics.Resistance checks them) ----
+    "mu": Range(0.0, 1.0, "", "snow or rolling friction coefficient: waxed ski 0.02-0.1, tyre "
+                "0.003-0.006; 1 is rubber on dry rock"),
+    "CdA": Range(0.0, 10.0, "m^2", "drag area: a tucked skier 0.15, an upright rider 0.6; 10 m^2 "
+                 "is a parachute"),
+    "rho": Range(0.0, 2.0, "kg/m^3", "air density: 1.225 at sea level, ~1.0 at 2000 m"),
+    "target_speed": Range(0.0, 100.0, "m/s", "the speed a figure brakes to by turning across "
+                          "the hill (0: none)"),
 }
 
 MAX_STEPS = 200_000
