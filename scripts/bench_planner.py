@@ -12,7 +12,11 @@ warm start, no lower bound, no fall table, one node at a time):
 - wall time per expansion: measured literally one child at a time over its first expansions;
   the baseline's wall time is count x that (a lower bound when the count is capped).
 
-Usage: python scripts/bench_planner.py [--quick] [--json out.json]
+Each run also counts the executed plans that end in a dead end (every one of the last node's q
+children collides or falls within one more stage) and those for which no other plan existed.
+
+Usage: python scripts/bench_planner.py [--quick] [--no-baseline] [--viable-stages M]
+[--json out.json]
 """
 from __future__ import annotations
 
@@ -58,8 +62,10 @@ def baseline(scene, problem, state, cf, t, ours_expanded, literal_cap, plain_cap
     return stats.expanded, not stats.proven, per, plan.f_opt
 
 
-def run_case(name, N, q, n_base, literal_cap, plain_cap):
+def run_case(name, N, q, n_base, literal_cap, plain_cap, viable_stages=None):
     scene = load_scene(ROOT / "scenes" / f"{name}.json").with_settings(n_stages=N, q=q)
+    if viable_stages is not None:
+        scene = scene.with_settings(viable_stages=viable_stages)
     clock = time.perf_counter()
     result = scene.run()
     wall = time.perf_counter() - clock
@@ -72,7 +78,13 @@ def run_case(name, N, q, n_base, literal_cap, plain_cap):
            "expanded_median": float(np.median(ex)), "expanded_max": int(ex.max()),
            "expanded_total": int(ex.sum()), "wall_median_s": float(np.median(wt)),
            "wall_max_s": float(wt.max()), "real_time_factor": wall / float(tr.duration),
-           "per_replan_wall_s": wt.tolist(), "per_replan_expanded": ex.tolist()}
+           "per_replan_wall_s": wt.tolist(), "per_replan_expanded": ex.tolist(),
+           "track_mean_d": float(np.mean(scene.problem().distance(
+               np.column_stack([tr.x, tr.y])))),
+           "dead_ends": sum(r.dead_end for r in reps),
+           "not_viable": sum(not r.viable for r in reps)}
+    if n_base < 0:                                        # --no-baseline
+        return out
     problem = scene.problem()
     steps = scene.settings.steps_per_stage
     picks = (np.arange(len(reps)) if n_base == 0 else     # 0: every replanning
@@ -148,6 +160,11 @@ def main(argv=None):
                     help="expansions timed for the one-child-at-a-time baseline")
     ap.add_argument("--plain-cap", type=int, default=50,
                     help="stop the plain search at this many times our node count (+1)")
+    ap.add_argument("--viable-stages", type=int,
+                    help="PlannerSettings.viable_stages (0: the paper's problem; default: as "
+                         "shipped)")
+    ap.add_argument("--no-baseline", action="store_true",
+                    help="only our planner's runs (time, nodes, dead ends)")
     ap.add_argument("--course", action="store_true",
                     help="only: the slalom (N = 12, q = 7) against plain best-first on every "
                          "replanning of the course (node counts; ~10 s per replanning)")
@@ -163,13 +180,17 @@ def main(argv=None):
     cases = [("slalom", 12, 7, 0)] if args.course else CASES
     results = []
     for name, N, q, nb in cases:
-        r = run_case(name, N, q, 1 if args.quick else nb, args.literal_cap, args.plain_cap)
+        nb = -1 if args.no_baseline else 1 if args.quick else nb
+        r = run_case(name, N, q, nb, args.literal_cap, args.plain_cap, args.viable_stages)
         results.append(r)
         print(f"{name} N={N} q={q}: course {r['course_s']:.1f} s, planning "
               f"{r['wall_total_s']:.1f} s"
               f" (x{r['real_time_factor']:.2f} real time); per replan median "
               f"{r['wall_median_s'] * 1e3:.0f} ms, worst {r['wall_max_s'] * 1e3:.0f} ms; nodes "
-              f"median {r['expanded_median']:.0f}, worst {r['expanded_max']}", flush=True)
+              f"median {r['expanded_median']:.0f}, worst {r['expanded_max']}; mean distance "
+              f"from the path {r['track_mean_d']:.3f} m; plans ending in a "
+              f"dead end {r['dead_ends']} of {r['replans']} ({r['not_viable']} with no other)",
+              flush=True)
     if args.json:
         Path(args.json).write_text(json.dumps({"info": info, "results": results}, indent=1))
     return 0

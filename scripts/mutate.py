@@ -150,8 +150,7 @@ MUTANTS = [
     M("edge_clearance_ignored", "core/obstacles.py",
       "hit[i[d <= cl]] = True", "hit[i[d <= 0.0]] = True", OBSTACLES),
     M("circle_clearance_ignored", "core/obstacles.py",
-      "hit |= np.any(d <= self.circles[None, :, 2] + cl, axis=1)",
-      "hit |= np.any(d <= self.circles[None, :, 2], axis=1)", OBSTACLES),
+      "r = c[:, 2] + cl", "r = c[:, 2]", OBSTACLES),
     M("polygon_inside_skipped", "core/obstacles.py",
       "hit |= _inside(a, p)", "pass", OBSTACLES),
     M("near_drops_clearance", "core/obstacles.py",
@@ -195,6 +194,21 @@ MUTANTS = [
       "self.a = st.sample_dt * v_min", "self.a = 2.0 * st.sample_dt * v_min", PLANNER),
     M("queue_clip_too_early", "core/planner/search.py",
       "if prio > ub + tol():", "if prio > 0.8 * ub + tol():", PLANNER),
+    # -- path following (issue 7, item 5) ------------------------------------------------------
+    M("body_not_checked", "core/planner/problem.py",
+      "pts = np.concatenate([P[:2], self.body_point(P)], axis=1)",
+      "pts = np.concatenate([P[:2], P[:2]], axis=1)", [T + "test_planner_body.py"]),
+    M("body_on_the_wrong_side", "core/planner/problem.py",
+      "state[Y] + off * np.cos(th)", "state[Y] - off * np.cos(th)", [T + "test_planner_body.py"]),
+    M("end_by_half_plane", "core/path.py",
+      "return bool(p >= self.length and crossed)", "return bool(crossed)",
+      [T + "test_path.py", T + "test_cli_follow.py"]),
+    M("progress_jumps_ahead", "core/path.py",
+      "p + 2.0 * travel + self.spacing", "p + self.near", [T + "test_path.py"]),
+    M("dead_ends_not_avoided", "core/planner/viable.py",
+      "    if not problem.settings.viable_stages:\n        return np.zeros(len(C_f), bool)\n"
+      "    return no_way_on(", "    if True:\n        return np.zeros(len(C_f), bool)\n"
+      "    return no_way_on(", [T + "test_planner_search.py"]),
     # -- mapping (Section 7) -------------------------------------------------------------------
     M("leg_twist_reversed", "mapping/skier.py",
       "twist = {s: np.clip(-o.leg_twist_gain * (tilts[s] - th)",

@@ -9,6 +9,19 @@ objects, a camera that follows the figures and a sun.  Frames go to ``<output>/f
 ``<output>/<name>.mp4`` (``format = "VIDEO"``); the scene to ``<output>/<name>.blend``.  A bad
 config exits with status 2 and one line naming the problem; a failed bake with status 1.
 See ``scripts/configs/*.toml`` for the format.
+
+On a render farm: bake once, then render chunks with plain ``blender -b job.blend -s A -e B -a``
+on any farm::
+
+    blender -b --python scripts/render_job.py -- --config job.toml --no-render --output shared/job
+    blender -b shared/job/job.blend -s 1 -e 24 -a          # one farm task per chunk of frames
+
+The saved .blend holds its output path relative to itself (``//frames/frame_``), so it can move
+to the farm's storage and its frames land next to it.  ``--frames A-B`` renders one chunk of the
+job's frames (after saving the whole range in the .blend); ``--device GPU`` renders Cycles on the
+GPU and fails with one line (exit 2) where Cycles finds none -- no silent CPU fallback, which
+would make a farm task tens of times slower unnoticed.  ``scripts/flamenco/
+turning_bake_render.js`` is a Flamenco job type doing the bake once and then the chunks.
 """
 from __future__ import annotations
 
@@ -28,13 +41,15 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 
 from blender_turning.core.files import temp_beside  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
-from blender_turning.core.ranges import RANGES  # noqa: E402
+from blender_turning.core.ranges import RANGES, Range  # noqa: E402
 from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "scripts"))
 import render_terrain  # noqa: E402
 
 ENGINES = ("WORKBENCH", "EEVEE", "CYCLES")
+DEVICES = ("CPU", "GPU")
+GPU_BACKENDS = ("OPTIX", "CUDA", "HIP", "ONEAPI", "METAL")     # Cycles' compute_device_type
 SPORTS = ("skier", "snowboarder", "telemark", "cyclist")
 
 
@@ -129,6 +144,29 @@ def check_output(out: Path, flag: str) -> None:
     tmp.unlink()
 
 
+def _frames(given: str, last: int):
+    """``(first, last)`` of ``--frames A-B`` (or ``A``): whole frames inside the job's
+    ``1..last``, ``A <= B``."""
+    parts = given.strip().split("-")
+    try:
+        pair = [int(v) for v in parts]
+    except ValueError:
+        pair = []
+    if len(pair) not in (1, 2):
+        raise ConfigError(f"--frames = {given!r} should be A-B (first and last frame) or A")
+    job = Range(1, last, "", "the job's frames", integer=True)
+    a = check("--frames first", pair[0], job)
+    b = check("--frames last", pair[-1], Range(a, last, "", "the job's frames", integer=True))
+    return a, b
+
+
+def _cli_choice(given, flag, choices):
+    value = given.upper()
+    if value not in choices:
+        raise ConfigError(f"{flag} = {given!r} is not one of {', '.join(choices)}")
+    return value
+
+
 def load_config(path: Path, overrides) -> dict:
     src = str(path)
     try:
@@ -139,7 +177,10 @@ def load_config(path: Path, overrides) -> dict:
         raise ConfigError(f"config {src!r} is nested too deeply") from None
     top = Fields(doc, src).only(_KNOWN[""])
     job = top.table("job", _KNOWN["job"])
-    cfg = {"name": _file_name(job, "name", path.stem),
+    name = _file_name(job, "name", path.stem)
+    if getattr(overrides, "name", None) is not None:
+        name = _file_name(Fields({"--name": overrides.name}, ""), "--name", None)
+    cfg = {"name": name,
            "seconds": job.number("seconds", "job_seconds", 5.0),
            "fps": job.number("fps", "job_fps", 24),
            "frame_step": job.number("frame_step", "frame_step", 1)}
@@ -172,7 +213,18 @@ def load_config(path: Path, overrides) -> dict:
     if fmt not in ("PNG", "VIDEO"):
         r.fail("format", f"= {fmt!r} is not PNG or VIDEO")
     cfg["render"] = {"engine": engine, "resolution": res, "format": fmt,
-                     "samples": r.number("samples", "render_samples", 16)}
+                     "samples": r.number("samples", "render_samples", 16), "device": "CPU"}
+    if getattr(overrides, "device", None) is not None:
+        cfg["render"]["device"] = _cli_choice(overrides.device, "--device", DEVICES)
+        if cfg["render"]["device"] == "GPU" and engine != "CYCLES":
+            raise ConfigError(f"--device = {overrides.device!r} is for Cycles; the engine is "
+                              f"{engine} (give --engine CYCLES)")
+    cfg["frames"] = None
+    if getattr(overrides, "frames", None) is not None:
+        if getattr(overrides, "no_render", False):
+            raise ConfigError(f"--frames = {overrides.frames!r} picks frames to render; "
+                              "--no-render renders none")
+        cfg["frames"] = _frames(overrides.frames, 1 + int(round(cfg["seconds"] * cfg["fps"])))
     cam = top.table("camera", _KNOWN["camera"])
     cfg["camera"] = {"follow": cam.string("follow", "all"),
                      "distance": cam.number("distance", "camera_distance", 16.0),
@@ -434,18 +486,40 @@ def setup_render(bpy, cfg):
         shading.show_shadows = True
     elif rc["engine"] == "CYCLES":
         scene.cycles.samples = rc["samples"]
-        scene.cycles.device = "CPU"
+        scene.cycles.device = rc["device"]
     else:
         eevee = scene.eevee
         if hasattr(eevee, "taa_render_samples"):
             eevee.taa_render_samples = rc["samples"]
-    out = cfg["output"]
+    # Relative to the saved .blend ("//"), which is saved in the output folder: the .blend can
+    # move to a farm's storage and its frames land next to it.
     if rc["format"] == "VIDEO":
         compat.set_output_format(scene, "VIDEO")
-        r.filepath = str(out / f"{cfg['name']}.mp4")
+        r.filepath = f"//{cfg['name']}.mp4"
     else:
         compat.set_output_format(scene, "PNG")
-        r.filepath = str(out / "frames" / "frame_")
+        r.filepath = "//frames/frame_"
+
+
+def use_gpu(bpy) -> str:
+    """Point Cycles at the first GPU backend with a device (in this session's preferences: a
+    farm worker opening the .blend uses its own, see the README's "Render farms"); the backend's
+    name, or :class:`ConfigError` naming ``--device`` where there is none."""
+    prefs = bpy.context.preferences.addons["cycles"].preferences
+    for backend in GPU_BACKENDS:
+        try:
+            prefs.compute_device_type = backend
+        except TypeError:                         # not built into this Blender
+            continue
+        prefs.refresh_devices()
+        gpus = [d for d in prefs.devices if d.type == backend]
+        if gpus:
+            for d in prefs.devices:
+                d.use = d.type == backend
+            return backend
+    prefs.compute_device_type = "NONE"
+    raise ConfigError("--device = 'GPU': Cycles finds no GPU on this machine (tried "
+                      f"{', '.join(GPU_BACKENDS)}); render with --device CPU")
 
 
 def run(cfg, render: bool = True) -> dict:
@@ -464,6 +538,8 @@ def run(cfg, render: bool = True) -> dict:
 
 def _run(bpy, cfg, render):
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    if cfg["render"]["device"] == "GPU":        # before the bake: fail fast, nothing written
+        log(f"Cycles renders on the GPU ({use_gpu(bpy)})")
     scene = bpy.context.scene
     scene.render.fps, scene.render.fps_base = cfg["fps"], 1.0
     scene.frame_start = 1
@@ -503,6 +579,8 @@ def _run(bpy, cfg, render):
     result = {"blend": blend, "frames": None}
     if not render:
         return result
+    if cfg["frames"] is not None:               # one chunk; the .blend keeps the whole range
+        scene.frame_start, scene.frame_end = cfg["frames"]
     n = len(range(scene.frame_start, scene.frame_end + 1, scene.frame_step)) * max(1, len(cameras))
     done = []
 
@@ -516,11 +594,11 @@ def _run(bpy, cfg, render):
         if not cameras:
             bpy.ops.render.render(animation=True)
         for name, cam in cameras:               # one shot per figure, each in its own folder
-            scene.camera = cam
+            scene.camera = cam                  # (relative to the .blend, as setup_render's)
             if cfg["render"]["format"] == "VIDEO":
-                scene.render.filepath = str(out / f"{cfg['name']}_{name}.mp4")
+                scene.render.filepath = f"//{cfg['name']}_{name}.mp4"
             else:
-                scene.render.filepath = str(out / "frames" / name / "frame_")
+                scene.render.filepath = f"//frames/{name}/frame_"
             bpy.ops.render.render(animation=True)
     finally:
         bpy.app.handlers.render_post.remove(progress)
@@ -552,7 +630,13 @@ def parse_args(argv):
     p.add_argument("--seconds", type=float, help="length of the animation (overrides job.seconds)")
     p.add_argument("--frame-step", type=int, help="render every n-th frame (overrides "
                    "job.frame_step)")
-    p.add_argument("--no-render", action="store_true", help="build, bake and save only")
+    p.add_argument("--no-render", action="store_true", help="build, bake and save only: "
+                   "bake once, then render chunks with plain `blender -b job.blend -s A -e B -a` "
+                   "on any farm")
+    p.add_argument("--frames", help="render only frames A-B of the job (a farm task's chunk)")
+    p.add_argument("--device", help="CPU or GPU: Cycles' render device (default CPU); GPU fails "
+                   "where Cycles finds none")
+    p.add_argument("--name", help="the job's name: <output>/<name>.blend (overrides job.name)")
     return p.parse_args(argv)
 
 

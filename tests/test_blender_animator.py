@@ -12,21 +12,13 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat, ops_figure, panel  # noqa: E402
 from blender_turning.blender.props import TurningFigureSettings  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
+from modal_stand_ins import Context, WindowManager  # noqa: E402
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 DATA = Path(__file__).parent / "data"
-
-
-@pytest.fixture(scope="module", autouse=True)
-def registered():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    addon.register()
-    yield
-    addon.unregister()
 
 
 @pytest.fixture
@@ -107,32 +99,6 @@ def test_one_bad_figure_bakes_nothing(scene):
     assert snapshot() == before
 
 
-class _WM:
-    def __init__(self):
-        self.progress = []
-
-    def progress_begin(self, lo, hi):
-        self.progress.append(("begin", lo, hi))
-
-    def progress_update(self, value):
-        self.progress.append(value)
-
-    def progress_end(self):
-        self.progress.append("end")
-
-    def event_timer_remove(self, timer):
-        pass
-
-
-class _Ctx:
-    def __init__(self, wm):
-        self.window_manager = wm
-        self.workspace = type("W", (), {"status_text_set": lambda self, text: None})()
-
-    def __getattr__(self, name):
-        return getattr(bpy.context, name)
-
-
 def modal_bake(figs):
     """A stand-in ``self`` for the modal Bake Turns over ``figs`` (no window in the wheel)."""
     from blender_turning.blender.ops_bake import BakeJob, FrameRange
@@ -150,14 +116,14 @@ def test_modal_bake_reports_progress_and_esc_writes_nothing(scene):
     figs = [add("SKIER"), add("SNOWBOARDER", (5, 0, 0)), add("TELEMARK", (10, 0, 0))]
     before = snapshot()
     op_cls, fake, reports = modal_bake(figs)
-    wm, timer = _WM(), type("E", (), {"type": "TIMER"})()
-    assert op_cls.modal(fake, _Ctx(wm), timer) == {"RUNNING_MODAL"}
-    assert op_cls.modal(fake, _Ctx(wm), type("E", (), {"type": "ESC"})()) == {"CANCELLED"}
+    wm, timer = WindowManager(), type("E", (), {"type": "TIMER"})()
+    assert op_cls.modal(fake, Context(wm), timer) == {"RUNNING_MODAL"}
+    assert op_cls.modal(fake, Context(wm), type("E", (), {"type": "ESC"})()) == {"CANCELLED"}
     assert wm.progress == [1, "end"] and "cancelled" in reports[0][1]
     assert snapshot() == before
     op_cls, fake, reports = modal_bake(figs)
-    wm = _WM()
-    while (ret := op_cls.modal(fake, _Ctx(wm), timer)) == {"RUNNING_MODAL"}:
+    wm = WindowManager()
+    while (ret := op_cls.modal(fake, Context(wm), timer)) == {"RUNNING_MODAL"}:
         pass
     assert ret == {"FINISHED"} and wm.progress == [1, 2, 3, "end"]
     assert all(f.animation_data.action.name == f.name for f in figs)
@@ -320,6 +286,19 @@ def test_tooltips_units_and_soft_limits():
                             ("curvature_rate_max", fig.limits.dC_f_max),
                             ("fall_angle", fig.limits.theta_fall)):
             assert props[name].soft_min <= value <= props[name].soft_max, (fig.name, name)
+
+
+def test_settings_take_their_ranges_from_the_core_table():
+    """Issue 9: one table of ranges (core/ranges.py) for flags, files, job keys and these
+    settings; Blender holds its floats in single precision."""
+    from blender_turning.core.ranges import RANGES
+    props = TurningFigureSettings.bl_rna.properties
+    for name, key in (("mass", "m"), ("com_height", "l"), ("inertia", "I_v"), ("speed", "V_cm"),
+                      ("curvature_max", "C_f_max"), ("curvature_rate_max", "dC_f_max"),
+                      ("fall_angle", "theta_fall"), ("period", "period"), ("lean", "theta_max"),
+                      ("heading", "heading"), ("plan_curvature_rate", "plan_curvature_rate")):
+        assert props[name].hard_min == pytest.approx(RANGES[key].lo, rel=1e-6), name
+        assert props[name].hard_max == pytest.approx(RANGES[key].hi, rel=1e-6), name
 
 
 def test_sub_panels(scene):

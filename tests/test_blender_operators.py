@@ -13,14 +13,14 @@ bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import snapshot  # noqa: E402
 
-from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat, ops_path, presets  # noqa: E402
 from blender_turning.blender.follow_job import Cancelled  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import PLAN_CURVATURE_RATE, FrameRange  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
+from modal_stand_ins import Context, WindowManager  # noqa: E402
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 OPERATORS = ("add_figure", "bake_turns", "follow_path", "clear_bake")
 
 
@@ -33,14 +33,6 @@ def have_mapping():
 
 
 needs_mapping = pytest.mark.skipif(not have_mapping(), reason="the mapping layer is not there")
-
-
-@pytest.fixture(scope="module", autouse=True)
-def registered():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    addon.register()
-    yield
-    addon.unregister()
 
 
 @pytest.fixture
@@ -287,34 +279,6 @@ def test_panels_draw_every_setting(scene):
     assert obj.turning.is_figure
 
 
-class _WM:
-    """The window manager calls the modal operator makes (no windows in background mode)."""
-
-    def __init__(self):
-        self.progress = []
-
-    def progress_begin(self, lo, hi):
-        self.progress.append(("begin", lo, hi))
-
-    def progress_update(self, value):
-        self.progress.append(value)
-
-    def progress_end(self):
-        self.progress.append("end")
-
-    def event_timer_remove(self, timer):
-        pass
-
-
-class _Ctx:
-    def __init__(self, wm):
-        self.window_manager = wm
-        self.workspace = type("W", (), {"status_text_set": lambda self, text: None})()
-
-    def __getattr__(self, name):
-        return getattr(bpy.context, name)
-
-
 def modal_operator(obj):
     """A stand-in ``self`` for ``TURNING_OT_follow_path.modal`` with the job running."""
     op_cls = bpy.types.TURNING_OT_follow_path
@@ -333,9 +297,9 @@ def test_esc_in_the_modal_follow_path_leaves_the_scene_unchanged(scene):
     obj.turning.plan_curvature_rate = 0.3
     before = snapshot()
     op_cls, fake, reports = modal_operator(obj)
-    wm = _WM()
+    wm = WindowManager()
     esc = type("E", (), {"type": "ESC"})()
-    assert op_cls.modal(fake, _Ctx(wm), esc) == {"CANCELLED"}
+    assert op_cls.modal(fake, Context(wm), esc) == {"CANCELLED"}
     assert fake._job.done() and "end" in wm.progress
     assert reports and "cancelled" in reports[0][1]
     assert snapshot() == before
@@ -347,10 +311,10 @@ def test_modal_follow_path_reports_progress_then_bakes(scene):
     obj.turning.path = make_path([(0, 0), (3, -12), (-3, -24), (0, -36)])
     obj.turning.plan_curvature_rate = 0.3
     op_cls, fake, reports = modal_operator(obj)
-    wm = _WM()
+    wm = WindowManager()
     timer = type("E", (), {"type": "TIMER"})()
     while True:
-        ret = op_cls.modal(fake, _Ctx(wm), timer)
+        ret = op_cls.modal(fake, Context(wm), timer)
         if ret != {"RUNNING_MODAL"}:
             break
         time.sleep(0.02)                   # Blender's timer ticks; leave the planner the GIL

@@ -11,19 +11,10 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat  # noqa: E402
 from rig_fixtures import activate, mixamo_skeleton, state  # noqa: E402
 
-pytestmark = pytest.mark.blender
-
-
-@pytest.fixture(scope="module", autouse=True)
-def registered():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    addon.register()
-    yield
-    addon.unregister()
+pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 
 
 def test_undo_make_figure_and_remove_figure():

@@ -15,14 +15,15 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import diff, snapshot  # noqa: E402
-from test_blender_operators import (_WM, _Ctx, add, make_path, make_wall,  # noqa: E402,F401
-                                    modal_operator, registered, scene)
+from modal_stand_ins import Context, WindowManager  # noqa: E402
+from test_blender_operators import (add, make_path, make_wall, modal_operator,  # noqa: E402,F401
+                                    scene)
 
 from blender_turning.blender import bake, compat, follow_job, ops_path, pipeline  # noqa: E402
 from blender_turning.blender import presets  # noqa: E402
 from blender_turning.blender.scene_adapters import obstacle_footprints  # noqa: E402
 
-pytestmark = pytest.mark.blender
+pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 TIMER = type("E", (), {"type": "TIMER"})()
 
 
@@ -364,7 +365,7 @@ def test_renaming_the_figure_while_it_plans_keeps_the_plan(scene):
     obj = planning_figure()
     op_cls, fake, reports = modal_operator(obj)
     obj.name = "Renamed"
-    assert run_modal(op_cls, fake, _Ctx(_WM())) == {"FINISHED"}, reports
+    assert run_modal(op_cls, fake, Context(WindowManager())) == {"FINISHED"}, reports
     assert obj.animation_data.action.name == "Renamed"
 
 
@@ -375,7 +376,7 @@ def test_deleting_the_figure_while_it_plans_writes_nothing(scene):
     bpy.data.objects.remove(body)
     bpy.data.objects.remove(obj)
     before = snapshot()
-    assert run_modal(op_cls, fake, _Ctx(_WM())) == {"CANCELLED"}
+    assert run_modal(op_cls, fake, Context(WindowManager())) == {"CANCELLED"}
     assert "deleted while planning" in reports[-1][1]
     assert_unchanged(before)
 
@@ -387,8 +388,8 @@ def test_cancel_without_event_stops_the_planner(scene):
     obj = planning_figure()
     before = snapshot()
     op_cls, fake, _ = modal_operator(obj)
-    wm = _WM()
-    op_cls.cancel(fake, _Ctx(wm))
+    wm = WindowManager()
+    op_cls.cancel(fake, Context(wm))
     assert fake._job.done() and "end" in wm.progress
     assert_unchanged(before)
 
@@ -419,7 +420,7 @@ def test_planner_thread_raising_is_reported_and_writes_nothing(scene, monkeypatc
     before = snapshot()
     monkeypatch.setattr(follow_job.FollowJob, "run", boom)
     op_cls, fake, reports = modal_operator(obj)
-    assert run_modal(op_cls, fake, _Ctx(_WM())) == {"CANCELLED"}
+    assert run_modal(op_cls, fake, Context(WindowManager())) == {"CANCELLED"}
     assert "internal error (RuntimeError: injected)" in reports[-1][1]
     assert_unchanged(before)
 
@@ -588,8 +589,10 @@ def test_a_bake_cut_short_is_cleaned_up_by_the_next(scene, monkeypatch):
             raise RuntimeError("injected")
         return real(*args)
     monkeypatch.setattr(compat, "new_fcurve", failing)
-    with pytest.raises(RuntimeError, match="injected"):
-        bpy.ops.turning.bake_turns()                     # ten curves written, then the failure
+    # Ten curves written, then the failure: one line (bpy.ops raises the ERROR report here),
+    # saying Undo puts the scene back.
+    with pytest.raises(RuntimeError, match=r"internal error \(RuntimeError: injected\).*Undo"):
+        bpy.ops.turning.bake_turns()
     monkeypatch.setattr(compat, "new_fcurve", real)
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     assert snapshot()[("action", "Skier")]["fcurves"] == clean

@@ -88,3 +88,42 @@ def test_bad_flags(tmp_path, capsys):
     assert main(["follow", str(scene), "--stage-time", "0.33"]) == 2
     err = capsys.readouterr().err
     assert "--stages = 0" in err and "t_stage = 0.33" in err
+
+
+def run_cli(tmp_path, doc):
+    p = tmp_path / "scene.json"
+    p.write_text(json.dumps(doc))
+    out = tmp_path / "t.csv"
+    r = subprocess.run([sys.executable, "-m", "blender_turning", "follow", str(p), "--out",
+                        str(out)], capture_output=True, text=True)
+    return r, out
+
+
+def test_switchback_is_not_reached_after_one_stage(tmp_path):
+    """Out 12 m and back 3 m to the side: the end lies behind the start.  The end test is the
+    progress along the path, so the run does not stop after a stage; at the time limit it has
+    not come back (the skier cannot turn that tightly), which is a failure, exit 2, one line
+    saying how far along it got, nothing written."""
+    doc = {"name": "switchback", "figure": {"preset": "skier", "body": {"V_cm": 6.0},
+                                            "limits": {"dC_f_max": 0.3}},
+           "path": {"polyline": [[0, 0], [12, 0], [12, 3], [0, 3]]},
+           "planner": {"stages": 4, "choices": 3}}
+    r, out = run_cli(tmp_path, doc)
+    assert r.returncode == 2, r.stdout
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1
+    assert "the end of the path was not reached within the time limit" in lines[0]
+    assert "m of 27.0 m along the path" in lines[0]
+    assert not out.exists()
+
+
+def test_start_far_from_the_path_is_not_at_its_end(tmp_path):
+    """A start 500 m beside the path, beyond its end: not done after one stage."""
+    doc = {"name": "far", "figure": {"preset": "cyclist", "limits": {"dC_f_max": 0.4}},
+           "path": {"polyline": [[0, 0], [20, 0]]},
+           "start": {"position": [40, 500], "heading_deg": 0},
+           "planner": {"stages": 3, "choices": 3}}
+    r, out = run_cli(tmp_path, doc)
+    assert r.returncode == 2
+    assert "got 0.0 m of 20.0 m along the path (0%)" in r.stderr.strip().splitlines()[0]
+    assert not out.exists()

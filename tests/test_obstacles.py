@@ -78,3 +78,24 @@ def test_validation():
         Obstacles(circles=[[0, 0, 0]])
     with pytest.raises(ValueError, match="3 vertices"):
         Obstacles(polygons=[[[0, 0], [1, 1]]])
+
+
+def test_circle_box_prefilter_is_exact():
+    """Segments against many circles: the same as every segment's distance to every centre,
+    touching included (rims at exactly representable distances, reached from either side)."""
+    from blender_turning.core.obstacles import point_segment_distance
+    rng = np.random.default_rng(3)
+    circles = np.column_stack([rng.integers(-20, 20, (40, 2)), 0.25 * rng.integers(1, 8, 40)])
+    obs = Obstacles(circles=circles, clearance=0.25)
+    a = rng.uniform(-22, 22, (5000, 2))
+    b = a + rng.normal(0, 1.5, (5000, 2))
+    rim = np.column_stack([circles[:, 2] + 0.25, np.zeros(40)])
+    a[:20] = circles[:20, :2] + rim[:20]                 # leaving the grown rim to the right
+    b[:20] = a[:20] + [1.0, 0.0]
+    b[20:40] = circles[20:, :2] - rim[20:]               # arriving at it from the left
+    a[20:40] = b[20:40] - [1.0, 0.0]
+    direct = (point_segment_distance(circles[None, :, :2], a[:, None], b[:, None])
+              <= circles[None, :, 2] + 0.25).any(axis=1)
+    got = obs.collides(a, b)
+    np.testing.assert_array_equal(got, direct)
+    assert got[:40].all() and 100 < got.sum() < 4900

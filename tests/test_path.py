@@ -113,3 +113,72 @@ def test_bad_inputs_name_the_problem():
         HermitePath.from_points([[0, 0], [1, 0]], [[1, 0]])
     with pytest.raises(ValueError, match="finite"):
         HermitePath.from_polyline([[0, 0], [np.nan, 1]])
+
+
+def test_start_direction_skips_coincident_first_points():
+    """A repeated first point (zero first segment) or a zero first handle: the heading comes
+    from the first non-degenerate tangent, not +x."""
+    down = HermitePath.from_polyline([[0, 0], [0, 0], [0, -10], [5, -20]])
+    np.testing.assert_allclose(down.start_direction(), [0.0, -1.0], atol=1e-12)
+    back = HermitePath.from_polyline([[0, 0], [-3, -4], [-3, -4]])
+    np.testing.assert_allclose(back.end_direction(), [-0.6, -0.8], atol=1e-12)
+    # A Bezier whose first handle sits on its knot leaves toward the second handle.
+    bez = HermitePath.from_bezier([[0, 0], [0, 0], [-5, 5], [-10, 5]])
+    np.testing.assert_allclose(bez.start_direction(), np.array([-1.0, 1.0]) / np.sqrt(2),
+                               atol=1e-12)
+    with pytest.raises(ValueError, match="no length"):
+        HermitePath.from_polyline([[1, 1], [1, 1]]).start_direction()
+
+
+def test_scene_start_heading_follows_the_path_not_plus_x():
+    """A scene path (Bezier) whose first handle sits on its first point starts along the path,
+    not along +x.  (Scene files refuse repeated consecutive points; the core handles them.)"""
+    from blender_turning.core.scene import scene_from_dict
+    sc = scene_from_dict({"figure": {"preset": "skier"},
+                          "path": {"bezier": [[0, 0], [0, 0], [0, 20], [0, 30]]}})
+    assert sc.state0[2] == pytest.approx(np.pi / 2, abs=1e-12)
+
+
+def progress_along(path, track, window):
+    from blender_turning.core.path import PathProgress
+    pr = PathProgress(path, window)
+    p, out, prev = 0.0, [], None
+    for xy in np.asarray(track, float):
+        p = pr.advance(p, xy, 0.0 if prev is None else float(np.hypot(*(xy - prev))))
+        out.append((p, pr.at_end(p, xy)))
+        prev = xy
+    return pr, out
+
+
+def test_progress_on_a_switchback_does_not_jump_to_the_end():
+    """Out 40 m, back 40 m, 4 m to the side: the end is level with the start and behind it.
+    Standing near the start (or past it) is no progress, and walking out is half the path."""
+    path = HermitePath.from_polyline([[0, 0], [40, 0], [40, 4], [0, 4]])
+    pr, out = progress_along(path, [[0.5, 0.3], [-2.0, 2.0], [-5.0, 4.0]], window=10.0)
+    assert all(p < 1.0 and not end for p, end in out)
+    walk = [[x, 0.2] for x in np.arange(0.0, 40.0, 1.0)] + [[40.5, 2.0]] + \
+        [[x, 3.8] for x in np.arange(39.0, -1.5, -1.0)]
+    pr, out = progress_along(path, walk, window=10.0)
+    assert out[39][0] == pytest.approx(39.0, abs=0.8) and not out[39][1]
+    assert out[-1][1] and out[-1][0] == pytest.approx(pr.length)
+    assert [end for _, end in out].index(True) == len(walk) - 2      # at x = 0, on the end line
+
+    # A loop (shorter than the distance counted as near) whose end is its start: not at the end
+    # from the start nor from just behind it; at the end once round.
+    ang = np.linspace(0, 2 * np.pi, 25)
+    ring = np.column_stack([5 * np.sin(ang), 5 - 5 * np.cos(ang)])
+    loop = HermitePath.from_polyline(ring)
+    pr, out = progress_along(loop, [[-0.05, 0.0], [0.0, 0.02], [0.3, 0.0]], window=50.0)
+    assert all(p < 1.0 and not end for p, end in out)
+    a = np.linspace(0.0, 2 * np.pi + 0.3, 200)
+    pr, out = progress_along(loop, np.column_stack([5.2 * np.sin(a), 5 - 5.2 * np.cos(a)]),
+                             window=50.0)
+    first = [end for _, end in out].index(True)
+    assert a[first] == pytest.approx(2 * np.pi, abs=0.04) and out[first][0] == pr.length
+
+
+def test_progress_needs_the_foot_near_the_path():
+    """500 m beside the path, beyond its end: no progress at all."""
+    path = HermitePath.from_polyline([[0, 0], [50, 0]])
+    _, out = progress_along(path, [[60.0, 500.0], [80.0, 500.0]], window=20.0)
+    assert out[-1] == (0.0, False)

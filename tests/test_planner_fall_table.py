@@ -70,5 +70,9 @@ def test_not_used_where_the_lean_is_not_monotone():
     # A fast cyclist with a sharp steering lock: alpha_v does not grow with theta_v everywhere.
     assert lean_problem("cyclist", V=7.0, dcf=0.4).fall_table() is None
     p = lean_problem()
-    p2 = Problem(p.figure, p.distance, p.obstacles, replace(p.settings, fall_table=False))
+    p2 = Problem(p.figure, p.distance, p.obstacles, replace(p.settings, fall_table=False,
+                                                            viable_stages=0))
     assert p2.fall_table() is None
+    # The dead-end test at the horizon (search.py) still asks the table for it.
+    p3 = Problem(p.figure, p.distance, p.obstacles, replace(p.settings, fall_table=False))
+    assert p3.fall_table() is not None

@@ -34,6 +34,14 @@ def test_shipped_scene_is_feasible_and_within_bounds(name):
     assert result.reached_end
     xy = np.column_stack([tr.x, tr.y])
     assert not scene.obstacles.collides(xy[:-1], xy[1:]).any()
+    # The body's ground point too (l sin(theta_v) to the side of the lean).
+    off = scene.figure.body.l * np.sin(tr.theta_v)
+    cm = np.column_stack([tr.x - off * np.sin(tr.theta_dir), tr.y + off * np.cos(tr.theta_dir)])
+    assert not scene.obstacles.collides(cm[:-1], cm[1:]).any()
+    # Progress along the path by arc length: the whole path.
+    assert result.progress == pytest.approx(scene.path.length(64), rel=1e-9)
+    # No executed plan ended in a dead end where one that does not existed.
+    assert not any(r.dead_end and r.viable for r in result.replans)
     assert np.all(np.abs(tr.theta_v) <= st.theta_bound)
     assert np.all(np.abs(tr.C_f) <= lim.C_f_max + 1e-12)
     rate = np.abs(np.diff(tr.C_f)) / np.diff(tr.t)

@@ -9,6 +9,7 @@ from blender_turning.core import preset
 from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
+from blender_turning.core.planner.viable import dead_end, doomed_nodes
 from blender_turning.core.planner.spacing import PairFloor
 
 
@@ -133,7 +134,11 @@ def test_proven_bounds_are_admissible(seed):
         togo = proof.togo[proof.root, c]
         if kids.collided[c] or kids.fell[c]:
             continue
-        f_ref, _ = exhaustive(rest, kids.state[:, c], float(kids.C_f[c]), 0.6, float(kids.s[c]))
+        if doomed_nodes(problem, kids.state[:, [c]], kids.C_f[[c]], 2)[0]:
+            assert togo == math.inf     # not a node of any allowed plan (module docstring)
+            continue
+        f_ref, _ = exhaustive(rest, kids.state[:, c], float(kids.C_f[c]), 0.6, float(kids.s[c]),
+                              fallback=False)         # the problem the search proved it for
         assert togo <= f_ref * (1 + 1e-9) + 1e-9
         checked += np.isfinite(togo) and togo > 0
     assert checked
@@ -237,3 +242,80 @@ def test_pair_floor_holds_on_every_branch(seed, spacing):
     floor = pf.floor(state[:, None], track.shape[1])[0]
     assert np.all(d[:, :-1] + d[:, 1:] >= floor[None, :] - 1e-9)
     assert floor.max() > 0
+
+
+def paper_problem(problem):
+    """The same problem with ``viable_stages = 0``: the paper's (no dead-end test)."""
+    return Problem(problem.figure, problem.distance, problem.obstacles,
+                   replace(problem.settings, viable_stages=0), problem.speed)
+
+
+def simulate_plan(problem, state, cf, choices):
+    x, c, s = np.asarray(state, float).reshape(5, 1), np.array([cf]), np.zeros(1)
+    for k, ch in enumerate(choices):
+        r = problem.simulate_stage(x, c, problem.u_values[[ch]], np.array([0.3 * k]), s)
+        x, c, s = r.state, r.C_f, r.s
+    return x[:, 0], float(c[0])
+
+
+def test_dead_end_preference_changes_the_optimum_on_many_random_problems():
+    """The equivalence test above covers the restricted problem, not only the paper's: on these
+    random problems the least-cost plan of the paper's problem often ends in a dead end."""
+    differ = 0
+    for seed in range(48):
+        rng = np.random.default_rng(seed)
+        N = int(rng.integers(1, 6))
+        q = int(rng.integers(2, 6)) if seed % 8 == 0 else int(rng.integers(3, 6))
+        problem, state, cf = random_problem(rng, N, q)
+        differ += exhaustive(problem, state, cf) != exhaustive(paper_problem(problem), state, cf)
+    assert differ >= 10
+
+
+@pytest.mark.parametrize("seed", range(0, 48, 3))
+def test_the_plan_does_not_end_in_a_dead_end(seed):
+    """The returned plan's last node is where its choices lead, and unless no plan ends alive,
+    one of its q children neither collides nor falls over the next stage."""
+    rng = np.random.default_rng(seed)
+    N = int(rng.integers(1, 6))
+    q = int(rng.integers(3, 6))
+    problem, state, cf = random_problem(rng, N, q)
+    plan = branch_and_bound(problem, state, cf)
+    if not plan.feasible:
+        return
+    x, c = simulate_plan(problem, state, cf, plan.choices)
+    np.testing.assert_allclose(plan.leaf[0], x, rtol=1e-12, atol=1e-12)
+    assert plan.leaf[1] == pytest.approx(c, abs=1e-15) and plan.leaf[2] == pytest.approx(0.3 * N)
+    paper = branch_and_bound(paper_problem(problem), state, cf)
+    if plan.viable:
+        assert not dead_end(problem, plan.leaf)
+        assert paper.f_opt <= plan.f_opt * (1 + 1e-9)
+    else:                     # no plan ends alive (the fall table may say so): the paper's plan
+        assert (plan.f_opt, plan.choices) == (paper.f_opt, paper.choices)
+
+
+def walled_problem(viable_stages=3):
+    """A wall across the path one stage beyond what the horizon can reach: every plan is
+    feasible up to its last node, and every last node is a dead end."""
+    fig = preset("skier")
+    st = PlannerSettings(n_stages=3, q=3, viable_stages=viable_stages)
+    wall_x = fig.body.V_cm * (st.horizon + 0.5 * st.t_stage)
+    obs = Obstacles(segments=[[[wall_x, -40.0], [wall_x, 40.0]]])
+    path = HermitePath.from_polyline([[0, 0], [60, 0]])
+    return Problem(fig, PathDistance(path), obs, st)
+
+
+def test_when_every_plan_ends_in_a_dead_end_the_papers_optimum_is_returned():
+    problem = walled_problem()
+    state = np.zeros(5)
+    plan = branch_and_bound(problem, state, 0.0)
+    paper = branch_and_bound(paper_problem(problem), state, 0.0)
+    assert plan.feasible and not plan.viable and dead_end(problem, plan.leaf)
+    assert (plan.f_opt, plan.choices) == (paper.f_opt, paper.choices)
+    assert exhaustive(problem, state, 0.0) == (paper.f_opt, paper.choices)
+    # Through a receding horizon: the next search (after a fallback) reuses nothing unproven.
+    r = problem.simulate_stage(state[:, None], np.zeros(1), np.array([plan.u[0]]), np.zeros(1),
+                               np.zeros(1))
+    nxt = branch_and_bound(problem, r.state[:, 0], float(r.C_f[0]), 0.3, 0.0, plan.choices,
+                           plan.proof.after(plan.choices[0]))
+    ref = exhaustive(problem, r.state[:, 0], float(r.C_f[0]), 0.3)
+    assert nxt.f_opt == pytest.approx(ref[0], rel=1e-9)

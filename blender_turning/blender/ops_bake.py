@@ -225,7 +225,15 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         return BakeJob([f.name for f in selected_figures(context)], frames, self.step)
 
     def _finish(self, job):
-        written = job.write()
+        try:
+            written = job.write()
+        except Exception as exc:
+            # Everything that can be checked was, before writing; a failure now is a bug (or the
+            # disk).  One line, not a traceback, and FINISHED so that the undo step is pushed:
+            # Ctrl+Z takes the scene back to before the bake.
+            report_error(self, "Bake Turns", job.current, exc,
+                         "; the bake was cut short: Undo (Ctrl+Z) puts the scene back")
+            return {"FINISHED"}
         frames = job.frames
         every = "" if job.step == 1 else f", every {job.step} frames"
         what = ", ".join(f"{name} ({r.fcurves} F-curves x {r.frames} keys)" for name, r in written)

@@ -9,6 +9,7 @@ from dataclasses import replace
 import bpy
 
 from ..core.errors import PlanInfeasible
+from ..core.follow_problem import DEFAULT_CLEARANCE
 from ..core.obstacles import Obstacles
 from . import bake
 from .follow_job import Cancelled, FollowJob
@@ -20,7 +21,6 @@ from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
                              figure_from_settings, obstacle_footprints)
 
 #: Distance the plan keeps from every obstacle footprint, m.
-CLEARANCE = 0.5
 
 
 def own_objects(fig) -> set:
@@ -36,11 +36,11 @@ def check_start_clear(control, footprints, collection) -> None:
     """Refuse a path that starts inside an obstacle (with the clearance), naming the obstacle."""
     start = control[:1]
     for name, poly in footprints:
-        gap = float(Obstacles(polygons=[poly], clearance=CLEARANCE).min_distance(start)[0])
-        if gap <= CLEARANCE:
+        gap = float(Obstacles(polygons=[poly], clearance=DEFAULT_CLEARANCE).min_distance(start)[0])
+        if gap <= DEFAULT_CLEARANCE:
             raise SceneInputError(
                 f"the path starts {'inside' if gap < 0 else f'{gap:.2f} m from'} obstacle "
-                f"{name!r} (collection {collection.name!r}; the plan keeps {CLEARANCE} m from "
+                f"{name!r} (collection {collection.name!r}; the plan keeps {DEFAULT_CLEARANCE} m from "
                 "every obstacle): move the path's first point or the obstacle, or take the "
                 "object out of the collection")
 
@@ -58,7 +58,7 @@ def prepare(context, fig) -> FollowJob:
     figure = figure_from_settings(s)
     if s.plan_curvature_rate > 0:
         figure = replace(figure, limits=replace(figure.limits, dC_f_max=s.plan_curvature_rate))
-    job = FollowJob(figure, control, footprints, clearance=CLEARANCE)
+    job = FollowJob(figure, control, footprints, clearance=DEFAULT_CLEARANCE)
     job.footprints = footprints                        # names, for the report of a failed plan
     return job
 
@@ -126,9 +126,8 @@ class TURNING_OT_follow_path(bpy.types.Operator):
             frames = finish(context, fig, job, job.result)
         except Exception as exc:
             return report_error(self, "Follow Path", fig.name, exc)
-        note = "" if job.result.reached_end else " (stopped before the end of the path)"
         self.report({"INFO"}, f"Follow Path: baked {fig.name} over frames "
-                              f"{frames.start}-{frames.end}{note}")
+                              f"{frames.start}-{frames.end}")
         return {"FINISHED"}
 
     def execute(self, context):

@@ -31,6 +31,13 @@ def _show_foot_track(settings, context):
     update_visibility(settings, context)
 
 
+def _range(key: str) -> dict:
+    """``min``/``max`` of a setting: the core's table of ranges (core/ranges.py), so a value
+    typed here is held to the same bounds as a flag, a scene file or a render-job key."""
+    r = RANGES[key]
+    return {"min": r.lo, "max": r.hi}
+
+
 def _is_curve(self, obj):
     return obj.type == "CURVE"
 
@@ -76,43 +83,43 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
     sport: EnumProperty(name="Sport", items=SPORTS, default="SKIER", options=_STATIC,
                         description="Which figure and mapping (Section 7) the bake uses")
     # -- body (Fig. 2) ----------------------------------------------------------------------
-    mass: FloatProperty(name="Mass", default=75.0, min=1.0, max=1000.0, soft_min=20.0,
+    mass: FloatProperty(name="Mass", default=75.0, **_range("m"), soft_min=20.0,
                         soft_max=150.0, unit="MASS", options=_STATIC,
                         description="How heavy the body is, with its equipment (m, kg)")
-    com_height: FloatProperty(name="COM Height", default=1.0, min=0.2, max=3.0, soft_min=0.4,
+    com_height: FloatProperty(name="COM Height", default=1.0, **_range("l"), soft_min=0.4,
                               soft_max=1.5, unit="LENGTH", options=_STATIC,
                               description="How high the body's centre of mass is above the "
                                           "foot (l, m)")
-    inertia: FloatProperty(name="Roll Inertia (kg m^2)", default=12.0, min=0.0, max=1000.0,
+    inertia: FloatProperty(name="Roll Inertia (kg m^2)", default=12.0, **_range("I_v"),
                            soft_min=1.0, soft_max=40.0, options=_STATIC,
                            description="How hard the body is to tip sideways about its centre "
                                        "of mass (I_v, kg m^2, Eq. 13)")
-    speed: FloatProperty(name="Speed", default=10.0, min=0.5, max=60.0, soft_min=2.0,
+    speed: FloatProperty(name="Speed", default=10.0, **_range("V_cm"), soft_min=2.0,
                          soft_max=30.0, unit="VELOCITY",
                          description="How fast the body moves forward (V_cm, m/s); animatable: "
                                      "key it to speed up or brake")
     # -- limits (Sections 3, 5.1) -----------------------------------------------------------
-    curvature_max: FloatProperty(name="Max Curvature (1/m)", default=1 / 6, min=0.001,
-                                 max=10.0, soft_min=0.02, soft_max=1.0, options=_STATIC,
+    curvature_max: FloatProperty(name="Max Curvature (1/m)", default=1 / 6,
+                                 **_range("C_f_max"), soft_min=0.02, soft_max=1.0, options=_STATIC,
                                  description="How sharply the foot can steer: one over the "
                                              "tightest turn radius (C_f max, 1/m)")
     curvature_rate_max: FloatProperty(name="Max Curvature Rate (1/(m s))", default=0.67,
-                                      min=0.001, max=100.0, soft_min=0.05, soft_max=5.0,
+                                      **_range("dC_f_max"), soft_min=0.05, soft_max=5.0,
                                       options=_STATIC,
                                       description="How fast the steering can change, e.g. edge "
                                                   "to edge (dC_f/dt max, 1/(m s))")
-    fall_angle: FloatProperty(name="Fall Angle", default=math.radians(60), min=math.radians(5),
-                              max=math.radians(85), soft_min=math.radians(30),
+    fall_angle: FloatProperty(name="Fall Angle", default=math.radians(60),
+                              **_range("theta_fall"), soft_min=math.radians(30),
                               soft_max=math.radians(80), subtype="ANGLE", options=_STATIC,
                               description="How far the body can lean before it falls over "
                                           "(theta_fall)")
     # -- the parametric controller (Section 5), animatable ----------------------------------
-    period: FloatProperty(name="Turn Period", default=2.0, min=0.3, max=20.0, soft_min=0.6,
+    period: FloatProperty(name="Turn Period", default=2.0, **_range("period"), soft_min=0.6,
                           soft_max=8.0, unit="TIME_ABSOLUTE",
                           description="How long one left-right pair of turns takes "
                                       "(2 pi / omega0, s); animatable")
-    lean: FloatProperty(name="Lean", default=math.radians(23), min=math.radians(1),
-                        max=math.radians(60), soft_min=math.radians(3),
+    lean: FloatProperty(name="Lean", default=math.radians(23), **_range("theta_max"),
+                        soft_min=math.radians(3),
                         soft_max=math.radians(45), subtype="ANGLE",
                         description="How far the body leans at the apex of a turn (theta_max); "
                                     "animatable")
@@ -120,7 +127,7 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                               description="Steer so the turns keep to the Heading on average "
                                           "(directional control, Section 5.2)")
     heading: FloatProperty(name="Heading", default=math.radians(90), subtype="ANGLE",
-                           soft_min=-2 * math.pi, soft_max=2 * math.pi,
+                           **_range("heading"), soft_min=-2 * math.pi, soft_max=2 * math.pi,
                            description="Which way the turns go on average, counter-clockwise "
                                        "from +X (theta_h); animatable")
     # -- placement and Follow Path ----------------------------------------------------------
@@ -137,7 +144,7 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                                description="Objects whose ground footprints the figure steers "
                                            "around (Follow Path)")
     plan_curvature_rate: FloatProperty(
-        name="Planner Curvature Rate (1/(m s))", default=0.0, min=0.0, max=100.0, soft_min=0.0,
+        name="Planner Curvature Rate (1/(m s))", default=0.0, **_range("plan_curvature_rate"), soft_min=0.0,
         soft_max=2.0, options=_STATIC,
         description="How fast the path planner may change the steering (dC_f/dt, 1/(m s)); 0 "
                     "uses Max Curvature Rate.  The sport presets set a gentler rate than the "

@@ -14,7 +14,7 @@ import sys
 from ..core.errors import TurningError
 from .common import discard_pending
 
-COMMANDS = ("simulate", "figures", "follow")
+COMMANDS = ("simulate", "figures", "follow", "crowd")
 
 
 class _Parser(argparse.ArgumentParser):

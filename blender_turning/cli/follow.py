@@ -2,14 +2,17 @@
 
 Writes the trajectory CSV (docs/ARCHITECTURE.md Sec. 3, ``phi`` from the 6.2 post-pass), the search
 statistics (JSON: one entry per replanning and totals) and a plot of path, obstacles and track.
-When no plan survives, the error names the time and the position (one line, exit 2).
+When no plan survives, the error names the time and the position; when the time limit (three times
+the time to ride the path) comes before the end of the path, how far along it got (arc length);
+either is one line on stderr, exit 2, and no trajectory or statistics are written (``--plot``
+still draws the track up to there, to show where it went wrong).
 """
 from __future__ import annotations
 
 import json
 import math
 
-from ..core.errors import PlanInfeasible
+from ..core.errors import PathNotFinished, PlanInfeasible
 from ..core.scene import check_horizon, load_scene
 from ..core.validate import check
 from .common import Outputs, require_matplotlib
@@ -52,10 +55,12 @@ def run(args) -> int:
         outputs.reserve(f"--{flag}", getattr(args, flag))
     try:
         result = scene.run()
-    except PlanInfeasible as exc:
+    except (PlanInfeasible, PathNotFinished) as exc:
         # The plot of the failed run (where it got stuck) is the one output written.
         if args.plot and exc.trajectory is not None:
-            _plot(outputs, scene, exc.trajectory, failed_at=exc.position)
+            where = getattr(exc, "position", None) or (float(exc.trajectory.x[-1]),
+                                                       float(exc.trajectory.y[-1]))
+            _plot(outputs, scene, exc.trajectory, failed_at=where)
             outputs.commit(only=("--plot",))
         raise
     traj = result.trajectory
@@ -75,7 +80,7 @@ def run(args) -> int:
           f"{traj.duration:.2f} s, {tot['replans']} replans, {tot['expanded']} nodes expanded, "
           f"{tot['wall_time']:.2f} s planning; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg"
-          f"{'' if result.reached_end else ' (stopped at the duration, not at the path end)'}"
+          f"{'' if result.reached_end else ' (stopped at the given duration)'}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0
 

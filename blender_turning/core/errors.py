@@ -54,3 +54,17 @@ class LeftTerrain(TurningError):
         self.t = t
         self.position = (x, y)
         self.trajectory = trajectory
+
+
+class PathNotFinished(TurningError):
+    """Path following (Section 6) stopped at its time limit before reaching the end of the path.
+    Carries how far along the path it got (arc length, m), the path's length and the trajectory."""
+
+    def __init__(self, t: float, progress: float, length: float, trajectory=None):
+        super().__init__(f"the end of the path was not reached within the time limit of "
+                         f"{t:.1f} s: got {progress:.1f} m of {length:.1f} m along the path "
+                         f"({100.0 * progress / max(length, 1e-12):.0f}%)")
+        self.t = t
+        self.progress = progress
+        self.length = length
+        self.trajectory = trajectory

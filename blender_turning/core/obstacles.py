@@ -105,8 +105,17 @@ class Obstacles:
                 d = segment_distance(a[i], b[i], e0[j], e1[j])
                 hit[i[d <= cl]] = True
         if len(self.circles):
-            d = point_segment_distance(self.circles[None, :, :2], a[:, None], b[:, None])
-            hit |= np.any(d <= self.circles[None, :, 2] + cl, axis=1)
+            # Only pairs whose boxes meet: a segment within r of a centre has the centre in its
+            # box grown by r (exact), and the box test is cheaper than the distance.
+            c = self.circles
+            r = c[:, 2] + cl
+            lo, hi = np.minimum(a, b), np.maximum(a, b)
+            box = ((c[None, :, 0] - r <= hi[:, 0:1]) & (c[None, :, 0] + r >= lo[:, 0:1]) &
+                   (c[None, :, 1] - r <= hi[:, 1:2]) & (c[None, :, 1] + r >= lo[:, 1:2]))
+            i, j = np.nonzero(box)
+            if len(i):
+                d = point_segment_distance(c[j, :2], a[i], b[i])
+                hit[i[d <= r[j]]] = True
         for p in self.polygons:      # a segment inside a polygon without touching its sides
             hit |= _inside(a, p)
         return hit

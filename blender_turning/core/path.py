@@ -11,12 +11,17 @@ is C1 (both tangents at a knot are the same); built from a Bezier curve it is ex
 ``per_segment`` (default 12) equal parameter steps per segment, or, with ``exact=True``, the
 distance to the nearest point of the spline itself.  Both are distances to a set, so both are
 1-Lipschitz in the foot position, which the planner's lower bound relies on.
+
+:class:`PathProgress` is how far along the path (arc length) the foot has got, tracked so that it
+can only move forward through the parts of the path the foot has actually passed near: the test
+of "the end of the path was reached" (not a half-plane through the end, which a switchback, a loop
+or a start far from the path satisfy at once).
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["HermitePath", "PathDistance"]
+__all__ = ["HermitePath", "PathDistance", "PathProgress"]
 
 # Hermite basis in monomial form: S(u) = [1 u u^2 u^3] @ _H @ [P0, T0, P1, T1].
 _H = np.array([[1.0, 0.0, 0.0, 0.0],
@@ -107,12 +112,34 @@ class HermitePath:
         pts = self.evaluate(seg, np.tile(u, self.n_segments))
         return np.vstack([pts, self.knots[-1:]])
 
+    def start_direction(self) -> np.ndarray:
+        """Unit tangent leaving the start of the path: the first non-degenerate one (coincident
+        first points, or a zero first tangent, are skipped)."""
+        return self._direction(1)
+
     def end_direction(self) -> np.ndarray:
-        """Unit tangent at the end of the path."""
-        d = self.evaluate(self.n_segments - 1, 1.0, 1)
-        if not np.any(d):
-            d = self.knots[-1] - self.evaluate(self.n_segments - 1, 0.99)
-        return d / np.linalg.norm(d)
+        """Unit tangent arriving at the end of the path (the last non-degenerate one)."""
+        return self._direction(-1)
+
+    def _direction(self, sign) -> np.ndarray:
+        """The tangent direction where the path leaves its start (``sign`` 1) or arrives at its
+        end (-1), skipping segments of no length: on the first (last) segment that has length,
+        its tangent at that end; where that is zero (a handle on its knot), the second
+        derivative's direction (``S(u) - S(0) ~ S''(0) u^2 / 2``); failing both, the chord."""
+        per = 64
+        pts = self.sample(per)[::sign]
+        step = np.diff(pts, axis=0) * sign
+        length = np.hypot(step[:, 0], step[:, 1])
+        tiny = 1e-12 * max(float(np.abs(self.knots).max()), 1.0)
+        ok = np.flatnonzero(length > tiny)
+        if not len(ok):
+            raise ValueError("path has no length: all its points coincide")
+        i = int(ok[0]) // per
+        seg, u = (i, 0.0) if sign > 0 else (self.n_segments - 1 - i, 1.0)
+        for d in (self.evaluate(seg, u, 1), sign * self.evaluate(seg, u, 2), step[ok[0]]):
+            if np.hypot(*d) > tiny:
+                return d / np.hypot(*d)
+        raise AssertionError("unreachable: the chord has length")
 
     def extended(self, length: float) -> "HermitePath":
         """This path with a straight run-out of ``length`` m along its end tangent (the planner
@@ -227,3 +254,49 @@ class PathDistance:
         r = self.path.evaluate(s, uu) - flat
         d = np.sqrt(np.einsum("mjk,mjk->mj", r, r).min(axis=1))
         return d.reshape(P.shape[:-1])
+
+
+class PathProgress:
+    """Arc length along the path reached so far, m.
+
+    The path is sampled at ``per_segment`` equal parameter steps per segment (arc lengths: the
+    polyline through the samples).  :meth:`advance` is called for each small move of the foot
+    (``travel`` m): the progress ``p`` moves to the arc length of the sample nearest the foot
+    among those from ``p - near`` to ``p + 2 travel + spacing`` along the path (``spacing``: the
+    largest between samples; ties go to the sample nearest ``p`` along the path), if the foot is
+    within ``near`` of it, and never backwards.  So the progress goes through the path in order,
+    no faster than twice the foot (the nearest point runs ahead of the foot only inside a curve,
+    by ``R / (R - e)`` at ``e`` m inside a radius ``R``): it cannot jump to the other leg of a
+    switchback or the end of a loop, and a foot farther than ``near`` from the path makes none.
+    The end is reached when the progress is the path's length (the foot is nearest the last
+    sample) and the foot has crossed the line through the end, normal to the end direction.
+    """
+
+    def __init__(self, path: HermitePath, near: float, per_segment: int = 64):
+        if not near > 0:
+            raise ValueError(f"progress distance = {near!r} is outside the allowed range (0, inf)")
+        self.near = float(near)
+        self.samples = path.sample(per_segment)
+        step = np.hypot(*np.diff(self.samples, axis=0).T)
+        self.arc = np.concatenate([[0.0], np.cumsum(step)])
+        self.spacing = float(step.max())
+        self.length = float(self.arc[-1])
+        self.end = path.knots[-1]
+        self.end_dir = path.end_direction()
+
+    def advance(self, p: float, xy, travel: float) -> float:
+        """The progress after the foot moved ``travel`` m to ``xy``, from progress ``p``."""
+        lo = np.searchsorted(self.arc, p - self.near, side="left")
+        hi = np.searchsorted(self.arc, p + 2.0 * travel + self.spacing, side="right")
+        cand = self.samples[lo:hi] - np.asarray(xy, float)[None, :2]
+        d = np.hypot(cand[:, 0], cand[:, 1])
+        best = np.flatnonzero(d <= d.min() * (1 + 1e-12) + 1e-12)
+        j = lo + best[np.argmin(np.abs(self.arc[lo + best] - p))]
+        if d[j - lo] > self.near:
+            return float(p)
+        return float(max(p, self.arc[j]))
+
+    def at_end(self, p: float, xy) -> bool:
+        """Has the foot at ``xy`` with progress ``p`` reached the end of the path?"""
+        crossed = float(np.dot(np.asarray(xy, float)[:2] - self.end, self.end_dir)) >= 0.0
+        return bool(p >= self.length and crossed)

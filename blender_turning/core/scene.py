@@ -15,9 +15,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .obstacles import Obstacles
+from .follow_problem import DEFAULT_CLEARANCE, FollowSetup, start_state
 from .params import PRESETS, Figure, preset
-from .path import HermitePath, PathDistance
-from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile, follow
+from .path import HermitePath
+from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile
 from .ranges import RANGES
 from .validate import FieldError, Fields, read_text
 
@@ -55,26 +56,19 @@ class Scene:
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))
 
+    def setup(self) -> FollowSetup:
+        """The shared path-following builder (:mod:`.follow_problem`) for this scene."""
+        return FollowSetup(self.figure, self.path, self.obstacles, self.settings, self.speed,
+                           self.samples_per_segment, self.exact_distance, self.run_out)
+
     def problem(self) -> Problem:
-        """The planning problem; the path gets a straight run-out (default: one horizon's reach)
-        so the planner does not turn back toward the end of the path."""
-        base = Problem(self.figure, PathDistance(self.path, self.samples_per_segment,
-                                                 self.exact_distance), self.obstacles,
-                       self.settings, self.speed)
-        run_out = base.reach() if self.run_out is None else self.run_out
-        dist = PathDistance(self.path.extended(run_out), self.samples_per_segment,
-                            self.exact_distance)
-        return Problem(self.figure, dist, self.obstacles, self.settings, self.speed)
+        """The planning problem (the path with its run-out: :mod:`.follow_problem`)."""
+        return self.setup().problem()
 
     def run(self) -> FollowResult:
-        """Follow the path to its end (or for ``duration`` seconds)."""
-        duration = self.duration
-        if duration is None:       # a safety net: three times the time to ride the path
-            duration = 3.0 * self.path.length() / min(self.speed.V.min(), self.figure.body.V_cm)
-            return follow(self.problem(), self.state0, self.C_f0, duration,
-                          end=self.path.knots[-1], end_dir=self.path.end_direction(),
-                          meta={"scene": self.name})
-        return follow(self.problem(), self.state0, self.C_f0, duration, meta={"scene": self.name})
+        """Follow the path to its end (raises ``PathNotFinished`` at the time limit), or for
+        ``duration`` seconds."""
+        return self.setup().run(self.state0, self.C_f0, self.duration, meta={"scene": self.name})
 
 
 def check_horizon(settings: PlannerSettings, where: str = "") -> None:
@@ -141,7 +135,7 @@ def _path(pf: Fields) -> HermitePath:
 
 
 def _obstacles(top: Fields) -> Obstacles:
-    clearance = top.number("clearance", "clearance", 0.0)
+    clearance = top.number("clearance", "clearance", DEFAULT_CLEARANCE)
     segs, circles, polys = [], [], []
     for of in top.tables("obstacles"):
         kind = of.string("type", choices=("circle", "segment", "polygon"))
@@ -190,18 +184,16 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
     sf = top.table("start", {"position", "heading_deg", "lean_deg", "lean_rate_deg", "speed",
                              "C_f"})
     pos = sf.xy("position", path.knots[0].tolist())
+    heading = None              # default: along the path's first non-degenerate tangent
     if sf.has("heading_deg"):
         heading = math.radians(sf.number("heading_deg", RANGES["heading"].deg()))
-    else:
-        d = path.evaluate(0, 0.0, 1)
-        heading = math.atan2(d[1], d[0])
     lean = math.radians(sf.number("lean_deg", RANGES["theta_v0"].deg(), 0.0))
     rate = math.radians(sf.number("lean_rate_deg", RANGES["omega_v0"].deg(), 0.0))
     if sf.has("speed"):
         fig = replace(fig, body=replace(fig.body, V_cm=sf.number("speed", "V_cm")))
     c_max = fig.limits.C_f_max
     cf0 = sf.number("C_f", replace(RANGES["C_f0"], lo=-c_max, hi=c_max), 0.0)
-    state0 = np.array([pos[0], pos[1], heading, lean, rate])
+    state0 = start_state(path, pos, heading, lean, rate)
 
     # Speed profile (Section 6: "a function of the terrain").
     spf = top.table("speed", {"by", "at", "V_cm"})

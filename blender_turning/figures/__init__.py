@@ -15,4 +15,6 @@ FIGURES = {
     "fig17_slalom": ("planner", "fig17"),
     "fig18_cyclist_corner": ("planner", "fig18"),
     "photo5_potholes": ("planner", "photo5"),
+    "crowd_ski_school": ("crowd", "ski_school"),
+    "crowd_peloton": ("crowd", "peloton"),
 }

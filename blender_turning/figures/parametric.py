@@ -79,13 +79,14 @@ def fig10(out: Path) -> None:
     fig = preset("skier")
     w, tm = TWO_PI / 2.0, math.radians(23)
     f, axes = plt.subplots(4, 1, figsize=(10, 11))
-    # 1: two figures turning out of phase on the same line: a figure-8 pattern.
-    for sign, c in ((1, "C0"), (-1, "C3")):
-        s0 = list(slalom_start(fig.body, w, tm))
-        s0[2], s0[4] = sign * s0[2], sign * s0[4]
-        tr = simulate(fig, PhaseEllipse(fig.body, w, tm, heading=0.0), 12.0, state0=s0)
-        axes[0].plot(tr.x, tr.y, c)
-    axes[0].set_title("1: figure-8 (two figures out of phase)")
+    # 1: two figures turning out of phase on the same line: a figure-8 pattern (a synchronised
+    # pair of the crowd code, run as one batch).
+    from ..crowd import Crowd, CrowdFigure, Turns, run_crowd, synchronized
+    pair = synchronized(CrowdFigure("skier", fig, Turns(TWO_PI / w, tm, 0.0)), 2, antiphase=True)
+    for r, c in zip(run_crowd(Crowd("figure-8", pair, 12.0)).figures, ("C0", "C3")):
+        axes[0].plot(r.trajectory.x, r.trajectory.y, c, label=f"{r.name}")
+    axes[0].legend(fontsize=7, loc="upper right")
+    axes[0].set_title("1: figure-8 (a synchronised pair in antiphase)")
     # 2: decreasing frequency: period 1.6 s -> 3.2 s.
     period = Schedule.sampled([0.0, 20.0], [1.6, 3.2])
     om = Schedule(lambda t: TWO_PI / period(t))

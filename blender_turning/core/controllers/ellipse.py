@@ -273,12 +273,14 @@ class PhaseEllipse(Controller):
             else:
                 self._bn = beta
             return
-        beta = self._modifier(np.asarray(theta_dir)[idx], side[idx], t, tmf, w, change, lo, hi)
+        goal = self.heading(t)                                    # per-figure headings too
+        beta = self._modifier(np.asarray(theta_dir)[idx], side[idx], t, tmf, w, change, lo, hi,
+                              np.asarray(goal)[idx] if np.ndim(goal) else goal)
         left = side[idx] > 0
         self._bp[idx[left]] = beta[left]
         self._bn[idx[~left]] = beta[~left]
 
-    def _modifier(self, theta_dir, side, t, tm, w, change, lo, hi):
+    def _modifier(self, theta_dir, side, t, tm, w, change, lo, hi, goal=None):
         """beta of the half-turn starting on ``side`` with heading ``theta_dir`` (Eqs. 7-8),
         within ``[lo, hi]``.
 
@@ -290,7 +292,8 @@ class PhaseEllipse(Controller):
         heading larger than that still sharpens the turn."""
         # Mean heading: the heading is at an extreme at a crossing (C_f is in phase with theta_v).
         mean = theta_dir + side * 0.5 * change
-        err = (self.heading(t) - mean + math.pi) % (2 * math.pi) - math.pi
+        goal = self.heading(t) if goal is None else goal         # the figures planned now
+        err = (goal - mean + math.pi) % (2 * math.pi) - math.pi
         more = side * err
         # Left to shallow half-turns: what one of them can take, and at least one half-turn's
         # change (the most a start off the ellipse leaves, its first half-turn being partial).

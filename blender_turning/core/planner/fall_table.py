@@ -9,6 +9,9 @@ monotone), so that plan's lean is the smallest of all plans at every step: if ev
 bound, every plan does, no later.  The right side is the mirror image (docs/ARCHITECTURE.md
 Section 4).
 
+The table covers ``max(n_stages, viable_stages)`` stages: the search asks it about nodes within
+the horizon and, for a plan's last node, the ``viable_stages`` after it (``search.py``).
+
 ``T[i, j, k]`` is the first step at which the hardest-steering plan from grid state
 ``(theta[i], omega[j], C_f[k])`` passes ``theta_bound + 1e-9``.  A node is looked up at the grid
 corner that is no worse (lean and lean rate no larger, curvature no smaller), whose fall comes no
@@ -49,7 +52,7 @@ class FallTable:
         h, steps = st.dt, st.steps_per_stage
         k1, k2, k3, k4 = (np.empty_like(x) for _ in range(4))
         anchor = c0
-        for n in range(st.n_stages * steps):
+        for n in range(max(st.n_stages, st.viable_stages) * steps):
             tau = (n % steps) * h
             if n % steps == 0:                  # a new stage starts from the curvature reached
                 c0, anchor = anchor, anchor
@@ -72,7 +75,8 @@ class FallTable:
         st, lim, b = problem.settings, problem.limits, problem.body
         if not problem.speed.is_constant or problem._physical_binds:
             return None
-        key = (b, lim, st.dt, st.t_stage, st.n_stages, st.theta_bound, float(problem.speed.V[0]))
+        key = (b, lim, st.dt, st.t_stage, max(st.n_stages, st.viable_stages), st.theta_bound,
+               float(problem.speed.V[0]))
         if key not in _CACHE:
             _CACHE[key] = FallTable(problem) if _cooperative(problem) else None
             if len(_CACHE) > 64:

@@ -5,6 +5,12 @@ Within a stage the control ``u = dC_f/dt`` is constant: the demanded curvature i
 ``C0 + u (t - t_stage_start)``, clipped to ``|C_f| <= C_f_max`` (Section 6.1), and bounded by
 the same rule as :func:`..dynamics.bound_cf` at every RK4 stage, relative to the curvature at the
 step's start (fused into :meth:`Problem._rhs`; tests hold it to the core's RK4).
+
+A node collides when, over any integration step, the foot's straight move or that of the ground
+point under the centre of mass (:meth:`Problem.body_point`) comes within the clearance of an
+obstacle (Section 6 checks the foot; the body sways up to ``l sin(theta_bound)`` to the side of
+it, 0.86 m for the skier at 30 deg, enough to pass over a gate panel the foot clears).  Adding a
+clip only removes branches, so every lower bound on the cost of a branch stays admissible.
 """
 from __future__ import annotations
 
@@ -88,7 +94,9 @@ class Problem:
         apply (varying speed, or a figure for which the lean is not monotone)."""
         if self._fall_table is False:
             from .fall_table import FallTable
-            self._fall_table = FallTable.for_problem(self) if self.settings.fall_table else None
+            st = self.settings
+            self._fall_table = FallTable.for_problem(self) if (st.fall_table or
+                                                               st.viable_stages) else None
         return self._fall_table
 
     def reach(self) -> float:
@@ -104,7 +112,9 @@ class Problem:
         p = Problem.__new__(Problem)
         p.__dict__.update(self.__dict__)
         p.distance = self.distance.near(center, r)
-        p.obstacles = self.obstacles.near(center, r)
+        # One stage more for the dead-end test (search.py), and the body's ground point.
+        far = r + self.v_max * self.settings.t_stage * 1.001 + self.body.l
+        p.obstacles = self.obstacles.near(center, far)
         p._pairs = False                        # its own path samples
         return p
 
@@ -224,6 +234,15 @@ class Problem:
         per = G.shape[1]
         return r[:, per - 1::per] * (1 + 1e-6) + 1e-9
 
+    def body_point(self, state) -> np.ndarray:
+        """The ground point under the centre of mass, shape ``(2, ...)`` for ``state`` of shape
+        ``(>= 4, ...)``: the foot plus ``l sin(theta_v)`` across the direction of travel, to the
+        left for a lean to the left (DESIGN.md Section 1), i.e.
+        ``foot + l sin(theta_v) (-sin theta_dir, cos theta_dir)``."""
+        off = self.body.l * np.sin(state[THETA_V])
+        th = state[THETA_DIR]
+        return np.stack([state[X] - off * np.sin(th), state[Y] + off * np.cos(th)])
+
     def _speed_at(self, t, s):
         if self.speed.is_constant:
             return float(self.speed.V[0])
@@ -254,10 +273,11 @@ class Problem:
         cost = np.zeros(m)
         d = np.zeros(m)
         fell = np.zeros(m, bool)
-        seg_a, seg_b = [], []
+        track = [x[:THETA_V + 1]]          # x, y, theta_dir, theta_v at every step's end
         rec = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")} if record else None
         h = st.dt
         half = 0.5 * h
+        check = len(self.obstacles) > 0
         k1, k2, k3, k4 = (np.empty_like(x) for _ in range(4))
         for k in range(st.steps_per_stage):
             tau = k * h
@@ -273,8 +293,8 @@ class Problem:
             self._rhs(x + half * k2, V, tau + half, C_f0, u, cf, half, k3)
             self._rhs(x + h * k3, V, tau + h, C_f0, u, cf, h, k4)
             new = x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
-            seg_a.append(x[:2].T)
-            seg_b.append(new[:2].T)
+            if check:
+                track.append(new[:THETA_V + 1])
             s = s + np.hypot(new[X] - x[X], new[Y] - x[Y])
             x, anchor = new, cf
             fell |= ~(np.abs(x[THETA_V]) <= st.theta_bound)       # NaN counts as fallen
@@ -284,8 +304,14 @@ class Problem:
         # The curvature in force at the end of the stage (the next stage's C0).
         cf_end = self._rhs(x, self._speed_at(t0 + st.t_stage, s), st.t_stage, C_f0, u, anchor,
                            h, k1)[0]
-        collided = self.obstacles.collides(np.concatenate(seg_a), np.concatenate(seg_b))
-        collided = collided.reshape(st.steps_per_stage, m).any(axis=0) if len(self.obstacles) \
-            else np.zeros(m, bool)
+        if check:   # the foot's and the body's ground point's moves, step by step
+            P = np.stack(track, axis=1)                          # (4, steps + 1, m)
+            pts = np.concatenate([P[:2], self.body_point(P)], axis=1)
+            a = pts[:, np.r_[0:len(track) - 1, len(track):2 * len(track) - 1]]
+            b = pts[:, np.r_[1:len(track), len(track) + 1:2 * len(track)]]
+            collided = self.obstacles.collides(a.reshape(2, -1).T, b.reshape(2, -1).T)
+            collided = collided.reshape(-1, m).any(axis=0)
+        else:
+            collided = np.zeros(m, bool)
         return StageResult(x, np.asarray(cf_end, float) * np.ones(m), s, cost, d, collided,
                            fell, rec)

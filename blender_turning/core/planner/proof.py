@@ -4,7 +4,8 @@
 Every node the search generated gets a lower bound ``T`` on the total cost (from the search's
 root) of any complete plan through it, over this search's horizon:
 
-- a leaf (depth N): its ``f``, exactly;
+- a leaf (depth N): its ``f``, exactly, also when it is a dead end (``search.py``): one stage
+  later, in the next search, it is an inner node and may have a live last node below it;
 - a child that collided, fell, or is doomed to fall (``fall_table.py``): infinity, it has no
   feasible completion;
 - a node clipped by the bound or left in the queue: its ``f + h`` (``h`` admissible);

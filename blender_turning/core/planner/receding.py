@@ -3,7 +3,8 @@
 :func:`follow` returns a :class:`FollowResult`: the trajectory (docs/ARCHITECTURE.md Sec. 3, ``phi``
 from the Section 6.2 post-pass) and one :class:`Replan` per planning step.  When no plan survives
 (every branch hits an obstacle or falls) it raises :class:`..errors.PlanInfeasible` with the time,
-the position and the trajectory up to there: never a silent fall-through.
+the position and the trajectory up to there; when the time limit comes before the end of the
+path, :class:`..errors.PathNotFinished` with how far along it got: never a silent fall-through.
 """
 from __future__ import annotations
 
@@ -13,11 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..dynamics import leg_force, steer
-from ..errors import PlanInfeasible
+from ..errors import PathNotFinished, PlanInfeasible
+from ..path import PathProgress
 from ..phase_estimate import estimate_phase
 from ..trajectory import Trajectory, body_meta
 from .problem import Problem
 from .search import SearchStats, branch_and_bound
+from .viable import dead_end
 
 __all__ = ["Replan", "FollowResult", "follow"]
 
@@ -32,10 +35,14 @@ class Replan:
     f_opt: float
     u: float
     stats: SearchStats
+    dead_end: bool = False
+    """The plan's last node has no continuation: each of its q children falls or collides."""
+    viable: bool = True
+    """False when no plan with a viable last node existed (``search.py``)."""
 
     def as_dict(self) -> dict:
         return {"t": self.t, "x": self.x, "y": self.y, "f_opt": self.f_opt, "dC_f_dt": self.u,
-                **self.stats.as_dict()}
+                "dead_end": self.dead_end, "viable": self.viable, **self.stats.as_dict()}
 
 
 @dataclass(frozen=True)
@@ -43,41 +50,46 @@ class FollowResult:
     trajectory: Trajectory
     replans: tuple
     reached_end: bool
+    progress: float = 0.0
+    """How far along the path the foot got (arc length, m; 0 when not followed to an end)."""
 
     def totals(self) -> dict:
         keys = ("expanded", "generated", "clipped_collision", "clipped_fall", "clipped_bound",
                 "clipped_doomed", "leaves", "wall_time")
         out = {k: sum(getattr(r.stats, k) for r in self.replans) for k in keys}
         out["replans"] = len(self.replans)
+        out["dead_ends"] = sum(r.dead_end for r in self.replans)
+        out["not_viable"] = sum(not r.viable for r in self.replans)
         out["proven"] = all(r.stats.proven for r in self.replans)
         out["duration"] = self.trajectory.duration
         return out
 
 
-def _past_end(end, end_dir, xy) -> bool:
-    """Has the foot crossed the plane through the path's end, normal to its end direction?"""
-    return float(np.dot(np.asarray(xy) - end, end_dir)) >= 0.0
-
-
 def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None = None,
-           end=None, end_dir=None, meta: dict | None = None) -> FollowResult:
-    """Follow the path from ``state0`` (shape ``(5,)``) until the foot passes the plane through
-    ``end`` normal to ``end_dir`` (the path's last point and direction) or ``duration`` seconds.
+           progress: PathProgress | None = None, meta: dict | None = None,
+           on_replan=None) -> FollowResult:
+    """Follow the path from ``state0`` (shape ``(5,)``) for ``duration`` seconds or, given a
+    :class:`..path.PathProgress`, until the foot reaches the end of the path (progress along it
+    by arc length, :meth:`PathProgress.at_end`), ``duration`` then being the time limit.
 
-    At least one of ``duration`` and ``end`` must be given.
+    Raises :class:`..errors.PathNotFinished` when the time limit comes first, and
+    :class:`..errors.PlanInfeasible` when no plan survives.  ``on_replan(t, xy, fraction)`` is
+    called before every replanning (``fraction``: of the path done, 0 without ``progress``); an
+    exception it raises ends the run (cancelling).
     """
-    if duration is None and end is None:
-        raise ValueError("follow needs a duration or an end point")
+    if duration is None:
+        raise ValueError("follow needs a duration (with a path progress: the time limit)")
     st = problem.settings
-    limit = duration if duration is not None else 1e4
     x = np.asarray(state0, float).reshape(5, 1).copy()
     cf, t, s = float(C_f0), 0.0, 0.0
     rows = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")}
     replans = []
     previous = proof = None
     reached = False
-    end = None if end is None else np.asarray(end, float)
-    while t < limit - 1e-9:
+    p = 0.0
+    while t < duration - 1e-9:
+        if on_replan is not None:
+            on_replan(t, x[:2, 0].copy(), p / progress.length if progress else 0.0)
         clock = time.perf_counter()
         local = problem.local(x[:2, 0])
         plan = branch_and_bound(local, x[:, 0], cf, t, s, previous, proof)
@@ -86,7 +98,8 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
             raise PlanInfeasible(t, (float(x[0, 0]), float(x[1, 0])), traj, plan.stats)
         stats = plan.stats
         stats = SearchStats(**{**stats.as_dict(), "wall_time": time.perf_counter() - clock})
-        replans.append(Replan(t, float(x[0, 0]), float(x[1, 0]), plan.f_opt, plan.u[0], stats))
+        replans.append(Replan(t, float(x[0, 0]), float(x[1, 0]), plan.f_opt, plan.u[0], stats,
+                              dead_end(local, plan.leaf), plan.viable))
         r = local.simulate_stage(x, np.array([cf]), np.array([plan.u[0]]), np.array([t]),
                                  np.array([s]), record=True)
         for k in rows:
@@ -94,10 +107,17 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
         x, cf, s, t = r.state, float(r.C_f[0]), float(r.s[0]), t + st.t_stage
         previous = plan.choices
         proof = plan.proof.after(plan.choices[0])
-        if end is not None and _past_end(end, end_dir, x[:2, 0]):
-            reached = True
-            break
-    return FollowResult(_trajectory(problem, rows, x, cf, t, s, meta), tuple(replans), reached)
+        if progress is not None:
+            steps = [xs[:2, 0] for xs in r.record["state"]] + [x[:2, 0]]
+            for a, b in zip(steps[:-1], steps[1:]):
+                p = progress.advance(p, b, float(np.hypot(*(b - a))))
+            if progress.at_end(p, x[:2, 0]):
+                reached = True
+                break
+    traj = _trajectory(problem, rows, x, cf, t, s, meta)
+    if progress is not None and not reached:
+        raise PathNotFinished(t, p, progress.length, traj)
+    return FollowResult(traj, tuple(replans), reached, p)
 
 
 def _trajectory(problem: Problem, rows, x, cf, t, s, meta) -> Trajectory:

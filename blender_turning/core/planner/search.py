@@ -24,18 +24,43 @@ Beyond the paper (each switchable, for the benchmarks and the exactness tests):
   clipped, backed up through the nodes it expanded);
 - batches: ``batch`` queue nodes are expanded together, their ``batch * q`` children simulated as
   one array operation.
+
+The problem solved (``viable_stages = M > 0``, the tests in ``viable.py``; with M = 0 it is the
+paper's): the receding horizon applies only the first stage of a plan, so a plan whose last node
+cannot go on is a poor choice however close it keeps to the path (in the paper's problem about
+four in five executed plans ended so on the shipped scenes: BENCHMARKS.md).  A plan is *allowed*
+when none of its nodes collides or falls (the paper's condition) and
+
+- no node of it, at depth ``d``, is *doomed*: proved by the fall table (``fall_table.py``; its
+  conservative grid lookup, exactly as ``FallTable.doomed`` computes it) to pass the lean bound
+  within ``N - d + M`` stages whatever it does, i.e. before M stages after the horizon;
+- its last node is not a *dead end*: one of its q children neither collides nor falls within one
+  more stage (simulated as any stage).
+
+Where the table does not apply (a varying speed, a figure whose lean is not monotone) only the
+second condition is tested.  The search returns the least ``f`` over the allowed plans, the
+lexicographically smallest of ties; when no plan is allowed, the paper's optimum (the same over
+all plans that neither collide nor fall), flagged ``Plan.viable = False``.  ``exhaustive``
+computes the same (tested).  With M > 0 the ``fall_table`` switch changes nothing (the doomed
+test is part of the problem); with M = 0 it is the exact speed-up described above.  Every bound
+stays admissible: the allowed plans are a subset of the paper's, so a lower bound on the cost of
+any completion bounds theirs; a warm start only offers allowed plans as upper bounds; a proof
+(``proof.py``) marks a node without allowed completions infinite only where it has none in the
+next search either (a doomed node stays doomed one stage later, with one stage more to go; a dead
+last node keeps its ``f``, as it is an inner node then), and a fallback search starts without one.
 """
 from __future__ import annotations
 
 import heapq
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .problem import Problem
 from .proof import ProvenBounds, back_up
+from .viable import dead_leaves, doomed_nodes, paper_problem
 
 __all__ = ["SearchStats", "Plan", "branch_and_bound", "exhaustive"]
 
@@ -47,7 +72,9 @@ class SearchStats:
     """What one search did.  ``expanded``: nodes whose children were simulated, those of the
     warm start's plans included.  Clipped counts are children (or queued nodes) dropped, by reason:
     collision, fall (the lean passed its bound), bound (cannot beat the best plan) and doomed
-    (will fall within the horizon whatever it does, ``fall_table.py``)."""
+    (will fall within the horizon, or with ``viable_stages`` before that many stages after it,
+    whatever it does, ``fall_table.py``; and last nodes that are dead ends).  After a fallback
+    to the paper's problem, the counts of both searches."""
 
     expanded: int
     generated: int
@@ -74,6 +101,10 @@ class Plan:
     stats: SearchStats
     proof: ProvenBounds | None = None
     """What the search proved about its subtrees, for the next replanning (``proof.py``)."""
+    leaf: tuple | None = None
+    """The plan's last node: ``(state (5,), C_f, t, s)``."""
+    viable: bool = True
+    """False when no plan with a viable last node exists and this is the paper's optimum."""
 
     @property
     def feasible(self) -> bool:
@@ -187,30 +218,41 @@ def _root(q, state, C_f, t0, s0, old):
 
 def _follow_choices(problem, state, C_f, t0, s0, choices):
     """Simulate one fixed plan (all q choices at its last stage when ``choices`` is one short).
-    Returns ``(cost, full choices, nodes whose children were simulated)`` of its best feasible
-    completion, or ``(inf, None, nodes)``."""
+    Returns ``(cost, full choices, nodes whose children were simulated, leaf)`` of its best
+    feasible completion (a viable last node: :func:`.viable.dead_leaves`), or ``(inf, None, nodes,
+    None)``."""
     st = problem.settings
     x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
     f = np.zeros(1)
     for k, c in enumerate(choices):
         r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
-        if r.collided[0] or r.fell[0]:
-            return np.inf, None, k + 1
+        if r.collided[0] or r.fell[0] or doomed_nodes(problem, r.state, r.C_f, k + 1)[0]:
+            return np.inf, None, k + 1, None
         x, cf, s, f, t = r.state, r.C_f, r.s, f + r.cost, t + st.t_stage
     if len(choices) < st.n_stages:
         q = st.q
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
-        fc = np.where(r.collided | r.fell, np.inf, f[0] + r.cost)
+        bad = r.collided | r.fell | doomed_nodes(problem, r.state, r.C_f, st.n_stages)
+        bad[~bad] = dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
+                                 r.s[~bad])
+        fc = np.where(bad, np.inf, f[0] + r.cost)
         j = int(np.argmin(fc))
         n = len(choices) + 1
-        return (float(fc[j]), list(choices) + [j], n) if np.isfinite(fc[j]) else (np.inf, None, n)
-    return float(f[0]), list(choices), len(choices)
+        if not np.isfinite(fc[j]):
+            return np.inf, None, n, None
+        return float(fc[j]), list(choices) + [j], n, (r.state[:, j].copy(), float(r.C_f[j]),
+                                                      t + st.t_stage, float(r.s[j]))
+    if dead_leaves(problem, x, cf, t, s)[0]:
+        return np.inf, None, len(choices), None
+    return float(f[0]), list(choices), len(choices), (x[:, 0].copy(), float(cf[0]), t,
+                                                      float(s[0]))
 
 
 def _greedy_dive(problem, state, C_f, t0, s0):
-    """A first complete plan: at each stage take the child with the least ``f + lower bound``.
-    Returns ``(cost, choices, nodes expanded)``, or ``(inf, None, nodes expanded)``."""
+    """A first complete plan: at each stage take the child with the least ``f + lower bound``
+    (at the last, only viable ones: :func:`.viable.dead_leaves`).  Returns ``(cost, choices, nodes
+    expanded, leaf)``, or ``(inf, None, nodes expanded, None)``."""
     st = problem.settings
     q = st.q
     x, cf, t, s = np.asarray(state, float).reshape(5, 1), np.array([C_f]), t0, np.array([s0])
@@ -220,13 +262,17 @@ def _greedy_dive(problem, state, C_f, t0, s0):
         r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
                                    np.full(q, t), np.repeat(s, q))
         key = f + r.cost + problem.lower_bound(r.d_last, depth, r.state, r.C_f)
-        key = np.where(r.collided | r.fell, np.inf, key)
+        bad = r.collided | r.fell | doomed_nodes(problem, r.state, r.C_f, depth)
+        if depth == st.n_stages:
+            bad[~bad] = dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
+                                     r.s[~bad])
+        key = np.where(bad, np.inf, key)
         j = int(np.argmin(key))
         if not np.isfinite(key[j]):
-            return np.inf, None, depth
+            return np.inf, None, depth, None
         choices.append(j)
         x, cf, s, f, t = r.state[:, [j]], r.C_f[[j]], r.s[[j]], f + r.cost[j], t + st.t_stage
-    return float(f), choices, st.n_stages
+    return float(f), choices, st.n_stages, (x[:, 0].copy(), float(cf[0]), t, float(s[0]))
 
 
 def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
@@ -243,17 +289,18 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     st = problem.settings
     clock = time.perf_counter()
     N = st.n_stages
-    ub, best = np.inf, None
+    ub, best, best_leaf = np.inf, None, None
     warm_cost = np.inf
     expanded = 0              # every node whose children are simulated, the warm start's too
     hot = False               # the first bound is the previous plan (usually the optimum)
     if st.warm_start:
         if previous is not None and len(previous) == N:
-            ub, best, n = _follow_choices(problem, state, C_f, t0, s0, list(previous[1:]))
+            ub, best, n, best_leaf = _follow_choices(problem, state, C_f, t0, s0,
+                                                     list(previous[1:]))
             expanded += n
             hot = best is not None
         if best is None:
-            ub, best, n = _greedy_dive(problem, state, C_f, t0, s0)
+            ub, best, n, best_leaf = _greedy_dive(problem, state, C_f, t0, s0)
             expanded += n
         warm_cost = ub
     if not st.reuse_proof:
@@ -262,7 +309,6 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     heap = [(0.0, 0, 0)]
     generated = leaves = 0
     clip_col = clip_fall = clip_bound = clip_doom = 0
-    table = problem.fall_table() if st.fall_table else None
     proven = True
     tol = lambda: _REL_TOL * max(1.0, abs(ub))     # noqa: E731
     while heap:
@@ -294,20 +340,30 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         clip_col += int(np.count_nonzero(r.collided))
         clip_fall += int(np.count_nonzero(r.fell & ~r.collided))
         alive = ~(r.collided | r.fell)
+        doomed = np.zeros(len(par), bool)
+        doomed[alive] = doomed_nodes(problem, r.state[:, alive], r.C_f[alive], depth[alive])
+        clip_doom += int(np.count_nonzero(doomed))
+        alive &= ~doomed
         leaf = alive & (depth == N)
+        dead = np.zeros(len(par), bool)
+        if leaf.any() and st.viable_stages:       # dead-end last nodes are not plans here
+            # Only those that could be the best plan need the (costly) check.
+            j = np.flatnonzero(leaf & ~(f > ub + tol()))
+            dead[j] = dead_leaves(problem, r.state[:, j], r.C_f[j],
+                                   nodes.cols["t"][par[j]] + st.t_stage, r.s[j])
+            clip_doom += int(np.count_nonzero(dead))
+            leaf &= ~dead
         leaves += int(np.count_nonzero(leaf))
         if leaf.any():
             f_min = f[leaf].min()
             if f_min <= ub:
                 tied = np.flatnonzero(leaf & (f == f_min))
-                plan = min(nodes.choices(int(par[j])) + [int(ch[j])] for j in tied)
+                plan, j = min((nodes.choices(int(par[j])) + [int(ch[j])], int(j)) for j in tied)
                 if f_min < ub or best is None or plan < list(best):
                     ub, best = float(f_min), plan
+                    best_leaf = (r.state[:, j].copy(), float(r.C_f[j]),
+                                 float(nodes.cols["t"][par[j]]) + st.t_stage, float(r.s[j]))
         inner = alive & (depth < N)
-        if table is not None and inner.any():
-            doomed = inner & table.doomed(r.state, r.C_f, (N - depth) * st.steps_per_stage)
-            clip_doom += int(np.count_nonzero(doomed))
-            inner &= ~doomed
         old = np.full(len(par), -1)
         togo = None
         if proof is not None:
@@ -330,7 +386,10 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                 problem, r, depth, None if togo is None else togo[k], True, k,
                 None if pairs is None else pairs[sub]))
             keep[k] = ~(prio[k] > ub + tol())
-        nodes.child_total[par, ch] = np.where(leaf, f, np.where(inner, prio, np.inf))
+        # A dead last node keeps its f: one stage on (the next search) it may have a live one.
+        # (A doomed one does not: it falls within the horizon and M stages, as does every node
+        # below it, and the next search's horizon ends one stage later.)
+        nodes.child_total[par, ch] = np.where(leaf | dead, f, np.where(inner, prio, np.inf))
         clip_bound += int(np.count_nonzero(inner & ~keep))
         if keep.any():
             k = np.flatnonzero(keep)
@@ -342,21 +401,36 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
     stats = SearchStats(expanded, generated, clip_col, clip_fall, clip_bound, clip_doom, leaves,
                         time.perf_counter() - clock, proven, float(warm_cost))
     if best is None:
+        if st.viable_stages:
+            # No plan ends viably: the paper's problem (its own proof; the one handed in was
+            # proved for the restricted problem and may mark its plans infeasible).
+            plan = branch_and_bound(paper_problem(problem), state, C_f, t0, s0, previous)
+            stats = SearchStats(**{**plan.stats.as_dict(), **{
+                k: getattr(stats, k) + getattr(plan.stats, k) for k in _COUNTS},
+                "wall_time": time.perf_counter() - clock})
+            return replace(plan, stats=stats, viable=False)
         return Plan((), (), math.inf, stats)
     return Plan(tuple(best), tuple(float(problem.u_values[c]) for c in best), float(ub), stats,
-                nodes.proof())
+                nodes.proof(), best_leaf)
 
 
+_COUNTS = ("expanded", "generated", "clipped_collision", "clipped_fall", "clipped_bound",
+           "clipped_doomed", "leaves")
 
-def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0):
+
+def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float = 0.0,
+               fallback: bool = True):
     """Reference: simulate all ``q^N`` plans level by level (clipping only collisions and falls)
-    and return ``(f_opt, choices)``, or ``(inf, None)`` when none survives."""
+    and return ``(f_opt, choices)`` of the problem stated in the module docstring (the least
+    cost of the allowed plans, or if there are none, of all: not with ``fallback=False``), or
+    ``(inf, None)`` when none survives."""
     st = problem.settings
     q = st.q
     x = np.asarray(state, float).reshape(5, 1)
     cf, t, s, f = np.array([C_f], float), np.array([t0], float), np.array([s0], float), np.zeros(1)
     paths = np.zeros((1, 0), np.int64)
-    for _ in range(st.n_stages):
+    ok = np.ones(1, bool)           # no node so far is doomed within the horizon and M stages
+    for depth in range(1, st.n_stages + 1):
         m = x.shape[1]
         par = np.repeat(np.arange(m), q)
         ch = np.tile(np.arange(q), m)
@@ -364,9 +438,15 @@ def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float =
         alive = ~(r.collided | r.fell)
         if not alive.any():
             return np.inf, None
+        ok = (ok[par] & ~doomed_nodes(problem, r.state, r.C_f, depth))[alive]
         x, cf, s = r.state[:, alive], r.C_f[alive], r.s[alive]
         f = (f[par] + r.cost)[alive]
         t = t[par][alive] + st.t_stage
         paths = np.concatenate([paths[par], ch[:, None]], axis=1)[alive]
+    viable = ok & ~dead_leaves(problem, x, cf, t, s)
+    if st.viable_stages and (viable.any() or not fallback):
+        f, paths = f[viable], paths[viable]
+        if not len(f):
+            return np.inf, None
     j = int(np.argmin(f))
     return float(f[j]), tuple(int(c) for c in paths[j])

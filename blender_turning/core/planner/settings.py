@@ -45,6 +45,11 @@ class PlannerSettings:
     fall_table: bool = True
     """Also clip nodes that provably fall within their remaining stages whatever they do
     (``fall_table.py``; exact).  Off: only the paper's clip of a branch that has fallen."""
+    viable_stages: int = 3
+    """Prefer plans that do not end in a dead end: a plan whose last node has no child that
+    survives one more stage, or one of whose nodes the fall table (``fall_table.py``) proves
+    will fall before this many stages after the horizon whatever it does, is only taken when no
+    other plan is feasible (``search.py`` states the problem solved); 0: the paper's problem."""
     reuse_proof: bool = True
     """Receding horizon: bound the cost still to come by what the previous search proved about
     the same subtree (``proof.py``; exact)."""
@@ -68,7 +73,9 @@ class PlannerSettings:
         check_range("lookahead", self.lookahead, 0, 1000)
         check_range("reach_directions", self.reach_directions, 0, 1000)
         check_range("max_expansions", self.max_expansions, 0, 1e12)
-        for name in ("n_stages", "q", "batch", "lookahead", "reach_directions", "max_expansions"):
+        check_range("viable_stages", self.viable_stages, 0, 64)
+        for name in ("n_stages", "q", "batch", "lookahead", "reach_directions", "max_expansions",
+                     "viable_stages"):
             if int(getattr(self, name)) != getattr(self, name):
                 raise ValueError(f"{name} = {getattr(self, name)!r} is not a whole number")
         for name in ("t_stage", "sample_dt"):

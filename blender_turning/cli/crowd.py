@@ -1,0 +1,118 @@
+"""``crowd``: many figures in one shot from a crowd scene file (README, "Crowds").
+
+Writes ``DIR/<figure>.csv`` per figure (DESIGN.md columns, ``t`` on the crowd's clock) and
+``DIR/summary.json``.  Parametric figures run as batches here; path figures are planned one task
+each on ``--workers K`` local processes or a Dask scheduler (``--scheduler ADDRESS``).  A figure
+that falls or finds no feasible plan is written up to there, listed in the summary, and makes
+the command end with one line and exit 2.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from ..core.params import check_range
+from ..core.ranges import MAX_SAMPLES
+from ..crowd import load_crowd, run_crowd
+from ..crowd.moving import MovingBodies, closest_approach
+from .common import Outputs
+from .progress import Progress
+
+
+def register(sub):
+    p = sub.add_parser("crowd", help="many figures: formations, batches, parallel planning",
+                       description="Simulate and plan every figure of a crowd scene file; one "
+                                   "trajectory CSV per figure plus summary.json.")
+    p.add_argument("scene", help="crowd scene JSON file (see README, 'Crowds')")
+    p.add_argument("--out", required=True, help="folder for the CSVs and summary.json")
+    engine = p.add_mutually_exclusive_group()
+    engine.add_argument("--workers", type=int, default=1,
+                        help="local worker processes for path planning (default 1: this one)")
+    engine.add_argument("--scheduler", help="address of a running Dask distributed scheduler "
+                                            "(tcp://host:8786), needs the cluster extra")
+    p.add_argument("--fps", type=float, help="write frames at this rate (default: the samples)")
+    p.set_defaults(func=run)
+
+
+def run(args) -> int:
+    check_range("--workers", args.workers, 1, 1024)
+    if args.fps is not None:
+        check_range("--fps", args.fps, 0.0, 1000.0, lo_open=True)
+    crowd = load_crowd(args.scene)
+    if args.fps is not None and crowd.duration * args.fps > MAX_SAMPLES:
+        raise ValueError(f"--fps {args.fps:g} x duration {crowd.duration:g} s is more than "
+                         f"{MAX_SAMPLES:,} frames a figure")
+    out = Path(args.out)
+    made = not out.exists()
+    if made and not out.parent.resolve().is_dir():
+        raise ValueError(f"--out = {args.out!r}: the folder {str(out.parent.resolve())!r} "
+                         f"does not exist")
+    out.mkdir(exist_ok=True)
+    outputs = Outputs()                       # every file checked before the work
+    try:
+        for f in crowd.figures:
+            outputs.reserve(f"--out {f.name}.csv", out / f"{f.name}.csv")
+        outputs.reserve("--out summary.json", out / "summary.json")
+        with Progress(len(crowd.figures), "figure", "crowd") as bar:
+            result = run_crowd(crowd, workers=args.workers, scheduler=args.scheduler,
+                               progress=bar)
+    except BaseException:
+        outputs.discard()
+        if made:
+            out.rmdir()
+        raise
+    tracks = [(f.name, r.trajectory, f.figure.body.l) for f, r in zip(crowd.figures,
+                                                                    result.figures)]
+    near = closest_approach(MovingBodies.from_tracks(tracks, dt=0.1)) \
+        if any(tr is not None and len(tr) for _, tr, _ in tracks) else {}
+    rows = []
+    for f, r in zip(crowd.figures, result.figures):
+        traj = r.trajectory
+        if traj is not None and args.fps is not None and len(traj) > 1:
+            traj = traj.resample(args.fps, start=math.ceil(traj.t[0] * args.fps) / args.fps)
+        csv = None
+        if traj is not None and len(traj):
+            csv = f"{f.name}.csv"
+            outputs.write(f"--out {csv}", traj.to_csv)
+        rows.append(_row(f, r, traj, csv))
+        if f.name in near:           # foot-CM segments sampled every 0.1 s (crowd/moving.py)
+            d, other, t = near[f.name]
+            rows[-1]["closest"] = {"distance_m": d if math.isfinite(d) else None,
+                                   "to": other, "t": t}
+    doc = {"crowd": crowd.name, "seed": crowd.seed, "duration": crowd.duration, "dt": crowd.dt,
+           "fps": args.fps, "figures": rows, "failed": [r.name for r in result.failed],
+           "wall_time": result.wall_time,
+           "engine": {"workers": args.workers, "scheduler": args.scheduler}}
+    text = json.dumps(doc, indent=1)
+    outputs.write("--out summary.json", lambda path: path.write_text(text))
+    outputs.commit(only=[f"--out {f.name}.csv" for f, row in zip(crowd.figures, rows)
+                         if row["csv"]] + ["--out summary.json"])
+    n_path = sum(f.is_path for f in crowd.figures)
+    print(f"crowd: {crowd.name}, {len(crowd.figures)} figures ({n_path} following paths), "
+          f"{result.wall_time:.2f} s -> {out}")
+    if result.failed:
+        first = result.failed[0]
+        raise ValueError(f"{len(result.failed)} of {len(crowd.figures)} figures failed (see "
+                         f"{out / 'summary.json'}); {first.name}: {first.message}")
+    return 0
+
+
+def _row(f, r, traj, csv) -> dict:
+    row = {"name": f.name, "preset": f.figure.name, "controller": "path" if f.is_path else
+           "turns", "time_offset": f.time_offset, "status": r.status, "message": r.message,
+           "csv": csv, "cpu_time": r.cpu_time,
+           "body": {"m": f.figure.body.m, "l": f.figure.body.l, "I_v": f.figure.body.I_v,
+                    "V_cm": f.figure.body.V_cm}}
+    if not f.is_path:
+        c = f.controller
+        row["turns"] = {"period": c.period, "lean_deg": math.degrees(c.lean),
+                        "heading_deg": None if c.heading is None else math.degrees(c.heading),
+                        "first_turn": f.first_turn}
+    if traj is not None and len(traj):
+        row.update(t_start=float(traj.t[0]), t_end=float(traj.t[-1]), samples=len(traj),
+                   distance=float(traj.s[-1]),
+                   lean_max_deg=math.degrees(float(abs(traj.theta_v).max())))
+    if r.plan:
+        row["plan"] = r.plan
+    return row

@@ -1,0 +1,197 @@
+"""Formations: crowds generated from a template figure and a seed (issue 11).
+
+- :func:`follow_leader`: ``count`` figures on the leader's track, each ``gap`` seconds (or metres)
+  further behind, with a lateral offset and small random differences of body and timing.
+- :func:`synchronized`: a pair or a line turning in phase or in antiphase (the figure-8s of the
+  paper's Fig. 10, track 1: two figures on one line, out of phase).
+- :func:`peloton`: riders on a road path in rows of ``abreast``, rows ``gap`` metres apart.
+
+Random choices come from ``random.Random`` seeded by the formation's seed and name, drawn in a
+fixed order per figure, so a crowd is the same on every machine and in every process.
+"""
+from __future__ import annotations
+
+import math
+import random
+from dataclasses import replace
+
+import numpy as np
+
+from ..core.params import check_range
+from ..core.path import HermitePath
+from .model import CrowdFigure, FollowPath, Turns
+
+__all__ = ["follow_leader", "synchronized", "peloton", "offset_path", "point_at_distance"]
+
+
+def _left(v) -> np.ndarray:
+    """The unit vector 90 deg counter-clockwise of ``v`` (the figure's left)."""
+    v = np.asarray(v, float) / np.linalg.norm(v)
+    return np.array([-v[1], v[0]])
+
+
+def offset_path(path: HermitePath, d: float) -> HermitePath:
+    """``path`` moved ``d`` m to its left (negative: right): each knot moves along the mitred
+    normal (``d / cos`` of half the corner's angle, so both straight legs of a corner stay ``d``
+    away), the tangents are kept.  Exact for straight segments; on a curved one the offset
+    differs from ``d`` by the order of ``d^2`` times its curvature."""
+    if d == 0.0:
+        return path
+    n = path.n_segments
+    knots = path.knots.copy()
+    for i in range(n + 1):
+        a = path.t_in[i - 1] if i > 0 else path.t_out[0]
+        b = path.t_out[i] if i < n else path.t_in[n - 1]
+        ua, ub = a / np.linalg.norm(a), b / np.linalg.norm(b)
+        if np.linalg.norm(ua + ub) < 1e-6:           # a reversal: no mitre, use the way out
+            knots[i] += d * _left(ub)
+            continue
+        m = _left(ua + ub)
+        knots[i] += d * m / float(m @ _left(ub))
+    return HermitePath(knots, path.t_out, path.t_in)
+
+
+def point_at_distance(path: HermitePath, s: float):
+    """The point ``(x, y)`` and the heading (rad) ``s`` m along ``path`` (64 chords per
+    segment); ``ValueError`` beyond its length."""
+    pts = path.sample(64)
+    seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+    cum = np.concatenate([[0.0], np.cumsum(seg)])
+    if not 0.0 <= s <= cum[-1]:
+        raise ValueError(f"{s:g} m along the path is beyond its length ({cum[-1]:.1f} m)")
+    i = min(int(np.searchsorted(cum, s, side="right")) - 1, len(seg) - 1)
+    u = (s - cum[i]) / seg[i] if seg[i] > 0 else 0.0
+    p = pts[i] + u * (pts[i + 1] - pts[i])
+    d = pts[i + 1] - pts[i]
+    return p, math.atan2(d[1], d[0])
+
+
+def _jittered_body(fig, rng: random.Random, jitter: float):
+    """The body with ``m``, ``l`` and ``I_v`` each scaled by ``1 + U(-jitter, jitter)`` (drawn
+    in that order, always, so the stream does not depend on ``jitter``)."""
+    scale = [1.0 + jitter * (2.0 * rng.random() - 1.0) for _ in range(3)]
+    if jitter == 0.0:
+        return fig
+    b = fig.body
+    return replace(fig, body=replace(b, m=b.m * scale[0], l=b.l * scale[1], I_v=b.I_v * scale[2]))
+
+
+def _moved(member: CrowdFigure, name, fig, lateral, s_along=None, **changes) -> CrowdFigure:
+    """``member`` renamed, with body ``fig``, moved ``lateral`` m to the left of its start
+    heading (a path figure: its path offset too; ``s_along``: started that far along it)."""
+    if not member.is_path:
+        head = member.state0()[2] if member.controller.heading is None \
+            else member.controller.heading
+        pos = np.asarray(member.position) + lateral * _left([math.cos(head), math.sin(head)])
+        return replace(member, name=name, figure=fig, position=tuple(pos), **changes)
+    sc = member.controller.scene
+    path = offset_path(sc.path, lateral)
+    state0 = np.array(sc.state0, float)
+    if s_along is not None:
+        p, head = point_at_distance(path, s_along)
+        state0[:3] = p[0], p[1], head
+    else:
+        state0[:2] += lateral * _left([math.cos(state0[2]), math.sin(state0[2])])
+    scene = replace(sc, name=f"{sc.name}/{name}", figure=fig, path=path, state0=state0)
+    return replace(member, name=name, figure=fig, controller=FollowPath(scene), **changes)
+
+
+def _laterals(lateral, count) -> list:
+    vals = list(lateral) if isinstance(lateral, (list, tuple, np.ndarray)) else [lateral]
+    if not vals:
+        raise ValueError("lateral is an empty list")
+    for v in vals:
+        check_range("lateral", v, -1e3, 1e3)
+    return [float(vals[i % len(vals)]) for i in range(count)]
+
+
+def follow_leader(leader: CrowdFigure, count: int, gap: float, by: str = "time",
+                  lateral=0.0, seed: int = 0, body_jitter: float = 0.0,
+                  timing_jitter: float = 0.0, period_jitter: float = 0.0,
+                  name: str | None = None) -> tuple:
+    """``count`` followers on the leader's track: follower ``i`` (1-based) starts ``i gap`` s
+    after the leader (``by="distance"``: ``gap`` m, i.e. ``gap / V_cm`` s at the leader's speed)
+    from the leader's start moved ``lateral`` m to the left (a number, or a list cycled over
+    the followers: ``[-1, 1]`` alternates sides).  A path leader's followers follow its path
+    offset by the same amount.  Random differences, uniform in ``+-``: ``body_jitter`` (relative,
+    on ``m``, ``l``, ``I_v``), ``timing_jitter`` (s, on the start time) and ``period_jitter``
+    (relative, on the turn period; turns only).  Followers are named ``<name>1 ...``
+    (default: the leader's name + ``"-"``)."""
+    check_range("count", count, 1, 10000)
+    if by not in ("time", "distance"):
+        raise ValueError(f"by = {by!r} is not one of time, distance")
+    check_range("gap", gap, 0.0, 1e4, lo_open=True)
+    check_range("body_jitter", body_jitter, 0.0, 0.3)
+    check_range("period_jitter", period_jitter, 0.0, 0.3)
+    gap_t = gap if by == "time" else gap / leader.figure.body.V_cm
+    check_range("timing_jitter", timing_jitter, 0.0, 0.5 * gap_t)
+    prefix = f"{leader.name}-" if name is None else name
+    rng = random.Random(f"follow_leader:{seed}:{prefix}")
+    out = []
+    for i, lat in enumerate(_laterals(lateral, int(count)), start=1):
+        fig = _jittered_body(leader.figure, rng, body_jitter)
+        late = timing_jitter * (2.0 * rng.random() - 1.0)
+        stretch = 1.0 + period_jitter * (2.0 * rng.random() - 1.0)
+        changes = {"time_offset": leader.time_offset + i * gap_t + late}
+        if not leader.is_path:
+            changes["controller"] = replace(leader.controller,
+                                            period=leader.controller.period * stretch)
+        out.append(_moved(leader, f"{prefix}{i}", fig, lat, **changes))
+    return tuple(out)
+
+
+def synchronized(template: CrowdFigure, count: int = 2, spacing: float = 0.0,
+                 antiphase: bool = True, name: str | None = None, gap: float = 0.0) -> tuple:
+    """``count`` figures turning together on a line across the heading, ``spacing`` m apart
+    (centred on the template's start); with ``antiphase`` every other one starts with the
+    opposite turn (``count = 2, spacing = 0``: the figure-8s of Fig. 10, track 1).  ``gap``
+    (s): each one starts that much after the one before, in the same place (synchronised
+    skiers drawing figure-8s ski one behind the other; ``gap = 0`` starts them together, on
+    top of each other when ``spacing`` is 0).  Named ``<name>1 ...`` (default: the template's
+    name)."""
+    if template.is_path:
+        raise ValueError("synchronized needs a turns template (the parametric controller)")
+    check_range("count", count, 1, 10000)
+    check_range("spacing", spacing, 0.0, 1e3)
+    check_range("gap", gap, 0.0, 1e4)
+    prefix = template.name if name is None else name
+    flip = {"left": "right", "right": "left"}
+    out = []
+    for k in range(int(count)):
+        first = flip[template.first_turn] if antiphase and k % 2 else template.first_turn
+        out.append(_moved(template, f"{prefix}{k + 1}", template.figure,
+                          (k - 0.5 * (count - 1)) * spacing, first_turn=first,
+                          time_offset=template.time_offset + k * gap))
+    return tuple(out)
+
+
+def peloton(template: CrowdFigure, count: int, gap: float, abreast: int = 2,
+            spacing: float = 0.8, seed: int = 0, body_jitter: float = 0.0,
+            name: str | None = None) -> tuple:
+    """``count`` riders on the template's path, ``abreast`` to a row ``spacing`` m apart,
+    rows ``gap`` m apart along the path; all start at once (the template's time offset), the
+    back row at the path's start, each rider on the path offset by its place in the row.
+    ``body_jitter`` as in :func:`follow_leader`.  Named ``<name>1 ...`` from the front."""
+    if not template.is_path:
+        raise ValueError("peloton needs a path template (the riders follow a road)")
+    check_range("count", count, 1, 10000)
+    check_range("gap", gap, 0.0, 1e3, lo_open=True)
+    check_range("abreast", abreast, 1, 100)
+    check_range("spacing", spacing, 0.0, 1e2)
+    check_range("body_jitter", body_jitter, 0.0, 0.3)
+    count, abreast = int(count), int(abreast)
+    rows = -(-count // abreast)
+    length = template.controller.scene.path.length()
+    if (rows - 1) * gap >= length:
+        raise ValueError(f"gap = {gap:g} m: {rows} rows need {(rows - 1) * gap:g} m of a "
+                         f"{length:.1f} m path")
+    prefix = template.name if name is None else name
+    rng = random.Random(f"peloton:{seed}:{prefix}")
+    out = []
+    for k in range(count):
+        row, col = divmod(k, abreast)
+        in_row = min(abreast, count - row * abreast)
+        fig = _jittered_body(template.figure, rng, body_jitter)
+        out.append(_moved(template, f"{prefix}{k + 1}", fig, (col - 0.5 * (in_row - 1)) * spacing,
+                          s_along=(rows - 1 - row) * gap))
+    return tuple(out)

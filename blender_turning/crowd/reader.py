@@ -1,0 +1,187 @@
+"""Crowd scene files (JSON; the format is in README.md, "Crowds"): read, validate, build.
+
+Every problem is one ``ValueError`` (:class:`~..core.validate.FieldError`) naming the file and
+the field, read by the core's one validator with the core's ranges where the field is the
+core's (``ski_school.json: figures[1].turns.period = -2 is outside the allowed range [0.3, 20]
+s``).  A path figure's ``follow`` object is a path-following scene (README, "Path following"),
+read by the core's scene reader; its errors name the crowd file and ``figures[i].follow``.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+from pathlib import Path
+
+from ..core.params import PRESETS, preset
+from ..core.ranges import RANGES, Range
+from ..core.scene import scene_from_dict
+from ..core.validate import FieldError, Fields, read_text
+from . import formations as formations_
+from .model import FIRST_TURNS, Crowd, CrowdFigure, FollowPath, Turns
+
+__all__ = ["load_crowd", "crowd_from_dict", "CROWD_RANGES"]
+
+CROWD_RANGES = {
+    "seed": Range(0, 2**63 - 1, "", "any whole number", integer=True),
+    "count": Range(1, 10000, "", "figures a formation adds", integer=True),
+    "time_offset": Range(0.0, 1e5, "s", "when a figure starts on the crowd's clock"),
+    "gap_s": Range(0.0, 1e4, "s", "time between successive figures", lo_open=True),
+    "gap_m": Range(0.0, 1e4, "m", "distance between successive figures or rows",
+                   lo_open=True),
+    "sync_gap_s": Range(0.0, 1e4, "s", "time between successive figures"),
+    "lateral_m": Range(-1e3, 1e3, "m", "sideways offset, to the left of the heading"),
+    "spacing_m": Range(0.0, 1e3, "m", "distance between figures side by side"),
+    "abreast": Range(1, 100, "", "riders in a row", integer=True),
+    "jitter": Range(0.0, 0.3, "", "relative random difference, up to 30 %"),
+    "timing_jitter_s": Range(0.0, 1e3, "s", "random difference of the start time (at most "
+                             "half the gap)"),
+}
+_TOP = {"name", "description", "seed", "duration", "dt", "figures", "formations"}
+_FIGURE = {"name", "preset", "body", "limits", "turns", "follow", "start", "time_offset"}
+_FORMATIONS = {
+    "follow_leader": {"type", "leader", "count", "gap_s", "gap_m", "lateral_m", "body_jitter",
+                      "timing_jitter_s", "period_jitter", "name", "seed"},
+    "synchronized": {"type", "template", "count", "spacing_m", "antiphase", "gap_s", "name"},
+    "peloton": {"type", "template", "count", "gap_m", "abreast", "spacing_m", "body_jitter",
+                "name", "seed"},
+}
+
+
+def load_crowd(path) -> Crowd:
+    """Read and validate a crowd scene file (a path figure's ``follow.scene`` file names are
+    relative to it)."""
+    text = read_text(path, "crowd file")
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FieldError(f"crowd file {str(path)!r} is not valid JSON ({exc})") from None
+    return crowd_from_dict(doc, Path(path).parent, Path(path).name)
+
+
+def crowd_from_dict(doc, base_dir=".", source: str = "crowd") -> Crowd:
+    """Validate a parsed crowd document; errors name ``source`` and the field."""
+    if not isinstance(doc, dict):
+        raise FieldError(f"{source}: the crowd must be a JSON object, not {type(doc).__name__}")
+    top = Fields(doc, source).only(_TOP)
+    seed = top.number("seed", CROWD_RANGES["seed"], 0)
+    figures = [_figure(f, Path(base_dir)) for f in top.tables("figures", _FIGURE)]
+    for i, f in enumerate(top.tables("formations")):
+        figures.extend(_formation(f, figures, seed, Path(base_dir)))
+    if not figures:
+        top.fail("figures", "is empty (and no formation adds any)")
+    duration = top.number("duration", "duration")
+    dt = top.number("dt", "dt", 0.02)
+    try:
+        return Crowd(top.string("name", "crowd"), tuple(figures), duration, dt, seed)
+    except ValueError as exc:
+        raise FieldError(f"{source}: {exc}") from None
+
+
+def _figure(f: Fields, base: Path) -> CrowdFigure:
+    name = f.string("name")
+    kinds = [k for k in ("turns", "follow") if f.has(k)]
+    if len(kinds) != 1:
+        f.fail("turns", "or follow: exactly one is needed")
+    offset = f.number("time_offset", CROWD_RANGES["time_offset"], 0.0)
+    try:
+        if kinds[0] == "follow":
+            if f.has("start"):
+                f.fail("start", "is for turns; a path figure starts where its follow.start says")
+            scene = _scene(f, base)
+            return CrowdFigure(name, scene.figure, FollowPath(scene), time_offset=offset)
+        t = f.table("turns", {"period", "lean_deg", "heading_deg"}, required=True)
+        heading = t.number("heading_deg", RANGES["heading"].deg(), 0.0) \
+            if t.value("heading_deg", 0.0) is not None else None
+        turns = Turns(t.number("period", "period"),
+                      math.radians(t.number("lean_deg", RANGES["theta_max"].deg())),
+                      None if heading is None else math.radians(heading))
+        s = f.table("start", {"position", "first_turn"})
+        return CrowdFigure(name, _body(f), turns, tuple(s.xy("position", [0.0, 0.0])),
+                           s.string("first_turn", "left", FIRST_TURNS), offset)
+    except FieldError:
+        raise
+    except ValueError as exc:                 # a combination the model refuses
+        raise FieldError(f"{f.source}: {f.path}: {exc}") from None
+
+
+def _body(f: Fields):
+    """The preset with the figure's ``body`` and ``limits`` overrides (the core's ranges)."""
+    fig = preset(f.string("preset", choices=tuple(PRESETS)))
+    body = f.table("body", {"m", "l", "I_v", "V_cm", "g"})
+    lim = f.table("limits", {"C_f_max", "dC_f_max", "theta_fall_deg"})
+    b = {k: body.number(k, k) for k in body.keys()}
+    lm = {k: lim.number(k, k) for k in ("C_f_max", "dC_f_max") if lim.has(k)}
+    if lim.has("theta_fall_deg"):
+        lm["theta_fall"] = math.radians(lim.number("theta_fall_deg",
+                                                   RANGES["theta_fall"].deg()))
+    return replace(fig, body=replace(fig.body, **b), limits=replace(fig.limits, **lm))
+
+
+def _scene(f: Fields, base: Path):
+    """The path-following scene of ``follow``: its ``scene`` file (relative to the crowd file)
+    with its objects overridden key by key, the figure's ``preset``/``body``/``limits`` as its
+    figure."""
+    follow = f.table("follow", required=True)
+    doc = dict(follow.doc)
+    if "scene" in doc:
+        ref = follow.string("scene")
+        try:
+            loaded = json.loads(read_text(base / ref, "scene file"))
+        except (ValueError, OSError) as exc:
+            follow.fail("scene", f"= {ref!r} cannot be read ({exc})")
+        if not isinstance(loaded, dict):
+            follow.fail("scene", f"= {ref!r} is not a JSON object")
+        doc = {**loaded, **{k: {**loaded[k], **v} if isinstance(v, dict) and isinstance(
+            loaded.get(k), dict) else v for k, v in doc.items() if k != "scene"}}
+    fig_doc = {k: f.doc[k] for k in ("preset", "body", "limits") if k in f.doc}
+    if fig_doc:
+        doc["figure"] = fig_doc
+    doc.setdefault("name", f.doc["name"])
+    return scene_from_dict(doc, f"{f.source}: {follow.path}")
+
+
+def _formation(f: Fields, figures: list, seed: int, base: Path) -> tuple:
+    kind = f.string("type", choices=tuple(_FORMATIONS))
+    f.only(_FORMATIONS[kind])
+    name = f.string("name", None)
+    count = f.number("count", CROWD_RANGES["count"], None if kind == "peloton" or
+                     kind == "follow_leader" else 2)
+    if count is None:
+        f.fail("count", "is missing")
+    try:
+        if kind == "follow_leader":
+            lead = f.string("leader")
+            leader = next((m for m in figures if m.name == lead), None)
+            if leader is None:
+                f.fail("leader", f"= {lead!r} names no figure defined before it")
+            if f.has("gap_s") == f.has("gap_m"):
+                f.fail("gap_s", "or gap_m: exactly one is needed")
+            by = "time" if f.has("gap_s") else "distance"
+            lateral = f.value("lateral_m", 0.0)
+            lateral = f.numbers("lateral_m", CROWD_RANGES["lateral_m"]) \
+                if isinstance(lateral, list) else f.number("lateral_m",
+                                                           CROWD_RANGES["lateral_m"], 0.0)
+            return formations_.follow_leader(
+                leader, count, f.number("gap_s" if by == "time" else "gap_m",
+                                        CROWD_RANGES["gap_s" if by == "time" else "gap_m"]),
+                by, lateral, f.number("seed", CROWD_RANGES["seed"], seed),
+                f.number("body_jitter", CROWD_RANGES["jitter"], 0.0),
+                f.number("timing_jitter_s", CROWD_RANGES["timing_jitter_s"], 0.0),
+                f.number("period_jitter", CROWD_RANGES["jitter"], 0.0), name)
+        template = _figure(f.table("template", _FIGURE, required=True), base)
+        if kind == "synchronized":
+            return formations_.synchronized(
+                template, count, f.number("spacing_m", CROWD_RANGES["spacing_m"], 0.0),
+                f.boolean("antiphase", True), name,
+                f.number("gap_s", CROWD_RANGES["sync_gap_s"], 0.0))
+        return formations_.peloton(
+            template, count, f.number("gap_m", CROWD_RANGES["gap_m"]),
+            f.number("abreast", CROWD_RANGES["abreast"], 2),
+            f.number("spacing_m", CROWD_RANGES["spacing_m"], 0.8),
+            f.number("seed", CROWD_RANGES["seed"], seed),
+            f.number("body_jitter", CROWD_RANGES["jitter"], 0.0), name)
+    except FieldError:
+        raise
+    except ValueError as exc:                 # a combination the formation refuses
+        raise FieldError(f"{f.source}: {f.path}: {exc}") from None

@@ -1,0 +1,210 @@
+"""Running a crowd: parametric figures in batches, path figures one task each, on any executor.
+
+The work is split into tasks the same way whatever runs them: one task per group of
+:class:`~.model.Turns` figures that share a body and limits (one batch of
+:func:`blender_turning.core.run`, per-figure ellipses, a figure that falls stops alone), and one
+task per :class:`~.model.FollowPath` figure (the planner of Section 6).  Tasks run in this
+process (``workers=1``), on a :class:`concurrent.futures.ProcessPoolExecutor` (``workers=K``),
+on a Dask distributed scheduler (``scheduler="tcp://..."``, through ``Client.get_executor()``)
+or on any ``concurrent.futures``-style executor the caller passes.  Nothing random is drawn
+here and every figure's result depends only on its own data, so the trajectories are the same
+bit for bit whatever the engine and the number of workers (tests hold them to ``==``).
+"""
+from __future__ import annotations
+
+import math
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.controllers import PhaseEllipse
+from ..core.errors import PlanInfeasible, TurningError
+from ..core.simulate import run
+from ..core.trajectory import Trajectory, body_meta
+from .model import Crowd, CrowdFigure
+
+__all__ = ["FigureResult", "CrowdResult", "run_crowd", "crowd_tasks", "run_task", "execute"]
+
+
+@dataclass(frozen=True, eq=False)
+class FigureResult:
+    """One figure's outcome.  ``trajectory`` is on the crowd's clock (``t`` starts at the
+    figure's ``time_offset``) and ends at the fall or where planning failed; ``status`` is
+    ``"ok"``, ``"fell"``, ``"infeasible"`` (no feasible plan) or ``"failed"`` (another domain
+    error of the planner, e.g. the path not finished in time; ``message`` says when and
+    where).  ``cpu_time``:
+    CPU seconds of the task that computed it (shared by a batch), ``plan`` the planner's totals
+    (path figures)."""
+
+    name: str
+    trajectory: Trajectory | None
+    status: str = "ok"
+    message: str = ""
+    cpu_time: float = 0.0
+    plan: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True, eq=False)
+class CrowdResult:
+    crowd: Crowd
+    figures: tuple
+    wall_time: float = 0.0
+
+    @property
+    def failed(self) -> tuple:
+        return tuple(r for r in self.figures if r.status != "ok")
+
+    def __getitem__(self, name: str) -> FigureResult:
+        for r in self.figures:
+            if r.name == name:
+                return r
+        raise KeyError(name)
+
+
+def crowd_tasks(crowd: Crowd) -> list:
+    """The crowd's tasks, in a fixed order: each a ``("turns", dt, duration, figures)`` batch
+    (figures sharing a body, limits and the presence of heading control, in crowd order) or a
+    ``("path", figure)``."""
+    groups, tasks = {}, []
+    for f in crowd.figures:
+        if f.is_path:
+            tasks.append(("path", f))
+            continue
+        key = (f.figure.body, f.figure.limits, f.controller.heading is None)
+        if key not in groups:
+            groups[key] = []
+            tasks.append(("turns", crowd.dt, crowd.duration, groups[key]))
+        groups[key].append(f)
+    return [(t[0], t[1], t[2], tuple(t[3])) if t[0] == "turns" else t for t in tasks]
+
+
+def run_task(task) -> list:
+    """Run one task of :func:`crowd_tasks` (in any process): a list of :class:`FigureResult`."""
+    cpu = time.process_time()
+    if task[0] == "path":
+        out = [_plan(task[1])]
+    else:
+        out = _batch(*task[1:])
+    cpu = time.process_time() - cpu
+    return [FigureResult(r.name, r.trajectory, r.status, r.message, cpu, r.plan) for r in out]
+
+
+def _on_crowd_clock(traj: Trajectory, f: CrowdFigure) -> Trajectory:
+    cols = traj.columns()
+    cols["t"] = cols["t"] + f.time_offset
+    return Trajectory.from_columns(cols, {**traj.meta, "figure": f.name,
+                                          "time_offset": f.time_offset})
+
+
+def _plan(f: CrowdFigure) -> FigureResult:
+    try:
+        res = f.controller.scene.run()
+    except TurningError as exc:      # no feasible plan, the path not finished in time, ...
+        tr = getattr(exc, "trajectory", None)
+        tr = None if tr is None else _on_crowd_clock(tr, f)
+        return FigureResult(f.name, tr, "infeasible" if isinstance(exc, PlanInfeasible)
+                            else "failed", str(exc))
+    return FigureResult(f.name, _on_crowd_clock(res.trajectory, f),
+                        plan={**res.totals(), "reached_end": res.reached_end})
+
+
+def _batch(dt: float, duration: float, figures: tuple) -> list:
+    """One batch of parametric figures (Section 5) sharing body and limits, each run for the
+    crowd's duration less its time offset, on its own clock."""
+    fig = figures[0].figure
+    w = np.array([f.controller.omega0 for f in figures])
+    tm = np.array([f.controller.lean for f in figures])
+    heading = None if figures[0].controller.heading is None \
+        else np.array([f.controller.heading for f in figures])
+    state0 = np.stack([f.state0() for f in figures], axis=1)
+    spans = [duration - f.time_offset for f in figures]
+    r = run(fig.body, fig.limits, PhaseEllipse(fig.body, w, tm, heading=heading), state0,
+            max(spans), dt)
+    fell = dict(r.falls)
+    out = []
+    for k, f in enumerate(figures):
+        n = min(int(math.floor(spans[k] / dt + 1e-9)) + 1, len(r.columns["t"]))
+        status, msg = "ok", ""
+        if k in fell:
+            n = min(n, int(round(fell[k] / dt)) + 1)
+            status = "fell"
+            msg = f"fell over at t = {fell[k] + f.time_offset:.2f} s"
+        cols = {c: v[:n, k] for c, v in r.columns.items()}
+        meta = {"preset": fig.name, "dt": dt, **body_meta(fig.body)}
+        out.append(FigureResult(f.name, _on_crowd_clock(Trajectory.from_columns(cols, meta), f),
+                                status, msg))
+    return out
+
+
+def run_crowd(crowd: Crowd, workers: int = 1, scheduler: str | None = None, executor=None,
+              progress=None) -> CrowdResult:
+    """Simulate and plan every figure of ``crowd``.
+
+    ``workers``: local worker processes (1: this process); ``scheduler``: the address of a
+    running Dask distributed scheduler (needs ``dask[distributed]``, the ``cluster`` extra);
+    ``executor``: any object with ``submit(fn, arg)`` returning ``concurrent.futures.Future``
+    (e.g. ``Client.get_executor()``), used as given and not shut down.  At most one of
+    ``workers > 1``, ``scheduler`` and ``executor``.  ``progress(done, total)`` is called with
+    the number of figures done after each task.  Failures (a fall, no feasible plan) are
+    reported per figure in :attr:`CrowdResult.figures`, not raised."""
+    clock = time.perf_counter()
+    tasks = crowd_tasks(crowd)
+    total = len(crowd.figures)
+    results, done = {}, 0
+
+    def collect(i, rs):
+        nonlocal done
+        results[i] = rs
+        done += len(rs)
+        if progress is not None:
+            progress(done, total)
+
+    execute(run_task, tasks, collect, workers, scheduler, executor)
+    by_name = {r.name: r for i in range(len(tasks)) for r in results[i]}
+    return CrowdResult(crowd, tuple(by_name[f.name] for f in crowd.figures),
+                       time.perf_counter() - clock)
+
+
+def execute(fn, tasks, collect, workers: int = 1, scheduler: str | None = None,
+            executor=None) -> None:
+    """``collect(i, fn(tasks[i]))`` for every task, as they finish, on the engine chosen as in
+    :func:`run_crowd` (``fn`` must be a module-level function, so other processes can import
+    it)."""
+    if isinstance(workers, bool) or int(workers) != workers or not 1 <= workers <= 1024:
+        raise ValueError(f"workers = {workers!r} is outside the allowed range [1, 1024]")
+    if sum((workers > 1, scheduler is not None, executor is not None)) > 1:
+        raise ValueError("give at most one of workers > 1, scheduler and executor")
+    if scheduler is not None:
+        client = _dask_client(scheduler)
+        try:
+            _fan_out(client.get_executor(), fn, tasks, collect)
+        finally:
+            client.close()
+    elif executor is not None:
+        _fan_out(executor, fn, tasks, collect)
+    elif workers > 1:
+        with ProcessPoolExecutor(max_workers=int(workers)) as pool:
+            _fan_out(pool, fn, tasks, collect)
+    else:
+        for i, task in enumerate(tasks):
+            collect(i, fn(task))
+
+
+def _fan_out(executor, fn, tasks, collect) -> None:
+    futures = {executor.submit(fn, task): i for i, task in enumerate(tasks)}
+    for fut in as_completed(futures):
+        collect(futures[fut], fut.result())
+
+
+def _dask_client(address: str):
+    try:
+        from dask.distributed import Client
+    except ImportError:
+        raise ValueError("--scheduler needs dask.distributed "
+                         "(pip install 'blender-turning[cluster]')") from None
+    try:
+        return Client(address, timeout=10)
+    except (OSError, TimeoutError) as exc:
+        raise ValueError(f"--scheduler = {address!r}: cannot connect ({exc})") from None
