@@ -12,8 +12,10 @@ py="$root/.venv/bin/python"
   --heading-deg 0 --duration 20 --fps 24 --out "$out/slalom.csv" --plot "$out/slalom.png"
 "$py" -m blender_turning figures --out "$out/figures"
 echo "demo: trajectory $out/slalom.csv, plot $out/slalom.png, figures in $out/figures"
-# The Blender demo (bpy wheel, background): skier, snowboarder, telemark on the slalom path and a
-# cyclist round a corner, 4 s at 320x180.  Prints its progress, then where the frames and .blend are.
+# The Blender demo (bpy wheel, background): skier, snowboarder and telemark skier down a snowy
+# mountain, a cyclist on a road over a hill, one follow shot each, 4 s at 320x180.  Prints its
+# progress, then where the frames (frames/<figure>/, shots.png) and .blend are.
 "$py" "$root/scripts/render_job.py" --config "$root/scripts/configs/demo.toml" \
   --output "$out/blender_demo" | grep --line-buffered -v "| Saved:"
-echo "demo: Blender frames in $out/blender_demo/frames, scene in $out/blender_demo/demo.blend"
+echo "demo: Blender frames in $out/blender_demo/frames/<figure>, all shots in" \
+  "$out/blender_demo/shots.png, scene in $out/blender_demo/demo.blend"

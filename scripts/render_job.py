@@ -44,6 +44,9 @@ from blender_turning.core.params import PRESETS  # noqa: E402
 from blender_turning.core.ranges import RANGES, Range  # noqa: E402
 from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
 
+sys.path.insert(0, str(ROOT / "scripts"))
+import render_terrain  # noqa: E402
+
 ENGINES = ("WORKBENCH", "EEVEE", "CYCLES")
 DEVICES = ("CPU", "GPU")
 GPU_BACKENDS = ("OPTIX", "CUDA", "HIP", "ONEAPI", "METAL")     # Cycles' compute_device_type
@@ -59,7 +62,7 @@ class ConfigError(ValueError):
 # (blender_turning/core/ranges.py) with the field validator every file format uses.
 
 _KNOWN = {
-    "": {"job", "render", "camera", "ground", "figures", "paths", "obstacles"},
+    "": {"job", "render", "camera", "ground", "figures", "paths", "obstacles", "terrain"},
     "job": {"name", "seconds", "fps", "frame_step", "output"},
     "render": {"engine", "resolution", "format", "samples"},
     "camera": {"follow", "distance", "height", "lens"},
@@ -67,8 +70,35 @@ _KNOWN = {
     "path": {"points"},
     "obstacle": {"group", "kind", "at", "size", "height"},
     "figure": {"sport", "control", "name", "start", "direction_deg", "period", "lean_deg",
-               "heading_deg", "path", "obstacles", "plan_curvature_rate"},
+               "heading_deg", "path", "obstacles", "plan_curvature_rate", "ground", "speed",
+               "target_speed", "tracks"},
+    "terrain": {"kind", "surface", "length", "width", "slope_deg", "cell", "seed", "moguls",
+                "at", "height", "spread", "road"},
 }
+
+
+def _terrains(top) -> dict:
+    """``[terrain.<name>]`` tables: a ``ski_slope`` mountain (core.terrain_gen) or a ``hill``
+    with an optional road; each becomes a Ground mesh figures can ride on."""
+    out = {}
+    tt = top.table("terrain")
+    for name in tt.keys():
+        t = tt.table(name, _KNOWN["terrain"])
+        kind = t.string("kind", "ski_slope", choices=("ski_slope", "hill"))
+        out[name] = {"kind": kind,
+                     "surface": t.string("surface", "snow" if kind == "ski_slope" else "grass",
+                                         choices=("snow", "grass")),
+                     "length": t.number("length", "terrain_size", 200.0),
+                     "width": t.number("width", "terrain_size", 200.0),
+                     "slope_deg": t.number("slope_deg", "terrain_slope", 18.0),
+                     "cell": t.number("cell", "terrain_cell", 1.0),
+                     "seed": t.number("seed", "terrain_seed", 7),
+                     "moguls": t.boolean("moguls", True),
+                     "at": tuple(float(v) for v in t.xy("at", [0.0, 0.0])),
+                     "height": t.number("height", "hill_height", 3.0),
+                     "spread": t.number("spread", "terrain_size", 12.0),
+                     "road": t.number("road", "road_width", 0.0)}
+    return out
 
 
 def _file_name(f, key, default):
@@ -219,6 +249,7 @@ def load_config(path: Path, overrides) -> dict:
                           "at": tuple(float(v) for v in o.xy("at")),
                           "size": o.number("size", "object_size", 0.6),
                           "height": o.number("height", "object_height", 1.8)})
+    terrains = _terrains(top)
     figures = top.tables("figures", _KNOWN["figure"])
     if not figures:
         raise ConfigError(f"{src}: the config has no [[figures]]")
@@ -238,7 +269,13 @@ def load_config(path: Path, overrides) -> dict:
                "path": f.string("path", None),
                "obstacles": f.string("obstacles", None),
                "plan_curvature_rate": f.number("plan_curvature_rate", "plan_curvature_rate",
-                                               None)}
+                                               None),
+               "ground": f.string("ground", None),
+               "speed": f.number("speed", "V_cm", None),
+               "target_speed": f.number("target_speed", "target_speed", 0.0),
+               "tracks": f.boolean("tracks", True)}
+        if fig["ground"] is not None and fig["ground"] not in terrains:
+            f.fail("ground", f"= {fig['ground']!r} is not a [terrain.<name>] of the config")
         fall = math.degrees(PRESETS[sport].limits.theta_fall)
         if fig["lean_deg"] >= fall:
             f.fail("lean_deg", f"= {fig['lean_deg']:g} is not below the {sport}'s fall angle "
@@ -254,8 +291,9 @@ def load_config(path: Path, overrides) -> dict:
             f.fail("obstacles", f"= {fig['obstacles']!r} names no obstacle group")
         cfg["figures"].append(fig)
     names = [fig["name"] for fig in cfg["figures"]]
-    if cfg["camera"]["follow"] not in ("all", *names):
-        cam.fail("follow", f"= {cfg['camera']['follow']!r} is not 'all' or a figure's name "
+    cfg["terrain"] = terrains
+    if cfg["camera"]["follow"] not in ("all", "each", *names):
+        cam.fail("follow", f"= {cfg['camera']['follow']!r} is not 'all', 'each' or a figure's name "
                            f"({', '.join(names)})")
     cfg["paths"], cfg["obstacles"] = paths, obstacles
     return cfg
@@ -319,7 +357,7 @@ def make_obstacles(bpy, obstacles):
     return groups
 
 
-def add_figure(bpy, fig, cfg, paths, groups):
+def add_figure(bpy, fig, cfg, paths, groups, grounds):
     scene = bpy.context.scene
     scene.cursor.location = (*fig["start"], 0.0)
     scene.cursor.rotation_euler = (0.0, 0.0, math.radians(fig["direction_deg"]) - math.pi / 2)
@@ -334,6 +372,11 @@ def add_figure(bpy, fig, cfg, paths, groups):
     s.use_heading = fig["heading_deg"] is not None
     if s.use_heading:
         s.heading = math.radians(fig["heading_deg"])
+    if fig["speed"] is not None:
+        s.speed = fig["speed"]
+    if fig["ground"] is not None:                    # rides on that terrain's mesh
+        s.ground = grounds[fig["ground"]]
+        s.terrain.target_speed = fig["target_speed"]
     if fig["control"] == "path":
         s.path = paths[fig["path"]]
         s.obstacles = groups.get(fig["obstacles"]) if fig["obstacles"] else None
@@ -504,13 +547,29 @@ def _run(bpy, cfg, render):
     scene.frame_end = frame_end
     paths = {name: make_path(bpy, name, pts) for name, pts in cfg["paths"].items()}
     groups = make_obstacles(bpy, cfg["obstacles"])
+    grounds = {name: render_terrain.make_terrain(bpy, name, spec, _material)
+               for name, spec in cfg["terrain"].items()}
     figures = []
     for fig in cfg["figures"]:
-        obj = add_figure(bpy, fig, cfg, paths, groups)
+        obj = add_figure(bpy, fig, cfg, paths, groups, grounds)
         bake_figure(bpy, obj, fig, frame_end)
         figures.append(obj)
-    locs = make_camera(bpy, cfg, figures)
-    make_ground_and_light(bpy, cfg, locs, figures)
+        spec = cfg["terrain"].get(fig["ground"])
+        if spec is not None and spec["surface"] == "snow" and fig["tracks"]:
+            render_terrain.make_tracks(bpy, obj, grounds[fig["ground"]], _material,
+                                       range(scene.frame_start, frame_end + 1))
+    cameras = []
+    if cfg["camera"]["follow"] == "each":
+        cameras = render_terrain.make_follow_cameras(
+            bpy, figures, cfg["camera"]["distance"], cfg["camera"]["height"],
+            cfg["camera"]["lens"])
+        scene.camera = cameras[0][1]
+    else:
+        locs = make_camera(bpy, cfg, figures)
+    if grounds:
+        render_terrain.light_the_snow(bpy)
+    else:
+        make_ground_and_light(bpy, cfg, locs, figures)
     setup_render(bpy, cfg)
     out = cfg["output"]
     out.mkdir(parents=True, exist_ok=True)
@@ -522,7 +581,7 @@ def _run(bpy, cfg, render):
         return result
     if cfg["frames"] is not None:               # one chunk; the .blend keeps the whole range
         scene.frame_start, scene.frame_end = cfg["frames"]
-    n = len(range(scene.frame_start, scene.frame_end + 1, scene.frame_step))
+    n = len(range(scene.frame_start, scene.frame_end + 1, scene.frame_step)) * max(1, len(cameras))
     done = []
 
     def progress(scene_, *_):
@@ -532,13 +591,27 @@ def _run(bpy, cfg, render):
     bpy.app.handlers.render_post.append(progress)
     t = time.perf_counter()
     try:
-        bpy.ops.render.render(animation=True)
+        if not cameras:
+            bpy.ops.render.render(animation=True)
+        for name, cam in cameras:               # one shot per figure, each in its own folder
+            scene.camera = cam                  # (relative to the .blend, as setup_render's)
+            if cfg["render"]["format"] == "VIDEO":
+                scene.render.filepath = f"//{cfg['name']}_{name}.mp4"
+            else:
+                scene.render.filepath = f"//frames/{name}/frame_"
+            bpy.ops.render.render(animation=True)
     finally:
         bpy.app.handlers.render_post.remove(progress)
     log(f"rendered {len(done)} frames with {cfg['render']['engine']} in "
         f"{time.perf_counter() - t:.1f} s")
     result["frames"] = (out / f"{cfg['name']}.mp4" if cfg["render"]["format"] == "VIDEO"
                         else out / "frames")
+    if cameras and cfg["render"]["format"] == "PNG":
+        shots = [sorted((out / "frames" / name).glob("frame_*.png")) for name, _ in cameras]
+        middle = [s[len(s) // 2] for s in shots if s]
+        if middle:
+            render_terrain.contact_sheet(bpy, middle, out / "shots.png")
+            log(f"shots: {out / 'shots.png'}")
     return result
 
 

@@ -318,7 +318,8 @@ def test_sub_panels(scene):
         drawn[cls.bl_label] = [c[1][1] for c in calls if c[0] == "prop" and len(c[1]) > 1]
     assert drawn["Body"] == ["mass", "com_height", "inertia"]
     assert drawn["Limits"] == ["curvature_max", "curvature_rate_max", "fall_angle"]
-    assert drawn["Ground"] == ["start", "start_heading"]
+    assert drawn["Ground"] == ["start", "start_heading", "ground", "friction", "drag_area",
+                              "air_density", "target_speed"]
     assert drawn["Turns"] == ["period", "lean", "use_heading", "heading", "speed"]
     # Rig shows for an armature that is not a figure yet (Make Figure hangs under it).
     arm = bpy.data.objects.new("Rig", bpy.data.armatures.new("Rig"))

@@ -7,6 +7,7 @@ import sys
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
@@ -31,16 +32,31 @@ def png_size(path):
 
 
 def test_demo_job_renders_tiny_frames(tmp_path):
+    """The demo (issue 10): the figures on terrain, one follow shot per figure, and a sheet."""
     r = run_job("--config", CONFIGS / "demo.toml", "--resolution", "32x24", "--seconds", "0.25",
                 "--output", tmp_path)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
-    frames = sorted((tmp_path / "frames").glob("frame_*.png"))
-    assert len(frames) == 4                    # 0.25 s at 24 fps, frame_step 2: frames 1, 3, 5, 7
-    assert all(png_size(f) == (32, 24) for f in frames)
-    assert (tmp_path / "demo.blend").stat().st_size > 0
-    assert "rendered frame 7 (4/4)" in r.stdout and f"blend: {tmp_path / 'demo.blend'}" in r.stdout
-    for name in ("Skier", "Snowboarder", "Telemark", "Cyclist"):
+    names = ("Skier", "Snowboarder", "Telemark", "Cyclist")
+    for name in names:
+        frames = sorted((tmp_path / "frames" / name).glob("frame_*.png"))
+        assert len(frames) == 4                # 0.25 s at 24 fps, frame_step 2: frames 1, 3, 5, 7
+        assert all(png_size(f) == (32, 24) for f in frames)
         assert f"baked {name}" in r.stdout
+    assert png_size(tmp_path / "shots.png") == (64, 48)          # 2 x 2 shots
+    # White snow under a blue sky: the skier's shot looks down the slope, its lower half is
+    # snow (measured median 228 of 255 at 320 x 180; 190 before the exposure, Filmic ~150).
+    import bpy
+    img = bpy.data.images.load(str(tmp_path / "frames" / "Skier" / "frame_0007.png"))
+    px = np.empty(32 * 24 * 4, np.float32)
+    img.pixels.foreach_get(px)
+    rgb = px.reshape(24, 32, 4)[:, :, :3]                          # bottom row first
+    lower = rgb[:8].reshape(-1, 3)
+    assert np.median(lower.mean(1)) > 0.82
+    assert np.median(lower.max(1) - lower.min(1)) < 0.1              # white, not tinted
+    top = rgb[-3:].reshape(-1, 3)
+    assert np.median(top[:, 2] - top[:, 0]) > 0.3                    # the sky is blue
+    assert (tmp_path / "demo.blend").stat().st_size > 0
+    assert "rendered frame 7 (16/16)" in r.stdout and f"blend: {tmp_path / 'demo.blend'}" in r.stdout
 
 
 @pytest.mark.parametrize("config", sorted(p.name for p in CONFIGS.glob("*.toml")))

@@ -29,7 +29,34 @@ def _world_triangles(obj, depsgraph):
     return world, tris.reshape(-1, 3)
 
 
+class MeshGround:
+    """A ground mesh read once: its smooth :attr:`field` for the physics and a BVH tree of its
+    triangles for exact heights (:meth:`heights`)."""
+
+    def __init__(self, name: str, field: HeightField, bvh):
+        self.name, self.field, self.bvh = name, field, bvh
+
+    def heights(self, x, y) -> np.ndarray:
+        """The mesh's height under each ``(x, y)`` by a ray cast from above (the smooth field's
+        where no ray hits, off the mesh's edge)."""
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
+        top = float(np.max(z)) + 1e3
+        cast = self.bvh.ray_cast
+        down = (0.0, 0.0, -1.0)
+        for k, (a, b) in enumerate(zip(x.tolist(), y.tolist())):
+            hit = cast((a, b, top), down)[0]
+            if hit is not None:
+                z[k] = hit[2]
+        return z
+
+
 def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
+    """:func:`read_ground`'s height field."""
+    return read_ground(obj, depsgraph, cell).field
+
+
+def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     """Sample the mesh object ``obj`` (with its modifiers) into a height field over its
     horizontal bounding box.  ``cell`` (m) defaults to a quarter of the median of each triangle's
     shortest side seen from above: the spline through the samples then rounds the mesh's creases by about a
@@ -56,20 +83,73 @@ def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
         raise ValueError(f"ground {obj.name!r} needs {nx * ny} samples at {cell:g} m; "
                          f"at most {MAX_SAMPLES}: use a coarser cell")
     bvh = BVHTree.FromPolygons(world.tolist(), tris.tolist(), all_triangles=True)
-    top = float(hi[2]) + 1.0
-    down = (0.0, 0.0, -1.0)
     xs = lo[0] + cell * np.arange(nx)
     ys = lo[1] + cell * np.arange(ny)
-    h = np.full((ny, nx), np.nan)
-    for j, y in enumerate(ys):
-        for i, x in enumerate(xs):
-            hit = bvh.ray_cast((float(x), float(y), top), down)[0]
-            if hit is not None:
-                h[j, i] = hit[2]
+    h = _rasterize(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
     if np.isnan(h).all():
         raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
     _fill_nearest(h)
-    return HeightField(h, float(xs[0]), float(ys[0]), float(cell))
+    return MeshGround(obj.name, HeightField(h, float(xs[0]), float(ys[0]), float(cell)), bvh)
+
+
+#: Most grid points a side of the triangles rasterized together (bigger ones go one by one).
+_MAX_SPAN = 32
+
+
+def _rasterize(world, tris, x0, y0, cell, nx, ny):
+    """The highest triangle's height over every grid point ``(x0 + i cell, y0 + j cell)`` (NaN
+    where none covers it): what a ray cast from above returns, computed for all points at once.
+    Each triangle's grid points inside its horizontal bounding box get barycentric weights;
+    points inside (to 1e-9, so shared edges are covered) take the interpolated height."""
+    P = world[tris]                                         # (k, 3 vertices, 3)
+    a, b, c = P[:, 0], P[:, 1], P[:, 2]
+    det = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (c[:, 0] - a[:, 0]) * (b[:, 1] - a[:, 1])
+    ok = np.abs(det) > 1e-12                                # seen edge-on from above: no area
+    a, b, c, det = a[ok], b[ok], c[ok], det[ok]
+    xy = np.stack([a, b, c], 1)[:, :, :2]
+    i0 = np.clip(np.ceil((xy[:, :, 0].min(1) - x0) / cell - 1e-9), 0, nx - 1).astype(int)
+    i1 = np.clip(np.floor((xy[:, :, 0].max(1) - x0) / cell + 1e-9), -1, nx - 1).astype(int)
+    j0 = np.clip(np.ceil((xy[:, :, 1].min(1) - y0) / cell - 1e-9), 0, ny - 1).astype(int)
+    j1 = np.clip(np.floor((xy[:, :, 1].max(1) - y0) / cell + 1e-9), -1, ny - 1).astype(int)
+
+    # Barycentric weights as affine functions of the point: u = ku0 + kux px + kuy py, same for v.
+    ax, ay, bx, by, cx, cy = a[:, 0], a[:, 1], b[:, 0], b[:, 1], c[:, 0], c[:, 1]
+    ku = np.stack([bx * cy - cx * by, by - cy, cx - bx], 1) / det[:, None]
+    kv = np.stack([cx * ay - ax * cy, cy - ay, ax - cx], 1) / det[:, None]
+    za, zb, zc = a[:, 2], b[:, 2], c[:, 2]
+    found_i, found_z = [], []
+
+    def cover(sel, di, dj):
+        """Grid points ``(i0 + di, j0 + dj)`` of the triangles ``sel`` (di, dj broadcast)."""
+        I0, I1, J0, J1, KU, KV, ZA, ZB, ZC = sel
+        i, j = I0 + di, J0 + dj
+        px, py = x0 + i * cell, y0 + j * cell
+        u = KU[0] + KU[1] * px + KU[2] * py                 # weight of vertex a
+        v = KV[0] + KV[1] * px + KV[2] * py                 # weight of vertex b
+        w = 1.0 - u - v
+        tol = -1e-9
+        hit = (i <= I1) & (j <= J1) & (u >= tol) & (v >= tol) & (w >= tol)
+        found_i.append((j * nx + i)[hit])
+        found_z.append((u * ZA + v * ZB + w * ZC)[hit])
+
+    def pick(k):
+        return (i0[k], i1[k], j0[k], j1[k], ku[k].T, kv[k].T, za[k], zb[k], zc[k])
+
+    extent = np.maximum(i1 - i0, j1 - j0) + 1
+    span = int(min(np.percentile(extent, 99), _MAX_SPAN)) if len(extent) else 0
+    small = pick(np.flatnonzero(extent <= span))
+    for di in range(span):
+        for dj in range(span):
+            cover(small, di, dj)
+    for k in np.flatnonzero(extent > span):                 # large triangles, one at a time
+        di, dj = np.meshgrid(np.arange(max(i1[k] - i0[k] + 1, 0)),
+                             np.arange(max(j1[k] - j0[k] + 1, 0)))
+        cover(pick(k), di.ravel(), dj.ravel())
+    h = np.full(ny * nx, -np.inf)
+    if found_i:                                             # the highest hit of each point
+        np.maximum.at(h, np.concatenate(found_i), np.concatenate(found_z))
+    h[np.isinf(h)] = np.nan
+    return h.reshape(ny, nx)
 
 
 def _fill_nearest(h):

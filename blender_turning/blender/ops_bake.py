@@ -17,7 +17,7 @@ from ..core.errors import TurningError
 from ..mapping.base import BoneChannels, PoseTrack
 from . import bake, compat, foot_track, retarget_adapter
 from .ops_common import check_figure, context_figure, poll_figure, report_error, selected_figures
-from .pipeline import figure_pose_track
+from .pipeline import figure_pose_track, ground_of
 from .scene_adapters import FrameRange, start_from_object
 
 FRAME_RANGES = (
@@ -127,6 +127,7 @@ class BakeJob:
     def __init__(self, names, frames: FrameRange, step: int = 1):
         self.names, self.frames, self.step = list(names), frames, step
         self.results = []                     # (name, start or None, traj, track)
+        self.grounds = {}                     # ground mesh name -> MeshGround
 
     @property
     def done(self) -> bool:
@@ -146,17 +147,28 @@ class BakeJob:
         check_figure(fig)
         # Not baked yet: start where the user put the figure; baked: from its Start settings.
         start = start_from_object(fig) if bake.figure_action(fig) is None else None
-        traj, track = figure_pose_track(fig, self.frames, start=start)
+        height = None if start is None else float(fig.location[2])
+        traj, track = figure_pose_track(fig, self.frames, start=start, height=height,
+                                        ground=self._ground(fig))
         bake.check_track(fig, track)
         self.results.append((name, start, traj, track))
+
+    def _ground(self, fig):
+        """The figure's Ground mesh, read once per job for all figures on it."""
+        mesh = fig.turning.ground
+        if mesh is None:
+            return None
+        if mesh.name not in self.grounds:
+            self.grounds[mesh.name] = ground_of(fig)
+        return self.grounds[mesh.name]
 
     def write(self) -> list:
         """Write every computed figure; ``[(name, BakeResult)]``."""
         out = []
         for name, start, traj, track in self.results:
             fig = bpy.data.objects[name]
-            if start is not None:
-                fig.turning.start = (start[0], start[1], 0.0)
+            if start is not None:                 # the height where the user put it stays
+                fig.turning.start = (start[0], start[1], float(fig.location[2]))
                 fig.turning.start_heading = start[2]
             out.append((name, apply_bake(fig, traj, track, self.step)))
         return out

@@ -120,7 +120,11 @@ class VIEW3D_PT_turning_ground(FigurePanel, bpy.types.Panel):
     bl_options = {"DEFAULT_CLOSED"}
 
     def draw(self, context):
-        self.draw_props(context, ("start", "start_heading"))
+        s, col = self.draw_props(context, ("start", "start_heading", "ground"))
+        sub = col.column()
+        sub.active = s.ground is not None          # they act on a Ground mesh only
+        for name in ("friction", "drag_area", "air_density", "target_speed"):
+            sub.prop(s.terrain, name)
 
 
 class VIEW3D_PT_turning_path(FigurePanel, bpy.types.Panel):

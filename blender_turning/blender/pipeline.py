@@ -3,51 +3,112 @@
 Operators and headless jobs call :func:`figure_pose_track`, then :func:`..bake.bake_pose_track`.
 Everything that can fail (bad settings, a fall, a mapping error) fails here, before the scene is
 touched.
+
+On a Ground mesh (``turning.ground``, docs/TERRAIN.md) the mesh is read once into a height field
+(:func:`.ground.read_ground`; pass it in as ``ground`` to share it between figures), the core
+simulates on it with the figure's friction, drag and target speed (the speed is then a state:
+the Speed setting at the first frame is where it starts), the foot's height on every frame is a
+ray cast onto the mesh, and the figure stands in the local surface (the mapping gets the smooth
+field's normal at the foot).  Without a Ground mesh the ground is flat at the Start height.
 """
 from __future__ import annotations
 
 from dataclasses import replace
 
+import numpy as np
+
 from ..core import DEFAULT_DT, simulate
-from .scene_adapters import (FrameRange, controller_from_settings, figure_from_settings,
-                             speed_schedule, start_state)
+from ..core.terrain import surface_frame
+from .scene_adapters import (FrameRange, SceneInputError, controller_from_settings,
+                             figure_from_settings, resistance_from_settings, speed_schedule,
+                             start_state)
 
 
-def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None):
+def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None, normal=None):
     """The sport's Section 7 mapping of ``traj`` (already at ``frames.fps``) to a pose track;
-    retargeted onto ``obj`` when it is a figure made from the user's own rig (issue 8)."""
+    retargeted onto ``obj`` when it is a figure made from the user's own rig (issue 8).
+    ``normal`` ((n, 3)): the surface normal at the foot on every frame (terrain)."""
     from ..mapping import map_trajectory      # the mapping layer's entry point
     from . import retarget_adapter
     if obj is not None and (retarget_adapter.is_user_rig(obj) or retarget_adapter.mirrored(obj)):
         return retarget_adapter.figure_track(obj, traj, frames, options)
-    return map_trajectory(sport.lower(), traj, options, frame_start=frames.start, fps=frames.fps)
+    return map_trajectory(sport.lower(), traj, options, frame_start=frames.start,
+                          normal=normal)
 
 
-def resampled(traj, frames: FrameRange):
-    """``traj`` at every frame of ``frames`` (exactly ``end - start + 1`` samples)."""
-    out = traj.resample(frames.fps, start=0.0)
+def resampled(traj, frames: FrameRange, ground=None):
+    """``traj`` at every frame of ``frames`` (exactly ``end - start + 1`` samples); ``ground``:
+    the surface it ran on (terrain)."""
+    out = traj.resample(frames.fps, start=0.0, ground=ground)
     n = frames.end - frames.start + 1
     if len(out) < n:
         raise ValueError(f"the trajectory covers {len(out)} of {n} frames")
     return type(out)(out.data[:, :n], out.meta)
 
 
-def simulate_figure(obj, frames: FrameRange, start=None):
+def ground_of(obj, depsgraph=None):
+    """The figure's Ground mesh read into a :class:`.ground.MeshGround`, or ``None`` (flat)."""
+    mesh = obj.turning.ground
+    if mesh is None:
+        return None
+    import bpy
+    from .ground import read_ground
+    return read_ground(mesh, depsgraph or bpy.context.evaluated_depsgraph_get())
+
+
+def _with_z(traj, z):
+    return type(traj).from_columns({**traj.columns(), "z": np.asarray(z, float)}, traj.meta)
+
+
+def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="read"):
     """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames`` from ``start``
-    (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.  Raises
-    ``ValueError`` or the core's ``FellOver``."""
+    (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.
+    ``height``: the flat ground's height (default the Start setting's z); ``ground``: its Ground
+    mesh as read by :func:`ground_of` (default: read it here).  Raises ``ValueError`` or the
+    core's ``TurningError`` (``FellOver``, ``Stopped``, ``LeftTerrain``)."""
+    s = obj.turning
+    if isinstance(ground, str):
+        ground = ground_of(obj)
     speed = speed_schedule(obj, frames)
-    figure = figure_from_settings(obj.turning)
+    figure = figure_from_settings(s)
     # The body at the first frame's speed (a keyed speed's property value is the current frame's).
     figure = replace(figure, body=replace(figure.body, V_cm=speed(0.0)))
     controller = controller_from_settings(obj, figure, frames)
-    traj = simulate(figure, controller, frames.duration + 2 * DEFAULT_DT,
-                    state0=start_state(obj, controller, start), meta={"figure": obj.name},
-                    speed=speed)
-    return resampled(traj, frames)
+    state0 = start_state(obj, controller, start)
+    duration = frames.duration + 2 * DEFAULT_DT
+    if ground is None:
+        traj = simulate(figure, controller, duration, state0=state0, meta={"figure": obj.name},
+                        speed=speed)
+        traj = resampled(traj, frames)
+        z0 = float(s.start[2]) if height is None else float(height)
+        return _with_z(traj, np.full(len(traj), z0))
+    target = float(s.terrain.target_speed) or None
+    if target is not None and not s.use_heading:
+        raise SceneInputError("Target Speed (turning.terrain.target_speed) steers the turns "
+                              "across the hill about the Heading: turn on Hold Heading")
+    traj = simulate(figure, controller, duration, state0=(*state0, speed(0.0)),
+                    meta={"figure": obj.name, "ground_object": ground.name},
+                    ground=ground.field, resistance=resistance_from_settings(s),
+                    target_speed=target)
+    traj = resampled(traj, frames, ground.field)
+    return _with_z(traj, ground.heights(traj.x, traj.y))
 
 
-def figure_pose_track(obj, frames: FrameRange, options=None, start=None):
-    """``(trajectory, pose track)`` of the figure ``obj`` over ``frames``."""
-    traj = simulate_figure(obj, frames, start)
-    return traj, map_track(obj.turning.sport, traj, frames, options, obj)
+def surface_normals(traj, ground) -> np.ndarray | None:
+    """(n, 3) unit normals of ``ground`` (a :class:`.ground.MeshGround`) under the foot, from its
+    smooth field (continuous from frame to frame); ``None`` on flat ground."""
+    if ground is None:
+        return None
+    fr = surface_frame(ground.field, traj.x, traj.y, traj.theta_dir, 9.81)
+    return np.asarray(fr.n, float).T
+
+
+def figure_pose_track(obj, frames: FrameRange, options=None, start=None, height=None,
+                      ground="read"):
+    """``(trajectory, pose track)`` of the figure ``obj`` over ``frames`` (see
+    :func:`simulate_figure`)."""
+    if isinstance(ground, str):
+        ground = ground_of(obj)
+    traj = simulate_figure(obj, frames, start, height, ground)
+    return traj, map_track(obj.turning.sport, traj, frames, options, obj,
+                           surface_normals(traj, ground))

@@ -42,6 +42,36 @@ def _is_curve(self, obj):
     return obj.type == "CURVE"
 
 
+def _is_mesh(self, obj):
+    return obj.type == "MESH"
+
+
+class TurningTerrainSettings(bpy.types.PropertyGroup):
+    """``Object.turning.terrain``: what slows the figure on a Ground mesh (docs/TERRAIN.md
+    Section 3) and the speed it brakes to.  Read once per bake (the core's ``Resistance`` and
+    ``TargetSpeed`` are constant over a run), so not animatable.  Used only with a Ground mesh:
+    on flat ground the figure keeps its (keyed) Speed, the paper's model."""
+
+    friction: FloatProperty(name="Slope Friction", default=0.05, min=RANGES["mu"].lo,
+                            max=RANGES["mu"].hi, soft_max=0.2, precision=3, options=_STATIC,
+                            description="Snow or rolling friction against the ground's normal "
+                                        "force (mu; ski on snow 0.05, bicycle tyre 0.004)")
+    drag_area: FloatProperty(name="Drag Area (m^2)", default=0.5, min=RANGES["CdA"].lo,
+                             max=RANGES["CdA"].hi, soft_max=1.5, options=_STATIC,
+                             description="Air drag coefficient times frontal area (C_d A, m^2; "
+                                         "skier 0.5, cyclist on the hoods 0.32)")
+    air_density: FloatProperty(name="Air Density (kg/m^3)", default=1.007, min=0.01,
+                               max=RANGES["rho"].hi, options=_STATIC,
+                               description="Density of the air (rho, kg/m^3; 1.225 at sea level, "
+                                           "1.007 at 2000 m)")
+    target_speed: FloatProperty(name="Target Speed", default=0.0, min=RANGES["target_speed"].lo,
+                                max=RANGES["target_speed"].hi, soft_max=30.0, unit="VELOCITY",
+                                options=_STATIC,
+                                description="Brake by turning across the hill when faster than "
+                                            "this (m/s; needs Hold Heading, the course down the "
+                                            "hill); 0 lets the speed run")
+
+
 class TurningFigureSettings(bpy.types.PropertyGroup):
     """``Object.turning``.  The Python names below are API (scripts and users' F-curves on
     ``turning.<name>`` use them): never rename or move one.  New concepts go into nested groups
@@ -128,6 +158,13 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
     rig: PointerProperty(type=TurningRigSettings, options=_STATIC,
                          description="Your own rig as a figure: its bone map, stance and "
                                      "equipment (issue 8)")
+    ground: PointerProperty(name="Ground", type=bpy.types.Object, poll=_is_mesh,
+                            options=_STATIC,
+                            description="Mesh the figure rides on: its speed then follows the "
+                                        "slope, friction and drag (docs/TERRAIN.md).  Empty: a "
+                                        "flat plane at the Start height")
+    terrain: PointerProperty(type=TurningTerrainSettings, options=_STATIC,
+                             description="Friction, drag and target speed on the Ground mesh")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.
@@ -144,7 +181,7 @@ def figure_settings(obj):
     return settings if settings is not None and settings.is_figure else None
 
 
-classes = (TurningFigureSettings,)
+classes = (TurningTerrainSettings, TurningFigureSettings)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 

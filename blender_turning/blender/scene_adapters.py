@@ -11,6 +11,7 @@ import numpy as np
 
 from ..core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
 from ..core.params import PRESETS
+from ..core.terrain_dynamics import RESISTANCE, Resistance
 from . import bake, compat
 from .foot_track import OWNER as FOOT_TRACK_OWNER
 from .props import BODY_FIELDS, LIMIT_FIELDS
@@ -87,6 +88,16 @@ def check_finite_settings(settings) -> None:
                                   f"{_allowed(prop)}")
 
 
+def resistance_from_settings(settings) -> Resistance:
+    """The core :class:`Resistance` of ``obj.turning.terrain`` (raises naming a field)."""
+    t = settings.terrain
+    for prop in t.bl_rna.properties:
+        if prop.type == "FLOAT" and not math.isfinite(getattr(t, prop.identifier)):
+            raise SceneInputError(f"{prop.name} (turning.terrain.{prop.identifier}) = "
+                                  f"{getattr(t, prop.identifier)} is not a finite number")
+    return Resistance(mu=float(t.friction), CdA=float(t.drag_area), rho=float(t.air_density))
+
+
 def figure_from_settings(settings) -> Figure:
     """The frozen core :class:`Figure` of ``obj.turning`` (raises ``ValueError`` naming a field)."""
     check_finite_settings(settings)
@@ -107,6 +118,9 @@ def settings_from_preset(settings, sport: str) -> None:
     fig = PRESETS[sport.lower()]
     settings.sport = sport.upper()
     settings.plan_curvature_rate = PLAN_CURVATURE_RATE[sport.lower()]
+    res = RESISTANCE[sport.lower()]
+    settings.terrain.friction, settings.terrain.drag_area = res.mu, res.CdA
+    settings.terrain.air_density = res.rho
     for s, f in BODY_FIELDS.items():
         setattr(settings, s, getattr(fig.body, f))
     for s, f in LIMIT_FIELDS.items():

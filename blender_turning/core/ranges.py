@@ -154,6 +154,21 @@ RANGES: dict[str, Range] = {
     "object_height": Range(0.01, 1000.0, "m", "an obstacle object's height"),
     "plan_curvature_rate": Range(0.0, 100.0, "1/(m s)", "the planner's dC_f/dt (0: the sport "
                                  "preset's); as dC_f_max"),
+    # -- terrain (docs/TERRAIN.md Section 3; as core.terrain_dynamics.Resistance checks them) ----
+    "mu": Range(0.0, 1.0, "", "snow or rolling friction coefficient: waxed ski 0.02-0.1, tyre "
+                "0.003-0.006; 1 is rubber on dry rock"),
+    "CdA": Range(0.0, 10.0, "m^2", "drag area: a tucked skier 0.15, an upright rider 0.6; 10 m^2 "
+                 "is a parachute"),
+    "rho": Range(0.0, 2.0, "kg/m^3", "air density: 1.225 at sea level, ~1.0 at 2000 m"),
+    "terrain_size": Range(10.0, 5000.0, "m", "a generated terrain's side (core.terrain_gen)"),
+    "terrain_cell": Range(0.05, 50.0, "m", "a generated terrain's grid spacing"),
+    "terrain_slope": Range(0.0, 45.0, "deg", "a generated ski slope's mean slope; 45 deg is a "
+                           "black run's steepest"),
+    "terrain_seed": Range(0, 2**31 - 1, "", "the generator's random seed", integer=True),
+    "hill_height": Range(-100.0, 100.0, "m", "a generated hill's height (negative: a dip)"),
+    "road_width": Range(0.0, 50.0, "m", "a road's width (0: no road)"),
+    "target_speed": Range(0.0, 100.0, "m/s", "the speed a figure brakes to by turning across "
+                          "the hill (0: none)"),
 }
 
 MAX_STEPS = 200_000

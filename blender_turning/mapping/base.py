@@ -87,10 +87,13 @@ class Mapping:
     def pose(self, builder, traj, options, spec) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def map(self, traj, options=None, frames=None) -> PoseTrack:
+    def map(self, traj, options=None, frames=None, normal=None) -> PoseTrack:
+        """``normal``: (n, 3) surface normals at the foot on terrain (``None``: flat ground);
+        the object then stands on the surface (:mod:`.surface`)."""
         from .bones import REQUIRED, require
         from .kinematics import PoseBuilder, Skeleton, quat_continuous
         from .rig_spec import load_rig
+        from .surface import Placement
 
         options = self.Options() if options is None else options
         if not isinstance(options, self.Options):
@@ -101,6 +104,7 @@ class Mapping:
         n = len(traj)
         frames = np.arange(n, dtype=float) + 1.0 if frames is None else np.asarray(frames, float)
         builder = PoseBuilder(Skeleton.from_spec(spec), n)
+        builder.placement = Placement(traj, normal)
         self.pose(builder, traj, options, spec)
         skel = builder.skel
         bones = {}
@@ -113,9 +117,8 @@ class Mapping:
             bones[name] = BoneChannels(location=loc,
                                        rotation=None if rot is None else quat_continuous(rot))
         # The object carries the foot point and the heading: the rig faces +Y, theta_dir is
-        # measured counter-clockwise from +x (docs/ARCHITECTURE.md Section 4).
-        zeros = np.zeros(n)
-        location = np.stack([traj.x, traj.y, zeros], axis=1)
-        rotation = np.stack([zeros, zeros, traj.theta_dir - np.pi / 2], axis=1)
+        # measured counter-clockwise from +x (docs/ARCHITECTURE.md Section 4); on terrain it
+        # stands on the surface (mapping/surface.py).
+        location, rotation = builder.placement.origin, builder.placement.euler
         props = {prop: np.array(getattr(traj, col), float) for prop, col in STATE_PROPS.items()}
         return PoseTrack(frames, location, rotation, bones, props)

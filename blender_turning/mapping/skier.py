@@ -153,7 +153,7 @@ class SkierMapping(Mapping):
         skel = b.skel
         chest = b.pose(B.CHEST)[:, :3, :3] @ skel.rest_of(B.CHEST)[:3, :3].T
         reach = 0.98 * (skel.length(B.side("upper_arm", "L")) + skel.length(B.side("forearm", "L")))
-        place = _Placement(traj)
+        place = b.placement
         for s, sx in SIDES:
             plant = o.pole_plant_L if s == "L" else o.pole_plant_R
             d = (traj.phi - plant + math.pi) % (2.0 * math.pi) - math.pi   # signed, wrapped
@@ -213,21 +213,6 @@ def _wrist(b, s):
     """Armature-space tail of the forearm (where the arm's IK puts its target)."""
     m = b.pose(B.side("forearm", s))
     return m[:, :3, 3] + b.skel.length(B.side("forearm", s)) * m[:, :3, 1]
-
-
-class _Placement:
-    """Armature space <-> world for every frame: the object sits on the foot point ``(x, y)``
-    turned by ``theta_dir - 90 deg`` (the rig faces +Y; :meth:`.base.Mapping.map`)."""
-
-    def __init__(self, traj):
-        self.origin = np.stack([traj.x, traj.y, np.zeros(len(traj))], 1)
-        self.R = rot_z(np.asarray(traj.theta_dir) - math.pi / 2)
-
-    def to_world(self, p, i):
-        return self.origin[i] + self.R[i] @ p
-
-    def to_local(self, p_world, idx):
-        return np.einsum("nji,nj->ni", self.R[idx], p_world - self.origin[idx])
 
 
 @dataclass

@@ -1,0 +1,94 @@
+"""Benchmark: Bake Turns of one cyclist over 60 s at 24 fps on a 200 m x 200 m Ground mesh (the
+project's ``ski_slope`` with its rolls and mogul field but no overall slope, as a 1 m grid mesh:
+a figure that stays on 200 m for a minute) against the same bake on flat ground, in the same run
+(issue 10: within 2x).  The cyclist rides at 3 m/s with its own rolling resistance and drag,
+slalom lean 5 deg, period 3 s, heading +x from (-95, 10).
+
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_terrain_bake.py [--repeat 3] [--cell 1.0]
+
+Timed: the whole bake as the operator does it (``BakeJob``: read the mesh, simulate, resample,
+ray-cast the feet, map, write F-curves), best of ``--repeat``; the terrain bake also split into
+reading the mesh and the rest.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-bench-"))
+
+import bpy  # noqa: E402
+
+from blender_turning import blender as addon  # noqa: E402
+from blender_turning.blender.ground import mesh_from_height_field, read_ground  # noqa: E402
+from blender_turning.blender.ops_bake import BakeJob  # noqa: E402
+from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+
+
+def best(fn, repeat):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--cell", type=float, default=1.0, help="mesh grid spacing, m")
+    args = ap.parse_args(argv)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon.register()
+    scene = bpy.context.scene
+    scene.render.fps, scene.frame_start = 24, 1
+    scene.frame_end = 1 + int(args.seconds * 24)
+    frames = FrameRange.of_scene(scene)
+    slope = ski_slope(length=200.0, width=200.0, slope_deg=0.0, cell=args.cell)
+    mountain = bpy.data.objects.new("Mountain", mesh_from_height_field(bpy, slope, "Mountain"))
+    scene.collection.objects.link(mountain)
+    figs = {}
+    for name, x, y, ground in (("flat", -95.0, 300.0, None), ("terrain", -95.0, 10.0, mountain)):
+        scene.cursor.location = (x, y, 0.0)
+        scene.cursor.rotation_euler = (0.0, 0.0, math.radians(-90.0))    # facing +x
+        bpy.ops.turning.add_figure(sport="CYCLIST")
+        fig = bpy.context.view_layer.objects.active
+        fig.name = name
+        fig.turning.ground = ground
+        fig.turning.speed, fig.turning.period = 3.0, 3.0
+        fig.turning.lean = math.radians(5.0)
+        figs[name] = fig
+
+    def bake(name):
+        job = BakeJob([name], frames)
+        job.compute_next()
+        job.write()
+
+    t_flat = best(lambda: bake("flat"), args.repeat)
+    t_terrain = best(lambda: bake("terrain"), args.repeat)
+    t_read = best(lambda: read_ground(mountain, bpy.context.evaluated_depsgraph_get()),
+                  args.repeat)
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"Python {platform.python_version()}, bpy {bpy.app.version_string}")
+    print(f"mesh: {len(mountain.data.vertices)} vertices ({args.cell:g} m grid, 200 x 200 m); "
+          f"{frames.end - frames.start + 1} frames")
+    print(f"flat bake     {t_flat:7.3f} s")
+    print(f"terrain bake  {t_terrain:7.3f} s  ({t_terrain / t_flat:.2f}x flat), of which reading "
+          f"the mesh {t_read:.3f} s")
+    addon.unregister()
+
+
+if __name__ == "__main__":
+    main()
