@@ -168,7 +168,7 @@ MUTANTS = [
       "d = np.where(_inside(p, poly), -np.abs(d), d)", "d = d", OBSTACLES),
     # -- trajectory I/O (the contract) ---------------------------------------------------------
     M("csv_header_unchecked", "core/trajectory.py",
-      "if not rows or tuple(rows[0]) != COLUMNS:", "if not rows:", TRAJ),
+      "if header not in (COLUMNS, LEGACY_COLUMNS):", "if not header:", TRAJ),
     M("csv_low_precision", "core/trajectory.py",
       "w.writerow([repr(float(v)) for v in row])", "w.writerow([f'{v:.6g}' for v in row])", TRAJ),
     M("resample_heading_rate_C_f", "core/trajectory.py",
