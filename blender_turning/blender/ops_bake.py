@@ -16,7 +16,8 @@ from bpy.props import EnumProperty, IntProperty
 from ..core.errors import TurningError
 from ..mapping.base import BoneChannels, PoseTrack
 from . import bake, compat, foot_track, retarget_adapter
-from .ops_common import check_figure, context_figure, poll_figure, report_error, selected_figures
+from .ops_common import (check_figure, context_figure, end_modal, poll_figure, report_error,
+                         selected_figures)
 from .pipeline import figure_pose_track, ground_of
 from .scene_adapters import FrameRange, start_from_object
 
@@ -270,13 +271,7 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
             f"Bake Turns: {len(job.results)} of {len(job.names)} figures (Esc to cancel)")
 
     def _cleanup(self, context):
-        wm = context.window_manager
-        if self._timer is not None:
-            wm.event_timer_remove(self._timer)
-            self._timer = None
-        wm.progress_end()
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
+        end_modal(self, context)
 
     def cancel(self, context):
         """Blender ends the operator (a file opened, Blender quits): stop, write nothing."""

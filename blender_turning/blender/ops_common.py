@@ -110,3 +110,15 @@ def report_error(op, title: str, fig_name: str, exc: BaseException, note: str = 
                "report it with the traceback from the system console")
     op.report({"ERROR"}, f"{title}: {fig_name}: {msg}{note}")
     return {"CANCELLED"}
+
+
+def end_modal(op, context) -> None:
+    """Undo what a modal operator's ``invoke`` set up: its timer, the progress bar and the status
+    text (the workspace is None while a file is being opened)."""
+    wm = context.window_manager
+    if op._timer is not None:
+        wm.event_timer_remove(op._timer)
+        op._timer = None
+    wm.progress_end()
+    if context.workspace is not None:
+        context.workspace.status_text_set(None)

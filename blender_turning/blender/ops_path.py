@@ -14,7 +14,7 @@ from ..core.obstacles import Obstacles
 from . import bake
 from .follow_job import Cancelled, FollowJob
 from .ops_bake import apply_bake
-from .ops_common import check_figure, context_figure, poll_figure, report_error
+from .ops_common import check_figure, context_figure, end_modal, poll_figure, report_error
 from .pipeline import map_track
 from .props import figure_settings
 from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
@@ -158,13 +158,7 @@ class TURNING_OT_follow_path(bpy.types.Operator):
         return {"RUNNING_MODAL"}
 
     def _cleanup(self, context):
-        wm = context.window_manager
-        if self._timer is not None:
-            wm.event_timer_remove(self._timer)
-            self._timer = None
-        wm.progress_end()
-        if context.workspace is not None:       # None while a file is being opened
-            context.workspace.status_text_set(None)
+        end_modal(self, context)
 
     def cancel(self, context):
         """Blender ends the operator without an event (a file is opened, or Blender quits): stop

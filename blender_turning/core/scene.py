@@ -158,6 +158,20 @@ def _obstacles(top: Fields) -> Obstacles:
                      polys, clearance)
 
 
+def read_figure(f) -> Figure:
+    """A figure's ``preset`` with its optional ``body`` and ``limits`` overrides, read from the
+    fields ``f`` (:class:`.validate.Fields`; ranges: core/ranges.py).  Scene and crowd files."""
+    fig = preset(f.string("preset", choices=tuple(PRESETS)))
+    body_f = f.table("body", {"m", "l", "I_v", "V_cm", "g"})
+    lim_f = f.table("limits", {"C_f_max", "dC_f_max", "theta_fall_deg"})
+    body = {k: body_f.number(k, k) for k in body_f.keys()}
+    lims = {k: lim_f.number(k, k) for k in ("C_f_max", "dC_f_max") if lim_f.has(k)}
+    if lim_f.has("theta_fall_deg"):
+        lims["theta_fall"] = math.radians(lim_f.number("theta_fall_deg",
+                                                       RANGES["theta_fall"].deg()))
+    return replace(fig, body=replace(fig.body, **body), limits=replace(fig.limits, **lims))
+
+
 def scene_from_dict(doc, source: str = "scene") -> Scene:
     """Validate a parsed scene document; errors name ``source`` and the field."""
     if not isinstance(doc, dict):
@@ -167,16 +181,7 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
     description = top.string("description", "")
 
     # Figure: a preset, with optional body and limit overrides (ranges: core/ranges.py).
-    fig_f = top.table("figure", {"preset", "body", "limits"}, required=True)
-    fig = preset(fig_f.string("preset", choices=tuple(PRESETS)))
-    body_f = fig_f.table("body", {"m", "l", "I_v", "V_cm", "g"})
-    lim_f = fig_f.table("limits", {"C_f_max", "dC_f_max", "theta_fall_deg"})
-    body = {k: body_f.number(k, k) for k in body_f.keys()}
-    lims = {k: lim_f.number(k, k) for k in ("C_f_max", "dC_f_max") if lim_f.has(k)}
-    if lim_f.has("theta_fall_deg"):
-        lims["theta_fall"] = math.radians(lim_f.number("theta_fall_deg",
-                                                       RANGES["theta_fall"].deg()))
-    fig = replace(fig, body=replace(fig.body, **body), limits=replace(fig.limits, **lims))
+    fig = read_figure(top.table("figure", {"preset", "body", "limits"}, required=True))
 
     pf = top.table("path", {"points", "tangents", "bezier", "polyline", "samples_per_segment",
                             "exact_distance"}, required=True)

@@ -10,12 +10,10 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import replace
 from pathlib import Path
 
-from ..core.params import PRESETS, preset
 from ..core.ranges import RANGES, Range
-from ..core.scene import scene_from_dict
+from ..core.scene import read_figure, scene_from_dict
 from ..core.validate import FieldError, Fields, read_text
 from . import formations as formations_
 from .model import FIRST_TURNS, Crowd, CrowdFigure, FollowPath, Turns
@@ -97,25 +95,12 @@ def _figure(f: Fields, base: Path) -> CrowdFigure:
                       math.radians(t.number("lean_deg", RANGES["theta_max"].deg())),
                       None if heading is None else math.radians(heading))
         s = f.table("start", {"position", "first_turn"})
-        return CrowdFigure(name, _body(f), turns, tuple(s.xy("position", [0.0, 0.0])),
+        return CrowdFigure(name, read_figure(f), turns, tuple(s.xy("position", [0.0, 0.0])),
                            s.string("first_turn", "left", FIRST_TURNS), offset)
     except FieldError:
         raise
     except ValueError as exc:                 # a combination the model refuses
         raise FieldError(f"{f.source}: {f.path}: {exc}") from None
-
-
-def _body(f: Fields):
-    """The preset with the figure's ``body`` and ``limits`` overrides (the core's ranges)."""
-    fig = preset(f.string("preset", choices=tuple(PRESETS)))
-    body = f.table("body", {"m", "l", "I_v", "V_cm", "g"})
-    lim = f.table("limits", {"C_f_max", "dC_f_max", "theta_fall_deg"})
-    b = {k: body.number(k, k) for k in body.keys()}
-    lm = {k: lim.number(k, k) for k in ("C_f_max", "dC_f_max") if lim.has(k)}
-    if lim.has("theta_fall_deg"):
-        lm["theta_fall"] = math.radians(lim.number("theta_fall_deg",
-                                                   RANGES["theta_fall"].deg()))
-    return replace(fig, body=replace(fig.body, **b), limits=replace(fig.limits, **lm))
 
 
 def _scene(f: Fields, base: Path):
