@@ -24,7 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .params import check_range
+from .validate import check
 
 __all__ = ["Plane", "HeightField", "FLAT", "SurfaceFrame", "surface_frame", "OffTerrain"]
 
@@ -49,11 +49,10 @@ class Plane:
     """The plane's height at ``(x0, y0)``, m."""
 
     def __post_init__(self):
-        # 60 deg is steeper than any skiable or rideable slope (an extreme couloir is ~55 deg).
-        check_range("slope", self.slope, 0.0, math.radians(60.0))
-        check_range("downhill", self.downhill, -1e3, 1e3)
-        for name in ("x0", "y0", "z0"):
-            check_range(name, getattr(self, name), -1e6, 1e6)
+        check("slope", self.slope, "slope")                  # ranges: core/ranges.py
+        check("downhill", self.downhill, "heading")
+        for name, key in (("x0", "coordinate"), ("y0", "coordinate"), ("z0", "height")):
+            check(name, getattr(self, name), key)
 
     @property
     def flat(self) -> bool:
@@ -95,9 +94,9 @@ class HeightField:
             raise ValueError(f"heights has shape {h.shape}; a grid of at least 2 x 2 is needed")
         if not np.isfinite(h).all():
             raise ValueError("heights holds a value that is not a finite number")
-        self.cell = check_range("cell", cell, 0.0, 1e4, lo_open=True)
-        self.x0 = check_range("x0", x0, -1e6, 1e6)
-        self.y0 = check_range("y0", y0, -1e6, 1e6)
+        self.cell = check("cell", cell, "cell")
+        self.x0 = check("x0", x0, "coordinate")
+        self.y0 = check("y0", y0, "coordinate")
         self.ny, self.nx = h.shape
         # Extend the grid by two rows/columns each side, linearly, so the 4 x 4 stencil exists.
         for axis in (0, 1):

@@ -33,7 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dynamics import bound_cf
-from .params import BodyParams, Limits, check_range
+from .params import BodyParams, Limits
+from .validate import check
 from .xp import Numpy, Scalar, backend
 from .terrain import surface_frame
 
@@ -57,9 +58,9 @@ class Resistance:
     """Air density, kg/m^3 (1.225: the ISA standard atmosphere at sea level)."""
 
     def __post_init__(self):
-        check_range("mu", self.mu, 0.0, 1.0)
-        check_range("CdA", self.CdA, 0.0, 10.0)
-        check_range("rho", self.rho, 0.0, 2.0)
+        check("mu", self.mu, "friction")                     # ranges: core/ranges.py
+        check("CdA", self.CdA, "drag_area")
+        check("rho", self.rho, "air_density")
 
     def drag_k(self, m: float) -> float:
         """``rho C_d A / (2 m)``, 1/m: the drag deceleration over ``V^2``."""
