@@ -14,7 +14,6 @@ import os
 import platform
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -29,17 +28,9 @@ from blender_turning.core import PhaseEllipse, Schedule, preset, simulate  # noq
 from blender_turning.blender.ops_bake import apply_bake  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from bench_common import best  # noqa: E402  (scripts/)
 
 SPORTS = ("SKIER", "SNOWBOARDER", "TELEMARK", "CYCLIST")
-
-
-def best(fn, repeat):
-    out = float("inf")
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        out = min(out, time.perf_counter() - t)
-    return out
 
 
 def add(sport, x):

@@ -31,15 +31,7 @@ import numpy as np
 from blender_turning.core import OpenLoop, PhaseEllipse, preset, run
 from blender_turning.core.heading_table import heading_table
 from blender_turning.core.simulate import DEFAULT_DT
-
-
-def best(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+from bench_common import best  # noqa: E402  (scripts/)
 
 
 def numpy_floor(n, repeat, dt=DEFAULT_DT):

@@ -18,7 +18,6 @@ import os
 import platform
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -33,15 +32,7 @@ from blender_turning.blender.ground import mesh_from_height_field, read_ground  
 from blender_turning.blender.ops_bake import BakeJob  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
-
-
-def best(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return min(times)
+from bench_common import best  # noqa: E402  (scripts/)
 
 
 def main(argv=None):
