@@ -55,7 +55,8 @@ from .kinematics import quat_continuous, quat_from_matrix, rigid_inverse, two_bo
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
 from .user_rig import RigFit, UserRig, fit_rig
 
-__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SEATED", "ANCHOR"]
+__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SLIDE", "SEATED",
+           "ANCHOR"]
 
 #: Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig.
 ATTACH = {
@@ -77,6 +78,10 @@ TRACKS = {"cyclist": {"crank": "pedal.R"}}
 #: the rider turns with it, so the bake keys the distance as ``turn_distance`` on the armature
 #: and a driver turns the piece (:attr:`.equipment.EquipmentPiece.spin`).
 SPIN = {"cyclist": ("wheel.F", "wheel.R")}
+#: Equipment that slides along another piece's own Y axis, by the distance the bake keys as a
+#: state property (m, of the user's figure): the front wheel along the fork, which keeps the
+#: steered and leaned tyre on the ground (:mod:`.cyclist`); a driver moves the piece.
+SLIDE = {"cyclist": {"wheel.F": ("fork", "turn_fork_slide")}}
 #: Sports where the pelvis sits on the equipment (the saddle): it goes exactly where the
 #: built-in's goes, the knees bend as the pedals ask.
 SEATED = {"cyclist"}
@@ -391,4 +396,9 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     if sport in SPIN:       # the foot point's path length (chords of one frame), m
         step = np.linalg.norm(np.diff(track.location[:, :2], axis=0), axis=1)
         props["turn_distance"] = np.concatenate([[0.0], np.cumsum(step)])
+    for piece, (along, prop) in SLIDE.get(sport, {}).items():
+        # The built-in keys the slide as the piece's location along the axis (a unit vector in
+        # the piece's rest frame); the user's figure is k times the size.
+        axis = bi.skel.rest_of(piece)[:3, :3].T @ bi.skel.rest_of(along)[:3, 1]
+        props[prop] = fit.k * (track.bones[piece].location @ axis)
     return PoseTrack(track.frames, location, rotation, bones, props)
