@@ -138,10 +138,11 @@ def knee(rec, s):
 
 def sample(scene, frames, bindings, ground=None):
     """Per frame: each figure's ankles, knees and hip joints (world) and the heading; for each
-    user rig (every key but 'builtin'), the lowest point of its ground equipment (``ground``,
-    default the pieces in ``bindings``), the largest distance from a joint to its binding
+    user rig (every key but 'builtin'), the lowest point of each piece of its ground equipment
+    (``ground``, default the pieces in ``bindings``), the largest distance from a joint to its binding
     (``bindings``: piece -> ``[(joint, side), ...]``, the joint's rest point in the piece's own
-    frame; joint ``'pelvis'``: the hip joints' midpoint) and every deforming bone's
+    frame; joint ``'pelvis'``: the hip joints' midpoint; a wheel's lowest point is its tyre's
+    circle's) and every deforming bone's
     (armature-space, world) matrices."""
     from blender_turning.blender.retarget_adapter import (facing, figure_bone_map, mirrored,
                                                           user_rig)
@@ -160,14 +161,14 @@ def sample(scene, frames, bindings, ground=None):
                  if o.get("turning_equipment") in bindings] for k in users}
     # The binding: where the built-in figure's joint sits on the piece at rest, in the piece's
     # own frame, scaled to the character as the piece is.
-    binding = {}
+    binding, fits = {}, {}
     for k in users:
         obj = scene[k]
         sport, goofy = obj.turning.sport.lower(), mirrored(obj)
         base = Skeleton.from_spec(load_rig(sport))
         S = np.diag([-1.0, 1.0, 1.0, 1.0])       # a goofy rider: the built-in's mirror image
         rest_of = (lambda n: S @ base.rest_of(mirror(n)) @ S) if goofy else base.rest_of
-        fit = fit_rig(user_rig(obj), figure_bone_map(obj), sport, goofy)
+        fit = fits[k] = fit_rig(user_rig(obj), figure_bone_map(obj), sport, goofy)
         for o in bound[k]:
             piece = o["turning_equipment"]
             for joint, s in bindings[piece]:
@@ -176,6 +177,8 @@ def sample(scene, frames, bindings, ground=None):
                 p = np.linalg.inv(rest_of(piece)) @ np.append(point, 1.0)
                 binding[o.name, joint, s] = Vector(fit.k / fit.scale * p[:3])
     low, gap, deform = ({k: [] for k in users} for _ in range(3))
+    from blender_turning.mapping.cyclist import tyre_radius
+    tyre = {w: tyre_radius(load_rig("cyclist")) for w in ("wheel.F", "wheel.R")}
     for f in range(frames[0], frames[1] + 1):
         sc.frame_set(f)
         for k, obj in scene.items():
@@ -187,6 +190,14 @@ def sample(scene, frames, bindings, ground=None):
             lows, gaps = [], []
             for o in ground[k]:
                 mw = np.array(o.matrix_world)
+                if o["turning_equipment"] in tyre:
+                    # A wheel: the tyre's circle (radius k r about the hub, in the plane across
+                    # its axle, its Y axis), as the built-in's is measured; the flat cylinder
+                    # that draws it reaches below by its half-width times the sine of the lean.
+                    a = mw[:3, 1] / np.linalg.norm(mw[:3, 1])
+                    lows.append(mw[2, 3] - tyre[o["turning_equipment"]] * fits[k].k
+                                * np.sqrt(max(0.0, 1.0 - a[2] ** 2)))
+                    continue
                 v = np.array([tuple(x.co) for x in o.data.vertices])
                 lows.append(np.min(v @ mw[2, :3] + mw[2, 3]))
             for o in bound[k]:
@@ -195,7 +206,7 @@ def sample(scene, frames, bindings, ground=None):
                     there = (0.5 * sum(world_head(obj, name(k, "hip", x)) for x in "LR")
                              if joint == "pelvis" else world_head(obj, name(k, joint, s)))
                     gaps.append(np.linalg.norm(at - there))
-            low[k].append(min(lows))
+            low[k].append(lows)
             gap[k].append(max(gaps))
             deform[k].append({pb.name: (np.array(pb.matrix),
                                         np.array(obj.matrix_world @ pb.matrix))

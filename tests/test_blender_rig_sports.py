@@ -95,15 +95,16 @@ def test_lean_and_knees_follow_the_builtin(run, key):
 @pytest.mark.parametrize("key", ["rigify", "mixamo"])
 def test_boots_bound_and_equipment_on_the_snow(run, key):
     """Snowboard: both ankles on the board; telemark: the balls of the feet on the skis (the
-    trailing heel lifts); cyclist: feet on the pedals, hands on the bar, hips on the saddle; no
-    point of the equipment below the ground, none 2 cm above it."""
+    trailing heel lifts); cyclist: feet on the pedals, hands on the bar, hips on the saddle, both
+    tyres on the ground; no point of the equipment below the ground, none 2 cm above it."""
     sport, (_, low, gap, _) = run
     low, gap = np.array(low[key]), np.array(gap[key])
-    # The cyclist's front wheel is rigid with the fork on the user's rig: the built-in's slide
-    # along the fork that keeps the steered, leaned tyre on the ground is not carried (measured:
-    # the tyre dips up to 6.4 mm).
-    below = 0.01 if sport == "CYCLIST" else 1e-3
-    assert np.all(low > -below) and np.all(low < 0.02), (sport, low.min(), low.max())
+    if sport == "CYCLIST":
+        # The tyres touch: the front one slides along the fork as the built-in's (a driver on
+        # the baked turn_fork_slide); measured within 3.1e-5 m (float32 world matrices).
+        assert np.abs(low).max() < 1e-4, (low.min(axis=0), low.max(axis=0))
+    low = low.min(axis=1)                    # the lowest piece
+    assert np.all(low > -1e-3) and np.all(low < 0.02), (sport, low.min(), low.max())
     assert np.all(gap < 0.01), (sport, gap.max())
 
 

@@ -323,8 +323,9 @@ def test_own_collection_as_obstacles_skips_the_figure_and_its_path(scene):
     course.objects.link(path)
     course.objects.link(make_wall("Cone", (6.0, -20.0), (1.0, 1.0)))
     obj.turning.path, obj.turning.obstacles = path, course
-    assert bpy.ops.turning.bake_turns() == {"FINISHED"}          # a foot track in Course too
-    assert obj.turning.foot_track.name in course.objects
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    obj.turning.foot_track.users_collection[0].objects.unlink(obj.turning.foot_track)
+    course.objects.link(obj.turning.foot_track)                   # a foot track in Course too
     bpy.context.view_layer.objects.active = obj
     names = [n for n, _ in obstacle_footprints(course, bpy.context.evaluated_depsgraph_get(),
                                                exclude=ops_path.own_objects(obj))]
@@ -425,41 +426,45 @@ def test_planner_thread_raising_is_reported_and_writes_nothing(scene, monkeypatc
     assert_unchanged(before)
 
 
-def test_foot_track_never_renders_nor_exports_to_gltf(scene, tmp_path):
+def _exported_names(tmp_path):
+    """Node names of a default glTF export and the bytes of a default FBX export."""
+    import json
+    import addon_utils
+    addon_utils.enable("io_scene_gltf2")
+    addon_utils.enable("io_scene_fbx")
+    out, fbx = str(tmp_path / "figure.gltf"), str(tmp_path / "figure.fbx")
+    assert bpy.ops.export_scene.gltf(filepath=out, export_format="GLTF_SEPARATE") == {"FINISHED"}
+    assert bpy.ops.export_scene.fbx(filepath=fbx) == {"FINISHED"}
+    with open(out) as fh, open(fbx, "rb") as fb:
+        return [n.get("name") for n in json.load(fh)["nodes"]], fb.read()
+
+
+def test_foot_track_never_renders_nor_exports(scene, tmp_path):
+    """Hidden (the default) the track is out of the view layer: default glTF and FBX exports
+    leave it out; shown it is drawn (and FBX's defaults take it, glTF still skips it)."""
     obj = add("SKIER")
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     track = obj.turning.foot_track
-    assert track.hide_render and not track.hide_viewport
-    obj.turning.show_foot_track = False
-    assert track.hide_viewport
-    obj.turning.show_foot_track = True
-    assert not track.hide_viewport
-    import addon_utils
-    addon_utils.enable("io_scene_gltf2")
-    out = str(tmp_path / "figure.gltf")
-    assert bpy.ops.export_scene.gltf(filepath=out, export_format="GLTF_SEPARATE") == {"FINISHED"}
-    import json
-    with open(out) as fh:
-        nodes = [n.get("name") for n in json.load(fh)["nodes"]]
+    def in_layer():            # after the update the UI's redraw would run
+        bpy.context.view_layer.update()
+        return track.name in bpy.context.view_layer.objects
+
+    assert track.hide_render and not obj.turning.show_foot_track
+    assert not in_layer() and not track.visible_get()
+    nodes, fbx = _exported_names(tmp_path)
     assert obj.name in nodes and track.name not in nodes
-    # FBX has no per-object exclusion: what the README tells the user to do instead.
-    addon_utils.enable("io_scene_fbx")
-    fbx = str(tmp_path / "figure.fbx")
-    name = track.name.encode()
-    assert bpy.ops.export_scene.fbx(filepath=fbx) == {"FINISHED"}
-    with open(fbx, "rb") as fh:
-        assert name in fh.read()                       # by default it goes out
+    assert obj.name.encode() in fbx and track.name.encode() not in fbx
+    obj.turning.show_foot_track = True
+    assert in_layer() and track.visible_get() and track.hide_render
+    nodes, fbx = _exported_names(tmp_path)
+    assert track.name not in nodes and track.name.encode() in fbx
     obj.turning.show_foot_track = False
-    assert bpy.ops.export_scene.fbx(filepath=fbx, use_visible=True) == {"FINISHED"}
-    with open(fbx, "rb") as fh:
-        data = fh.read()
-    assert name not in data and obj.name.encode() in data
-    assert bpy.ops.export_scene.fbx(filepath=fbx, object_types={"ARMATURE", "MESH"}) == \
-        {"FINISHED"}
-    with open(fbx, "rb") as fh:
-        assert name not in fh.read()
+    assert not in_layer()
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}          # baking again keeps it hidden
+    assert not in_layer() and obj.turning.foot_track == track
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
-    assert "glTF_not_exported" not in bpy.data.collections
+    for name in ("glTF_not_exported", "Turning Guides", "Turning Guides Hidden"):
+        assert name not in bpy.data.collections
     assert np.all([m.name != "Turning Foot Track" for m in bpy.data.materials])
 
 

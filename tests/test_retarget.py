@@ -364,3 +364,51 @@ def test_a_goofy_builtin_snowboarder_is_the_mirror_of_regular():
     assert np.allclose(goofy.props["turn_lean"], traj.theta_v)
     # The right boot leads (+Y is the travel in the rig's frame), the left trails.
     assert np.all(P["foot.R"][:, 1, 3] > P["foot.L"][:, 1, 3] + 0.3)
+
+
+def _euler_matrix(euler):
+    """(n, 3, 3) Blender's Euler XYZ: Rz(c) Ry(b) Rx(a)."""
+    out = []
+    for a, b, c in euler:
+        rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+        ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
+        out.append(rot_z(np.array(c)) @ ry @ rx)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("sport", ["skier", "cyclist"])
+def test_on_terrain_the_rig_stands_in_the_surface_as_the_builtin(sport):
+    """With a surface normal (a Ground mesh) the built-in's object tilts with the surface; the
+    user's rig tilts the same: its ankles and equipment land on the built-in's (scaled about the
+    foot point) in world space, not upright beside them."""
+    fig = preset(sport)
+    traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(20),
+                                      heading=0.3), duration=3.0).resample(24)
+    sigma = math.radians(15)               # a plane rising towards +y, and across it a little
+    normal = np.tile([0.05, -math.sin(sigma), math.cos(sigma)], (len(traj), 1))
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    run = map_trajectory(sport, traj, normal=normal)
+    rig = user_rig(scale=0.01)
+    bm = BM
+    fit = fit_rig(rig, bm, sport)
+    out = retarget(run, sport, rig, bm, fit)
+    Rb, Ru = _euler_matrix(run.rotation), _euler_matrix(out.rotation)
+    assert np.abs(Rb[:, :, 2] - normal).max() < 1e-12          # the built-in's in the surface
+    skel = Skeleton.from_spec(load_rig(sport))
+    P, Pb = user_fk(rig, out), skel.fk(run.bones, len(run))
+
+    def scaled(p_builtin):                 # the built-in's world point, scaled about the foot
+        return run.location + fit.k * np.einsum("nij,nj->ni", Rb, p_builtin)
+
+    def user(p):
+        return out.location + rig.scale * np.einsum("nij,nj->ni", Ru, p)
+
+    for j in ("foot.L", "foot.R"):
+        assert np.max(np.abs(user(P[PREFIX + j][:, :3, 3]) - scaled(Pb[j][:, :3, 3]))) < 1e-6
+    for piece in equipment_rest(sport, rig, bm, fit):
+        if piece.name.startswith(("pole", "wheel", "crank")):
+            continue        # a pole swings in the built-in's hand; wheels and crank turn
+        Mu = P[piece.bone] @ np.linalg.inv(rig.rest_of(piece.bone)) @ piece.rest
+        Mb = Pb[piece.name]
+        assert np.max(np.abs(Ru @ Mu[:, :3, :3] - Rb @ Mb[:, :3, :3])) < 1e-6, piece.name
+        assert np.max(np.abs(user(Mu[:, :3, 3]) - scaled(Mb[:, :3, 3]))) < 1e-6, piece.name

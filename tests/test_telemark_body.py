@@ -50,3 +50,37 @@ def test_the_boots_bend_at_the_ball_and_stay_out_of_the_ski(posed):
         assert min(shell.min(), toe.min()) > -1e-3                     # never through the ski
         assert np.ptp(toe) < 1e-3                                      # the toe stays down
         assert np.ptp(heel) > 0.05                                     # the heel lifts
+
+
+def test_the_preset_body_is_the_telemark_lunge():
+    """The core's telemark body is its own: the centre-of-mass distance and roll inertia of the
+    built-in telemark figure in its lunge (Winter's segment data), averaged over the run, within
+    the rounding of the preset (5 mm, 0.05 kg m^2); lower and lighter in roll than the skier's
+    upright athletic stance measured the same way."""
+    from blender_turning.mapping.anthropometry import posed_body
+    averaged = {}
+    for sport in ("telemark", "skier"):
+        body = preset(sport).body
+        traj = simulate(preset(sport), PhaseEllipse(body, omega0=math.pi,
+                                                    theta_max=math.radians(23), heading=0.0),
+                        duration=6.0).resample(24)
+        l, inertia = posed_body(sport, traj, body.m)
+        averaged[sport] = (l.mean(), inertia.mean())
+    body = preset("telemark").body
+    assert abs(averaged["telemark"][0] - body.l) < 5e-3, averaged
+    assert abs(averaged["telemark"][1] - body.I_v) < 0.05, averaged
+    assert averaged["skier"][0] - body.l > 0.05 and averaged["skier"][1] - body.I_v > 1.0
+
+
+def test_segment_data_is_a_whole_body():
+    """Winter's fractions sum to the whole body; a rod along the roll axis adds nothing."""
+    from blender_turning.mapping.anthropometry import SEGMENTS, centre_and_roll_inertia
+    total = sum(f * (1 if k == "trunk_head_neck" else 2) for k, (f, _, _) in SEGMENTS.items())
+    assert total == pytest.approx(1.0, abs=1e-12)
+    skel = Skeleton.from_spec(load_rig("telemark"))
+    P = skel.fk({}, 1)                       # the rest pose: standing upright
+    com, inertia = centre_and_roll_inertia(P, skel, 75.0)
+    assert com[0, 0] == pytest.approx(0.0, abs=1e-12)                  # symmetric left-right
+    # Standing, the centre of mass is at ~55% of the stature above the soles (Winter 2009).
+    stature = skel.rest_of("spine.006")[2, 3] + skel.length("spine.006") - 0.055
+    assert 0.53 < (com[0, 2] - 0.055) / stature < 0.58

@@ -1,11 +1,17 @@
 """The foot track drawn as a curve object: a poly spline through the foot's ground positions.
 
-It is a guide for the animator, not part of the shot: it never renders (``hide_render``), the glTF
-exporter leaves it out (it sits in glTF's ``glTF_not_exported`` collection as well), and the
-figure's Show Foot Track setting hides it in the viewport (then FBX's "Visible Objects" leaves it
-out too).  Each figure owns its track: the track points back at its figure, so a duplicated
-figure (Shift+D copies the pointer, not the track) draws a track of its own and never redraws or
-deletes the original's.
+It is a guide for the animator, not part of the shot: it never renders (``hide_render``) and is
+not exported.  Tracks live in a collection of their own, *Turning Guides*, a child of the scene
+collection; a hidden track (the figure's *Show Foot Track* off, the default) sits in its child
+*Turning Guides Hidden*, which every view layer of the scene excludes (``LayerCollection.exclude``,
+the outliner's checkbox).  An excluded collection's objects are not in the view layer, and the
+exporters take the view layer's objects (FBX: ``context.view_layer.objects``; glTF: the
+evaluated scene), so a default FBX or glTF export leaves a hidden track out.  Showing it moves it
+into *Turning Guides*, drawn in the viewport; it is then in the view layer, so FBX's defaults
+export it (glTF still skips it: every track is also in glTF's ``glTF_not_exported`` collection).
+Each figure owns its track: the track points back at its figure, so a duplicated figure (Shift+D
+copies the pointer, not the track) draws a track of its own and never redraws or deletes the
+original's.
 """
 from __future__ import annotations
 
@@ -18,6 +24,9 @@ MATERIAL = "Turning Foot Track"
 OWNER = "turning_foot_track_of"
 #: The collection the glTF exporter skips (io_scene_gltf2's BLENDER_GLTF_SPECIAL_COLLECTION).
 GLTF_SKIPPED = "glTF_not_exported"
+#: Shown tracks; its child :data:`HIDDEN` (excluded from every view layer) holds hidden ones.
+GUIDES = "Turning Guides"
+HIDDEN = "Turning Guides Hidden"
 
 
 def owned_track(fig_obj):
@@ -37,20 +46,66 @@ def owned_track(fig_obj):
     return obj if owner == fig_obj else None
 
 
-def _new_track(fig_obj, collection):
+def _collection(name, parent):
+    coll = bpy.data.collections.get(name)
+    if coll is None:
+        coll = bpy.data.collections.new(name)
+    if parent is not None and coll.name not in parent.children:
+        parent.children.link(coll)
+    return coll
+
+
+def _find_layer(layer, coll):
+    if layer.collection == coll:
+        return layer
+    for child in layer.children:
+        found = _find_layer(child, coll)
+        if found is not None:
+            return found
+    return None
+
+
+def _guide_collections(fig_obj):
+    """``(shown, hidden)``: the guide collections, linked under every scene the figure is in,
+    the hidden one excluded from each of their view layers."""
+    scenes = fig_obj.users_scene or (bpy.context.scene,)
+    shown = _collection(GUIDES, None)
+    hidden = _collection(HIDDEN, shown)
+    for scene in scenes:
+        if shown.name not in scene.collection.children:
+            scene.collection.children.link(shown)
+        for view_layer in scene.view_layers:
+            layer = _find_layer(view_layer.layer_collection, hidden)
+            if layer is not None and not layer.exclude:
+                layer.exclude = True
+    return shown, hidden
+
+
+def _place(fig_obj, obj) -> None:
+    """Link the track into the guide collection its figure's Show Foot Track asks for (and
+    glTF's skipped one), and out of every other (a track drawn by older versions sat in the
+    figure's collection)."""
+    shown, hidden = _guide_collections(fig_obj)
+    home = shown if show_track(fig_obj) else hidden
+    skipped = bpy.data.collections.get(GLTF_SKIPPED)
+    if skipped is None:
+        skipped = bpy.data.collections.new(GLTF_SKIPPED)
+        skipped.use_fake_user = True      # not in any scene: keep it on save
+    for coll in (home, skipped):
+        if obj.name not in coll.objects:
+            coll.objects.link(obj)
+    for coll in list(obj.users_collection):
+        if coll not in (home, skipped):
+            coll.objects.unlink(obj)
+    obj.hide_viewport = False             # older versions hid it per object
+
+
+def _new_track(fig_obj):
     name = f"{fig_obj.name} Foot Track"
     curve = bpy.data.curves.new(name, "CURVE")
     curve.dimensions = "3D"
     curve.bevel_depth = 0.03
     obj = bpy.data.objects.new(name, curve)
-    colls = collection or (fig_obj.users_collection[0] if fig_obj.users_collection
-                           else bpy.context.scene.collection)
-    colls.objects.link(obj)
-    skipped = bpy.data.collections.get(GLTF_SKIPPED)
-    if skipped is None:
-        skipped = bpy.data.collections.new(GLTF_SKIPPED)
-        skipped.use_fake_user = True      # not in any scene: keep it on save
-    skipped.objects.link(obj)
     obj.hide_select = True
     obj.hide_render = True
     obj[OWNER] = fig_obj
@@ -60,13 +115,13 @@ def _new_track(fig_obj, collection):
     return obj
 
 
-def write_foot_track(fig_obj, x, y, collection=None):
+def write_foot_track(fig_obj, x, y):
     """Create or refill the curve object showing the foot's path of ``fig_obj``; return it."""
     obj = owned_track(fig_obj)
     if obj is None or obj.type != "CURVE":
-        obj = _new_track(fig_obj, collection)
+        obj = _new_track(fig_obj)
         fig_obj.turning.foot_track = obj
-    obj.hide_viewport = not show_track(fig_obj)
+    _place(fig_obj, obj)
     curve = obj.data
     curve.splines.clear()
     sp = curve.splines.new("POLY")
@@ -79,19 +134,29 @@ def write_foot_track(fig_obj, x, y, collection=None):
 
 
 def show_track(fig_obj) -> bool:
-    return bool(getattr(fig_obj.turning, "show_foot_track", True))
+    return bool(getattr(fig_obj.turning, "show_foot_track", False))
 
 
 def update_visibility(settings, _context=None) -> None:
-    """``Show Foot Track`` changed: show or hide the figure's own track in the viewport."""
+    """``Show Foot Track`` changed: move the figure's own track into the shown or the hidden
+    (excluded) guide collection."""
     fig_obj = settings.id_data
     obj = owned_track(fig_obj)
     if obj is not None:
-        obj.hide_viewport = not show_track(fig_obj)
+        _place(fig_obj, obj)
+
+
+def _remove_if_ours_and_empty(name, fake_user):
+    coll = bpy.data.collections.get(name)
+    if coll is None or len(coll.all_objects) or len(coll.children) or \
+            coll.use_fake_user != fake_user or (fake_user and coll.users != 1):
+        return
+    bpy.data.collections.remove(coll)
 
 
 def remove_foot_track(fig_obj) -> None:
-    """Delete the figure's own track; a track it only points at (another figure's) stays."""
+    """Delete the figure's own track; a track it only points at (another figure's) stays.  The
+    guide collections go with the last track."""
     obj = owned_track(fig_obj)
     fig_obj.turning.foot_track = None
     if obj is None:
@@ -104,7 +169,6 @@ def remove_foot_track(fig_obj) -> None:
     for mat in mats:                      # what the first track made goes with the last one
         if mat.name == MATERIAL and mat.users == 0:
             bpy.data.materials.remove(mat)
-    skipped = bpy.data.collections.get(GLTF_SKIPPED)
-    if (skipped is not None and len(skipped.all_objects) == 0 and skipped.use_fake_user
-            and skipped.users == 1):            # ours: only the fake user holds it
-        bpy.data.collections.remove(skipped)
+    _remove_if_ours_and_empty(HIDDEN, False)
+    _remove_if_ours_and_empty(GUIDES, False)
+    _remove_if_ours_and_empty(GLTF_SKIPPED, True)     # ours: only the fake user holds it

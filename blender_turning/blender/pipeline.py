@@ -31,7 +31,7 @@ def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None, norm
     from ..mapping import map_trajectory      # the mapping layer's entry point
     from . import retarget_adapter
     if obj is not None and (retarget_adapter.is_user_rig(obj) or retarget_adapter.mirrored(obj)):
-        return retarget_adapter.figure_track(obj, traj, frames, options)
+        return retarget_adapter.figure_track(obj, traj, frames, options, normal)
     return map_trajectory(sport.lower(), traj, options, frame_start=frames.start,
                           normal=normal)
 

@@ -151,10 +151,11 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                     "figure's limit")
     foot_track: PointerProperty(name="Foot Track", type=bpy.types.Object, options=_STATIC,
                                 description="Curve object drawn along the foot's path")
-    show_foot_track: BoolProperty(name="Show Foot Track", default=True, options=_STATIC,
+    show_foot_track: BoolProperty(name="Show Foot Track", default=False, options=_STATIC,
                                   update=_show_foot_track,
                                   description="Draw the foot's path in the viewport (a guide: it "
-                                              "never renders and is not exported to glTF)")
+                                              "never renders; hidden, it is out of the view "
+                                              "layer and no exporter writes it)")
     rig: PointerProperty(type=TurningRigSettings, options=_STATIC,
                          description="Your own rig as a figure: its bone map, stance and "
                                      "equipment (issue 8)")

@@ -125,13 +125,15 @@ def facing(obj) -> float:
                    mirrored(obj)).travel
 
 
-def figure_track(obj, traj, frames, options=None):
-    """The pose track of ``obj`` for ``traj`` when it is a user's rig or rides goofy: the
-    built-in figure's Section 7 mapping (of the mirrored run for a goofy stance), retargeted
-    onto the user's rig, or mirrored onto the built-in rig itself."""
+def figure_track(obj, traj, frames, options=None, normal=None):
+    """The pose track of ``obj`` for ``traj`` (one sample per frame of ``frames``) when it is a
+    user's rig or rides goofy: the built-in figure's Section 7 mapping (of the mirrored run for
+    a goofy stance), retargeted onto the user's rig, or mirrored onto the built-in rig itself.
+    ``normal`` ((n, 3)): the surface normal at the foot on a Ground mesh; the figure then stands
+    in the local surface as the built-in figures do (:mod:`..mapping.surface`)."""
     sport, mirror = obj.turning.sport.lower(), mirrored(obj)
     track = map_trajectory(sport, mirrored_trajectory(traj) if mirror else traj, options,
-                           frame_start=frames.start, fps=frames.fps)
+                           frame_start=frames.start, normal=normal)
     if not is_user_rig(obj):
         return goofy_track(sport, track)
     return retarget(track, sport, user_rig(obj), figure_bone_map(obj), mirror=mirror)
@@ -275,6 +277,9 @@ def build_equipment(context, obj, bm: BoneMap):
             _drive_spin(eq, obj, piece.spin)
         rest = obj.data.bones[piece.bone].matrix_local
         tied.matrix_basis = rest.inverted() @ Matrix(piece.rest.tolist())
+        if piece.slide:           # along the fork, in the bone's frame (armature units)
+            prop, axis = piece.slide
+            _drive_slide(tied, obj, prop, np.array(rest.to_3x3()).T @ axis / obj.scale[0])
         con = tied.constraints.new("CHILD_OF")
         con.name = "Turning: follows " + piece.bone
         con.target, con.subtarget = obj, piece.bone
@@ -290,18 +295,30 @@ def build_equipment(context, obj, bm: BoneMap):
     return coll
 
 
-def _drive_spin(eq, obj, spin: float) -> None:
-    """``eq.rotation_euler.y = spin * obj["turn_distance"]`` (a simple expression: no Python)."""
-    if "turn_distance" not in obj.keys():
-        obj["turn_distance"] = 0.0
-    fc = eq.driver_add("rotation_euler", 1)
+def _drive(eq, path, index, obj, prop, factor: float) -> None:
+    """``eq.<path>[index] = factor * obj[prop]`` (a simple expression: no Python)."""
+    if prop not in obj.keys():
+        obj[prop] = 0.0
+    fc = eq.driver_add(path, index)
     drv = fc.driver
     drv.type = "SCRIPTED"
     var = drv.variables.new()
     var.name, var.type = "d", "SINGLE_PROP"
     var.targets[0].id = obj
-    var.targets[0].data_path = '["turn_distance"]'
-    drv.expression = f"{spin!r} * d"
+    var.targets[0].data_path = f'["{prop}"]'
+    drv.expression = f"{float(factor)!r} * d"
+
+
+def _drive_spin(eq, obj, spin: float) -> None:
+    """``eq.rotation_euler.y = spin * obj["turn_distance"]``: the wheel rolls."""
+    _drive(eq, "rotation_euler", 1, obj, "turn_distance", spin)
+
+
+def _drive_slide(eq, obj, prop: str, axis) -> None:
+    """``eq.delta_location = axis * obj[prop]``: the piece slides along ``axis`` (its parent
+    bone's frame, per unit of the property)."""
+    for i in range(3):
+        _drive(eq, "delta_location", i, obj, prop, axis[i])
 
 
 def remove_equipment(obj) -> None:

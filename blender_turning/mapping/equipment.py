@@ -10,7 +10,7 @@ import numpy as np
 from . import bones as B
 from .bone_map import BoneMap
 from .cyclist import tyre_radius
-from .retarget import ATTACH, SPIN, TRACKS, _rest_difference
+from .retarget import ATTACH, SLIDE, SPIN, TRACKS, _rest_difference
 from .rig_spec import load_rig
 from .stance import builtin_skeleton
 from .user_rig import RigFit, UserRig, fit_rig
@@ -46,6 +46,9 @@ class EquipmentPiece:
     """Rotation about its own Y axis (the axle) per metre travelled, rad/m (``SPIN``): a wheel
     of the built-in's tyre radius ``r`` scaled by ``k`` rolls forwards at ``-1 / (k r)``, as the
     built-in's wheels do (Section 7: "as a function of the distance travelled")."""
+    slide: tuple = ()
+    """``(state property, (3,) unit axis)``: the piece slides along the axis (user armature
+    space, at rest) by the property's value (world metres, ``SLIDE``), or ``()``."""
 
 
 def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = None,
@@ -76,5 +79,10 @@ def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = N
             axis = ("" if v[i] > 0 else "NEGATIVE_") + "XYZ"[i]
         spin = -1.0 / (fit.k * tyre_radius(load_rig(sport))) if piece in SPIN.get(sport, ()) \
             else 0.0
-        out.append(EquipmentPiece(piece, joint, bm.bone(joint), m, size, track, axis, spin))
+        slide = ()
+        if piece in SLIDE.get(sport, {}):
+            along, prop = SLIDE[sport][piece]
+            slide = (prop, A.T @ C @ skel.rest_of(along)[:3, 1])
+        out.append(EquipmentPiece(piece, joint, bm.bone(joint), m, size, track, axis, spin,
+                                  slide))
     return out

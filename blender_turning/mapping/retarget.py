@@ -53,9 +53,11 @@ from .bone_map import JOINT_PARENT, JOINTS, BoneMap
 from .common import rot_z
 from .kinematics import quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
+from .surface import euler_xyz
 from .user_rig import RigFit, UserRig, fit_rig
 
-__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SEATED", "ANCHOR"]
+__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SLIDE", "SEATED",
+           "ANCHOR"]
 
 #: Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig.
 ATTACH = {
@@ -77,6 +79,10 @@ TRACKS = {"cyclist": {"crank": "pedal.R"}}
 #: the rider turns with it, so the bake keys the distance as ``turn_distance`` on the armature
 #: and a driver turns the piece (:attr:`.equipment.EquipmentPiece.spin`).
 SPIN = {"cyclist": ("wheel.F", "wheel.R")}
+#: Equipment that slides along another piece's own Y axis, by the distance the bake keys as a
+#: state property (m, of the user's figure): the front wheel along the fork, which keeps the
+#: steered and leaned tyre on the ground (:mod:`.cyclist`); a driver moves the piece.
+SLIDE = {"cyclist": {"wheel.F": ("fork", "turn_fork_slide")}}
 #: Sports where the pelvis sits on the equipment (the saddle): it goes exactly where the
 #: built-in's goes, the knees bend as the pedals ask.
 SEATED = {"cyclist"}
@@ -116,6 +122,15 @@ def swing(a, b) -> np.ndarray:
         ax = _unit(ax)
         out[opp] = 2.0 * ax[..., :, None] * ax[..., None, :] - np.eye(3)
     return out
+
+
+def _matrix_xyz(euler) -> np.ndarray:
+    """(n, 3, 3) Blender's Euler XYZ rotations ``Rz(c) Ry(b) Rx(a)`` of ``euler`` (n, 3)."""
+    a, b, c = np.asarray(euler, float).T
+    Rx, Ry = np.tile(np.eye(3), (2, len(a), 1, 1))
+    Rx[:, 1, 1], Rx[:, 1, 2], Rx[:, 2, 1], Rx[:, 2, 2] = np.cos(a), -np.sin(a), np.sin(a), np.cos(a)
+    Ry[:, 0, 0], Ry[:, 0, 2], Ry[:, 2, 0], Ry[:, 2, 2] = np.cos(b), np.sin(b), -np.sin(b), np.cos(b)
+    return rot_z(c) @ Ry @ Rx
 
 
 def _mapped(bm: BoneMap, rig: UserRig, joint: str):
@@ -381,14 +396,21 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
             loc, q = _channels(rig, bone, poses[j], _delta(poses, rig, bm, anc))
             bones[bone] = BoneChannels(location=loc if anc is None else None, rotation=q)
     # Root motion: the object turns the user's facing onto the heading and puts `origin` on
-    # the foot point (the built-in's object carries the foot point and theta_dir - 90 deg).
-    heading = track.rotation[:, 2] + math.pi / 2
-    psi = heading - fit.travel
-    R = rot_z(psi)
+    # the foot point (the built-in's object carries the foot point and theta_dir - 90 deg, and
+    # on terrain stands in the local surface, mapping/surface.py).  The user's armature point
+    # p is the built-in's (s / k) C^T (p - origin), scaled by k about the foot point, so the
+    # object's rotation is R_builtin C^T: tilted with the surface exactly as the built-in's.
+    R = _matrix_xyz(track.rotation) @ fit.C.T
+    psi = track.rotation[:, 2] + math.pi / 2 - fit.travel
     location = track.location - fit.scale * np.einsum("nij,j->ni", R, fit.origin)
-    rotation = np.stack([np.zeros(len(track)), np.zeros(len(track)), psi], axis=1)
+    rotation = euler_xyz(R, psi)
     props = unmirror_props(track.props) if mirror else dict(track.props)
     if sport in SPIN:       # the foot point's path length (chords of one frame), m
         step = np.linalg.norm(np.diff(track.location[:, :2], axis=0), axis=1)
         props["turn_distance"] = np.concatenate([[0.0], np.cumsum(step)])
+    for piece, (along, prop) in SLIDE.get(sport, {}).items():
+        # The built-in keys the slide as the piece's location along the axis (a unit vector in
+        # the piece's rest frame); the user's figure is k times the size.
+        axis = bi.skel.rest_of(piece)[:3, :3].T @ bi.skel.rest_of(along)[:3, 1]
+        props[prop] = fit.k * (track.bones[piece].location @ axis)
     return PoseTrack(track.frames, location, rotation, bones, props)
