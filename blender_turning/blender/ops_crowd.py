@@ -8,7 +8,10 @@ collection, selected, so Bake Turns (or Follow Path) then does the whole crowd.
 """
 from __future__ import annotations
 
+import types
+
 import bpy
+import numpy as np
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 from ..core.errors import TurningError
@@ -117,45 +120,56 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
         for name in names:
             layout.prop(self, name)
 
-    def _check(self) -> None:
-        """Every value against the crowd's table of ranges (a script may pass any)."""
+    def _values(self) -> types.SimpleNamespace:
+        """The settings as typed (a float property keeps float32: 0.05 is read back as
+        0.0500000007; the shortest decimal that float32 holds is what was typed), each checked
+        against the crowd's table of ranges (a script may pass any value)."""
+        out = {}
         for name, key in (("count", "count"), ("gap_time", "gap_s"), ("gap_distance", "gap_m"),
                           ("lateral", "lateral_m"), ("seed", "seed"), ("body_jitter", "jitter"),
                           ("timing_jitter", "timing_jitter_s"), ("period_jitter", "jitter"),
                           ("spacing", "spacing_m"), ("sync_gap", "sync_gap_s"),
                           ("abreast", "abreast"), ("row_spacing", "spacing_m")):
-            check(name, getattr(self, name), CROWD_RANGES[key])
+            v = getattr(self, name)
+            if isinstance(v, float):
+                v = float(np.format_float_positional(np.float32(v), unique=True, trim="0"))
+            out[name] = check(name, v, CROWD_RANGES[key])
+        for name in ("formation", "gap_by", "alternate", "antiphase"):
+            out[name] = getattr(self, name)
+        return types.SimpleNamespace(**out)
 
-    def members(self, context, template) -> tuple:
-        """``(template's member, the formation's members)``, the core's (nothing is made)."""
-        self._check()
-        if self.formation == "SYNCHRONIZED":
+    @staticmethod
+    def members(context, template, v) -> tuple:
+        """``(template's member, the formation's members)``, the core's (nothing is made), for
+        the settings ``v`` (:meth:`_values`)."""
+        if v.formation == "SYNCHRONIZED":
             lead = crowd_scene.template_member(context, template, path=False)
-            return lead, synchronized(lead, self.count, self.spacing, self.antiphase, "m",
-                                      self.sync_gap)
-        if self.formation == "PELOTON":
+            return lead, synchronized(lead, v.count, v.spacing, v.antiphase, "m",
+                                      v.sync_gap)
+        if v.formation == "PELOTON":
             if template.turning.path is None:
                 raise ValueError("Peloton: the template has no path curve: set its Path "
                                  "(Follow Path > Path) to the road")
             lead = crowd_scene.template_member(context, template, path=True)
-            return lead, peloton(lead, self.count, self.gap_distance, self.abreast,
-                                 self.row_spacing, self.seed, self.body_jitter, "m")
+            return lead, peloton(lead, v.count, v.gap_distance, v.abreast,
+                                 v.row_spacing, v.seed, v.body_jitter, "m")
         lead = crowd_scene.template_member(context, template,
                                            path=template.turning.path is not None)
-        by_time = self.gap_by == "TIME"
-        lateral = [-self.lateral, self.lateral] if self.alternate else self.lateral
-        return lead, follow_leader(lead, self.count, self.gap_time if by_time
-                                   else self.gap_distance, "time" if by_time else "distance",
-                                   lateral, self.seed, self.body_jitter, self.timing_jitter,
-                                   self.period_jitter, "m")
+        by_time = v.gap_by == "TIME"
+        lateral = [-v.lateral, v.lateral] if v.alternate else v.lateral
+        return lead, follow_leader(lead, v.count, v.gap_time if by_time
+                                   else v.gap_distance, "time" if by_time else "distance",
+                                   lateral, v.seed, v.body_jitter, v.timing_jitter,
+                                   v.period_jitter, "m")
 
-    def _path_object(self, template, lead, member, k, collection):
+    @staticmethod
+    def _path_object(template, lead, member, k, collection, v):
         """The member's path curve: the template's when it is the same path, else a new one."""
         path = member.controller.scene.path
         s_along = 0.0
-        if self.formation == "PELOTON":             # rows from the back, as the core places them
-            rows = -(-self.count // self.abreast)
-            s_along = (rows - 1 - (k - 1) // self.abreast) * self.gap_distance
+        if v.formation == "PELOTON":             # rows from the back, as the core places them
+            rows = -(-v.count // v.abreast)
+            s_along = (rows - 1 - (k - 1) // v.abreast) * v.gap_distance
         if path is lead.controller.scene.path and s_along == 0.0:
             return template.turning.path
         return crowd_scene.curve_object(crowd_scene.path_from(path, s_along),
@@ -165,7 +179,8 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
     def execute(self, context):
         template = context_figure(context)
         try:
-            lead, members = self.members(context, template)
+            v = self._values()
+            lead, members = self.members(context, template, v)
         except (ValueError, TurningError) as exc:
             return report_error(self, "Add Crowd", template.name, exc)
         coll = crowd_scene.new_crowd_collection(context)
@@ -175,7 +190,7 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
                 coll.objects.link(template)          # the leader is one of the crowd
                 figs.append(template)
             for k, member in enumerate(members, start=1):
-                path_obj = self._path_object(template, lead, member, k, coll) \
+                path_obj = self._path_object(template, lead, member, k, coll, v) \
                     if member.is_path else None
                 new = crowd_scene.duplicate_figure(template, f"{template.name} {k}", coll)
                 crowd_scene.place(new, member, template.turning.start, path_obj)
