@@ -69,7 +69,8 @@ def main():
         return [ops_path.prepare(ctx, f).run() for f in figs]
 
     def in_workers():
-        job = crowd_job.CrowdFollow(ctx, figs)
+        job = crowd_job.CrowdFollow(figs)
+        job.read(ctx)
         t0 = time.perf_counter()
         job.start()
         started = time.perf_counter() - t0

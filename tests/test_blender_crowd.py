@@ -251,7 +251,8 @@ def path_figures(count=3):
 def test_plans_in_the_workers_equal_each_figure_planned_alone(scene):
     figs = path_figures()
     figs[2].turning.crowd.time_offset = 0.5
-    job = crowd_job.CrowdFollow(bpy.context, figs)
+    job = crowd_job.CrowdFollow(figs)
+    job.read(bpy.context)
     job.start()
     job.wait()
     results = job.results()
@@ -434,3 +435,13 @@ def test_a_peloton_starts_where_the_core_places_its_rows(scene):
         lateral = ((k - 1) % 2 * 0.8 - 0.4) if k < 5 else 0.0   # rows of 2, the last of 1
         np.testing.assert_allclose(path_of(fig).knots[-1], offset_path(road, lateral).knots[-1],
                                    atol=1e-5)
+
+
+def test_a_figure_that_cannot_be_read_is_named_and_nothing_changes(scene):
+    figs = path_figures(2)
+    figs[1].turning.path = make_path([(8, 0)], "OnePoint")
+    before = snapshot()
+    with pytest.raises(RuntimeError, match=r"Follow Path: Telemark\.001: path 'OnePoint' has 1 "
+                                           r"point\(s\); it needs at least 2"):
+        bpy.ops.turning.follow_path()
+    assert snapshot() == before, diff(before, snapshot())

@@ -100,17 +100,26 @@ def figure_scene(name: str, job) -> Scene:
 class CrowdFollow:
     """Plan the figures ``figs`` (armature objects) along their paths, in worker processes.
 
-    :meth:`start` submits the plans, :meth:`done`/:attr:`progress` are polled by the modal
-    operator, :meth:`results` collects them (raising what a worker raised), :meth:`write`
-    bakes them; :meth:`cancel` stops.  Raises ``ValueError`` naming the figure (in
-    :attr:`current`) when a figure cannot be read.
+    :meth:`read` reads the figures, :meth:`start` submits the plans, :meth:`done` and
+    :attr:`progress` are polled by the modal operator, :meth:`results` collects them (raising
+    what a worker raised), :meth:`write` bakes them; :meth:`cancel` stops.  :attr:`current` is
+    the figure being read or written (for a report).
     """
 
-    def __init__(self, context, figs, workers: int | None = None):
-        from .ops_path import prepare             # ops_path dispatches here: import when used
+    def __init__(self, figs, workers: int | None = None):
         self.uids = [f.session_uid for f in figs]
         self.names = [f.name for f in figs]
         self.current = self.names[0]
+        self.max_workers = workers
+        self.tasks = []
+        self._pool = None
+        self._futures = []
+
+    def read(self, context) -> None:
+        """Read every figure as Follow Path reads one (raises ``ValueError`` naming the bad
+        input; :attr:`current` names the figure)."""
+        from .ops_path import prepare             # ops_path dispatches here: import when used
+        figs = [self.figure(i) for i in range(len(self.uids))]
         members = []
         for i, fig in enumerate(figs):
             self.current = fig.name
@@ -120,9 +129,11 @@ class CrowdFollow:
                                        time_offset=float(fig.turning.crowd.time_offset)))
         self.crowd = Crowd("follow_path", members, duration=1.0)
         self.tasks = crowd_tasks(self.crowd)      # one ("path", figure) task per figure
-        self.workers = max(1, min(len(self.tasks), workers or os.cpu_count() or 1))
-        self._pool = None
-        self._futures = []
+
+    @property
+    def workers(self) -> int:
+        """Worker processes: one per figure, at most one per core (or the number asked)."""
+        return max(1, min(len(self.uids), self.max_workers or os.cpu_count() or 1))
 
     def start(self) -> None:
         """Start the workers and hand them every plan (on the main thread: see the module)."""
@@ -227,11 +238,11 @@ def needs_crowd(figs) -> bool:
 def prepare_crowd(op, context, figs):
     """The job for ``figs``, or ``None`` (reported)."""
     from .ops_common import report_error
-    job = None
+    job = CrowdFollow(figs)
     try:
-        job = CrowdFollow(context, figs)
+        job.read(context)
     except Exception as exc:
-        report_error(op, TITLE, figs[0].name if job is None else job.current, exc)
+        report_error(op, TITLE, job.current, exc)
         return None
     return job
 
