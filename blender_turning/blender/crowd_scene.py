@@ -20,7 +20,7 @@ import bpy
 import numpy as np
 
 from ..core.path import HermitePath
-from ..crowd import CrowdFigure, FollowPath, Turns
+from ..crowd import CrowdFigure, FollowPath, Turns, point_at_distance
 from . import bake, retarget_adapter
 from .foot_track import OWNER as FOOT_TRACK_OWNER
 from .ops_common import CROWD_TAG
@@ -48,9 +48,10 @@ def template_member(context, fig, path: bool) -> CrowdFigure:
 # -- paths ------------------------------------------------------------------------------------
 
 def path_from(path: HermitePath, s_along: float = 0.0) -> HermitePath:
-    """``path`` from ``s_along`` m along it (found on 64 chords per segment, as
-    :func:`..crowd.formations.point_at_distance` finds it), the segment there split exactly
-    (de Casteljau), so the rest of the path is unchanged."""
+    """``path`` from ``s_along`` m along it: the segment there split (de Casteljau) so that the
+    rest of the path is unchanged, starting at the point the core's formation starts the figure
+    (:func:`..crowd.formations.point_at_distance`, on 64 chords a segment: off the curve by at
+    most a chord's sagitta, under a millimetre on a road)."""
     if s_along <= 0.0:
         return path
     per = 64
@@ -65,8 +66,9 @@ def path_from(path: HermitePath, s_along: float = 0.0) -> HermitePath:
     p = [k0, k0 + path.t_out[seg] / 3.0, k1 - path.t_in[seg] / 3.0, k1]
     a = [p[j] + u * (p[j + 1] - p[j]) for j in range(3)]           # de Casteljau at u
     b = [a[j] + u * (a[j + 1] - a[j]) for j in range(2)]
-    c = b[0] + u * (b[1] - b[0])
-    knots = np.vstack([c, path.knots[seg + 1:]])
+    c = b[0] + u * (b[1] - b[0])                                     # on the curve at u
+    start, _ = point_at_distance(path, s_along)
+    knots = np.vstack([start, path.knots[seg + 1:]])
     t_out = np.vstack([3.0 * (b[1] - c), path.t_out[seg + 1:]])
     t_in = np.vstack([3.0 * (k1 - a[2]), path.t_in[seg + 1:]])
     return HermitePath(knots, t_out, t_in)
