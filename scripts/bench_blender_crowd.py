@@ -95,7 +95,8 @@ def main():
     print(f"| one after the other in Blender's process (baseline) | {min(seq):.2f} s | 1.0x |")
     print(f"| multi-figure Follow Path, {out['workers']} spawned workers | {min(par):.2f} s | "
           f"{min(seq) / min(par):.2f}x |")
-    print(f"| of which submitting the plans (starts the worker processes) | {min(out['start']):.2f} s | |")
+    print("| of which submitting the plans (starts the worker processes) | "
+          f"{min(out['start']):.2f} s | |")
     print(f"\nall runs: baseline {', '.join(f'{t:.2f}' for t in seq)} s; "
           f"workers {', '.join(f'{t:.2f}' for t in par)} s")
 

@@ -26,12 +26,12 @@ from test_blender_operators import add, make_path  # noqa: E402
 import blender_turning  # noqa: E402
 from blender_turning.blender import compat, crowd_job, ops_path  # noqa: E402
 from blender_turning.blender import retarget_adapter as ra  # noqa: E402
-from blender_turning.core import (DEFAULT_DT, BodyParams, Figure, Limits, PhaseEllipse,  # noqa: E402
-                                  Schedule, simulate)
-from blender_turning.crowd import CrowdFigure, Turns, follow_leader, synchronized  # noqa: E402
+from blender_turning.core import (DEFAULT_DT, BodyParams, Figure, Limits,  # noqa: E402
+                                  PhaseEllipse, Schedule, simulate)
+from blender_turning.crowd import (Crowd, CrowdFigure, Turns, follow_leader,  # noqa: E402
+                                   synchronized)
 from blender_turning.crowd.poses import map_task  # noqa: E402
 from blender_turning.crowd.runner import crowd_tasks, run_task  # noqa: E402
-from blender_turning.crowd import Crowd  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 ESC = type("E", (), {"type": "ESC"})()
@@ -413,7 +413,7 @@ def test_followers_on_a_road_follow_the_core_offset_paths(scene):
     for k, d in ((1, -1.0), (2, 1.0)):
         fig = bpy.data.objects[f"Cyclist {k}"]
         want, got = offset_path(road, d), path_of(fig)
-        for a in ("knots", "t_out", "t_in"):    # float32 of up to 90 m: ulp 7.6e-6 (measured 5.7e-6)
+        for a in ("knots", "t_out", "t_in"):   # float32 up to 90 m: ulp 7.6e-6 (measured 5.7e-6)
             np.testing.assert_allclose(getattr(got, a), getattr(want, a), atol=2e-5)
         assert fig.turning.crowd.time_offset == f32(k * 5.0 / lead.turning.speed)
 

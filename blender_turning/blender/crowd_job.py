@@ -30,6 +30,8 @@ import types
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 
+import bpy
+
 from ..core.follow_problem import start_state
 from ..core.scene import Scene
 from ..crowd import Crowd, CrowdFigure, FollowPath
@@ -183,7 +185,6 @@ class CrowdFollow:
 
     def figure(self, i: int):
         """The i-th figure's object now (by session id: it may have been renamed), or None."""
-        import bpy
         return next((o for o in bpy.data.objects if o.session_uid == self.uids[i]), None)
 
     def write(self, context, results) -> FrameRange:
