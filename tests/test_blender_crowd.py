@@ -445,3 +445,19 @@ def test_a_figure_that_cannot_be_read_is_named_and_nothing_changes(scene):
                                            r"point\(s\); it needs at least 2"):
         bpy.ops.turning.follow_path()
     assert snapshot() == before, diff(before, snapshot())
+
+
+def test_the_crowd_panel_draws_the_settings_and_add_crowd(scene):
+    from blender_turning.blender import panel_crowd
+    from test_blender_operators import LayoutStub
+    add("SKIER")
+    calls = []
+    cls = panel_crowd.VIEW3D_PT_turning_crowd
+    assert cls.poll(bpy.context)
+    fake = type("P", (panel_crowd.FigurePanel,), {"layout": LayoutStub(calls)})()
+    cls.draw(fake, bpy.context)
+    drawn = [c[1][1] for c in calls if c[0] == "prop"] + [c[1][0] for c in calls
+                                                         if c[0] == "operator_menu_enum"]
+    assert drawn == ["time_offset", "first_turn", "turning.add_crowd"]
+    assert any("act on 1 figure (the selection)" in c[2].get("text", "") for c in calls
+               if c[0] == "label")
