@@ -249,8 +249,9 @@ def test_add_menu_lists_every_sport(scene):
                                                  bpy.context)
     assert [c[2]["text"] for c in calls if c[0] == "operator"] == [
         "Skier", "Snowboarder", "Telemark", "Cyclist"]
-    assert [c[2] for c in calls if c[0] == "set"] == ["SKIER", "SNOWBOARDER", "TELEMARK",
-                                                       "CYCLIST"]
+    assert [c[2] for c in calls if c[0] == "set" and c[1] == "sport"] == [
+        "SKIER", "SNOWBOARDER", "TELEMARK", "CYCLIST"]
+    assert ("operator_menu_enum", ("turning.add_crowd", "formation")) in [c[:2] for c in calls]
     drawn = bpy.types.VIEW3D_MT_add._dyn_ui_initialize()
     assert ops_figure.draw_add_menu in drawn
     calls = []

@@ -19,9 +19,26 @@ def context_figure(context):
     return obj if figure_settings(obj) is not None else None
 
 
+#: Custom property of a collection made by Add Crowd (:mod:`.ops_crowd`): a crowd's figures.
+CROWD_TAG = "turning_crowd"
+
+
+def crowd_collection(context):
+    """The active collection when it is a crowd (made by Add Crowd), else ``None``."""
+    coll = getattr(context, "collection", None)
+    return coll if coll is not None and coll.get(CROWD_TAG) else None
+
+
+def collection_figures(coll) -> list:
+    """The figures of a collection (and its children), by name."""
+    return sorted((o for o in coll.all_objects if figure_settings(o) is not None),
+                  key=lambda o: o.name)
+
+
 def selected_figures(context) -> list:
     """Every selected figure (a selected body mesh counts for its armature), the active one
-    first, the others by name; each once."""
+    first, the others by name; each once.  With no figure selected and a Crowd collection
+    active (clicked in the Outliner): its figures."""
     active = context_figure(context)
     found = {}
     for obj in getattr(context, "selected_objects", ()) or ():
@@ -29,6 +46,10 @@ def selected_figures(context) -> list:
             obj = obj.parent
         if figure_settings(obj) is not None:
             found[obj.name] = obj
+    if not found and crowd_collection(context) is not None:
+        figs = collection_figures(crowd_collection(context))
+        if figs:
+            return figs
     rest = [found[name] for name in sorted(found) if active is None or name != active.name]
     return ([active] if active is not None else []) + rest
 
@@ -39,6 +60,9 @@ def poll_figure(cls, context) -> bool:
         cls.poll_message_set("Switch to Object Mode first")
         return False
     fig = context_figure(context)
+    if fig is None:
+        figs = selected_figures(context)          # a Crowd collection's, when it is active
+        fig = figs[0] if figs else None
     if fig is None:
         cls.poll_message_set("No figure selected: add one with Add Figure, or select one")
         return False

@@ -11,10 +11,10 @@ import bpy
 from ..core.errors import PlanInfeasible
 from ..core.follow_problem import DEFAULT_CLEARANCE
 from ..core.obstacles import Obstacles
-from . import bake
+from . import bake, crowd_job
 from .follow_job import Cancelled, FollowJob
 from .ops_bake import apply_bake
-from .ops_common import check_figure, context_figure, end_modal, poll_figure, report_error
+from .ops_common import check_figure, end_modal, poll_figure, report_error
 from .pipeline import map_track
 from .props import figure_settings
 from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
@@ -89,26 +89,28 @@ def finish(context, fig, job, result):
 
 
 class TURNING_OT_follow_path(bpy.types.Operator):
-    """Plan the active figure's turns along its path curve around the obstacles, and bake them"""
+    """Plan the selected figures' turns along their path curves around the obstacles, and bake
+    them (several figures: in worker processes, one progress bar)"""
 
     bl_idname = "turning.follow_path"
     bl_label = "Follow Path"
     bl_options = {"REGISTER", "UNDO"}
 
     _job = None
+    _crowd = None                       # several figures: a crowd_job.CrowdFollow
     _timer = None
 
     @classmethod
     def poll(cls, context):
         if not poll_figure(cls, context):
             return False
-        if context_figure(context).turning.path is None:
+        if not crowd_job.follow_figures(context):
             cls.poll_message_set("Set the figure's path curve first (Follow Path > Path)")
             return False
         return True
 
     def _start(self, context):
-        fig = context_figure(context)
+        fig = crowd_job.follow_figures(context)[0]
         try:
             return fig, prepare(context, fig)
         except Exception as exc:
@@ -131,6 +133,9 @@ class TURNING_OT_follow_path(bpy.types.Operator):
         return {"FINISHED"}
 
     def execute(self, context):
+        figs = crowd_job.follow_figures(context)
+        if crowd_job.needs_crowd(figs):
+            return crowd_job.run_crowd_inline(self, context, figs)
         fig, job = self._start(context)
         if job is None:
             return {"CANCELLED"}
@@ -143,31 +148,47 @@ class TURNING_OT_follow_path(bpy.types.Operator):
     def invoke(self, context, event):
         if context.window is None:                       # background / scripted: plan inline
             return self.execute(context)
+        figs = crowd_job.follow_figures(context)
+        if crowd_job.needs_crowd(figs):
+            self._crowd = crowd_job.prepare_crowd(self, context, figs)
+            if self._crowd is None:
+                return {"CANCELLED"}
+            self._begin_modal(context)
+            self._crowd.start()
+            crowd_job.status(context, self._crowd)
+            return {"RUNNING_MODAL"}
         fig, job = self._start(context)
         if job is None:
             return {"CANCELLED"}
         # By session id, not name or Python reference: the user may rename the figure while it
         # plans, and an undo step reloads every ID (a kept reference would dangle).
         self._fig_uid, self._job = fig.session_uid, job
+        self._begin_modal(context)
+        job.start()
+        context.workspace.status_text_set("Follow Path: planning... (Esc to cancel)")
+        return {"RUNNING_MODAL"}
+
+    def _begin_modal(self, context):
         wm = context.window_manager
         wm.progress_begin(0, 100)
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.modal_handler_add(self)
-        job.start()
-        context.workspace.status_text_set("Follow Path: planning... (Esc to cancel)")
-        return {"RUNNING_MODAL"}
 
     def _cleanup(self, context):
         end_modal(self, context)
 
     def cancel(self, context):
         """Blender ends the operator without an event (a file is opened, or Blender quits): stop
-        the planner thread and write nothing."""
+        the planner thread (or the worker processes) and write nothing."""
+        if getattr(self, "_crowd", None) is not None:      # (tests' stand-ins lack it)
+            self._crowd.cancel()
         if self._job is not None:
             self._job.cancel(wait=True)
         self._cleanup(context)
 
     def modal(self, context, event):
+        if getattr(self, "_crowd", None) is not None:
+            return crowd_job.crowd_modal(self, context, event)
         job = self._job
         if event.type == "ESC":
             job.cancel(wait=True)

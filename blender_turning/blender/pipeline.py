@@ -13,6 +13,7 @@ field's normal at the foot).  Without a Ground mesh the ground is flat at the St
 """
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -36,10 +37,38 @@ def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None, norm
                           normal=normal)
 
 
-def resampled(traj, frames: FrameRange, ground=None):
+def first_frame(offset: float, fps: float) -> int:
+    """Frames after the bake's first at which a figure starting ``offset`` s late has its first
+    key: the first frame at or after its start (as :func:`..crowd.poses.map_task` counts)."""
+    return math.ceil(offset * fps - 1e-9)
+
+
+def on_crowd_clock(traj, offset: float):
+    """``traj`` (on the figure's own clock, ``t = 0`` at its start) with ``t`` on the scene's
+    clock: ``offset`` s later (the crowd's clock, :mod:`..crowd.runner`)."""
+    if offset == 0.0:
+        return traj
+    cols = traj.columns()
+    cols["t"] = cols["t"] + offset
+    return type(traj).from_columns(cols, {**traj.meta, "time_offset": offset})
+
+
+def started(frames: FrameRange, offset: float) -> FrameRange:
+    """The frames a figure starting ``offset`` s after ``frames.start`` is keyed on."""
+    k0 = first_frame(offset, frames.fps)
+    if frames.start + k0 >= frames.end:
+        raise SceneInputError(f"Start Offset (turning.crowd.time_offset) = {offset:g} s starts "
+                              f"the figure at frame {frames.start + k0}, not before the last "
+                              f"frame {frames.end}: lower it or bake more frames")
+    return FrameRange(frames.start + k0, frames.end, frames.fps)
+
+
+def resampled(traj, frames: FrameRange, ground=None, origin: int | None = None):
     """``traj`` at every frame of ``frames`` (exactly ``end - start + 1`` samples); ``ground``:
-    the surface it ran on (terrain)."""
-    out = traj.resample(frames.fps, start=0.0, ground=ground)
+    the surface it ran on (terrain).  ``traj``'s ``t = 0`` is frame ``origin`` (default
+    ``frames.start``; a figure with a start offset is keyed from a later frame)."""
+    origin = frames.start if origin is None else origin
+    out = traj.resample(frames.fps, start=(frames.start - origin) / frames.fps, ground=ground)
     n = frames.end - frames.start + 1
     if len(out) < n:
         raise ValueError(f"the trajectory covers {len(out)} of {n} frames")
@@ -65,21 +94,29 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
     (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.
     ``height``: the flat ground's height (default the Start setting's z); ``ground``: its Ground
     mesh as read by :func:`ground_of` (default: read it here).  Raises ``ValueError`` or the
-    core's ``TurningError`` (``FellOver``, ``Stopped``, ``LeftTerrain``)."""
+    core's ``TurningError`` (``FellOver``, ``Stopped``, ``LeftTerrain``).
+
+    A figure with a Start Offset (``turning.crowd.time_offset``, a crowd's follower) runs on its
+    own clock from that many seconds after the first frame, as the core's crowd does
+    (:mod:`..crowd.runner`): its trajectory is ``t = offset`` + its own time, sampled at the
+    frames from the first at or after its start (:func:`started`), its keyed settings read on
+    its own clock (the value keyed at frame ``f`` acts ``offset`` s later)."""
     s = obj.turning
     if isinstance(ground, str):
         ground = ground_of(obj)
+    offset = float(s.crowd.time_offset)
+    shown = started(frames, offset)
     speed = speed_schedule(obj, frames)
     figure = figure_from_settings(s)
     # The body at the first frame's speed (a keyed speed's property value is the current frame's).
     figure = replace(figure, body=replace(figure.body, V_cm=speed(0.0)))
     controller = controller_from_settings(obj, figure, frames)
     state0 = start_state(obj, controller, start)
-    duration = frames.duration + 2 * DEFAULT_DT
+    duration = frames.duration - offset + 2 * DEFAULT_DT
     if ground is None:
         traj = simulate(figure, controller, duration, state0=state0, meta={"figure": obj.name},
                         speed=speed)
-        traj = resampled(traj, frames)
+        traj = resampled(on_crowd_clock(traj, offset), shown, origin=frames.start)
         z0 = float(s.start[2]) if height is None else float(height)
         return _with_z(traj, np.full(len(traj), z0))
     target = float(s.terrain.target_speed) or None
@@ -90,7 +127,7 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
                     meta={"figure": obj.name, "ground_object": ground.name},
                     ground=ground.field, resistance=resistance_from_settings(s),
                     target_speed=target)
-    traj = resampled(traj, frames, ground.field)
+    traj = resampled(on_crowd_clock(traj, offset), shown, ground.field, frames.start)
     return _with_z(traj, ground.heights(traj.x, traj.y))
 
 
@@ -110,5 +147,6 @@ def figure_pose_track(obj, frames: FrameRange, options=None, start=None, height=
     if isinstance(ground, str):
         ground = ground_of(obj)
     traj = simulate_figure(obj, frames, start, height, ground)
-    return traj, map_track(obj.turning.sport, traj, frames, options, obj,
+    shown = started(frames, float(obj.turning.crowd.time_offset))
+    return traj, map_track(obj.turning.sport, traj, shown, options, obj,
                            surface_normals(traj, ground))

@@ -15,6 +15,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorPro
                        PointerProperty)
 
 from ..core.ranges import RANGES
+from .props_crowd import TurningCrowdSettings
 from .props_rig import TurningRigSettings
 
 SPORTS = (
@@ -166,6 +167,9 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                                         "flat plane at the Start height")
     terrain: PointerProperty(type=TurningTerrainSettings, options=_STATIC,
                              description="Friction, drag and target speed on the Ground mesh")
+    crowd: PointerProperty(type=TurningCrowdSettings, options=_STATIC,
+                           description="The figure's start offset and first turn in a crowd "
+                                       "(issue 11)")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.

@@ -182,12 +182,15 @@ def controller_from_settings(obj, figure: Figure, frames: FrameRange) -> PhaseEl
 def start_state(obj, controller, start=None) -> tuple:
     """The simulation's initial state ``(x, y, theta_dir, theta_v, omega_v)``: upright at
     ``start = (x, y, theta_dir)`` (default: the figure's Start settings), on the target ellipse
-    (``omega_v = omega0 theta_max``)."""
+    (``omega_v = omega0 theta_max``; First Turn Right, ``turning.crowd.first_turn``: ``-omega0
+    theta_max``, the mirror image about the start direction, Section 1's symmetry, exact when
+    the Heading is the Start Direction)."""
     s = obj.turning
     if start is None:
         start = (s.start[0], s.start[1], s.start_heading)
     w, tm = controller.target(0.0)
-    return (float(start[0]), float(start[1]), float(start[2]), 0.0, w * tm)
+    rate = -w * tm if s.crowd.first_turn == "RIGHT" else w * tm
+    return (float(start[0]), float(start[1]), float(start[2]), 0.0, rate)
 
 
 def start_from_object(obj):

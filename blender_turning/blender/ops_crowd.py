@@ -1,0 +1,230 @@
+"""``turning.add_crowd``: a formation of figures from the active one as template (issue 11); also
+in the Add menu (Shift+A > Turning Figure > Add Crowd) and the Crowd panel.
+
+The formation is the core's (:mod:`..crowd.formations`: follow the leader, synchronised,
+peloton), computed before anything is made, so bad input is reported and the scene stays as it
+was.  The figures are linked duplicates of the template (:mod:`.crowd_scene`) in a new "Crowd"
+collection, selected, so Bake Turns (or Follow Path) then does the whole crowd.
+"""
+from __future__ import annotations
+
+import types
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
+
+from ..core.errors import TurningError
+from ..core.validate import check
+from ..crowd import follow_leader, peloton, synchronized
+from ..crowd.reader import CROWD_RANGES
+from . import crowd_scene
+from .ops_common import context_figure, poll_figure, report_error
+
+FORMATIONS = (
+    ("FOLLOW_LEADER", "Follow the Leader",
+     "Figures on the template's track, each a time or distance further behind (a ski school "
+     "behind its instructor); the template leads"),
+    ("SYNCHRONIZED", "Synchronized",
+     "A pair or a line turning together, in phase or in antiphase (the figure-8s of Fig. 10); "
+     "the template's turns"),
+    ("PELOTON", "Peloton",
+     "Riders in rows on the template's path curve, all starting at once (a cyclist following "
+     "a road)"),
+)
+GAP_BY = (("TIME", "Time", "Each follower starts Gap seconds after the one before"),
+          ("DISTANCE", "Distance", "Each follower starts Gap metres (at the leader's speed) "
+                                   "behind the one before"))
+
+
+def _r(key: str) -> dict:
+    """``min``/``max`` of a property from the crowd file's table of ranges."""
+    r = CROWD_RANGES[key]
+    return {"min": r.lo, "max": r.hi}
+
+
+class TURNING_OT_add_crowd(bpy.types.Operator):
+    """Add a crowd made from the active figure: followers of a leader, a synchronised pair or
+    line, or a peloton, in a new Crowd collection"""
+
+    bl_idname = "turning.add_crowd"
+    bl_label = "Add Crowd"
+    bl_options = {"REGISTER", "UNDO"}
+
+    formation: EnumProperty(name="Formation", items=FORMATIONS, default="FOLLOW_LEADER")
+    count: IntProperty(name="Count", default=4, min=1, max=int(CROWD_RANGES["count"].hi),
+                       soft_max=50, description="How many figures the formation adds")
+    gap_by: EnumProperty(name="Gap By", items=GAP_BY, default="TIME")
+    gap_time: FloatProperty(name="Gap", default=1.5, **_r("gap_s"), soft_max=10.0,
+                            unit="TIME_ABSOLUTE",
+                            description="Time between successive followers (s)")
+    gap_distance: FloatProperty(name="Gap", default=6.0, **_r("gap_m"), soft_max=50.0,
+                                unit="LENGTH",
+                                description="Distance between successive followers, or rows "
+                                            "of a peloton (m)")
+    lateral: FloatProperty(name="Lateral Offset", default=0.0, **_r("lateral_m"),
+                           soft_min=-10.0, soft_max=10.0, unit="LENGTH",
+                           description="How far to the left of the leader's track the "
+                                       "followers go (m; negative: right)")
+    alternate: BoolProperty(name="Alternate Sides", default=False,
+                            description="Followers alternate right and left of the track by "
+                                        "the Lateral Offset")
+    seed: IntProperty(name="Seed", default=0, min=0, max=2**31 - 1,
+                      description="Draws the small random differences; the same seed makes "
+                                  "the same crowd")
+    body_jitter: FloatProperty(name="Body Differences", default=0.0, **_r("jitter"),
+                               subtype="FACTOR",
+                               description="Mass, centre-of-mass height and roll inertia each "
+                                           "up to this fraction larger or smaller")
+    timing_jitter: FloatProperty(name="Timing Differences", default=0.0,
+                                 **_r("timing_jitter_s"), soft_max=1.0, unit="TIME_ABSOLUTE",
+                                 description="Start times up to this much earlier or later "
+                                             "(s; at most half the gap)")
+    period_jitter: FloatProperty(name="Period Differences", default=0.0, **_r("jitter"),
+                                 subtype="FACTOR",
+                                 description="Turn periods up to this fraction longer or "
+                                             "shorter")
+    spacing: FloatProperty(name="Spacing", default=3.0, **_r("spacing_m"), soft_max=20.0,
+                           unit="LENGTH", description="Distance between figures side by side")
+    antiphase: BoolProperty(name="Antiphase", default=True,
+                            description="Every other figure starts with the opposite turn")
+    sync_gap: FloatProperty(name="Start Gap", default=0.0, **_r("sync_gap_s"), soft_max=10.0,
+                            unit="TIME_ABSOLUTE",
+                            description="Each figure starts this long after the one before")
+    abreast: IntProperty(name="Abreast", default=2, min=1, max=int(CROWD_RANGES["abreast"].hi),
+                         description="Riders in a row")
+    row_spacing: FloatProperty(name="Row Spacing", default=0.8, **_r("spacing_m"),
+                               soft_max=3.0, unit="LENGTH",
+                               description="Distance between riders of a row")
+
+    @classmethod
+    def poll(cls, context):
+        return poll_figure(cls, context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "formation")
+        layout.prop(self, "count")
+        if self.formation == "FOLLOW_LEADER":
+            layout.prop(self, "gap_by")
+            layout.prop(self, "gap_time" if self.gap_by == "TIME" else "gap_distance")
+            layout.prop(self, "lateral")
+            layout.prop(self, "alternate")
+            names = ("seed", "body_jitter", "timing_jitter", "period_jitter")
+        elif self.formation == "SYNCHRONIZED":
+            names = ("spacing", "antiphase", "sync_gap")
+        else:
+            layout.prop(self, "gap_distance")
+            names = ("abreast", "row_spacing", "seed", "body_jitter")
+        for name in names:
+            layout.prop(self, name)
+
+    def _values(self) -> types.SimpleNamespace:
+        """The settings as typed (a float property keeps float32: 0.05 is read back as
+        0.0500000007; the shortest decimal that float32 holds is what was typed), each checked
+        against the crowd's table of ranges (a script may pass any value)."""
+        out = {}
+        for name, key in (("count", "count"), ("gap_time", "gap_s"), ("gap_distance", "gap_m"),
+                          ("lateral", "lateral_m"), ("seed", "seed"), ("body_jitter", "jitter"),
+                          ("timing_jitter", "timing_jitter_s"), ("period_jitter", "jitter"),
+                          ("spacing", "spacing_m"), ("sync_gap", "sync_gap_s"),
+                          ("abreast", "abreast"), ("row_spacing", "spacing_m")):
+            v = getattr(self, name)
+            if isinstance(v, float):
+                v = float(np.format_float_positional(np.float32(v), unique=True, trim="0"))
+            out[name] = check(name, v, CROWD_RANGES[key])
+        for name in ("formation", "gap_by", "alternate", "antiphase"):
+            out[name] = getattr(self, name)
+        return types.SimpleNamespace(**out)
+
+    @staticmethod
+    def members(context, template, v) -> tuple:
+        """``(template's member, the formation's members)``, the core's (nothing is made), for
+        the settings ``v`` (:meth:`_values`)."""
+        if v.formation == "SYNCHRONIZED":
+            lead = crowd_scene.template_member(context, template, path=False)
+            return lead, synchronized(lead, v.count, v.spacing, v.antiphase, "m",
+                                      v.sync_gap)
+        if v.formation == "PELOTON":
+            if template.turning.path is None:
+                raise ValueError("Peloton: the template has no path curve: set its Path "
+                                 "(Follow Path > Path) to the road")
+            lead = crowd_scene.template_member(context, template, path=True)
+            return lead, peloton(lead, v.count, v.gap_distance, v.abreast,
+                                 v.row_spacing, v.seed, v.body_jitter, "m")
+        lead = crowd_scene.template_member(context, template,
+                                           path=template.turning.path is not None)
+        by_time = v.gap_by == "TIME"
+        lateral = [-v.lateral, v.lateral] if v.alternate else v.lateral
+        return lead, follow_leader(lead, v.count, v.gap_time if by_time
+                                   else v.gap_distance, "time" if by_time else "distance",
+                                   lateral, v.seed, v.body_jitter, v.timing_jitter,
+                                   v.period_jitter, "m")
+
+    @staticmethod
+    def _path_object(template, lead, member, k, collection, v):
+        """The member's path curve: the template's when it is the same path, else a new one."""
+        path = member.controller.scene.path
+        s_along = 0.0
+        if v.formation == "PELOTON":             # rows from the back, as the core places them
+            rows = -(-v.count // v.abreast)
+            s_along = (rows - 1 - (k - 1) // v.abreast) * v.gap_distance
+        if path is lead.controller.scene.path and s_along == 0.0:
+            return template.turning.path
+        return crowd_scene.curve_object(crowd_scene.path_from(path, s_along),
+                                        f"{template.name} {k} Path",
+                                        float(template.turning.start[2]), collection)
+
+    def execute(self, context):
+        template = context_figure(context)
+        try:
+            v = self._values()
+            lead, members = self.members(context, template, v)
+        except (ValueError, TurningError) as exc:
+            return report_error(self, "Add Crowd", template.name, exc)
+        coll = crowd_scene.new_crowd_collection(context)
+        figs = []
+        try:
+            if self.formation == "FOLLOW_LEADER":
+                coll.objects.link(template)          # the leader is one of the crowd
+                figs.append(template)
+            for k, member in enumerate(members, start=1):
+                path_obj = self._path_object(template, lead, member, k, coll, v) \
+                    if member.is_path else None
+                new = crowd_scene.duplicate_figure(template, f"{template.name} {k}", coll)
+                crowd_scene.place(new, member, template.turning.start, path_obj)
+                figs.append(new)
+        except Exception as exc:                     # a bug: take back what was made
+            crowd_scene.remove_crowd(coll, keep=template)
+            return report_error(self, "Add Crowd", template.name, exc)
+        for obj in context.selected_objects:
+            obj.select_set(False)
+        for fig in figs:
+            fig.select_set(True)
+        context.view_layer.objects.active = figs[0]
+        self.report({"INFO"}, f"Add Crowd: {len(figs)} figures in {coll.name!r} "
+                              f"({self.formation.replace('_', ' ').lower()}); Bake Turns or "
+                              "Follow Path now does them all")
+        return {"FINISHED"}
+
+
+def draw_add_menu(self, context):
+    """Shift+A > Turning Figure > Add Crowd (from the active figure)."""
+    self.layout.separator()
+    self.layout.operator_menu_enum(TURNING_OT_add_crowd.bl_idname, "formation",
+                                   text="Add Crowd", icon="COMMUNITY")
+
+
+classes = (TURNING_OT_add_crowd,)
+_register, _unregister = bpy.utils.register_classes_factory(classes)
+
+
+def register():
+    _register()
+    bpy.types.VIEW3D_MT_turning_figure_add.append(draw_add_menu)
+
+
+def unregister():
+    bpy.types.VIEW3D_MT_turning_figure_add.remove(draw_add_menu)
+    _unregister()
