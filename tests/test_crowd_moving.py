@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core.trajectory import COLUMNS, Trajectory
-from blender_turning.crowd.moving import MovingBodies, closest_approach
+from blender_turning.core.moving import MovingBodies, closest_approach
 
 
 def track(t, x, y, theta_dir=0.0, theta_v=0.0):

@@ -15,7 +15,7 @@ from pathlib import Path
 from ..core.params import check_range
 from ..core.ranges import MAX_SAMPLES
 from ..crowd import load_crowd, run_crowd
-from ..crowd.moving import MovingBodies, closest_approach
+from ..core.moving import MovingBodies, closest_approach
 from .common import Outputs
 from .progress import Progress
 
@@ -76,7 +76,7 @@ def run(args) -> int:
             csv = f"{f.name}.csv"
             outputs.write(f"--out {csv}", traj.to_csv)
         rows.append(_row(f, r, traj, csv))
-        if f.name in near:           # foot-CM segments sampled every 0.1 s (crowd/moving.py)
+        if f.name in near:           # foot-CM segments sampled every 0.1 s (core/moving.py)
             d, other, t = near[f.name]
             rows[-1]["closest"] = {"distance_m": d if math.isfinite(d) else None,
                                    "to": other, "t": t}
