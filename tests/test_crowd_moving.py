@@ -1,5 +1,6 @@
 """Figures as moving obstacles (issue 11): the foot-CM segment, its side, its time."""
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -63,6 +64,13 @@ def test_bodies_that_cross_between_the_samples_collide():
     foot, body = steps([[0.5, -0.6]], [[0.5, 0.6]])               # along y, 1.0 s to 1.1 s
     assert b.collides(foot, body, [1.0], 0.1)[0]
     assert not b.collides(foot, body, [1.3], 0.1)[0]              # 3 m behind it by then
+    # Crossing a third of the way through: no moment tested (multiples of 1/16 of the step)
+    # comes within 1 cm; the bound left after the halvings does, and counts (module doc).
+    foot, body = steps([[1 / 3, -0.4]], [[1 / 3, 0.8]])
+    b1 = replace(b, clearance=0.01)
+    assert b1.collides(foot, body, [1.0], 0.1)[0]
+    assert not b1.collides(foot + np.array([[[0.3]], [[0.0]]]), body + np.array(
+        [[[0.3]], [[0.0]]]), [1.0], 0.1)[0]                      # 0.3 m to the side: clear
     # Side by side at the same speed 0.5 m apart: no relative motion, no false alarm.
     foot, body = steps([[0.0, 0.5]], [[1.0, 0.5]])
     assert not b.collides(foot, body, [1.0], 0.1)[0]
@@ -77,6 +85,11 @@ def test_near_keeps_only_bodies_that_come_near_within_the_window():
     assert b.near((-4.0, 2.0), 1.0, 0.0, 2.0).names == ("passer",)      # passer at x = -5..-3
     assert b.near((4.0, 2.0), 1.0, 0.0, 2.0).names == ()                # not there yet
     assert b.near((4.0, 2.0), 1.0, 8.0, 9.5).names == ("passer",)
+    # The passer reaches the box (x >= 2.5) at 7.5 s: a window ending after that keeps it.
+    assert b.near((4.0, 2.0), 1.0, 0.0, 7.55).names == ("passer",)
+    assert b.near((4.0, 2.0), 1.0, 0.0, 6.5).names == ()
+    assert b.near((-4.0, 2.0), 1.0, 2.45, 5.0).names == ("passer",)     # leaves at 2.5 s
+    assert b.near((-4.0, 2.0), 1.0, 3.5, 5.0).names == ()
     log = []
     logged = MovingBodies.from_tracks([("passer", PASSER, 1.0)], clearance=0.5, log=log)
     logged.near((4.0, 2.0), 1.0, 8.0, 9.5)

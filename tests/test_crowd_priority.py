@@ -171,6 +171,33 @@ def test_the_moving_bodies_of_the_exactness_test_change_the_optimum():
     assert moved >= 3 and blocked >= 3
 
 
+def test_local_keeps_the_bodies_that_reach_the_search_within_its_horizon():
+    """A 30 m/s body 30 m away at the root's time crosses the path at 1.0 s, within the
+    horizon (1.2 s): kept; one crossing at 2.5 s, after the dead-end test's stage: dropped."""
+    fig = preset("skier")
+    fig = replace(fig, body=replace(fig.body, V_cm=8.0))
+    st = PlannerSettings(n_stages=4, q=5)
+    t = np.arange(-20, 101) * st.dt
+    tracks = []
+    for name, tc in (("soon", 1.0), ("later", 2.5)):
+        cols = {c: np.zeros_like(t) for c in COLUMNS}
+        cols.update(t=t, x=np.full_like(t, 8.0 * tc + 1.0), y=30.0 * (t - tc),
+                    theta_dir=np.full_like(t, math.pi / 2))
+        tracks.append((name, Trajectory.from_columns(cols), 1.0))
+    bodies = MovingBodies.from_tracks(tracks, dt=st.dt, clearance=1.0)
+    path = HermitePath.from_polyline(np.array([[0.0, 0.0], [40.0, 0.0]]))
+    base = Problem(fig, PathDistance(path), Obstacles(), st)
+    problem = around(base, bodies)
+    state = np.zeros(5)
+    assert np.linalg.norm(bodies.at(0.0)[0][0]) > base.reach() + base.v_max * 0.3 + 2.0
+    local = problem.local(state[:2], state, 0.0)
+    assert local.movers.names == ("soon",)
+    plan_ref = exhaustive(problem, state, 0.0)[1]
+    plan = branch_and_bound(local, state, 0.0)
+    assert plan_ref is None and not plan.feasible                # it sweeps 1 m ahead
+    assert exhaustive(base, state, 0.0)[1] is not None           # without it: a plan
+
+
 def test_proof_reuse_and_warm_start_stay_exact_around_moving_bodies(crossing):
     """The receding horizon reuses each search's proof and plan in the next (proof.py); with
     obstacles that move, a node's time is part of it: the same trajectory without them."""
