@@ -30,9 +30,10 @@ def skier(name, points, offset=0.0, **extra):
             **extra}
 
 
-# Two skiers whose paths cross where both arrive 2.5 s after the start: alone, they collide.
+# Two skiers whose paths cross where both arrive 4.5 s into the shot (on their own clocks 3.5
+# and 2.5 s: each its own time offset): alone, they collide.
 CROSSING = {"name": "crossing", "duration": 10, "figures": [
-    skier("a", [[0, 0], [40, 0]]), skier("b", [[20, -20], [20, 20]])]}
+    skier("a", [[-8, 0], [40, 0]], 1.0), skier("b", [[20, -20], [20, 20]], 2.0)]}
 # The same twice, 100 m apart: two groups that cannot see each other.
 TWO_CROSSINGS = {**CROSSING, "figures": CROSSING["figures"] + [
     skier("c", [[100, 0], [140, 0]]), skier("d", [[120, -20], [120, 20]])]}
