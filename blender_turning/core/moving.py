@@ -176,15 +176,28 @@ class MovingBodies:
                              f"bodies' grid (multiples of {self.dt!r} s)")
         k = (k.astype(np.int64) - self.m0)[None, :] + np.arange(steps)[:, None]   # (S, m)
         n = self.foot.shape[1]
+        # The whole stage first: the bodies whose box over its time span meets the track's.
+        a, b = min(max(int(k.min()), 0), n), min(max(int(k.max()) + 2, 0), n)
+        if a >= b:
+            return np.zeros(m, bool)
+        theirs = np.concatenate([self.foot[:, a:b], self.cm[:, a:b]], axis=1)
+        body = np.asarray(body, float)
+        mine = np.concatenate([foot.reshape(2, -1), body.reshape(2, -1)], axis=1)
+        near = np.all((np.fmin.reduce(theirs, axis=1) <= mine.max(axis=1) + self.clearance) &
+                      (np.fmax.reduce(theirs, axis=1) >= mine.min(axis=1) - self.clearance),
+                      axis=1)                            # all NaN (absent): False
+        if not near.any():
+            return np.zeros(m, bool)
         inside = (k >= 0) & (k + 1 < n)
         kk = np.clip(k, 0, max(n - 2, 0))
         # Step instances (i: flat (S, m)) against bodies (j), box test first.
         P0, P1 = (np.moveaxis(foot[:, s], 0, -1).reshape(-1, 2) for s in
                   (slice(0, -1), slice(1, None)))
-        Q0, Q1 = (np.moveaxis(np.asarray(body, float)[:, s], 0, -1).reshape(-1, 2) for s in
+        Q0, Q1 = (np.moveaxis(body[:, s], 0, -1).reshape(-1, 2) for s in
                   (slice(0, -1), slice(1, None)))
-        R0, R1 = self.foot[:, kk.ravel()], self.foot[:, kk.ravel() + 1]      # (B, S m, 2)
-        S0, S1 = self.cm[:, kk.ravel()], self.cm[:, kk.ravel() + 1]
+        F, C = self.foot[near], self.cm[near]
+        R0, R1 = F[:, kk.ravel()], F[:, kk.ravel() + 1]                     # (B, S m, 2)
+        S0, S1 = C[:, kk.ravel()], C[:, kk.ravel() + 1]
         cl = self.clearance
         mine = np.stack([P0, P1, Q0, Q1])
         lo, hi = mine.min(axis=0) - cl, mine.max(axis=0) + cl
