@@ -241,6 +241,15 @@ def test_priority_planning_is_the_same_on_two_workers(two_crossings):
     _same(grouped, run_crowd(crowd, workers=2))
 
 
+@pytest.mark.slow
+def test_priority_planning_is_the_same_on_a_dask_local_cluster(two_crossings):
+    distributed = pytest.importorskip("dask.distributed")
+    crowd, grouped = two_crossings
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        _same(grouped, run_crowd(crowd, scheduler=cluster.scheduler_address))
+
+
 def test_a_path_figure_plans_around_a_parametric_one_named_before_it():
     doc = {"name": "slalom crossing", "duration": 8, "figures": [
         {"name": "turner", "preset": "skier", "body": {"V_cm": 8.0},
