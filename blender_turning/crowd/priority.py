@@ -84,18 +84,41 @@ def conflicts(figures, groups, results, clearance: float) -> list:
     searches (its ``region``), the body of a figure of group ``a`` before it."""
     where = {i: g for g, members in enumerate(groups) for i in members}
     out = set()
+    boxes = [_track_box(f, results[i].trajectory, clearance) for i, f in enumerate(figures)]
     for k, fk in enumerate(figures):
         region = results[k].region
         if region is None or not len(region):
             continue
+        x, y, r = region[:, 0], region[:, 1], region[:, 2]
+        pad = 4.0 * fk.controller.scene.settings.dt          # near's window: a few steps more
+        reach = np.array([(x - r).min(), (y - r).min(), (x + r).max(), (y + r).max(),
+                          region[:, 3].min() + fk.time_offset - pad,
+                          region[:, 4].max() + fk.time_offset + pad])
         for j in range(k):
             tr = results[j].trajectory
-            if where[j] == where[k] or (where[j], where[k]) in out or tr is None or not len(tr):
+            if where[j] == where[k] or (where[j], where[k]) in out or boxes[j] is None or \
+                    not _overlap(boxes[j], reach):      # a quick test first (conservative)
                 continue
             body = bodies_for(fk, [(figures[j].name, tr, figures[j].figure.body.l)], clearance)
             if body.seen_by(region).any():
                 out.add((where[j], where[k]))
     return sorted(out)
+
+
+def _track_box(f, tr, clearance: float):
+    """Where and when a trajectory's body is, grown by its CM height and the clearance:
+    ``(x0, y0, x1, y1, t0, t1)`` on the crowd's clock, or ``None``."""
+    if tr is None or not len(tr):
+        return None
+    grow = f.figure.body.l + clearance
+    lo, hi = np.fmin.reduce, np.fmax.reduce                 # NaN samples left out
+    return np.array([lo(tr.x) - grow, lo(tr.y) - grow, hi(tr.x) + grow, hi(tr.y) + grow,
+                     tr.t[0], tr.t[-1]])
+
+
+def _overlap(a, b) -> bool:
+    return bool(a[0] <= b[2] and b[0] <= a[2] and a[1] <= b[3] and b[1] <= a[3]
+                and a[4] <= b[5] and b[4] <= a[5])
 
 
 def merge(groups, pairs) -> list:
