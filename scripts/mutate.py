@@ -49,6 +49,7 @@ MAPPING = [T + "test_mutation_guards_mapping.py", T + "test_mapping_skier.py",
            T + "test_mapping.py", T + "test_mapping_snowboarder.py",
            T + "test_mapping_telemark.py", T + "test_mapping_cyclist.py"]
 TERRAIN = [T + "test_terrain.py", T + "test_terrain_symbolic.py", T + "test_terrain_sim.py"]
+MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
 
@@ -236,6 +237,30 @@ MUTANTS = [
       "    if not problem.settings.viable_stages:\n        return np.zeros(len(C_f), bool)\n"
       "    return no_way_on(", "    if True:\n        return np.zeros(len(C_f), bool)\n"
       "    return no_way_on(", [T + "test_planner_search.py"]),
+    # -- figures avoiding each other (issue 11, core/moving.py) --------------------------------
+    M("movers_without_time", "core/planner/problem.py",
+      "self.movers.collides(P[:2], pts[:, len(track):], t0, h)",
+      "self.movers.collides(P[:2], pts[:, len(track):], 0.0 * t0, h)", MOVING),
+    M("movers_without_body_point", "core/planner/problem.py",
+      "self.movers.collides(P[:2], pts[:, len(track):], t0, h)",
+      "self.movers.collides(P[:2], P[:2], t0, h)", MOVING),
+    M("movers_window_one_stage", "core/planner/problem.py",
+      "t + (st.n_stages + 1) * st.t_stage * 1.001 + st.dt", "t + st.t_stage", MOVING),
+    M("movers_lipschitz_ignored", "core/moving.py",
+      "idx = np.flatnonzero(~hit & (0.5 * (d0 + d1 - L) <= cl))",
+      "idx = np.flatnonzero(~hit & (0.5 * (d0 + d1) <= cl))", MOVING),
+    M("movers_doubt_not_counted", "core/moving.py",
+      "    hit[idx] = True                            # still in doubt", "    pass  #", MOVING),
+    M("movers_cm_on_the_right", "core/moving.py",
+      "x - side * np.sin(head), y + side * np.cos(head)",
+      "x + side * np.sin(head), y - side * np.cos(head)", MOVING),
+    M("movers_near_window_short", "core/moving.py",
+      "min(int(math.ceil(t_hi / self.dt)) - self.m0 + 2, n)",
+      "min(int(math.ceil(t_hi / self.dt)) - self.m0 - 5, n)", MOVING),
+    M("groups_never_see_each_other", "crowd/priority.py",
+      "            if body.seen_by(region).any():", "            if False:", MOVING),
+    M("bodies_on_the_crowds_clock", "crowd/priority.py",
+      "clearance, shift=f.time_offset,", "clearance, shift=0.0,", MOVING),
     # -- mapping (Section 7) -------------------------------------------------------------------
     M("leg_twist_reversed", "mapping/skier.py",
       "twist = {s: np.clip(-o.leg_twist_gain * (tilts[s] - th)",

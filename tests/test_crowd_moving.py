@@ -1,11 +1,12 @@
 """Figures as moving obstacles (issue 11): the foot-CM segment, its side, its time."""
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from blender_turning.core.trajectory import COLUMNS, Trajectory
-from blender_turning.crowd.moving import MovingBodies, closest_approach
+from blender_turning.core.moving import MovingBodies, closest_approach
 
 
 def track(t, x, y, theta_dir=0.0, theta_v=0.0):
@@ -32,10 +33,64 @@ def test_the_cm_leans_to_the_left_of_the_heading_by_l_sin_theta_v():
     assert near["passer"][2] == pytest.approx(5.0)
 
 
+def steps(a, b):
+    """Track steps ``a[i] -> b[i]`` of upright figures (foot = body point) as
+    ``MovingBodies.collides`` takes them: shape (2, 2, m)."""
+    foot = np.stack([np.asarray(a, float).T, np.asarray(b, float).T], axis=1)
+    return foot, foot
+
+
 def test_a_step_collides_only_while_the_body_is_there():
     late = track(T + 20.0, 0.0, 0.0)                              # the same spot, 20 s later
     b = MovingBodies.from_tracks([("still", STILL, 1.0), ("late", late, 1.0)], clearance=0.3)
-    a, c = np.array([[-1.0, 0.2], [-1.0, 0.2], [-1.0, 0.6]]), np.array([[1.0, 0.2]] * 3)
-    np.testing.assert_array_equal(b.collides([5.0, 15.0, 5.0], a, c), [True, False, False])
-    np.testing.assert_array_equal(b.collides([25.0, 35.0, -5.0], a, c), [True, False, False])
+    foot, body = steps([[-1.0, 0.2], [-1.0, 0.2], [-1.0, 0.6]], [[1.0, 0.2]] * 3)
+    np.testing.assert_array_equal(b.collides(foot, body, [5.0, 15.0, 5.0], 0.1),
+                                  [True, False, False])
+    np.testing.assert_array_equal(b.collides(foot, body, [25.0, 35.0, -5.0], 0.1),
+                                  [True, False, False])
     assert closest_approach(b)["still"] == (math.inf, None, None)    # never in the shot together
+    with pytest.raises(ValueError, match="not on the moving bodies' grid"):
+        b.collides(foot, body, [5.03, 5.0, 5.0], 0.1)
+    with pytest.raises(ValueError, match="sampling step"):
+        b.collides(foot, body, [5.0, 5.0, 5.0], 0.05)
+
+
+def test_bodies_that_cross_between_the_samples_collide():
+    """At both ends of the step they are 0.78 m apart, half way through on top of each other:
+    the rule holds in continuous time (core/moving.py), not only at the samples."""
+    t = np.round(np.arange(0, 21) * 0.1, 12)
+    runner = track(t, 10.0 * (t - 1.0), 0.0)                     # along x at 10 m/s
+    b = MovingBodies.from_tracks([("runner", runner, 1.0)], dt=0.1, clearance=0.3)
+    foot, body = steps([[0.5, -0.6]], [[0.5, 0.6]])               # along y, 1.0 s to 1.1 s
+    assert b.collides(foot, body, [1.0], 0.1)[0]
+    assert not b.collides(foot, body, [1.3], 0.1)[0]              # 3 m behind it by then
+    # Crossing a third of the way through: no moment tested (multiples of 1/16 of the step)
+    # comes within 1 cm; the bound left after the halvings does, and counts (module doc).
+    foot, body = steps([[1 / 3, -0.4]], [[1 / 3, 0.8]])
+    b1 = replace(b, clearance=0.01)
+    assert b1.collides(foot, body, [1.0], 0.1)[0]
+    assert not b1.collides(foot + np.array([[[0.3]], [[0.0]]]), body + np.array(
+        [[[0.3]], [[0.0]]]), [1.0], 0.1)[0]                      # 0.3 m to the side: clear
+    # Side by side at the same speed 0.5 m apart: no relative motion, no false alarm.
+    foot, body = steps([[0.0, 0.5]], [[1.0, 0.5]])
+    assert not b.collides(foot, body, [1.0], 0.1)[0]
+    assert b.collides(foot, body - np.array([[[0.0], [0.0]], [[0.25], [0.25]]]), [1.0],
+                      0.1)[0]                                     # leaning towards it
+
+
+def test_near_keeps_only_bodies_that_come_near_within_the_window():
+    b = MovingBodies.from_tracks([("still", STILL, 1.0), ("passer", PASSER, 1.0)],
+                                 clearance=0.5)
+    assert b.near((0.0, 0.0), 1.0).names == ("still", "passer")
+    assert b.near((-4.0, 2.0), 1.0, 0.0, 2.0).names == ("passer",)      # passer at x = -5..-3
+    assert b.near((4.0, 2.0), 1.0, 0.0, 2.0).names == ()                # not there yet
+    assert b.near((4.0, 2.0), 1.0, 8.0, 9.5).names == ("passer",)
+    # The passer reaches the box (x >= 2.5) at 7.5 s: a window ending after that keeps it.
+    assert b.near((4.0, 2.0), 1.0, 0.0, 7.55).names == ("passer",)
+    assert b.near((4.0, 2.0), 1.0, 0.0, 6.5).names == ()
+    assert b.near((-4.0, 2.0), 1.0, 2.45, 5.0).names == ("passer",)     # leaves at 2.5 s
+    assert b.near((-4.0, 2.0), 1.0, 3.5, 5.0).names == ()
+    log = []
+    logged = MovingBodies.from_tracks([("passer", PASSER, 1.0)], clearance=0.5, log=log)
+    logged.near((4.0, 2.0), 1.0, 8.0, 9.5)
+    assert log == [(4.0, 2.0, 1.0, 8.0, 9.5)] and logged.seen_by(log).tolist() == [True]

@@ -2,7 +2,8 @@
 
 Writes ``DIR/<figure>.csv`` per figure (DESIGN.md columns, ``t`` on the crowd's clock) and
 ``DIR/summary.json``.  Parametric figures run as batches here; path figures are planned one task
-each on ``--workers K`` local processes or a Dask scheduler (``--scheduler ADDRESS``).  A figure
+each (those in the crowd's ``priority``: one task per independent group) on ``--workers K``
+local processes or a Dask scheduler (``--scheduler ADDRESS``).  A figure
 that falls or finds no feasible plan is written up to there, listed in the summary, and makes
 the command end with one line and exit 2.
 """
@@ -15,7 +16,7 @@ from pathlib import Path
 from ..core.params import check_range
 from ..core.ranges import MAX_SAMPLES
 from ..crowd import load_crowd, run_crowd
-from ..crowd.moving import MovingBodies, closest_approach
+from ..core.moving import MovingBodies, closest_approach
 from .common import Outputs
 from .progress import Progress
 
@@ -76,11 +77,12 @@ def run(args) -> int:
             csv = f"{f.name}.csv"
             outputs.write(f"--out {csv}", traj.to_csv)
         rows.append(_row(f, r, traj, csv))
-        if f.name in near:           # foot-CM segments sampled every 0.1 s (crowd/moving.py)
+        if f.name in near:           # foot-CM segments sampled every 0.1 s (core/moving.py)
             d, other, t = near[f.name]
             rows[-1]["closest"] = {"distance_m": d if math.isfinite(d) else None,
                                    "to": other, "t": t}
     doc = {"crowd": crowd.name, "seed": crowd.seed, "duration": crowd.duration, "dt": crowd.dt,
+           "priority": list(crowd.priority), "clearance": crowd.clearance,
            "fps": args.fps, "figures": rows, "failed": [r.name for r in result.failed],
            "wall_time": result.wall_time,
            "engine": {"workers": args.workers, "scheduler": args.scheduler}}

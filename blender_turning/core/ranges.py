@@ -127,6 +127,8 @@ RANGES: dict[str, Range] = {
     "distance": Range(0.0, 1e6, "m", "a distance travelled along the path"),
     "radius": Range(0.0, 1e4, "m", "an obstacle's radius", lo_open=True),
     "clearance": Range(0.0, 100.0, "m", "the distance the track keeps from obstacles"),
+    "body_clearance": Range(0.0, 100.0, "m", "the distance a crowd's figure keeps from the "
+                            "bodies (foot to CM) of figures planned before it (issue 11)"),
     "run_out": Range(0.0, 1e4, "m", "the straight added after the path's end"),
     "samples_per_segment": Range(1, 1000, "", "path samples per spline segment", integer=True),
     # -- scenes: terrain (issue 10, docs/TERRAIN.md) ----------------------------------------------

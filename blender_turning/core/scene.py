@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .moving import around
 from .obstacles import Obstacles
 from .follow_problem import DEFAULT_CLEARANCE, FollowSetup, start_state
 from .params import PRESETS, Figure, preset
@@ -70,10 +71,14 @@ class Scene:
         """The planning problem (the path with its run-out: :mod:`.follow_problem`)."""
         return self.setup().problem()
 
-    def run(self) -> FollowResult:
+    def run(self, movers=None) -> FollowResult:
         """Follow the path to its end (raises ``PathNotFinished`` at the time limit), or for
-        ``duration`` seconds."""
-        return self.setup().run(self.state0, self.C_f0, self.duration, meta={"scene": self.name})
+        ``duration`` seconds; around ``movers`` too (other figures' bodies, a
+        :class:`.moving.MovingBodies` on this figure's clock), if given."""
+        setup = self.setup()
+        problem = None if movers is None else around(setup.problem(), movers)
+        return setup.run(self.state0, self.C_f0, self.duration, problem=problem,
+                         meta={"scene": self.name})
 
 
 def check_horizon(settings: PlannerSettings, where: str = "") -> None:

@@ -12,6 +12,9 @@ them from a template and a seed, the reader (:mod:`.reader`) from a crowd scene 
 
 Every figure has its own clock: it starts at ``time_offset`` seconds of the crowd's clock, and
 its trajectory is reported on the crowd's clock (``t = time_offset + own t``).
+
+Priority planning (issue 11): the figures a crowd's ``priority`` names plan in that order, each
+path figure around the bodies of those before it (:mod:`..core.moving`), keeping ``clearance``.
 """
 from __future__ import annotations
 
@@ -20,14 +23,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..core.follow_problem import DEFAULT_CLEARANCE
 from ..core.params import Figure, check_range
 from ..core.ranges import MAX_STEPS
 from ..core.validate import check
 from ..core.simulate import slalom_start
 
-__all__ = ["Turns", "FollowPath", "CrowdFigure", "Crowd", "FIRST_TURNS"]
+__all__ = ["Turns", "FollowPath", "CrowdFigure", "Crowd", "FIRST_TURNS", "BODY_CLEARANCE"]
 
 FIRST_TURNS = ("left", "right")
+
+#: Distance kept between two figures' foot-CM segments in priority planning, m: each figure's
+#: half width with its equipment (the obstacles' :data:`..core.follow_problem.DEFAULT_CLEARANCE`)
+#: on either side of the gap.
+BODY_CLEARANCE = 2.0 * DEFAULT_CLEARANCE
 
 
 @dataclass(frozen=True)
@@ -116,13 +125,20 @@ class Crowd:
 
     ``duration`` (s, on the crowd's clock) ends every :class:`Turns` figure; a path figure ends
     at its path's end (or its scene's ``duration``).  ``dt`` is the RK4 step of the parametric
-    figures.  ``seed`` is the one the formations drew from (recorded in the summary)."""
+    figures.  ``seed`` is the one the formations drew from (recorded in the summary).
+
+    ``priority``: names of figures in planning order (``crowd/runner.py``): each path figure
+    named plans around the bodies of the figures named before it, keeping ``clearance`` (m)
+    from them; the parametric figures cannot steer, so they must come before every path figure
+    named.  Figures not named plan alone."""
 
     name: str
     figures: tuple
     duration: float
     dt: float = 0.02
     seed: int = 0
+    priority: tuple = ()
+    clearance: float = BODY_CLEARANCE
 
     def __post_init__(self):
         object.__setattr__(self, "figures", tuple(self.figures))
@@ -141,6 +157,20 @@ class Crowd:
             if not f.is_path and f.time_offset >= self.duration:
                 raise ValueError(f"figure {f.name!r}: time_offset = {f.time_offset:g} s is not "
                                  f"before the crowd's duration ({self.duration:g} s)")
+        object.__setattr__(self, "priority", tuple(self.priority))
+        check("clearance", self.clearance, "body_clearance")
+        path_named = None
+        for i, name in enumerate(self.priority):
+            if name not in seen:
+                raise ValueError(f"priority[{i}] = {name!r} names no figure of the crowd")
+            if name in self.priority[:i]:
+                raise ValueError(f"priority[{i}] = {name!r} is named twice")
+            if self[name].is_path:
+                path_named = path_named or name
+            elif path_named is not None:
+                raise ValueError(f"priority[{i}] = {name!r} follows the parametric controller "
+                                 f"and cannot steer around {path_named!r}, named before it: "
+                                 f"name the parametric figures first")
 
     def __getitem__(self, name: str) -> CrowdFigure:
         for f in self.figures:

@@ -16,7 +16,7 @@ from ..core.ranges import RANGES, Range
 from ..core.scene import read_figure, scene_from_dict
 from ..core.validate import FieldError, Fields, read_text
 from . import formations as formations_
-from .model import FIRST_TURNS, Crowd, CrowdFigure, FollowPath, Turns
+from .model import BODY_CLEARANCE, FIRST_TURNS, Crowd, CrowdFigure, FollowPath, Turns
 
 __all__ = ["load_crowd", "crowd_from_dict", "CROWD_RANGES"]
 
@@ -35,7 +35,8 @@ CROWD_RANGES = {
     "timing_jitter_s": Range(0.0, 1e3, "s", "random difference of the start time (at most "
                              "half the gap)"),
 }
-_TOP = {"name", "description", "seed", "duration", "dt", "figures", "formations"}
+_TOP = {"name", "description", "seed", "duration", "dt", "figures", "formations", "priority",
+        "clearance"}
 _FIGURE = {"name", "preset", "body", "limits", "turns", "follow", "start", "time_offset"}
 _FORMATIONS = {
     "follow_leader": {"type", "leader", "count", "gap_s", "gap_m", "lateral_m", "body_jitter",
@@ -70,10 +71,25 @@ def crowd_from_dict(doc, base_dir=".", source: str = "crowd") -> Crowd:
         top.fail("figures", "is empty (and no formation adds any)")
     duration = top.number("duration", "duration")
     dt = top.number("dt", "dt", 0.02)
+    priority = _priority(top, figures)
+    clearance = top.number("clearance", "body_clearance", BODY_CLEARANCE)
     try:
-        return Crowd(top.string("name", "crowd"), tuple(figures), duration, dt, seed)
+        return Crowd(top.string("name", "crowd"), tuple(figures), duration, dt, seed, priority,
+                     clearance)
     except ValueError as exc:
         raise FieldError(f"{source}: {exc}") from None
+
+
+def _priority(top: Fields, figures: list) -> tuple:
+    """``priority``: a list of figure names, or ``"all"``: the parametric figures (they cannot
+    steer), then the path figures, each in the crowd's order (formations after their leaders)."""
+    v = top.value("priority", [])
+    if v == "all":
+        return tuple([f.name for f in figures if not f.is_path] +
+                     [f.name for f in figures if f.is_path])
+    if not isinstance(v, list) or not all(isinstance(n, str) for n in v):
+        top.fail("priority", f"= {v!r} is neither \"all\" nor a list of figure names")
+    return tuple(v)
 
 
 def _figure(f: Fields, base: Path) -> CrowdFigure:

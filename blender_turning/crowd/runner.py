@@ -9,13 +9,18 @@ on a Dask distributed scheduler (``scheduler="tcp://..."``, through ``Client.get
 or on any ``concurrent.futures``-style executor the caller passes.  Nothing random is drawn
 here and every figure's result depends only on its own data, so the trajectories are the same
 bit for bit whatever the engine and the number of workers (tests hold them to ``==``).
+
+With a ``priority`` (issue 11) the path figures it names are planned after the rest, one task
+per group of figures that can see each other, each figure around the bodies of those before it
+(:mod:`.priority`: the groups give the same result as planning them one after another).
 """
 from __future__ import annotations
 
 import math
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import dataclass, field
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -23,6 +28,7 @@ from ..core.controllers import PhaseEllipse
 from ..core.errors import PlanInfeasible, TurningError
 from ..core.simulate import run
 from ..core.trajectory import Trajectory, body_meta
+from . import priority as priority_
 from .model import Crowd, CrowdFigure
 
 __all__ = ["FigureResult", "CrowdResult", "run_crowd", "crowd_tasks", "run_task", "execute"]
@@ -36,7 +42,9 @@ class FigureResult:
     error of the planner, e.g. the path not finished in time; ``message`` says when and
     where).  ``cpu_time``:
     CPU seconds of the task that computed it (shared by a batch), ``plan`` the planner's totals
-    (path figures)."""
+    (path figures).  ``region``: for a figure planned by priority, the regions its searches
+    looked at for other figures' bodies, rows ``(x, y, radius, t_lo, t_hi)`` on its own clock
+    (``MovingBodies.near``)."""
 
     name: str
     trajectory: Trajectory | None
@@ -44,6 +52,7 @@ class FigureResult:
     message: str = ""
     cpu_time: float = 0.0
     plan: dict = field(default_factory=dict)
+    region: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -66,11 +75,13 @@ class CrowdResult:
 def crowd_tasks(crowd: Crowd) -> list:
     """The crowd's tasks, in a fixed order: each a ``("turns", dt, duration, figures)`` batch
     (figures sharing a body, limits and the presence of heading control, in crowd order) or a
-    ``("path", figure)``."""
+    ``("path", figure)``.  Path figures named in the crowd's ``priority`` are not among them
+    (they are planned after these: :func:`run_crowd`)."""
     groups, tasks = {}, []
     for f in crowd.figures:
         if f.is_path:
-            tasks.append(("path", f))
+            if f.name not in crowd.priority:
+                tasks.append(("path", f))
             continue
         key = (f.figure.body, f.figure.limits, f.controller.heading is None)
         if key not in groups:
@@ -81,14 +92,17 @@ def crowd_tasks(crowd: Crowd) -> list:
 
 
 def run_task(task) -> list:
-    """Run one task of :func:`crowd_tasks` (in any process): a list of :class:`FigureResult`."""
+    """Run one task of :func:`crowd_tasks` or a ``("group", clearance, bodies, figures)`` of
+    priority planning (in any process): a list of :class:`FigureResult`."""
     cpu = time.process_time()
     if task[0] == "path":
         out = [_plan(task[1])]
+    elif task[0] == "group":
+        out = _group(*task[1:])
     else:
         out = _batch(*task[1:])
     cpu = time.process_time() - cpu
-    return [FigureResult(r.name, r.trajectory, r.status, r.message, cpu, r.plan) for r in out]
+    return [replace(r, cpu_time=cpu) for r in out]
 
 
 def _on_crowd_clock(traj: Trajectory, f: CrowdFigure) -> Trajectory:
@@ -98,16 +112,36 @@ def _on_crowd_clock(traj: Trajectory, f: CrowdFigure) -> Trajectory:
                                           "time_offset": f.time_offset})
 
 
-def _plan(f: CrowdFigure) -> FigureResult:
+def _plan(f: CrowdFigure, bodies=None) -> FigureResult:
+    """Plan ``f`` (around ``bodies``, a ``MovingBodies`` on its clock, if given)."""
     try:
-        res = f.controller.scene.run()
+        sc = f.controller.scene
+        res = sc.run() if bodies is None else sc.run(bodies)
     except TurningError as exc:      # no feasible plan, the path not finished in time, ...
         tr = getattr(exc, "trajectory", None)
         tr = None if tr is None else _on_crowd_clock(tr, f)
+        msg = str(exc)
+        if isinstance(exc, PlanInfeasible) and bodies is not None and bodies.log:
+            near = [n for n, k in zip(bodies.names, bodies.seen_by(bodies.log[-1:])) if k]
+            msg += (f", with {', '.join(near)} (planned before it) within reach" if near else
+                    "; no figure planned before it was within reach")
         return FigureResult(f.name, tr, "infeasible" if isinstance(exc, PlanInfeasible)
-                            else "failed", str(exc))
+                            else "failed", msg)
     return FigureResult(f.name, _on_crowd_clock(res.trajectory, f),
                         plan={**res.totals(), "reached_end": res.reached_end})
+
+
+def _group(clearance: float, bodies: tuple, figures: tuple) -> list:
+    """Priority planning of ``figures`` in order, each around ``bodies`` (``(name, trajectory,
+    l)`` on the crowd's clock) and the figures before it (a failed one: up to where it got)."""
+    done, out = list(bodies), []
+    for f in figures:
+        log = []
+        r = _plan(f, priority_.bodies_for(f, done, clearance, log))
+        out.append(replace(r, region=np.array(log, float).reshape(-1, 5)))
+        if r.trajectory is not None and len(r.trajectory):
+            done.append((f.name, r.trajectory, f.figure.body.l))
+    return out
 
 
 def _batch(dt: float, duration: float, figures: tuple) -> list:
@@ -152,19 +186,45 @@ def run_crowd(crowd: Crowd, workers: int = 1, scheduler: str | None = None, exec
     clock = time.perf_counter()
     tasks = crowd_tasks(crowd)
     total = len(crowd.figures)
-    results, done = {}, 0
+    by_name = {}
 
     def collect(i, rs):
-        nonlocal done
-        results[i] = rs
-        done += len(rs)
-        if progress is not None:
-            progress(done, total)
+        new = any(r.name not in by_name for r in rs)
+        by_name.update((r.name, r) for r in rs)
+        if progress is not None and new:
+            progress(len(by_name), total)
 
-    execute(run_task, tasks, collect, workers, scheduler, executor)
-    by_name = {r.name: r for i in range(len(tasks)) for r in results[i]}
+    with engine(workers, scheduler, executor) as ex:
+        _fan_out(ex, run_task, tasks, collect)
+        named = [crowd[n] for n in crowd.priority if crowd[n].is_path]
+        if named:
+            bodies = tuple((n, by_name[n].trajectory, crowd[n].figure.body.l)
+                           for n in crowd.priority if not crowd[n].is_path)
+            _by_priority(named, bodies, crowd.clearance, ex, collect)
     return CrowdResult(crowd, tuple(by_name[f.name] for f in crowd.figures),
                        time.perf_counter() - clock)
+
+
+def _by_priority(named, bodies, clearance, ex, collect) -> None:
+    """Plan the path figures ``named`` (in priority order) around ``bodies`` and each other:
+    groups in parallel, merged and planned again until none sees another (:mod:`.priority`)."""
+    groups = priority_.initial_groups(named, clearance)
+    pending, final = groups, {}
+    while pending:
+        tasks = [("group", clearance, bodies, tuple(named[i] for i in g)) for g in pending]
+        def done(i, rs):
+            final.update(zip(pending[i], rs))
+            collect(i, rs)                          # progress: figures with a first result
+        _fan_out(ex, run_task, tasks, done)
+        merged = priority_.merge(groups, priority_.conflicts(named, groups, final, clearance))
+        pending = [g for g in merged if g not in groups]
+        groups = merged
+    for gi, g in enumerate(groups):
+        for rank, i in enumerate(g):
+            r = final[i]
+            plan = {**r.plan, "priority": {"group": gi, "rank": rank,
+                                           "after": [named[j].name for j in g[:rank]]}}
+            collect(i, [replace(r, plan=plan)])
 
 
 def execute(fn, tasks, collect, workers: int = 1, scheduler: str | None = None,
@@ -172,6 +232,14 @@ def execute(fn, tasks, collect, workers: int = 1, scheduler: str | None = None,
     """``collect(i, fn(tasks[i]))`` for every task, as they finish, on the engine chosen as in
     :func:`run_crowd` (``fn`` must be a module-level function, so other processes can import
     it)."""
+    with engine(workers, scheduler, executor) as ex:
+        _fan_out(ex, fn, tasks, collect)
+
+
+@contextmanager
+def engine(workers: int = 1, scheduler: str | None = None, executor=None):
+    """The executor chosen as in :func:`run_crowd`, open for the ``with`` block (``None``:
+    this process)."""
     if isinstance(workers, bool) or int(workers) != workers or not 1 <= workers <= 1024:
         raise ValueError(f"workers = {workers!r} is outside the allowed range [1, 1024]")
     if sum((workers > 1, scheduler is not None, executor is not None)) > 1:
@@ -179,20 +247,23 @@ def execute(fn, tasks, collect, workers: int = 1, scheduler: str | None = None,
     if scheduler is not None:
         client = _dask_client(scheduler)
         try:
-            _fan_out(client.get_executor(), fn, tasks, collect)
+            yield client.get_executor()
         finally:
             client.close()
     elif executor is not None:
-        _fan_out(executor, fn, tasks, collect)
+        yield executor
     elif workers > 1:
         with ProcessPoolExecutor(max_workers=int(workers)) as pool:
-            _fan_out(pool, fn, tasks, collect)
+            yield pool
     else:
-        for i, task in enumerate(tasks):
-            collect(i, fn(task))
+        yield None
 
 
 def _fan_out(executor, fn, tasks, collect) -> None:
+    if executor is None:
+        for i, task in enumerate(tasks):
+            collect(i, fn(task))
+        return
     futures = {executor.submit(fn, task): i for i, task in enumerate(tasks)}
     for fut in as_completed(futures):
         collect(futures[fut], fut.result())

@@ -11,6 +11,12 @@ point under the centre of mass (:meth:`Problem.body_point`) comes within the cle
 obstacle (Section 6 checks the foot; the body sways up to ``l sin(theta_bound)`` to the side of
 it, 0.86 m for the skier at 30 deg, enough to pass over a gate panel the foot clears).  Adding a
 clip only removes branches, so every lower bound on the cost of a branch stays admissible.
+
+Figures planned before this one (a crowd's priority planning, issue 11) are moving obstacles:
+:attr:`Problem.movers`, a :class:`..moving.MovingBodies` on this figure's clock, checked on the
+same steps with each step's time (:meth:`..moving.MovingBodies.collides`); a node's time is
+part of its identity, so every reuse across searches (proof, warm start: ``proof.py``) sees the
+same collisions for the same node.
 """
 from __future__ import annotations
 
@@ -49,6 +55,10 @@ class StageResult:
 class Problem:
     """Everything a search needs, as plain arrays (the Blender side builds one from a curve and
     objects).  ``distance`` is a :class:`PathDistance`, ``obstacles`` an :class:`Obstacles`."""
+
+    #: Other figures' bodies as moving obstacles (:class:`..moving.MovingBodies`), or ``None``
+    #: (set with :func:`..moving.around`).
+    movers = None
 
     def __init__(self, figure: Figure, distance: PathDistance, obstacles: Obstacles,
                  settings: PlannerSettings, speed: SpeedProfile | None = None):
@@ -103,10 +113,12 @@ class Problem:
         """How far the foot can get within one horizon, m."""
         return self.v_max * self.settings.horizon * 1.001 + 1e-6
 
-    def local(self, center, state=None) -> "Problem":
+    def local(self, center, state=None, t=None) -> "Problem":
         """The same problem with the path samples and obstacles that cannot matter within one
         horizon of ``center`` dropped (exact: see :meth:`PathDistance.near` and
-        :meth:`Obstacles.near`).  ``state``: the root's (used on terrain only)."""
+        :meth:`Obstacles.near`).  ``state``: the root's (used on terrain only); ``t``: its time
+        (the moving bodies kept are those that can come near from then to the end of the
+        horizon and one stage more; ``None``: at any time)."""
         r = self.reach()
         self.fall_table()                       # built once, shared by the local copies
         p = type(self).__new__(type(self))
@@ -115,6 +127,10 @@ class Problem:
         # One stage more for the dead-end test (search.py), and the body's ground point.
         far = r + self.v_max * self.settings.t_stage * 1.001 + self.body.l
         p.obstacles = self.obstacles.near(center, far)
+        if self.movers is not None:
+            st = self.settings
+            p.movers = self.movers.near(center, far, t, None if t is None else
+                                        t + (st.n_stages + 1) * st.t_stage * 1.001 + st.dt)
         p._pairs = False                        # its own path samples
         return p
 
@@ -279,7 +295,7 @@ class Problem:
         rec = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")} if record else None
         h = st.dt
         half = 0.5 * h
-        check = len(self.obstacles) > 0
+        check = len(self.obstacles) > 0 or self.movers is not None
         k1, k2, k3, k4 = (np.empty_like(x) for _ in range(4))
         for k in range(st.steps_per_stage):
             tau = k * h
@@ -314,6 +330,8 @@ class Problem:
             b = pts[:, np.r_[1:len(track), len(track) + 1:2 * len(track)]]
             collided = self.obstacles.collides(a.reshape(2, -1).T, b.reshape(2, -1).T)
             collided = collided.reshape(-1, m).any(axis=0)
+            if self.movers is not None:   # the same steps, at their times (core/moving.py)
+                collided |= self.movers.collides(P[:2], pts[:, len(track):], t0, h)
         else:
             collided = np.zeros(m, bool)
         return StageResult(x, np.asarray(cf_end, float) * np.ones(m), s, cost, d, collided,

@@ -90,7 +90,7 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
         if on_replan is not None:
             on_replan(t, x[:2, 0].copy(), p / progress.length if progress else 0.0)
         clock = time.perf_counter()
-        local = problem.local(x[:2, 0], x[:, 0])
+        local = problem.local(x[:2, 0], x[:, 0], t)
         plan = branch_and_bound(local, x[:, 0], cf, t, s, previous, proof)
         if not plan.feasible:
             traj = _trajectory(problem, rows, x, cf, t, s, meta)

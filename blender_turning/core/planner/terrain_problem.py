@@ -108,14 +108,14 @@ class TerrainProblem(Problem):
         T = st.horizon + st.t_stage + st.dt
         return (V_root + self.body.g * self._sin_max * T) / (1.0 - self._slip) * (1 + 1e-9)
 
-    def local(self, center, state=None) -> "TerrainProblem":
+    def local(self, center, state=None, t=None) -> "TerrainProblem":
         """:meth:`Problem.local`, with the foot speed limit of a search from ``state``."""
         p = type(self).__new__(type(self))
         p.__dict__.update(self.__dict__)
         if state is not None:
             p.v_max = self.speed_limit(float(state[V_CM]))
         p._runaways = np.zeros(1, np.int64)
-        return Problem.local(p, center)
+        return Problem.local(p, center, t=t)
 
     @property
     def runaways(self) -> int:
