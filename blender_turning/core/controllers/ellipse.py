@@ -126,6 +126,7 @@ class PhaseEllipse(Controller):
         self._limits_given = limits is not None
         self._limits = limits
         self._feasible = None if limits is None else feasible_turns(body, limits)
+        self._table_speed = None    # the speed follow_speed took _feasible at (None: not yet)
         self._bp = self._bn = None  # beta of the left (theta_v >= 0) and right half-turns
         self._side = None           # +1 during a left half-turn, -1 right, per figure
         self._planned = False       # the coming half-turn's beta was set in this step
@@ -139,6 +140,7 @@ class PhaseEllipse(Controller):
         if not self._limits_given:
             self._limits = limits
             self._feasible = feasible_turns(self.body, limits)
+            self._table_speed = None
         self._bp = self._bn = self._side = self._t_prev = None
         self._planned = False
         self._memo = {}
@@ -153,7 +155,10 @@ class PhaseEllipse(Controller):
         body = super().follow_speed(V_cm)
         if self._limits is not None:
             grid = max(SPEED_GRID, math.floor(V_cm / SPEED_GRID) * SPEED_GRID)
-            self._feasible = feasible_turns(replace(self.nominal_body, V_cm=grid), self._limits)
+            if grid != self._table_speed:       # on terrain the speed changes every step
+                self._feasible = feasible_turns(replace(self.nominal_body, V_cm=grid),
+                                                self._limits)
+                self._table_speed = grid
         return body
 
     # -- the feasible ellipse (items 3, 3b of issue 7) -----------------------------------------
