@@ -224,3 +224,19 @@ def test_the_feasible_table_follows_the_speed_grid():
     assert ctl._feasible is feasible_turns(ctl.body, SKIER.limits)
     ctl.follow_speed(13.3)                         # the grid speed of before, a table anew
     assert ctl._feasible is feasible_turns(replace(BODY, V_cm=13.0), SKIER.limits)
+
+
+def test_the_ellipse_followed_is_feasible_at_the_current_speed():
+    """After the speed drops to where the commanded 23 deg turn is not feasible, the ellipse
+    the controller follows (its target, and the float law the stepper uses) is the one the new
+    table allows, not one remembered from the faster speed."""
+    ctl = PhaseEllipse(BODY, W, TM, heading=0.0)
+    ctl.begin_run(SKIER.limits)
+    law = ctl.scalar_alpha_law()
+    state = (0.0, 0.0, 0.0, 0.1, 0.2)
+    ctl.follow_speed(12.0)
+    fast = ctl.target(0.0)[1], law(0.0, state)
+    ctl.follow_speed(5.2)
+    slow = ctl.target(0.0)[1], law(0.0, state)
+    assert slow[0] == ctl.feasible_lean(W, TM) < fast[0] - math.radians(2)
+    assert slow[1] == ctl.desired_alpha(0.0, state) != fast[1]

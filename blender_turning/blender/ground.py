@@ -1,10 +1,12 @@
 """Ground mesh <-> the core's height field (docs/TERRAIN.md).  The core stays bpy-free: a mesh
-object the user picks as ground is read once, by ray casts from above on a regular grid, into a
-:class:`..core.terrain.HeightField`; the demo's mountain goes the other way."""
+object the user picks as ground is read once into a :class:`..core.terrain.HeightField` (what
+ray casts from above on a regular grid return, rasterized in numpy; kept while the mesh does not
+change); the demo's mountain goes the other way."""
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
-from mathutils.bvhtree import BVHTree
 
 from ..core.terrain import HeightField
 
@@ -30,24 +32,34 @@ def _world_triangles(obj, depsgraph):
 
 
 class MeshGround:
-    """A ground mesh read once: its smooth :attr:`field` for the physics and a BVH tree of its
-    triangles for exact heights (:meth:`heights`)."""
+    """A ground mesh read once: its smooth :attr:`field` for the physics, and exact heights by
+    ray casts onto the mesh (:meth:`heights`)."""
 
-    def __init__(self, name: str, field: HeightField, bvh):
-        self.name, self.field, self.bvh = name, field, bvh
+    def __init__(self, name: str, field: HeightField):
+        self.name, self.field = name, field
 
     def heights(self, x, y) -> np.ndarray:
         """The mesh's height under each ``(x, y)`` by a ray cast from above (the smooth field's
-        where no ray hits, off the mesh's edge)."""
+        where no ray hits, off the mesh's edge).  ``Object.ray_cast`` in the object's own space:
+        Blender keeps the evaluated mesh's BVH tree between calls (and bakes), where a
+        ``BVHTree`` of our own cost ~0.2 s to build for a 200 m x 200 m, 1 m mesh."""
+        import bpy
+        obj = bpy.data.objects.get(self.name)
+        if obj is None:
+            raise ValueError(f"ground {self.name!r} was deleted while baking")
+        ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
         x, y = np.asarray(x, float), np.asarray(y, float)
         z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
+        m = np.array(ev.matrix_world)
+        inv = np.linalg.inv(m)
         top = float(np.max(z)) + 1e3
-        cast = self.bvh.ray_cast
-        down = (0.0, 0.0, -1.0)
-        for k, (a, b) in enumerate(zip(x.tolist(), y.tolist())):
-            hit = cast((a, b, top), down)[0]
-            if hit is not None:
-                z[k] = hit[2]
+        origins = np.stack([x, y, np.full_like(x, top)], -1) @ inv[:3, :3].T + inv[:3, 3]
+        down = tuple(-inv[:3, 2])
+        cast = ev.ray_cast
+        for k, o in enumerate(origins.tolist()):
+            hit, loc = cast(o, down)[:2]
+            if hit:
+                z[k] = m[2, 0] * loc[0] + m[2, 1] * loc[1] + m[2, 2] * loc[2] + m[2, 3]
         return z
 
 
@@ -68,6 +80,10 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     world, tris = _world_triangles(obj, depsgraph)
     if len(tris) == 0:
         raise ValueError(f"ground {obj.name!r} has no faces")
+    key = _digest(world, tris, cell)
+    kept = _READ.get(obj.name)
+    if kept is not None and kept[0] == key:
+        return kept[1]
     lo, hi = world.min(0), world.max(0)
     if cell is None:
         # Each triangle's shortest side seen from above (a quad's diagonal is never it).
@@ -82,14 +98,34 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     if nx * ny > MAX_SAMPLES:
         raise ValueError(f"ground {obj.name!r} needs {nx * ny} samples at {cell:g} m; "
                          f"at most {MAX_SAMPLES}: use a coarser cell")
-    bvh = BVHTree.FromPolygons(world.tolist(), tris.tolist(), all_triangles=True)
     xs = lo[0] + cell * np.arange(nx)
     ys = lo[1] + cell * np.arange(ny)
     h = _rasterize(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
     if np.isnan(h).all():
         raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
     _fill_nearest(h)
-    return MeshGround(obj.name, HeightField(h, float(xs[0]), float(ys[0]), float(cell)), bvh)
+    ground = MeshGround(obj.name, HeightField(h, float(xs[0]), float(ys[0]), float(cell)))
+    _READ.pop(obj.name, None)
+    while len(_READ) >= _KEEP:                              # the oldest read goes
+        _READ.pop(next(iter(_READ)))
+    _READ[obj.name] = (key, ground)
+    return ground
+
+
+#: Grounds read, by object name: ``(digest of the world-space mesh and cell, MeshGround)``.
+#: Baking again over an unchanged mesh (a figure's settings changed, not the mountain) skips the
+#: rasterization (~0.2-0.3 s for 200 m x 200 m at 0.25 m); any change to the evaluated mesh, its
+#: placement or the cell changes the digest.
+_READ: dict[str, tuple[bytes, MeshGround]] = {}
+_KEEP = 4
+
+
+def _digest(world, tris, cell) -> bytes:
+    """A digest of what a read depends on: world-space vertices, triangles, cell."""
+    h = hashlib.blake2b(world.tobytes(), digest_size=20)
+    h.update(tris.tobytes())
+    h.update(repr(cell).encode())
+    return h.digest()
 
 
 #: Most grid points a side of the triangles rasterized together (bigger ones go one by one).

@@ -42,6 +42,7 @@ class TerrainStage:
             lambda x, y: [float(v) for v in ground.derivatives(x, y)])
         if type(controller).terrain_cf_law is Controller.terrain_cf_law:
             self._demand = self._lean_law           # the base law, fused with the frame
+            self._alpha = controller.scalar_alpha_law()
         else:
             law = controller.terrain_cf_law(ground)  # a law of its own (Straight: C_f = 0)
             self._demand = lambda t, st, fr: law(t, st)
@@ -60,7 +61,7 @@ class TerrainStage:
         """:meth:`.Controller.terrain_cf_law` at a frame already computed."""
         c = self.controller
         x, y, d, th, om, V = st
-        alpha = c.desired_alpha(t, (x, y, d, th - c.equilibrium_lean(fr, t), om))
+        alpha = self._alpha(t, (x, y, d, th - c.equilibrium_lean(fr, t), om))
         return terrain_inverse_cf(c.body, fr, th, alpha, V)
 
     def stage(self, t: float, st, fr, anchor, tau: float):

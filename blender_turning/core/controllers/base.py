@@ -63,6 +63,12 @@ class Controller:
         inverse, alpha = scalar_inverse_cf(self.body), self.desired_alpha
         return lambda t, state: inverse(state[THETA_V], alpha(t, state))
 
+    def scalar_alpha_law(self):
+        """``f(t, state) -> alpha_v`` for one figure on floats: :meth:`desired_alpha`, which a
+        subclass may specialise for speed (the terrain stepper, :mod:`..terrain_one_figure`,
+        asks it about the lean from the equilibrium lean)."""
+        return self.desired_alpha
+
     def terrain_cf_law(self, ground):
         """``f(t, state) -> C_f`` on terrain (``state`` = ``(x, y, theta_dir, theta_v, omega_v,
         V_cm)``, docs/TERRAIN.md Section 6): the lean law is asked about the lean from the
