@@ -52,7 +52,9 @@ class MeshGround:
         z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
         m = np.array(ev.matrix_world)
         inv = np.linalg.inv(m)
-        top = float(np.max(z)) + 1e3
+        # From 1 m above the mesh's box: the BVH works in float32, a ray from 1 km above
+        # would carry ~0.3 mm of round-off into the hit.
+        top = float(np.max(np.array(ev.bound_box) @ m[2, :3] + m[2, 3])) + 1.0
         origins = np.stack([x, y, np.full_like(x, top)], -1) @ inv[:3, :3].T + inv[:3, 3]
         down = tuple(-inv[:3, 2])
         cast = ev.ray_cast
