@@ -240,3 +240,15 @@ def test_the_ellipse_followed_is_feasible_at_the_current_speed():
     slow = ctl.target(0.0)[1], law(0.0, state)
     assert slow[0] == ctl.feasible_lean(W, TM) < fast[0] - math.radians(2)
     assert slow[1] == ctl.desired_alpha(0.0, state) != fast[1]
+
+
+def test_a_body_at_another_speed_is_the_replaced_body():
+    """``BodyParams.at_speed`` (the controller follows the speed every step on terrain) is
+    ``replace(body, V_cm=...)``: equal, same hash, same ``J``, and its speed is checked."""
+    from dataclasses import replace
+    body = preset("cyclist").body
+    fast = body.at_speed(13.7)
+    assert fast == replace(body, V_cm=13.7) and hash(fast) == hash(replace(body, V_cm=13.7))
+    assert fast.J == replace(body, V_cm=13.7).J and body.V_cm != 13.7
+    with pytest.raises(ValueError, match="V_cm"):
+        body.at_speed(-1.0)

@@ -9,8 +9,6 @@ no memory change).  The integrator bounds the demand (``dynamics.bound_cf``).  S
 """
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from ..dynamics import THETA_V, inverse_cf
@@ -38,7 +36,7 @@ class Controller:
 
         Eq. (1) is solved with the current ``V_cm``; the paper keeps ``V_cm`` constant in
         Sections 3-5, and lets it vary along the path in Section 6 (the planner's speed profile)."""
-        self.body = replace(self.nominal_body, V_cm=float(V_cm))
+        self.body = self.nominal_body.at_speed(float(V_cm))
         return self.body
 
     def begin_run(self, limits) -> None:
