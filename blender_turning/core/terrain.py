@@ -259,8 +259,8 @@ def surface_frame(ground, x, y, theta_dir, g: float) -> SurfaceFrame:
 def frame_terms(h, hx, hy, hxx, hxy, hyy, c, s, g: float, sqrt) -> SurfaceFrame:
     """:func:`surface_frame` from the height's derivatives and the heading's ``c = cos``,
     ``s = sin`` (docs/TERRAIN.md Section 1), vectors as 3-tuples: the one formula for floats
-    (``sqrt = math.sqrt``; the fused stepper :mod:`.terrain_one_figure` calls it directly) and
-    arrays (``np.sqrt``)."""
+    (``sqrt = math.sqrt``) and arrays (``np.sqrt``).  (:mod:`.terrain_one_figure` writes it out
+    inside its fused stage.)"""
     p = hx * c + hy * s                                   # slope along the heading
     inv_t = 1.0 / sqrt(1.0 + p * p)
     inv_n = 1.0 / sqrt(1.0 + hx * hx + hy * hy)

@@ -145,8 +145,8 @@ def terrain_rates(body: BodyParams, resistance: Resistance, fr, tx, ty, cf, s, c
     """The equations of motion on terrain under a bounded ``C_f`` (module docstring;
     docs/TERRAIN.md Sections 2-3), floats or arrays: ``(x', y', theta_dir', theta_v', omega_v',
     V_cm', alpha_v, V_f, N)``; ``s, c`` = sin, cos of ``theta_v``, ``(tx, ty)`` the horizontal
-    part of the frame's tangent.  :func:`terrain_steer` and the fused float stepper
-    (:mod:`.terrain_one_figure`) both step through it."""
+    part of the frame's tangent.  (One figure is stepped by :mod:`.terrain_one_figure`, these
+    lines written out on floats, held to this by ``tests/test_terrain_fast.py``.)"""
     l = body.l
     V_f = V * (1.0 / (1.0 - cf * l * s))                        # Eq. (21)
     G_n = fr.g_normal + V_f * V_f * fr.kappa_n

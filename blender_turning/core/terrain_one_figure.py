@@ -3,14 +3,24 @@
 :func:`.terrain_dynamics.terrain_steer` and :func:`.terrain_dynamics.terrain_rk4_step` serve
 arrays (the planner's batch, a trajectory's columns); stepping one figure through them costs
 numpy's per-call dispatch at every operation, ~10x the flat fused path (:mod:`.one_figure`).
-Here one RK4 stage is floats only, through the same formulas, each written once for floats and
-arrays: the foot's frame (:func:`.terrain.frame_terms`, docs/TERRAIN.md Section 1, the height
-field's bicubic as a per-cell polynomial, :meth:`.terrain.HeightField.derivatives_one`), the
-controller's lean law about the local plumb lean and Eq. (1) on terrain
-(:func:`.terrain_dynamics.terrain_inverse_cf`, docs/TERRAIN.md Section 6), Section 3's bounds on
-``C_f`` (as :func:`.dynamics.bound_cf`, written out on floats as :mod:`.one_figure` does) and
-Eqs. (2), (21) and the speed equation on terrain (:func:`.terrain_dynamics.terrain_rates`,
-docs/TERRAIN.md Sections 2-3).  ``tests/test_terrain_fast.py`` ties it to the array path.
+Here one RK4 stage is one function on floats with the body's constants bound as locals, as
+:mod:`.one_figure` does on flat ground, written out from the same equations:
+
+- the foot's frame (docs/TERRAIN.md Section 1; :func:`.terrain.frame_terms`), the surface's
+  derivatives from :meth:`.terrain.HeightField.derivatives_one` (the bicubic as a per-cell
+  polynomial) or :meth:`.terrain.Plane.derivatives_one`;
+- the controller's lean law about the local plumb lean
+  (:meth:`.controllers.base.Controller.equilibrium_lean`,
+  :func:`.terrain_dynamics.plumb_lean_along`) and Eq. (1) on terrain
+  (:func:`.terrain_dynamics.terrain_inverse_cf`), docs/TERRAIN.md Section 6;
+- Section 3's bounds on ``C_f`` (:func:`.dynamics.bound_cf`);
+- Eq. (21), Eq. (2) on terrain, the normal force and the speed equation
+  (:func:`.terrain_dynamics.terrain_rates`, docs/TERRAIN.md Sections 2-3).
+
+A controller with a terrain law or an equilibrium lean of its own (:class:`.controllers.Straight`)
+is asked through its methods instead.  ``tests/test_terrain_fast.py`` holds this stage to
+:func:`.terrain_dynamics.terrain_steer` on numpy arrays to 1e-12 and whole runs to the array
+loop.
 """
 from __future__ import annotations
 
@@ -20,7 +30,7 @@ from .controllers.base import Controller
 from .dynamics import PHYSICAL_MARGIN
 from .params import BodyParams, Limits
 from .terrain import frame_terms
-from .terrain_dynamics import Resistance, terrain_inverse_cf, terrain_rates
+from .terrain_dynamics import Resistance
 
 __all__ = ["TerrainStage"]
 
@@ -28,61 +38,101 @@ __all__ = ["TerrainStage"]
 class TerrainStage:
     """The float right-hand side of one figure on ``ground`` under ``controller``.
 
-    :meth:`frame` is the foot's frame at a point (vectors as 3-tuples), :meth:`lean` the lean
-    the controller's law sees (from its equilibrium lean), and :meth:`stage` one RK4 stage.
-    The controller's speed may change between calls (:meth:`.Controller.follow_speed`): the law
-    reads it on every call."""
+    :attr:`derivatives` gives the surface at a point, :meth:`lean` the lean the controller's
+    law sees there (from its equilibrium lean; what :meth:`.Controller.relative_state` gives),
+    :attr:`stage` one RK4 stage.  The controller's speed may change between calls
+    (:meth:`.Controller.follow_speed`); the law reads the state's speed."""
 
     def __init__(self, body: BodyParams, limits: Limits, resistance: Resistance, ground,
                  controller: Controller):
-        self.body, self.limits, self.resistance = body, limits, resistance
-        self.controller = controller
         one = getattr(ground, "derivatives_one", None)
-        self._derivatives = one if one is not None else (
+        self.derivatives = one if one is not None else (
             lambda x, y: [float(v) for v in ground.derivatives(x, y)])
-        if type(controller).terrain_cf_law is Controller.terrain_cf_law:
-            self._demand = self._lean_law           # the base law, fused with the frame
-            self._alpha = controller.scalar_alpha_law()
-        else:
-            law = controller.terrain_cf_law(ground)  # a law of its own (Straight: C_f = 0)
-            self._demand = lambda t, st, fr: law(t, st)
+        self.controller = controller
+        self._g = body.g
+        base = type(controller)
+        own_law = None if base.terrain_cf_law is Controller.terrain_cf_law else \
+            controller.terrain_cf_law(ground)
+        self._plumb = base.equilibrium_lean is Controller.equilibrium_lean
+        self.stage = self._build(body, limits, resistance, own_law)
 
-    def frame(self, x: float, y: float, theta_dir: float):
-        """:func:`.terrain.surface_frame` on floats, vectors as tuples."""
-        return frame_terms(*self._derivatives(x, y), math.cos(theta_dir), math.sin(theta_dir),
-                           self.body.g, math.sqrt)
+    def _equilibrium(self, t, d, h, hx, hy, hxx, hxy, hyy, c, s, g_n, g_b, nx, ny, nz):
+        """The controller's equilibrium lean (:meth:`.Controller.equilibrium_lean`) at a frame."""
+        ctl = self.controller
+        if not self._plumb:
+            return ctl.equilibrium_lean(frame_terms(h, hx, hy, hxx, hxy, hyy, c, s, self._g,
+                                                    math.sqrt), t)
+        heading = getattr(ctl, "heading", None)
+        if heading is None or ctl.lean_about_heading:
+            return math.atan2(-g_b, g_n)                        # plumb_lean
+        H = heading(t)                                          # plumb_lean_along
+        cH, sH = math.cos(H), math.sin(H)
+        p = -(nx * cH + ny * sH) / nz
+        return math.atan2(self._g * (nx * sH - ny * cH) / math.sqrt(1.0 + p * p), g_n)
 
-    def lean(self, t: float, theta_v: float, fr) -> float:
-        """``theta_v`` from the controller's equilibrium lean at ``fr`` (what its law and
-        :meth:`~.Controller.begin_step` see: :meth:`.Controller.relative_state`)."""
-        return theta_v - self.controller.equilibrium_lean(fr, t)
+    def lean(self, t: float, x: float, y: float, d: float, theta_v: float, dv) -> float:
+        """``theta_v`` from the controller's equilibrium lean at ``(x, y)`` heading ``d``
+        (``dv``: :attr:`derivatives` there)."""
+        h, hx, hy, hxx, hxy, hyy = dv
+        c, s = math.cos(d), math.sin(d)
+        p = hx * c + hy * s
+        it = 1.0 / math.sqrt(1.0 + p * p)
+        nz = 1.0 / math.sqrt(1.0 + hx * hx + hy * hy)
+        nx, ny = -hx * nz, -hy * nz
+        g = self._g
+        return theta_v - self._equilibrium(t, d, h, hx, hy, hxx, hxy, hyy, c, s, g * nz,
+                                           -g * (nx * s - ny * c) * it, nx, ny, nz)
 
-    def _lean_law(self, t, st, fr):
-        """:meth:`.Controller.terrain_cf_law` at a frame already computed."""
-        c = self.controller
-        x, y, d, th, om, V = st
-        alpha = self._alpha(t, (x, y, d, th - c.equilibrium_lean(fr, t), om))
-        return terrain_inverse_cf(c.body, fr, th, alpha, V)
+    def _build(self, body, limits, resistance, own_law):
+        g, l, J, m = body.g, body.l, body.J, body.m
+        mu, kd = resistance.mu, resistance.drag_k(body.m)
+        law_J, law_l = self.controller.body.J, self.controller.body.l
+        cmax, rate = limits.C_f_max, limits.dC_f_max
+        rated = rate != math.inf
+        sin, cos, sqrt, inf, copysign = math.sin, math.cos, math.sqrt, math.inf, math.copysign
+        derivatives, equilibrium = self.derivatives, self._equilibrium
+        alpha_law = self.controller.scalar_alpha_law() if own_law is None else None
 
-    def stage(self, t: float, st, fr, anchor, tau: float):
-        """One stage at state ``st`` (6 floats) with its frame ``fr`` (:meth:`frame`): the
-        demanded ``C_f`` bounded as in Section 3 (size, physical branch on the side of the lean,
-        rate from ``anchor`` over ``tau``; ``anchor`` None: no rate bound), then
-        :func:`.terrain_dynamics.terrain_rates`.  Returns ``(x', y', theta_dir', theta_v',
-        omega_v', V_cm', alpha_v, V_f, N, C_f)``."""
-        cf = self._demand(t, st, fr)
-        th = st[3]
-        s = math.sin(th)
-        ls = self.body.l * s
-        lim = self.limits
-        cmax = lim.C_f_max
-        # Section 3's physical branch binds only on the side the body leans to.
-        lo = -cmax if ls >= 0.0 else max(-cmax, PHYSICAL_MARGIN / ls)
-        hi = cmax if ls <= 0.0 else min(cmax, PHYSICAL_MARGIN / ls)
-        cf = lo if cf < lo else hi if cf > hi else cf
-        if anchor is not None and lim.dC_f_max != math.inf:
-            step = lim.dC_f_max * tau
-            cf = anchor - step if cf < anchor - step else anchor + step if cf > anchor + step \
-                else cf
-        return (*terrain_rates(self.body, self.resistance, fr, fr.t[0], fr.t[1], cf, s,
-                               math.cos(th), st[4], st[5]), cf)
+        def stage(t, x, y, d, th, om, V, anchor, tau, dv=None):
+            """``(x', y', theta_dir', theta_v', omega_v', V_cm', alpha_v, V_f, C_f)``."""
+            h, hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
+            # The foot's frame (docs/TERRAIN.md Section 1): t, n, b = n x t.
+            c, s = cos(d), sin(d)
+            p = hx * c + hy * s
+            it = 1.0 / sqrt(1.0 + p * p)
+            nz = 1.0 / sqrt(1.0 + hx * hx + hy * hy)
+            tx, ty, tz = c * it, s * it, p * it
+            nx, ny = -hx * nz, -hy * nz
+            bx, by, bz = ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx
+            kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz * it * it
+            g_n, g_b = g * nz, -g * bz
+            sn, cs = sin(th), cos(th)
+            if alpha_law is None:
+                cf = own_law(t, (x, y, d, th, om, V))
+            else:
+                # The lean law about the equilibrium lean, then Eq. (1) on terrain.
+                eq = equilibrium(t, d, h, hx, hy, hxx, hxy, hyy, c, s, g_n, g_b, nx, ny, nz)
+                k = ((g_n + V * V * kappa) * sn + g_b * cs
+                     - alpha_law(t, (x, y, d, th - eq, om)) * law_J)
+                den = k * law_l * sn + V * V * cs
+                cf = k / den if den > 0.0 else copysign(inf, k)
+            # Section 3: |C_f| <= C_f_max, the physical branch on the side of the lean, the rate.
+            ls = l * sn
+            lo = -cmax if ls >= 0.0 else max(-cmax, PHYSICAL_MARGIN / ls)
+            hi = cmax if ls <= 0.0 else min(cmax, PHYSICAL_MARGIN / ls)
+            cf = lo if cf < lo else hi if cf > hi else cf
+            if rated and anchor is not None:
+                step = rate * tau
+                cf = anchor - step if cf < anchor - step else \
+                    anchor + step if cf > anchor + step else cf
+            # Eq. (21), Eq. (2) on terrain, the normal force and the speed (Sections 2-3).
+            V_f = V * (1.0 / (1.0 - cf * ls))
+            G_n = g_n + V_f * V_f * kappa
+            alpha = (G_n * sn + (g_b - V * V_f * cf) * cs) / J
+            N = m * (G_n - l * (alpha * sn + om * om * cs))
+            hor = tx * tx + ty * ty
+            turn = V_f * (cf * (tx * by - ty * bx) / hor + kappa * (tx * ny - ty * nx) / hor)
+            return (V_f * tx, V_f * ty, turn, om, alpha, -g * tz - mu * N / m - kd * V * V,
+                    alpha, V_f, cf)
+
+        return stage

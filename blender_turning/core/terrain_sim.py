@@ -183,7 +183,7 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
     Returns ``(rows, None | "fell" | "stopped" | "left")``."""
     controller.begin_run(limits)
     rhs = TerrainStage(body, limits, resistance, ground, controller)
-    frame, lean, stage = rhs.frame, rhs.lean, rhs.stage
+    derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
     begin, target, fall = controller.begin_step, controller.target, limits.theta_fall
     anchor = None if anchor is None else float(anchor)
     x0, x1, x2, x3, x4, x5 = (float(v) for v in st)
@@ -192,22 +192,22 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
     V_now = body.V_cm
     for i in range(n):
         t = i * dt
-        st = (x0, x1, x2, x3, x4, x5)
         if x5 != V_now:
             # Below MIN_SPEED the run stops at this row (a body slower than the table of ranges
             # allows is never made): the last row is steered at the minimum speed.
             controller.follow_speed(max(x5, MIN_SPEED))
             V_now = x5
         if brake is not None:
-            brake.update(t, st)
+            brake.update(t, (x0, x1, x2, x3, x4, x5))
         try:
-            fr = frame(x0, x1, x2)
+            dv = derivatives(x0, x1)
         except OffTerrain:                      # the step ended past the edge
             return rows, "left"
-        rel = lean(t, x3, fr)
+        rel = lean(t, x0, x1, x2, x3, dv)
         begin(t, (x0, x1, x2, rel, x4))
-        a0, a1, a2, a3, a4, a5, alpha, V_f, _, cf = stage(t, st, fr, anchor, dt)
-        rows.append((*st, alpha, cf, V_f, *target(t), rel))
+        a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, dt,
+                                                       dv)
+        rows.append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel))
         if abs(rel) > fall:
             return rows, "fell"
         if x5 < MIN_SPEED:
@@ -215,13 +215,12 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
         if i + 1 == n:
             break
         try:
-            y = (x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5)
-            b0, b1, b2, b3, b4, b5 = stage(t + h, y, frame(*y[:3]), cf, h)[:6]
-            y = (x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5)
-            c0, c1, c2, c3, c4, c5 = stage(t + h, y, frame(*y[:3]), cf, h)[:6]
-            y = (x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
-                 x5 + dt * c5)
-            d0, d1, d2, d3, d4, d5 = stage(t + dt, y, frame(*y[:3]), cf, dt)[:6]
+            b0, b1, b2, b3, b4, b5 = stage(t + h, x0 + h * a0, x1 + h * a1, x2 + h * a2,
+                                           x3 + h * a3, x4 + h * a4, x5 + h * a5, cf, h)[:6]
+            c0, c1, c2, c3, c4, c5 = stage(t + h, x0 + h * b0, x1 + h * b1, x2 + h * b2,
+                                           x3 + h * b3, x4 + h * b4, x5 + h * b5, cf, h)[:6]
+            d0, d1, d2, d3, d4, d5 = stage(t + dt, x0 + dt * c0, x1 + dt * c1, x2 + dt * c2,
+                                           x3 + dt * c3, x4 + dt * c4, x5 + dt * c5, cf, dt)[:6]
         except OffTerrain:
             return rows, "left"
         x0 += w6 * (a0 + 2.0 * (b0 + c0) + d0)
