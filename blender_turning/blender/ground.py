@@ -102,7 +102,9 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
                          f"at most {MAX_SAMPLES}: use a coarser cell")
     xs = lo[0] + cell * np.arange(nx)
     ys = lo[1] + cell * np.arange(ny)
-    h = _rasterize(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
+    h = _rasterize_grid(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
+    if h is None:                                           # not a grid mesh
+        h = _rasterize(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
     if np.isnan(h).all():
         raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
     _fill_nearest(h)
@@ -190,8 +192,72 @@ def _rasterize(world, tris, x0, y0, cell, nx, ny):
     return h.reshape(ny, nx)
 
 
+def _rasterize_grid(world, tris, x0, y0, cell, nx, ny):
+    """:func:`_rasterize` for a grid mesh, or ``None`` for any other: vertices on an axis-aligned
+    lattice (every node present once), each lattice cell split into two
+    triangles along one of its diagonals (Blender's triangulation of the quads, as read).  Then
+    each grid point's triangle follows from its place in its lattice cell, and its height is
+    that triangle's plane there: the same heights as the general rasterization (to round-off),
+    for a terrain of 200 m x 200 m at 0.25 m in ~20 ms instead of ~0.2 s."""
+    xy = world[:, :2]
+    lo = xy.min(0)
+    n, step = [], []
+    for k in (0, 1):                                        # lattice columns, then rows
+        gaps = np.diff(np.sort(xy[:, k]))
+        if not len(gaps) or gaps.max() <= 0.0:
+            return None
+        n.append(1 + int((gaps > 0.5 * gaps.max()).sum()))  # a lattice's gaps: 0 or a step
+        step.append((xy[:, k].max() - lo[k]) / (n[-1] - 1))
+    step = np.array(step)
+    idx = np.rint((xy - lo) / step).astype(np.int64)
+    if n[0] * n[1] != len(world) or np.abs(lo + idx * step - xy).max() > 1e-4 * step.min():
+        return None
+    node = idx[:, 1] * n[0] + idx[:, 0]
+    if len(np.unique(node)) != len(node):
+        return None
+    Z = np.empty(len(node))
+    Z[node] = world[:, 2]
+    Z = Z.reshape(n[1], n[0])
+    # Each triangle within one lattice cell; the cell's diagonal from the corners it holds.
+    ti, tj = idx[tris, 0], idx[tris, 1]                    # (k, 3)
+    ci, cj = ti.min(1), tj.min(1)
+    if (ti.max(1) - ci != 1).any() or (tj.max(1) - cj != 1).any():
+        return None
+    corner = (ti - ci[:, None]) + 2 * (tj - cj[:, None])   # 0: (0,0) 1: (1,0) 2: (0,1) 3: (1,1)
+    mask = (1 << corner).sum(1)               # a triangle's corners as bits: 11, 13 / 7, 14
+    cell_id = cj * (n[0] - 1) + ci
+    cells = (n[0] - 1) * (n[1] - 1)
+    both = np.bincount(cell_id, weights=mask, minlength=cells)
+    # Two triangles a cell, split along (0,0)-(1,1) (11 + 13) or (1,0)-(0,1) (7 + 14): no
+    # holes (0 or one triangle), overlaps or other shapes (no other sums give 24 or 21).
+    if ((both != 24) & (both != 21)).any():
+        return None
+    main = both == 24
+    # Each cell's two triangles as planes over (u, v) in [0, 1]^2: h = c0 + a u + b v; the first
+    # holds u >= v (along the main diagonal) or u + v <= 1 (across), the second the rest.
+    z00, z10 = Z[:-1, :-1].ravel(), Z[:-1, 1:].ravel()
+    z01, z11 = Z[1:, :-1].ravel(), Z[1:, 1:].ravel()
+    plane = np.empty((cells, 2, 3))
+    plane[:, 0] = np.where(main[:, None], np.stack([z00, z10 - z00, z11 - z10], 1),
+                           np.stack([z00, z10 - z00, z01 - z00], 1))
+    plane[:, 1] = np.where(main[:, None], np.stack([z00, z11 - z01, z01 - z00], 1),
+                           np.stack([z01 + z10 - z11, z11 - z01, z11 - z10], 1))
+    plane = plane.reshape(-1, 3).T
+    # The grid points: lattice cell and place in it, per column and per row.
+    fx = np.clip((x0 + cell * np.arange(nx) - lo[0]) / step[0], 0.0, n[0] - 1)
+    fy = np.clip((y0 + cell * np.arange(ny) - lo[1]) / step[1], 0.0, n[1] - 1)
+    i = np.minimum(fx.astype(np.int64), n[0] - 2)
+    j = np.minimum(fy.astype(np.int64), n[1] - 2)
+    u, v = (fx - i)[None, :], (fy - j)[:, None]
+    c = j[:, None] * (n[0] - 1) + i[None, :]
+    k = 2 * c + np.where(main[c], u < v, u + v > 1.0)
+    return plane[0][k] + plane[1][k] * u + plane[2][k] * v
+
+
 def _fill_nearest(h):
     """Fill NaN holes along rows, then columns, from the nearest finite neighbour (in place)."""
+    if not np.isnan(h).any():
+        return
     for grid in (h, h.T):
         for row in grid:
             ok = np.isfinite(row)
