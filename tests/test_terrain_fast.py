@@ -1,7 +1,7 @@
 """The fused float stepper on terrain (core/terrain_one_figure.py) is the array path
-(core/terrain_dynamics.py) to round-off: the height field's per-cell polynomials, one RK4 stage,
-and whole runs against the loop that stepped through ``terrain_rk4_step`` (issue 10, "the bake
-stays fast")."""
+(core/terrain_dynamics.py) to round-off: the height field on floats, one RK4 stage, and whole
+runs against the loop that stepped through ``terrain_rk4_step`` (issue 10, "the bake stays
+fast")."""
 import math
 
 import numpy as np
@@ -36,9 +36,9 @@ def _points(ground, rng, n):
     return xs.tolist(), ys.tolist()
 
 
-def test_cell_polynomials_are_the_bicubic_spline():
-    """``derivatives_one`` (per-cell coefficients, Horner) against the Catmull-Rom weights of
-    the array path: h and its first and second derivatives, on a rough random grid."""
+def test_float_evaluation_is_the_bicubic_spline():
+    """``derivatives_one`` (the stencil and weights on floats) against the array path: h and
+    its first and second derivatives, on a rough random grid, at cell corners and edges."""
     rng = np.random.default_rng(5)
     xs, ys = _points(ROUGH, rng, 400)
     one = np.array([ROUGH.derivatives_one(x, y) for x, y in zip(xs, ys)])
@@ -168,6 +168,27 @@ def test_fused_run_is_the_array_loop(case):
         assert np.abs(fast.theta_v).max() > 0.2
     fr = surface_frame(ground, fast.x, fast.y, fast.theta_dir, BODY.g)
     np.testing.assert_allclose(fast.z, fr.z, atol=1e-12)
+
+
+class _LeanAboutHalfThePlumb(PhaseEllipse):
+    """A controller with an equilibrium lean of its own (the stepper asks it, with a frame)."""
+
+    def equilibrium_lean(self, frame, t):
+        return 0.5 * math.atan2(-frame.g_lateral, frame.g_normal)
+
+
+def test_a_controller_with_its_own_equilibrium_lean():
+    slope = ski_slope(length=400.0, width=200.0, cell=2.0)
+    res, dt, n, fall = RESISTANCE["skier"], 0.02, 300, -math.pi / 2
+    s0 = (*slalom_start(BODY, W, TM, fall, 40.0, 150.0), BODY.V_cm)
+
+    def make():
+        return _LeanAboutHalfThePlumb(BODY, W, TM, heading=fall + 0.5)
+
+    fast = simulate_terrain(SKIER, make(), (n - 1) * dt, dt, s0, slope, res)
+    ref = _array_loop(SKIER, make(), slope, res, s0, n, dt)
+    np.testing.assert_allclose(fast.theta_v, ref[:, 3], rtol=0, atol=1e-12)   # measured 1e-14
+    np.testing.assert_allclose(fast.x, ref[:, 0], rtol=0, atol=1e-11)
 
 
 class _Recorder:

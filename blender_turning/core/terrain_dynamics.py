@@ -39,7 +39,7 @@ from .xp import Numpy, Scalar, backend
 from .terrain import surface_frame
 
 __all__ = ["TERRAIN_STATE", "V_CM", "Resistance", "RESISTANCE", "plumb_lean", "plumb_lean_along",
-           "terrain_steer", "terrain_rates",
+           "terrain_steer",
            "terrain_inverse_cf", "terrain_leg_force", "terrain_rk4_step"]
 
 TERRAIN_STATE = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
@@ -99,7 +99,7 @@ def plumb_lean_along(frame, heading, g: float):
     instead of the frame's own heading: from the normal, ``g_b = -g b_z`` with
     ``b_z = n_x t_y - n_y t_x`` and ``t`` the heading lifted onto the surface."""
     xp = Scalar if type(frame.g_normal) is float and type(heading) is float else Numpy
-    n = frame.n if type(frame.n) is tuple or xp is Numpy else frame.n.tolist()
+    n = frame.n.tolist() if xp is Scalar else frame.n
     c, s = xp.cos(heading), xp.sin(heading)
     p = -(n[0] * c + n[1] * s) / n[2]                       # slope along the heading
     g_b = -g * (n[0] * s - n[1] * c) / (1.0 + p * p) ** 0.5
@@ -118,8 +118,6 @@ def terrain_inverse_cf(body: BodyParams, frame, theta_v, alpha_v, V):
     G_n = frame.g_normal + V * V * frame.kappa_n
     k = G_n * s + frame.g_lateral * c - alpha_v * body.J
     den = k * body.l * s + V * V * c
-    if xp is Scalar:                                        # one figure: no both-branch where
-        return k / den if den > 0.0 else math.copysign(math.inf, k)
     ok = den > 0.0
     return xp.where(ok, k / xp.where(ok, den, 1.0), xp.copysign(math.inf, k))
 
@@ -136,25 +134,16 @@ def terrain_steer(body: BodyParams, limits: Limits, resistance: Resistance, grou
     xp = Scalar if type(th) is float and type(C_f) is float else Numpy
     s, c = xp.sin(th), xp.cos(th)
     cf = bound_cf(body, limits, C_f, s, anchor, tau, xp)
-    tx, ty = (fr.t[0], fr.t[1]) if xp is Numpy else fr.t[:2].tolist()
-    *deriv, alpha, V_f, N = terrain_rates(body, resistance, fr, tx, ty, cf, s, c, om, V)
-    return tuple(deriv), cf, alpha, V_f, N, fr
-
-
-def terrain_rates(body: BodyParams, resistance: Resistance, fr, tx, ty, cf, s, c, om, V):
-    """The equations of motion on terrain under a bounded ``C_f`` (module docstring;
-    docs/TERRAIN.md Sections 2-3), floats or arrays: ``(x', y', theta_dir', theta_v', omega_v',
-    V_cm', alpha_v, V_f, N)``; ``s, c`` = sin, cos of ``theta_v``, ``(tx, ty)`` the horizontal
-    part of the frame's tangent.  (One figure is stepped by :mod:`.terrain_one_figure`, these
-    lines written out on floats, held to this by ``tests/test_terrain_fast.py``.)"""
-    l = body.l
-    V_f = V * (1.0 / (1.0 - cf * l * s))                        # Eq. (21)
+    ratio = 1.0 / (1.0 - cf * body.l * s)                      # Eq. (21): V_f / V_cm
+    V_f = V * ratio
     G_n = fr.g_normal + V_f * V_f * fr.kappa_n
-    alpha = (G_n * s + (fr.g_lateral - V * V_f * cf) * c) / body.J      # Eq. (2) on terrain
-    N = body.m * (G_n - l * (alpha * s + om * om * c))
+    alpha = (G_n * s + (fr.g_lateral - V * V_f * cf) * c) / body.J     # Eq. (2) on terrain
+    N = body.m * (G_n - body.l * (alpha * s + om * om * c))
     dV = fr.g_along - resistance.mu * N / body.m - resistance.drag_k(body.m) * V * V
     turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)
-    return V_f * tx, V_f * ty, turn, om, alpha, dV, alpha, V_f, N
+    tx, ty = (fr.t[0], fr.t[1]) if xp is Numpy else fr.t[:2].tolist()
+    deriv = (V_f * tx, V_f * ty, turn, om, alpha, dV)
+    return deriv, cf, alpha, V_f, N, fr
 
 
 def terrain_leg_force(body: BodyParams, theta_v, omega_v, alpha_v, C_f, V, V_f, frame):

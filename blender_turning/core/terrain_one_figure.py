@@ -6,16 +6,16 @@ numpy's per-call dispatch at every operation, ~10x the flat fused path (:mod:`.o
 Here one RK4 stage is one function on floats with the body's constants bound as locals, as
 :mod:`.one_figure` does on flat ground, written out from the same equations:
 
-- the foot's frame (docs/TERRAIN.md Section 1; :func:`.terrain.frame_terms`), the surface's
-  derivatives from :meth:`.terrain.HeightField.derivatives_one` (the bicubic as a per-cell
-  polynomial) or :meth:`.terrain.Plane.derivatives_one`;
+- the foot's frame (docs/TERRAIN.md Section 1; :func:`.terrain.surface_frame`) from the
+  surface's derivatives on floats (:meth:`.terrain.HeightField.derivatives_one`,
+  :meth:`.terrain.Plane.derivatives_one`);
 - the controller's lean law about the local plumb lean
   (:meth:`.controllers.base.Controller.equilibrium_lean`,
   :func:`.terrain_dynamics.plumb_lean_along`) and Eq. (1) on terrain
   (:func:`.terrain_dynamics.terrain_inverse_cf`), docs/TERRAIN.md Section 6;
 - Section 3's bounds on ``C_f`` (:func:`.dynamics.bound_cf`);
 - Eq. (21), Eq. (2) on terrain, the normal force and the speed equation
-  (:func:`.terrain_dynamics.terrain_rates`, docs/TERRAIN.md Sections 2-3).
+  (:func:`.terrain_dynamics.terrain_steer`, docs/TERRAIN.md Sections 2-3).
 
 A controller with a terrain law or an equilibrium lean of its own (:class:`.controllers.Straight`)
 is asked through its methods instead.  ``tests/test_terrain_fast.py`` holds this stage to
@@ -29,7 +29,7 @@ import math
 from .controllers.base import Controller
 from .dynamics import PHYSICAL_MARGIN
 from .params import BodyParams, Limits
-from .terrain import frame_terms
+from .terrain import surface_frame
 from .terrain_dynamics import Resistance
 
 __all__ = ["TerrainStage"]
@@ -48,7 +48,7 @@ class TerrainStage:
         one = getattr(ground, "derivatives_one", None)
         self.derivatives = one if one is not None else (
             lambda x, y: [float(v) for v in ground.derivatives(x, y)])
-        self.controller = controller
+        self.ground, self.controller = ground, controller
         self._g = body.g
         base = type(controller)
         own_law = None if base.terrain_cf_law is Controller.terrain_cf_law else \
@@ -56,12 +56,12 @@ class TerrainStage:
         self._plumb = base.equilibrium_lean is Controller.equilibrium_lean
         self.stage = self._build(body, limits, resistance, own_law)
 
-    def _equilibrium(self, t, d, h, hx, hy, hxx, hxy, hyy, c, s, g_n, g_b, nx, ny, nz):
-        """The controller's equilibrium lean (:meth:`.Controller.equilibrium_lean`) at a frame."""
+    def _equilibrium(self, t, x, y, d, g_n, g_b, nx, ny, nz):
+        """The controller's equilibrium lean (:meth:`.Controller.equilibrium_lean`) at the
+        frame of ``(x, y)`` heading ``d``."""
         ctl = self.controller
         if not self._plumb:
-            return ctl.equilibrium_lean(frame_terms(h, hx, hy, hxx, hxy, hyy, c, s, self._g,
-                                                    math.sqrt), t)
+            return ctl.equilibrium_lean(surface_frame(self.ground, x, y, d, self._g), t)
         heading = getattr(ctl, "heading", None)
         if heading is None or ctl.lean_about_heading:
             return math.atan2(-g_b, g_n)                        # plumb_lean
@@ -73,15 +73,15 @@ class TerrainStage:
     def lean(self, t: float, x: float, y: float, d: float, theta_v: float, dv) -> float:
         """``theta_v`` from the controller's equilibrium lean at ``(x, y)`` heading ``d``
         (``dv``: :attr:`derivatives` there)."""
-        h, hx, hy, hxx, hxy, hyy = dv
+        _, hx, hy, _, _, _ = dv
         c, s = math.cos(d), math.sin(d)
         p = hx * c + hy * s
         it = 1.0 / math.sqrt(1.0 + p * p)
         nz = 1.0 / math.sqrt(1.0 + hx * hx + hy * hy)
         nx, ny = -hx * nz, -hy * nz
         g = self._g
-        return theta_v - self._equilibrium(t, d, h, hx, hy, hxx, hxy, hyy, c, s, g * nz,
-                                           -g * (nx * s - ny * c) * it, nx, ny, nz)
+        return theta_v - self._equilibrium(t, x, y, d, g * nz, -g * (nx * s - ny * c) * it,
+                                           nx, ny, nz)
 
     def _build(self, body, limits, resistance, own_law):
         g, l, J, m = body.g, body.l, body.J, body.m
@@ -95,7 +95,7 @@ class TerrainStage:
 
         def stage(t, x, y, d, th, om, V, anchor, tau, dv=None):
             """``(x', y', theta_dir', theta_v', omega_v', V_cm', alpha_v, V_f, C_f)``."""
-            h, hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
+            _, hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
             # The foot's frame (docs/TERRAIN.md Section 1): t, n, b = n x t.
             c, s = cos(d), sin(d)
             p = hx * c + hy * s
@@ -111,7 +111,7 @@ class TerrainStage:
                 cf = own_law(t, (x, y, d, th, om, V))
             else:
                 # The lean law about the equilibrium lean, then Eq. (1) on terrain.
-                eq = equilibrium(t, d, h, hx, hy, hxx, hxy, hyy, c, s, g_n, g_b, nx, ny, nz)
+                eq = equilibrium(t, x, y, d, g_n, g_b, nx, ny, nz)
                 k = ((g_n + V * V * kappa) * sn + g_b * cs
                      - alpha_law(t, (x, y, d, th - eq, om)) * law_J)
                 den = k * law_l * sn + V * V * cs
