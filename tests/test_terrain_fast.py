@@ -36,9 +36,10 @@ def _points(ground, rng, n):
     return xs.tolist(), ys.tolist()
 
 
-def test_float_evaluation_is_the_bicubic_spline():
-    """``derivatives_one`` (the stencil and weights on floats) against the array path: h and
-    its first and second derivatives, on a rough random grid, at cell corners and edges."""
+def test_cell_polynomials_are_the_bicubic_spline():
+    """``derivatives_one`` (per-cell coefficients, Horner) against the Catmull-Rom weights of the
+    array path: h and its first and second derivatives, on a rough random grid, at cell corners
+    and edges."""
     rng = np.random.default_rng(5)
     xs, ys = _points(ROUGH, rng, 400)
     one = np.array([ROUGH.derivatives_one(x, y) for x, y in zip(xs, ys)])
