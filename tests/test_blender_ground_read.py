@@ -54,6 +54,24 @@ def test_heights_are_ray_casts_onto_a_moved_tilted_scaled_mesh():
     np.testing.assert_allclose(got[~on], read.field.derivatives(x[~on], y[~on])[0])
 
 
+def test_heights_on_a_grid_mesh_are_its_triangles_without_ray_casts():
+    """A grid mesh (moved, turned by 90 deg, stretched) gives the feet's heights from its
+    lattice: the world-space ray casts' heights to float32, off the mesh the smooth field's."""
+    obj = _mountain(location=(7.0, -4.0, 3.0), rotation_euler=(0.0, 0.0, math.pi / 2),
+                    scale=(1.3, 0.8, 1.2))
+    read = ground.read_ground(obj, bpy.context.evaluated_depsgraph_get())
+    assert read.grid is not None
+    x_lo, x_hi, y_lo, y_hi = read.field.extent
+    rng = np.random.default_rng(7)
+    x, y = rng.uniform(x_lo, x_hi, 600), rng.uniform(y_lo, y_hi, 600)
+    want = _world_rays(obj, x, y)
+    got = read.heights(x, y)
+    on = np.isfinite(want)
+    assert on.sum() > 550
+    np.testing.assert_allclose(got[on], want[on], atol=2e-5)
+    np.testing.assert_allclose(got[~on], read.field.derivatives(x[~on], y[~on])[0])
+
+
 def test_a_read_is_kept_only_while_the_mesh_stays_the_same():
     obj = _mountain()
     depsgraph = bpy.context.evaluated_depsgraph_get
@@ -100,11 +118,15 @@ def _triangle_grid(diagonals, xs, ys, z):
 
 
 def _both(obj, cell=0.23):
+    """The grid path's heights on the sample grid (None: not a grid mesh) and the general
+    rasterization's."""
     world, tris = ground._world_triangles(obj, bpy.context.evaluated_depsgraph_get())
     lo, hi = world.min(0), world.max(0)
     nx, ny = (int(np.floor((hi[k] - lo[k]) / cell)) + 1 for k in (0, 1))
-    args = (world, tris, float(lo[0]), float(lo[1]), cell, nx, ny)
-    return ground._rasterize_grid(*args), ground._rasterize(*args)
+    grid = ground._grid_mesh(world, tris)
+    xs, ys = lo[0] + cell * np.arange(nx), lo[1] + cell * np.arange(ny)
+    return (None if grid is None else grid.heights(xs[None, :], ys[:, None]),
+            ground._rasterize(world, tris, float(lo[0]), float(lo[1]), cell, nx, ny))
 
 
 def test_a_grid_mesh_is_rasterized_by_its_lattice():
