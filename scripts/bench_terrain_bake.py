@@ -10,7 +10,7 @@ Timed: the whole bake as the operator does it (``BakeJob``: read the mesh, simul
 ray-cast the feet, map, write F-curves), best of ``--repeat``, the cases interleaved: the
 terrain bake the first time over the mesh (reading it) and again (the read is kept while the
 mesh is unchanged: a figure's settings changed); and the parts: reading the mesh, and the
-simulation with its resampling (and, on terrain, the feet's ray casts) alone.
+simulation with its resampling (and, on terrain, the feet's heights on the mesh) alone.
 """
 from __future__ import annotations
 
@@ -85,7 +85,7 @@ def main(argv=None):
                                               mesh_ground.read_ground(mountain, depsgraph())),
         "  reading the mesh, again": lambda: mesh_ground.read_ground(mountain, depsgraph()),
         "  simulate + resample, flat": lambda: simulate_figure(figs["flat"], frames, ground=None),
-        "  simulate + resample + ray casts, terrain": lambda: simulate_figure(
+        "  simulate + resample + foot heights, terrain": lambda: simulate_figure(
             figs["terrain"], frames, ground=read),
     }
     times = {k: math.inf for k in parts}
