@@ -1,8 +1,8 @@
 """Simulation on terrain: the loop of Fig. 4 with the ground and speed as a state.
 
 :func:`simulate_terrain` steps one figure on a surface (:mod:`.terrain`) with friction and drag
-(:class:`.terrain_dynamics.Resistance`) by :func:`.terrain_dynamics.terrain_rk4_step` (classical
-RK4, ``C_f`` bounded at every stage as on flat ground).  Each step the controller is re-targeted
+(:class:`.terrain_dynamics.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
+``C_f`` bounded at every stage as on flat ground, as :func:`.terrain_dynamics.terrain_rk4_step`).  Each step the controller is re-targeted
 to the current speed (:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from
 the local plumb lean (:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1)
 on terrain (:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes
