@@ -47,7 +47,7 @@ class BodyParams:
         terrain the speed is a state and the controller follows it every step
         (:meth:`.controllers.base.Controller.follow_speed`), where ``replace``'s full check
         cost ~4 us a step."""
-        body = object.__new__(BodyParams)
+        body = object.__new__(type(self))
         body.__dict__.update(self.__dict__)
         body.__dict__["V_cm"] = check("V_cm", V_cm, "V_cm")
         return body
