@@ -1,10 +1,12 @@
 """Ground mesh <-> the core's height field (docs/TERRAIN.md).  The core stays bpy-free: a mesh
-object the user picks as ground is read once, by ray casts from above on a regular grid, into a
-:class:`..core.terrain.HeightField`; the demo's mountain goes the other way."""
+object the user picks as ground is read once into a :class:`..core.terrain.HeightField` (what
+ray casts from above on a regular grid return, rasterized in numpy; kept while the mesh does not
+change); the demo's mountain goes the other way."""
 from __future__ import annotations
 
+import hashlib
+
 import numpy as np
-from mathutils.bvhtree import BVHTree
 
 from ..core.terrain import HeightField
 
@@ -30,24 +32,43 @@ def _world_triangles(obj, depsgraph):
 
 
 class MeshGround:
-    """A ground mesh read once: its smooth :attr:`field` for the physics and a BVH tree of its
-    triangles for exact heights (:meth:`heights`)."""
+    """A ground mesh read once: its smooth :attr:`field` for the physics, and exact heights on
+    the mesh (:meth:`heights`)."""
 
-    def __init__(self, name: str, field: HeightField, bvh):
-        self.name, self.field, self.bvh = name, field, bvh
+    def __init__(self, name: str, field: HeightField, grid: _GridMesh | None = None):
+        self.name, self.field, self.grid = name, field, grid
 
     def heights(self, x, y) -> np.ndarray:
-        """The mesh's height under each ``(x, y)`` by a ray cast from above (the smooth field's
-        where no ray hits, off the mesh's edge)."""
+        """The mesh's height under each ``(x, y)``: what a ray cast from above returns (the
+        smooth field's where none hits, off the mesh's edge).  A grid mesh is evaluated from its
+        lattice (:class:`_GridMesh`); any other by ``Object.ray_cast`` in the object's own
+        space (Blender keeps the evaluated mesh's BVH tree between calls and bakes, where a
+        ``BVHTree`` of our own cost ~0.2 s to build for a 200 m x 200 m, 1 m mesh)."""
+        if self.grid is not None:
+            x, y = np.asarray(x, float), np.asarray(y, float)
+            on = self.grid.contains(x, y)
+            z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
+            z[on] = self.grid.heights(x[on], y[on])
+            return z
+        import bpy
+        obj = bpy.data.objects.get(self.name)
+        if obj is None:
+            raise ValueError(f"ground {self.name!r} was deleted while baking")
+        ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
         x, y = np.asarray(x, float), np.asarray(y, float)
         z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
-        top = float(np.max(z)) + 1e3
-        cast = self.bvh.ray_cast
-        down = (0.0, 0.0, -1.0)
-        for k, (a, b) in enumerate(zip(x.tolist(), y.tolist())):
-            hit = cast((a, b, top), down)[0]
-            if hit is not None:
-                z[k] = hit[2]
+        m = np.array(ev.matrix_world)
+        inv = np.linalg.inv(m)
+        # From 1 m above the mesh's box: the BVH works in float32, a ray from 1 km above
+        # would carry ~0.3 mm of round-off into the hit.
+        top = float(np.max(np.array(ev.bound_box) @ m[2, :3] + m[2, 3])) + 1.0
+        origins = np.stack([x, y, np.full_like(x, top)], -1) @ inv[:3, :3].T + inv[:3, 3]
+        down = tuple(-inv[:3, 2])
+        cast = ev.ray_cast
+        for k, o in enumerate(origins.tolist()):
+            hit, loc = cast(o, down)[:2]
+            if hit:
+                z[k] = m[2, 0] * loc[0] + m[2, 1] * loc[1] + m[2, 2] * loc[2] + m[2, 3]
         return z
 
 
@@ -68,6 +89,10 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     world, tris = _world_triangles(obj, depsgraph)
     if len(tris) == 0:
         raise ValueError(f"ground {obj.name!r} has no faces")
+    key = _digest(world, tris, cell)
+    kept = _READ.get(obj.name)
+    if kept is not None and kept[0] == key:
+        return kept[1]
     lo, hi = world.min(0), world.max(0)
     if cell is None:
         # Each triangle's shortest side seen from above (a quad's diagonal is never it).
@@ -82,14 +107,38 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     if nx * ny > MAX_SAMPLES:
         raise ValueError(f"ground {obj.name!r} needs {nx * ny} samples at {cell:g} m; "
                          f"at most {MAX_SAMPLES}: use a coarser cell")
-    bvh = BVHTree.FromPolygons(world.tolist(), tris.tolist(), all_triangles=True)
     xs = lo[0] + cell * np.arange(nx)
     ys = lo[1] + cell * np.arange(ny)
-    h = _rasterize(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
+    grid = _grid_mesh(world, tris)
+    if grid is not None:
+        h = grid.heights(xs[None, :], ys[:, None])
+    else:
+        h = _rasterize(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
     if np.isnan(h).all():
         raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
     _fill_nearest(h)
-    return MeshGround(obj.name, HeightField(h, float(xs[0]), float(ys[0]), float(cell)), bvh)
+    ground = MeshGround(obj.name, HeightField(h, float(xs[0]), float(ys[0]), float(cell)), grid)
+    _READ.pop(obj.name, None)
+    while len(_READ) >= _KEEP:                              # the oldest read goes
+        _READ.pop(next(iter(_READ)))
+    _READ[obj.name] = (key, ground)
+    return ground
+
+
+#: Grounds read, by object name: ``(digest of the world-space mesh and cell, MeshGround)``.
+#: Baking again over an unchanged mesh (a figure's settings changed, not the mountain) skips the
+#: rasterization (~0.2-0.3 s for 200 m x 200 m at 0.25 m); any change to the evaluated mesh, its
+#: placement or the cell changes the digest.
+_READ: dict[str, tuple[bytes, MeshGround]] = {}
+_KEEP = 4
+
+
+def _digest(world, tris, cell) -> bytes:
+    """A digest of what a read depends on: world-space vertices, triangles, cell."""
+    h = hashlib.blake2b(world.tobytes(), digest_size=20)
+    h.update(tris.tobytes())
+    h.update(repr(cell).encode())
+    return h.digest()
 
 
 #: Most grid points a side of the triangles rasterized together (bigger ones go one by one).
@@ -152,8 +201,87 @@ def _rasterize(world, tris, x0, y0, cell, nx, ny):
     return h.reshape(ny, nx)
 
 
+class _GridMesh:
+    """A grid mesh's triangles as planes over its lattice cells (:func:`_grid_mesh`): the mesh's
+    exact height anywhere over the lattice from where the point lies in its cell."""
+
+    def __init__(self, lo, step, n, plane, main):
+        self.lo, self.step, self.n, self.plane, self.main = lo, step, n, plane, main
+
+    def contains(self, x, y):
+        hi = self.lo + self.step * (np.array(self.n) - 1)
+        return (x >= self.lo[0]) & (x <= hi[0]) & (y >= self.lo[1]) & (y <= hi[1])
+
+    def heights(self, x, y):
+        """The mesh's height at ``(x, y)`` (arrays that broadcast; inside :meth:`contains`)."""
+        n0, n1 = self.n
+        fx = np.clip((x - self.lo[0]) / self.step[0], 0.0, n0 - 1)
+        fy = np.clip((y - self.lo[1]) / self.step[1], 0.0, n1 - 1)
+        i = np.minimum(fx.astype(np.int64), n0 - 2)
+        j = np.minimum(fy.astype(np.int64), n1 - 2)
+        u, v = fx - i, fy - j
+        c = j * (n0 - 1) + i
+        k = 2 * c + np.where(self.main[c], u < v, u + v > 1.0)
+        return self.plane[0][k] + self.plane[1][k] * u + self.plane[2][k] * v
+
+
+def _grid_mesh(world, tris) -> _GridMesh | None:
+    """The mesh as a :class:`_GridMesh` when it is one, else ``None``: vertices on an
+    axis-aligned lattice (every node present once), each lattice cell split into two triangles
+    along one of its diagonals (Blender's triangulation of the quads, as read).  Then a point's
+    triangle follows from its place in its lattice cell, and its height is that triangle's
+    plane there: the general rasterization's heights (to round-off) for 200 m x 200 m at
+    0.25 m in ~40 ms instead of ~0.14 s, and the feet's heights without ray casts."""
+    xy = world[:, :2]
+    lo = xy.min(0)
+    n, step = [], []
+    for k in (0, 1):                                        # lattice columns, then rows
+        gaps = np.diff(np.sort(xy[:, k]))
+        if not len(gaps) or gaps.max() <= 0.0:
+            return None
+        n.append(1 + int((gaps > 0.5 * gaps.max()).sum()))  # a lattice's gaps: 0 or a step
+        step.append((xy[:, k].max() - lo[k]) / (n[-1] - 1))
+    step = np.array(step)
+    idx = np.rint((xy - lo) / step).astype(np.int64)
+    if n[0] * n[1] != len(world) or np.abs(lo + idx * step - xy).max() > 1e-4 * step.min():
+        return None
+    node = idx[:, 1] * n[0] + idx[:, 0]
+    if len(np.unique(node)) != len(node):
+        return None
+    Z = np.empty(len(node))
+    Z[node] = world[:, 2]
+    Z = Z.reshape(n[1], n[0])
+    # Each triangle within one lattice cell; the cell's diagonal from the corners it holds.
+    ti, tj = idx[tris, 0], idx[tris, 1]                    # (k, 3)
+    ci, cj = ti.min(1), tj.min(1)
+    if (ti.max(1) - ci != 1).any() or (tj.max(1) - cj != 1).any():
+        return None
+    corner = (ti - ci[:, None]) + 2 * (tj - cj[:, None])   # 0: (0,0) 1: (1,0) 2: (0,1) 3: (1,1)
+    mask = (1 << corner).sum(1)               # a triangle's corners as bits: 11, 13 / 7, 14
+    cell_id = cj * (n[0] - 1) + ci
+    cells = (n[0] - 1) * (n[1] - 1)
+    both = np.bincount(cell_id, weights=mask, minlength=cells)
+    # Two triangles a cell, split along (0,0)-(1,1) (11 + 13) or (1,0)-(0,1) (7 + 14): no
+    # holes (0 or one triangle), overlaps or other shapes (no other sums give 24 or 21).
+    if ((both != 24) & (both != 21)).any():
+        return None
+    main = both == 24
+    # Each cell's two triangles as planes over (u, v) in [0, 1]^2: h = c0 + a u + b v; the first
+    # holds u >= v (along the main diagonal) or u + v <= 1 (across), the second the rest.
+    z00, z10 = Z[:-1, :-1].ravel(), Z[:-1, 1:].ravel()
+    z01, z11 = Z[1:, :-1].ravel(), Z[1:, 1:].ravel()
+    plane = np.empty((cells, 2, 3))
+    plane[:, 0] = np.where(main[:, None], np.stack([z00, z10 - z00, z11 - z10], 1),
+                           np.stack([z00, z10 - z00, z01 - z00], 1))
+    plane[:, 1] = np.where(main[:, None], np.stack([z00, z11 - z01, z01 - z00], 1),
+                           np.stack([z01 + z10 - z11, z11 - z01, z11 - z10], 1))
+    return _GridMesh(lo, step, n, plane.reshape(-1, 3).T, main)
+
+
 def _fill_nearest(h):
     """Fill NaN holes along rows, then columns, from the nearest finite neighbour (in place)."""
+    if not np.isnan(h).any():
+        return
     for grid in (h, h.T):
         for row in grid:
             ok = np.isfinite(row)

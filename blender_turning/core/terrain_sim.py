@@ -1,8 +1,8 @@
 """Simulation on terrain: the loop of Fig. 4 with the ground and speed as a state.
 
 :func:`simulate_terrain` steps one figure on a surface (:mod:`.terrain`) with friction and drag
-(:class:`.terrain_dynamics.Resistance`) by :func:`.terrain_dynamics.terrain_rk4_step` (classical
-RK4, ``C_f`` bounded at every stage as on flat ground).  Each step the controller is re-targeted
+(:class:`.terrain_dynamics.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
+``C_f`` bounded at every stage as on flat ground, as :func:`.terrain_dynamics.terrain_rk4_step`).  Each step the controller is re-targeted
 to the current speed (:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from
 the local plumb lean (:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1)
 on terrain (:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes
@@ -25,8 +25,8 @@ from .params import Figure, check_range
 from .phase import phase
 from .schedule import Schedule
 from .terrain import FLAT, HeightField, OffTerrain, Plane, surface_frame
-from .terrain_dynamics import (Resistance, terrain_leg_force, terrain_rk4_step,
-                               terrain_steer)
+from .terrain_dynamics import Resistance, terrain_leg_force
+from .terrain_one_figure import TerrainStage
 from .trajectory import Trajectory, body_meta, resistance_meta
 
 __all__ = ["TargetSpeed", "simulate_terrain", "describe_ground", "MIN_SPEED", "NO_RESISTANCE"]
@@ -99,29 +99,6 @@ class _Braking:
         return self.course(t) + self.side * self.offset
 
 
-class _LastPoint:
-    """``ground`` remembering its last point: at every RK4 stage the steering law and the
-    right-hand side ask about the same foot position (a height field's bicubic costs ~100 us)."""
-
-    def __init__(self, ground):
-        self.ground, self._key, self._value = ground, None, None
-
-    def derivatives(self, x, y):
-        return self.ground.derivatives(x, y)
-
-    def derivatives_one(self, x: float, y: float):
-        key = (x, y)
-        if key != self._key:
-            one = getattr(self.ground, "derivatives_one", None)
-            self._value = (one(x, y) if one is not None else
-                           tuple(float(v) for v in self.ground.derivatives(x, y)))
-            self._key = key
-        return self._value
-
-    def __getattr__(self, name):
-        return getattr(self.ground, name)
-
-
 def describe_ground(ground) -> str:
     """The ``meta["ground"]`` entry of a trajectory: ``"flat"`` or what the surface was."""
     if isinstance(ground, Plane):
@@ -181,7 +158,7 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
             # plumb lean of the heading the figure has, which swings through it smoothly.
             controller.heading = Schedule.of(brake)
             controller.lean_about_heading = True
-        rows, stop = _loop(body, limits, controller, _LastPoint(ground), resistance, st, n, dt,
+        rows, stop = _loop(body, limits, controller, ground, resistance, st, n, dt,
                            C_f0, brake)
     finally:
         if brake is not None:
@@ -200,39 +177,59 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
 
 def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake):
     """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean from
-    the controller's equilibrium lean)``.
+    the controller's equilibrium lean)``.  Classical RK4 on Python floats, written out
+    (:mod:`.terrain_one_figure` for the stages), ``C_f`` bounded at every stage relative to the
+    curvature at the step's start, as :func:`.terrain_dynamics.terrain_rk4_step` does.
     Returns ``(rows, None | "fell" | "stopped" | "left")``."""
     controller.begin_run(limits)
-    law = controller.terrain_cf_law(ground)
+    rhs = TerrainStage(body, limits, resistance, ground, controller)
+    derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
+    begin, target, fall = controller.begin_step, controller.target, limits.theta_fall
     anchor = None if anchor is None else float(anchor)
+    x0, x1, x2, x3, x4, x5 = (float(v) for v in st)
+    h, w6 = 0.5 * dt, dt / 6.0
     rows = []
     V_now = body.V_cm
     for i in range(n):
         t = i * dt
-        V = float(st[5])
-        if V != V_now:
+        if x5 != V_now:
             # Below MIN_SPEED the run stops at this row (a body slower than the table of ranges
             # allows is never made): the last row is steered at the minimum speed.
-            controller.follow_speed(max(V, MIN_SPEED))
-            V_now = V
+            controller.follow_speed(max(x5, MIN_SPEED))
+            V_now = x5
         if brake is not None:
-            brake.update(t, st)
-        rel = controller.relative_state(ground, st, t)
-        controller.begin_step(t, rel)
-        _, cf, alpha, V_f, _, _ = terrain_steer(body, limits, resistance, ground, law(t, st), st,
-                                                anchor, dt)
-        rows.append((*st, float(alpha), float(cf), float(V_f), *controller.target(t), rel[3]))
-        if abs(rel[3]) > limits.theta_fall:
+            brake.update(t, (x0, x1, x2, x3, x4, x5))
+        try:
+            dv = derivatives(x0, x1)
+        except OffTerrain:                      # the step ended past the edge
+            return rows, "left"
+        rel = lean(t, x0, x1, x2, x3, dv)
+        begin(t, (x0, x1, x2, rel, x4))
+        a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, dt,
+                                                       dv)
+        rows.append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel))
+        if abs(rel) > fall:
             return rows, "fell"
-        if V < MIN_SPEED:
+        if x5 < MIN_SPEED:
             return rows, "stopped"
         if i + 1 == n:
             break
-        anchor = float(cf)
         try:
-            st = terrain_rk4_step(body, limits, resistance, ground, st, t, dt, law, anchor)
+            b0, b1, b2, b3, b4, b5 = stage(t + h, x0 + h * a0, x1 + h * a1, x2 + h * a2,
+                                           x3 + h * a3, x4 + h * a4, x5 + h * a5, cf, h)[:6]
+            c0, c1, c2, c3, c4, c5 = stage(t + h, x0 + h * b0, x1 + h * b1, x2 + h * b2,
+                                           x3 + h * b3, x4 + h * b4, x5 + h * b5, cf, h)[:6]
+            d0, d1, d2, d3, d4, d5 = stage(t + dt, x0 + dt * c0, x1 + dt * c1, x2 + dt * c2,
+                                           x3 + dt * c3, x4 + dt * c4, x5 + dt * c5, cf, dt)[:6]
         except OffTerrain:
             return rows, "left"
+        x0 += w6 * (a0 + 2.0 * (b0 + c0) + d0)
+        x1 += w6 * (a1 + 2.0 * (b1 + c1) + d1)
+        x2 += w6 * (a2 + 2.0 * (b2 + c2) + d2)
+        x3 += w6 * (a3 + 2.0 * (b3 + c3) + d3)
+        x4 += w6 * (a4 + 2.0 * (b4 + c4) + d4)
+        x5 += w6 * (a5 + 2.0 * (b5 + c5) + d5)
+        anchor = cf
     return rows, None
 
 

@@ -9,8 +9,6 @@ no memory change).  The integrator bounds the demand (``dynamics.bound_cf``).  S
 """
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 
 from ..dynamics import THETA_V, inverse_cf
@@ -38,7 +36,7 @@ class Controller:
 
         Eq. (1) is solved with the current ``V_cm``; the paper keeps ``V_cm`` constant in
         Sections 3-5, and lets it vary along the path in Section 6 (the planner's speed profile)."""
-        self.body = replace(self.nominal_body, V_cm=float(V_cm))
+        self.body = self.nominal_body.at_speed(float(V_cm))
         return self.body
 
     def begin_run(self, limits) -> None:
@@ -62,6 +60,12 @@ class Controller:
             return self.desired_cf
         inverse, alpha = scalar_inverse_cf(self.body), self.desired_alpha
         return lambda t, state: inverse(state[THETA_V], alpha(t, state))
+
+    def scalar_alpha_law(self):
+        """``f(t, state) -> alpha_v`` for one figure on floats: :meth:`desired_alpha`, which a
+        subclass may specialise for speed (the terrain stepper, :mod:`..terrain_one_figure`,
+        asks it about the lean from the equilibrium lean)."""
+        return self.desired_alpha
 
     def terrain_cf_law(self, ground):
         """``f(t, state) -> C_f`` on terrain (``state`` = ``(x, y, theta_dir, theta_v, omega_v,

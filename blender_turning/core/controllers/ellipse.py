@@ -126,6 +126,7 @@ class PhaseEllipse(Controller):
         self._limits_given = limits is not None
         self._limits = limits
         self._feasible = None if limits is None else feasible_turns(body, limits)
+        self._table_speed = None    # the speed follow_speed took _feasible at (None: not yet)
         self._bp = self._bn = None  # beta of the left (theta_v >= 0) and right half-turns
         self._side = None           # +1 during a left half-turn, -1 right, per figure
         self._planned = False       # the coming half-turn's beta was set in this step
@@ -139,6 +140,7 @@ class PhaseEllipse(Controller):
         if not self._limits_given:
             self._limits = limits
             self._feasible = feasible_turns(self.body, limits)
+            self._table_speed = None
         self._bp = self._bn = self._side = self._t_prev = None
         self._planned = False
         self._memo = {}
@@ -153,7 +155,11 @@ class PhaseEllipse(Controller):
         body = super().follow_speed(V_cm)
         if self._limits is not None:
             grid = max(SPEED_GRID, math.floor(V_cm / SPEED_GRID) * SPEED_GRID)
-            self._feasible = feasible_turns(replace(self.nominal_body, V_cm=grid), self._limits)
+            if grid != self._table_speed:       # on terrain the speed changes every step
+                self._feasible = feasible_turns(replace(self.nominal_body, V_cm=grid),
+                                                self._limits)
+                self._table_speed = grid
+                self._memo = {}                 # the ellipses made feasible by the old table
         return body
 
     # -- the feasible ellipse (items 3, 3b of issue 7) -----------------------------------------
@@ -338,17 +344,30 @@ class PhaseEllipse(Controller):
         return w, tm
 
     def scalar_cf_law(self):
-        """:meth:`desired_cf` for one figure on floats (:func:`ellipse_alpha_one` or the paper's,
-        Eq. 1), with constant schedules read once."""
-        inverse, ellipse, alpha = scalar_inverse_cf(self.body), self._ellipse, self._alpha_one
+        """:meth:`desired_cf` for one figure on floats: :meth:`scalar_alpha_law` through
+        Eq. (1)."""
+        return self._float_law(scalar_inverse_cf(self.body))
+
+    def scalar_alpha_law(self):
+        """:meth:`desired_alpha` for one figure on floats (:func:`ellipse_alpha_one` or the
+        paper's), with constant schedules read once."""
+        return self._float_law(None)
+
+    def _float_law(self, inverse):
+        """The float law, ending in ``inverse(theta_v, alpha_v)`` (Eq. 1) unless ``None``."""
+        ellipse, alpha = self._ellipse, self._alpha_one
         w_s, tm_s, r0 = self.omega0, self.theta_max, self.origin_radius
         wc, tc = w_s.constant_value, tm_s.constant_value
         fixed = {}                     # constant schedules: the ellipse per beta, computed once
+        table = [self._feasible]       # ... per feasibility table (follow_speed changes it)
 
         def law(t, state):
             th = state[3]
             b = (self._bp if th >= 0.0 else self._bn) if self._bp is not None else 1.0
             if wc is not None and tc is not None:
+                if self._feasible is not table[0]:
+                    fixed.clear()
+                    table[0] = self._feasible
                 e = fixed.get(b)
                 if e is None:
                     if len(fixed) > 8:
@@ -356,7 +375,8 @@ class PhaseEllipse(Controller):
                     e = fixed[b] = ellipse(wc, tc, b)
             else:
                 e = ellipse(wc if wc is not None else w_s(t), tc if tc is not None else tm_s(t), b)
-            return inverse(th, alpha(th, state[4], e[0], e[1], e[2], r0))
+            a = alpha(th, state[4], e[0], e[1], e[2], r0)
+            return a if inverse is None else inverse(th, a)
 
         return law
 

@@ -1,0 +1,138 @@
+"""One figure on terrain on Python floats: the right-hand side of the terrain loop fused.
+
+:func:`.terrain_dynamics.terrain_steer` and :func:`.terrain_dynamics.terrain_rk4_step` serve
+arrays (the planner's batch, a trajectory's columns); stepping one figure through them costs
+numpy's per-call dispatch at every operation, ~10x the flat fused path (:mod:`.one_figure`).
+Here one RK4 stage is one function on floats with the body's constants bound as locals, as
+:mod:`.one_figure` does on flat ground, written out from the same equations:
+
+- the foot's frame (docs/TERRAIN.md Section 1; :func:`.terrain.surface_frame`) from the
+  surface's derivatives on floats (:meth:`.terrain.HeightField.derivatives_one`,
+  :meth:`.terrain.Plane.derivatives_one`);
+- the controller's lean law about the local plumb lean
+  (:meth:`.controllers.base.Controller.equilibrium_lean`,
+  :func:`.terrain_dynamics.plumb_lean_along`) and Eq. (1) on terrain
+  (:func:`.terrain_dynamics.terrain_inverse_cf`), docs/TERRAIN.md Section 6;
+- Section 3's bounds on ``C_f`` (:func:`.dynamics.bound_cf`);
+- Eq. (21), Eq. (2) on terrain, the normal force and the speed equation
+  (:func:`.terrain_dynamics.terrain_steer`, docs/TERRAIN.md Sections 2-3).
+
+A controller with a terrain law or an equilibrium lean of its own (:class:`.controllers.Straight`)
+is asked through its methods instead.  ``tests/test_terrain_fast.py`` holds this stage to
+:func:`.terrain_dynamics.terrain_steer` on numpy arrays to 1e-12 and whole runs to the array
+loop.
+"""
+from __future__ import annotations
+
+import math
+
+from .controllers.base import Controller
+from .dynamics import PHYSICAL_MARGIN
+from .params import BodyParams, Limits
+from .terrain import surface_frame
+from .terrain_dynamics import Resistance
+
+__all__ = ["TerrainStage"]
+
+
+class TerrainStage:
+    """The float right-hand side of one figure on ``ground`` under ``controller``.
+
+    :attr:`derivatives` gives the surface at a point, :meth:`lean` the lean the controller's
+    law sees there (from its equilibrium lean; what :meth:`.Controller.relative_state` gives),
+    :attr:`stage` one RK4 stage.  The controller's speed may change between calls
+    (:meth:`.Controller.follow_speed`); the law reads the state's speed."""
+
+    def __init__(self, body: BodyParams, limits: Limits, resistance: Resistance, ground,
+                 controller: Controller):
+        one = getattr(ground, "derivatives_one", None)
+        self.derivatives = one if one is not None else (
+            lambda x, y: [float(v) for v in ground.derivatives(x, y)])
+        self.ground, self.controller = ground, controller
+        self._g = body.g
+        base = type(controller)
+        own_law = None if base.terrain_cf_law is Controller.terrain_cf_law else \
+            controller.terrain_cf_law(ground)
+        self._plumb = base.equilibrium_lean is Controller.equilibrium_lean
+        self.stage = self._build(body, limits, resistance, own_law)
+
+    def _equilibrium(self, t, x, y, d, g_n, g_b, nx, ny, nz):
+        """The controller's equilibrium lean (:meth:`.Controller.equilibrium_lean`) at the
+        frame of ``(x, y)`` heading ``d``."""
+        ctl = self.controller
+        if not self._plumb:
+            return ctl.equilibrium_lean(surface_frame(self.ground, x, y, d, self._g), t)
+        heading = getattr(ctl, "heading", None)
+        if heading is None or ctl.lean_about_heading:
+            return math.atan2(-g_b, g_n)                        # plumb_lean
+        H = heading(t)                                          # plumb_lean_along
+        cH, sH = math.cos(H), math.sin(H)
+        p = -(nx * cH + ny * sH) / nz
+        return math.atan2(self._g * (nx * sH - ny * cH) / math.sqrt(1.0 + p * p), g_n)
+
+    def lean(self, t: float, x: float, y: float, d: float, theta_v: float, dv) -> float:
+        """``theta_v`` from the controller's equilibrium lean at ``(x, y)`` heading ``d``
+        (``dv``: :attr:`derivatives` there)."""
+        _, hx, hy, _, _, _ = dv
+        c, s = math.cos(d), math.sin(d)
+        p = hx * c + hy * s
+        it = 1.0 / math.sqrt(1.0 + p * p)
+        nz = 1.0 / math.sqrt(1.0 + hx * hx + hy * hy)
+        nx, ny = -hx * nz, -hy * nz
+        g = self._g
+        return theta_v - self._equilibrium(t, x, y, d, g * nz, -g * (nx * s - ny * c) * it,
+                                           nx, ny, nz)
+
+    def _build(self, body, limits, resistance, own_law):
+        g, l, J, m = body.g, body.l, body.J, body.m
+        mu, kd = resistance.mu, resistance.drag_k(body.m)
+        law_J, law_l = self.controller.body.J, self.controller.body.l
+        cmax, rate = limits.C_f_max, limits.dC_f_max
+        rated = rate != math.inf
+        sin, cos, sqrt, inf, copysign = math.sin, math.cos, math.sqrt, math.inf, math.copysign
+        derivatives, equilibrium = self.derivatives, self._equilibrium
+        alpha_law = self.controller.scalar_alpha_law() if own_law is None else None
+
+        def stage(t, x, y, d, th, om, V, anchor, tau, dv=None):
+            """``(x', y', theta_dir', theta_v', omega_v', V_cm', alpha_v, V_f, C_f)``."""
+            _, hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
+            # The foot's frame (docs/TERRAIN.md Section 1): t, n, b = n x t.
+            c, s = cos(d), sin(d)
+            p = hx * c + hy * s
+            it = 1.0 / sqrt(1.0 + p * p)
+            nz = 1.0 / sqrt(1.0 + hx * hx + hy * hy)
+            tx, ty, tz = c * it, s * it, p * it
+            nx, ny = -hx * nz, -hy * nz
+            bx, by, bz = ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx
+            kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz * it * it
+            g_n, g_b = g * nz, -g * bz
+            sn, cs = sin(th), cos(th)
+            if alpha_law is None:
+                cf = own_law(t, (x, y, d, th, om, V))
+            else:
+                # The lean law about the equilibrium lean, then Eq. (1) on terrain.
+                eq = equilibrium(t, x, y, d, g_n, g_b, nx, ny, nz)
+                k = ((g_n + V * V * kappa) * sn + g_b * cs
+                     - alpha_law(t, (x, y, d, th - eq, om)) * law_J)
+                den = k * law_l * sn + V * V * cs
+                cf = k / den if den > 0.0 else copysign(inf, k)
+            # Section 3: |C_f| <= C_f_max, the physical branch on the side of the lean, the rate.
+            ls = l * sn
+            lo = -cmax if ls >= 0.0 else max(-cmax, PHYSICAL_MARGIN / ls)
+            hi = cmax if ls <= 0.0 else min(cmax, PHYSICAL_MARGIN / ls)
+            cf = lo if cf < lo else hi if cf > hi else cf
+            if rated and anchor is not None:
+                step = rate * tau
+                cf = anchor - step if cf < anchor - step else \
+                    anchor + step if cf > anchor + step else cf
+            # Eq. (21), Eq. (2) on terrain, the normal force and the speed (Sections 2-3).
+            V_f = V * (1.0 / (1.0 - cf * ls))
+            G_n = g_n + V_f * V_f * kappa
+            alpha = (G_n * sn + (g_b - V * V_f * cf) * cs) / J
+            N = m * (G_n - l * (alpha * sn + om * om * cs))
+            hor = tx * tx + ty * ty
+            turn = V_f * (cf * (tx * by - ty * bx) / hor + kappa * (tx * ny - ty * nx) / hor)
+            return (V_f * tx, V_f * ty, turn, om, alpha, -g * tz - mu * N / m - kd * V * V,
+                    alpha, V_f, cf)
+
+        return stage
