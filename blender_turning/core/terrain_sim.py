@@ -108,7 +108,7 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
         if getattr(controller, "heading", None) is None:
             raise ValueError("target_speed steers the heading: the controller needs a heading "
                              "(the course, e.g. the fall line)")
-        brake = _Braking(rule, controller.heading, float(st[0]), float(st[1]))
+        brake = _Braking(rule, controller, figure, ground, resistance, st)
     n = int(math.floor(duration / dt + 1e-9)) + 1
     info = {"preset": figure.name, "dt": dt, **body_meta(body), "ground": describe_ground(ground),
             **resistance_meta(resistance), **(meta or {})}
@@ -117,16 +117,12 @@ def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt
     course = getattr(controller, "heading", None)
     try:
         if brake is not None:
-            # The command jumps across the fall line when the side flips: lean about the
-            # plumb lean of the heading the figure has, which swings through it smoothly.
             controller.heading = Schedule.of(brake)
-            controller.lean_about_heading = True
         rows, stop = _loop(body, limits, controller, _LastPoint(ground), resistance, st, n, dt,
                            C_f0, brake)
     finally:
         if brake is not None:
             controller.heading = course
-            controller.lean_about_heading = False
     traj = _trajectory(body, ground, np.array(rows, float), dt, info)
     if stop == "fell":
         raise FellOver(float(traj.t[-1]), float(rows[-1][-1]), traj,

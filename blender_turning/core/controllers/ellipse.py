@@ -193,6 +193,20 @@ class PhaseEllipse(Controller):
         per body serves every speed (exactly 1.0 at the nominal speed)."""
         return self.nominal_body.V_cm / self.body.V_cm
 
+    def mean_heading_rate(self, t: float) -> float:
+        """The fastest the *mean* heading can turn at the current speed, rad/s (one figure):
+        directional control (Section 5.2) sharpens the half-turns to one side to the largest
+        feasible beta and flattens those to the other to the smallest, so one full turn moves
+        the mean heading by ``dtheta(hi) - dtheta(lo)`` (Eq. 6 at ``(beta theta_max, omega0 /
+        beta)``) in ``pi (hi + lo) / omega0`` seconds.  A commanded heading that moves faster
+        leaves the figure behind (the braking rule, :mod:`..braking`, stays below it)."""
+        w = float(self.omega0(t))
+        tm = float(self.feasible_lean(w, float(self.theta_max(t))))
+        lo, hi = ((BETA_MIN, BETA_MAX) if self._feasible is None
+                  else self._feasible.beta_range(tm, w))
+        change = (self.half_turn_change(hi * tm, w / hi) - self.half_turn_change(lo * tm, w / lo))
+        return float(change) * w / (math.pi * (hi + lo))
+
     def _solve_beta(self, theta_max, omega0, wanted, lo, hi):
         if self.directional == "linear":
             extra = wanted - self.half_turn_change(theta_max, omega0)
