@@ -35,8 +35,8 @@ def _mean_late(traj):
 # (slope deg, target m/s) -> largest excess of the last 30 s mean over the target, m/s.  Each
 # change of side swings the heading through the fall line at the fastest mean-heading rate
 # (~25 deg/s), where the figure speeds up; the traverses after it bleed that off.  Measured
-# excess (skier, snowboarder, telemark): 6 deg 0.2; 12 deg 0.3-1.1; 18 deg / 12 m/s 1.0-1.8.
-EXCESS = {(6, 8.0): 0.4, (6, 12.0): 0.4, (12, 8.0): 1.3, (12, 12.0): 0.8, (18, 12.0): 2.0}
+# excess (skier, snowboarder, telemark): 6 deg 0.2; 12 deg 0.3-1.0; 18 deg / 12 m/s 1.0-1.9.
+EXCESS = {(6, 8.0): 0.4, (6, 12.0): 0.4, (12, 8.0): 1.3, (12, 12.0): 0.8, (18, 12.0): 2.1}
 
 
 @pytest.mark.parametrize("sport", ["skier", "snowboarder", "telemark"])
@@ -69,9 +69,9 @@ def test_the_rule_does_not_depend_on_the_downhill_direction():
 
 def test_the_turn_shape_holds_and_the_lean_oscillates_about_the_plumb_lean():
     """While braking the speed swings by 4-8 m/s; the turns keep the commanded lean (median
-    peak about the plumb lean, measured 23.3-23.9 deg) and about the commanded period
-    (median 1.80-1.84 s: directional control reshapes half-turns to swing the heading, Section
-    5.2, as on a traverse), and the lean's mean is the plumb lean of the heading (within 4.7
+    peak about the plumb lean, measured 23.4-23.6 deg) and about the commanded period
+    (median 1.79-1.88 s: directional control reshapes half-turns to swing the heading, Section
+    5.2, as on a traverse), and the lean's mean is the plumb lean of the heading (within 3.2
     deg measured)."""
     for target in (8.0, 12.0):
         traj, plane = _run("skier", 12, target)

@@ -152,7 +152,8 @@ class _Braking:
         lat_x, lat_y = -math.sin(c), math.cos(c)
         lateral = (x - self.x0) * lat_x + (y - self.y0) * lat_y
         off = _wrap(float(state[2]) - c)                 # the heading the figure has
-        margin = (V * (1.0 - math.cos(off)) / rate + V * self.period(t) * abs(math.sin(off))
+        swing = max(abs(off), abs(self.offset)) if off * self.offset > 0.0 else abs(self.offset)
+        margin = (V * self.period(t) * abs(math.sin(off)) + V * (1.0 - math.cos(swing)) / rate
                   + self.radius)
         s = self.side
         if self.offset * s > 0.0 and (s * lateral + margin > r.corridor
@@ -165,7 +166,11 @@ class _Braking:
         self.offset += min(max(want - self.offset, -step), step)
         a = min(dt / (0.5 * self.period(t)), 1.0)
         self.mean_off += a * _wrap(off - self.mean_off)
-        self.offset = min(max(self.offset, self.mean_off - r.reach), self.mean_off + r.reach)
+        lead = _wrap(self.offset - self.mean_off)
+        if abs(lead) > r.reach and lead * _wrap(want - self.mean_off) > 0.0:
+            # Leading the figure toward the goal by more than the reach: wait for it.  (A figure
+            # that has overshot the goal is not followed: the command stays to bring it back.)
+            self.offset = self.mean_off + math.copysign(r.reach, lead)
 
     def __call__(self, t: float) -> float:
         return self.course(t) + self.offset
