@@ -89,7 +89,7 @@ class _Braking:
         self.grad = None
         self.mean_off = _wrap(float(state0[2]) - float(self.course(0.0)))
         self.angle = 0.0
-        """The last angle from the fall line asked for, rad (for tests and reports)."""
+        """The angle from the local fall line asked for in the last step, rad."""
 
     def _gradient(self, x, y, dt):
         one = getattr(self.ground, "derivatives_one", None)
@@ -132,7 +132,7 @@ class _Braking:
         q = (self.mu * g_n + self.k * V * V - (e + self.integral) / r.tau) / self.g
         # 2. The angle from the fall line that gives it (the local plane).
         if tan_s < 1e-9:
-            cos_d = 1.0 if q < 0.0 else -1.0          # flat: nothing to gain by turning
+            cos_d = 1.0                               # flat: nothing to gain by turning
         elif q >= 1.0:
             cos_d = -1.0
         elif q <= -1.0:
@@ -140,7 +140,8 @@ class _Braking:
         else:
             cos_d = q / (math.sqrt(1.0 - q * q) * tan_s)
         cos_d = min(max(cos_d, math.cos(r.max_angle)), 1.0)
-        held = (e > 0 and cos_d <= math.cos(r.max_angle)) or (e < 0 and cos_d >= 1.0)
+        held = (tan_s < 1e-9 or (e > 0 and cos_d <= math.cos(r.max_angle))
+                or (e < 0 and cos_d >= 1.0))
         if not held:
             self.integral += e * dt / r.reset_time
         self.angle = math.acos(cos_d)
