@@ -131,6 +131,7 @@ class PhaseEllipse(Controller):
         self._planned = False       # the coming half-turn's beta was set in this step
         self._t_prev = None
         self._memo = {}
+        self._rates = {}            # mean_heading_rate at the nominal speed, per table and turn
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
 
@@ -200,12 +201,20 @@ class PhaseEllipse(Controller):
         the mean heading by ``dtheta(hi) - dtheta(lo)`` (Eq. 6 at ``(beta theta_max, omega0 /
         beta)``) in ``pi (hi + lo) / omega0`` seconds.  A commanded heading that moves faster
         leaves the figure behind (the braking rule, :mod:`..braking`, stays below it)."""
-        w = float(self.omega0(t))
-        tm = float(self.feasible_lean(w, float(self.theta_max(t))))
-        lo, hi = ((BETA_MIN, BETA_MAX) if self._feasible is None
-                  else self._feasible.beta_range(tm, w))
-        change = (self.half_turn_change(hi * tm, w / hi) - self.half_turn_change(lo * tm, w / lo))
-        return float(change) * w / (math.pi * (hi + lo))
+        w, tm0 = float(self.omega0(t)), float(self.theta_max(t))
+        key = (self._feasible, w, tm0)          # the feasible table moves in 0.5 m/s steps
+        per_turn = self._rates.get(key)
+        if per_turn is None:
+            tm = float(self.feasible_lean(w, tm0))
+            lo, hi = ((BETA_MIN, BETA_MAX) if self._feasible is None
+                      else self._feasible.beta_range(tm, w))
+            table = heading_table(self.nominal_body)
+            change = table.value_one(hi * tm, w / hi) - table.value_one(lo * tm, w / lo)
+            per_turn = float(change) * w / (math.pi * (hi + lo))
+            if len(self._rates) > 64:
+                self._rates.clear()
+            self._rates[key] = per_turn
+        return per_turn * self._speed_scale()
 
     def _solve_beta(self, theta_max, omega0, wanted, lo, hi):
         if self.directional == "linear":
