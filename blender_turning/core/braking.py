@@ -19,14 +19,21 @@ The rule, from the speed equation (docs/TERRAIN.md Section 3)
    course itself when the course is already that far from the fall line).
 3. *What the body can follow.*  The commanded heading moves toward it no faster than
    ``turn_share`` of the fastest mean-heading rate directional control has at the current speed
-   (:meth:`.controllers.ellipse.PhaseEllipse.mean_heading_rate`): a change of side swings the
-   command through the fall line at a rate the figure can follow, so the lean stays on its
-   ellipse about the plumb lean of the commanded heading (the turn shape holds).
-4. *Where.*  The side flips when the figure is ``corridor`` metres to that side of the course
-   line through its start, or when it is closer to the terrain's edge (a height field's extent)
-   than the swing back needs: ``V (1 - cos o) / r`` (the lateral distance covered while the
-   command swings from the offset ``o`` back to the course at the rate ``r``) plus one turn
-   radius ``1 / C_f_max``.
+   (:meth:`.controllers.ellipse.PhaseEllipse.mean_heading_rate`), and never leads the figure's
+   own mean heading (low-passed over half a turn) by more than ``reach`` toward the goal: a
+   change of side swings the command through the fall line at a rate the figure can follow, and
+   the lean, taken about the plumb lean of the commanded heading, stays near its ellipse.
+4. *Where.*  The side flips when the swing back to the course would carry the figure past the
+   corridor's edge (``corridor`` metres to that side of the course line through its start) or
+   the terrain's (a height field's extent).  The swing's lateral distance is
+   ``V T |sin o_f| + V (1 - cos o_s) / r + 1 / C_f_max``: ``o_f`` the figure's heading offset
+   from the course, ``o_s`` the larger of it and the command's, ``T`` one turn period (the
+   figure lags the command by up to a period: directional control acts at the lean's zero
+   crossings and the half-turn under way turns the wrong way), ``r`` the rate of item 3, and one
+   tightest turn radius to spare.
+
+Measured over a grid of sports, slopes and targets, and the limits of braking by carving:
+docs/TERRAIN.md Section 6 (``scripts/braking_grid.py``).
 """
 from __future__ import annotations
 
