@@ -170,8 +170,8 @@ def test_target_speed_brakes_by_turning_across_the_hill():
                     target_speed=12.0)
     late = held.t >= 20.0
     assert free.V_cm[late].mean() > 25.0
-    assert 10.0 < held.V_cm[late].mean() < 15.5          # measured 14.1
-    assert held.V_cm[late].max() < 20.0                  # measured 18.6
+    assert 10.0 < held.V_cm[late].mean() < 15.5          # measured 13.2 (14.1 before core/braking.py)
+    assert held.V_cm[late].max() < 20.0                  # measured 18.0
     # It went down the hill, zig-zagging within the corridor (and a turn radius).
     assert held.y[-1] < -300.0
     assert np.abs(held.x).max() < TargetSpeed(12.0).corridor + 60.0

@@ -4,7 +4,7 @@ from .errors import FellOver, TurningError
 from .params import PRESETS, BodyParams, Figure, Limits, preset
 from .schedule import Schedule, TurnSchedule, read_schedule_csv
 from .simulate import DEFAULT_DT, run, simulate, slalom_start
-from .terrain_sim import TargetSpeed
+from .braking import TargetSpeed
 from .trajectory import COLUMNS, Trajectory
 
 __all__ = ["CONTROLLERS", "OpenLoop", "PhaseEllipse", "Straight", "TargetSpeed", "FellOver",

@@ -63,7 +63,7 @@ class TerrainStage:
         if not self._plumb:
             return ctl.equilibrium_lean(surface_frame(self.ground, x, y, d, self._g), t)
         heading = getattr(ctl, "heading", None)
-        if heading is None or ctl.lean_about_heading:
+        if heading is None:
             return math.atan2(-g_b, g_n)                        # plumb_lean
         H = heading(t)                                          # plumb_lean_along
         cH, sH = math.cos(H), math.sin(H)

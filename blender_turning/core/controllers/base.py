@@ -25,10 +25,6 @@ class Controller:
         self.body = body
         self.nominal_body = body
         """The body the controller was made for; :attr:`body` carries the current speed."""
-        self.lean_about_heading = False
-        """On terrain: lean about the plumb lean of the current heading, not of the commanded
-        one (:meth:`equilibrium_lean`; set while a target speed swings the command across the
-        hill)."""
 
     def follow_speed(self, V_cm: float) -> BodyParams:
         """Steer at the forward speed ``V_cm`` from now on (a speed that varies over time);
@@ -95,10 +91,10 @@ class Controller:
     def equilibrium_lean(self, frame, t):
         """The lean the law oscillates about (docs/TERRAIN.md Section 6): the plumb lean of the
         commanded mean heading when the controller holds one (it does not swing with each
-        turn's heading, which would force the lean at the turn's own frequency), else, or with
-        :attr:`lean_about_heading` set, of the current heading."""
+        turn's heading, which would force the lean at the turn's own frequency; a target speed's
+        command, :mod:`..braking`, moves continuously), else of the current heading."""
         heading = getattr(self, "heading", None)
-        if heading is None or self.lean_about_heading:
+        if heading is None:
             return plumb_lean(frame)
         return plumb_lean_along(frame, heading(t), self.body.g)
 

@@ -132,6 +132,7 @@ class PhaseEllipse(Controller):
         self._planned = False       # the coming half-turn's beta was set in this step
         self._t_prev = None
         self._memo = {}
+        self._rates = {}            # mean_heading_rate at the nominal speed, per table and turn
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
 
@@ -198,6 +199,28 @@ class PhaseEllipse(Controller):
         :mod:`..heading_table` is ``1 / V`` times a function of the ellipse alone, so one table
         per body serves every speed (exactly 1.0 at the nominal speed)."""
         return self.nominal_body.V_cm / self.body.V_cm
+
+    def mean_heading_rate(self, t: float) -> float:
+        """The fastest the *mean* heading can turn at the current speed, rad/s (one figure):
+        directional control (Section 5.2) sharpens the half-turns to one side to the largest
+        feasible beta and flattens those to the other to the smallest, so one full turn moves
+        the mean heading by ``dtheta(hi) - dtheta(lo)`` (Eq. 6 at ``(beta theta_max, omega0 /
+        beta)``) in ``pi (hi + lo) / omega0`` seconds.  A commanded heading that moves faster
+        leaves the figure behind (the braking rule, :mod:`..braking`, stays below it)."""
+        w, tm0 = float(self.omega0(t)), float(self.theta_max(t))
+        key = (self._feasible, w, tm0)          # the feasible table moves in 0.5 m/s steps
+        per_turn = self._rates.get(key)
+        if per_turn is None:
+            tm = float(self.feasible_lean(w, tm0))
+            lo, hi = ((BETA_MIN, BETA_MAX) if self._feasible is None
+                      else self._feasible.beta_range(tm, w))
+            table = heading_table(self.nominal_body)
+            change = table.value_one(hi * tm, w / hi) - table.value_one(lo * tm, w / lo)
+            per_turn = float(change) * w / (math.pi * (hi + lo))
+            if len(self._rates) > 64:
+                self._rates.clear()
+            self._rates[key] = per_turn
+        return per_turn * self._speed_scale()
 
     def _solve_beta(self, theta_max, omega0, wanted, lo, hi):
         if self.directional == "linear":
