@@ -31,7 +31,7 @@ EDGE = 10.0
 #: mesh: it is projected vertically).
 CURVE = [(0.0, 8.0, 3.0), (0.0, -8.0, -1.0), (1.5, -30.0, 0.0), (-1.5, -52.0, -20.0),
          (0.0, -74.0, 5.0)]
-POST = ((1.4, -19.0), (1.0, 1.0))     # centre, size: 0.9 m beside the curve, inside its clearance
+POST = ((0.6, -14.0), (1.0, 1.0))     # centre, size: standing across the curve
 START_SPEED = 8.0
 
 
@@ -138,28 +138,34 @@ def test_the_run_follows_the_projected_curve_around_the_post(world):
     xy = np.column_stack([cv[("location", 0)], cv[("location", 1)]])
     path = HermitePath.from_bezier(ops_path.bezier_control_points(world["fig"].turning.path))
     samples = path.sample(64)
-    assert np.abs(samples - np.array(CURVE)[:, :2][[0]]).min() == 0.0    # xy kept
-    dist = np.min(np.linalg.norm(xy[:, None] - samples[None], axis=2), axis=1)
-    # Within 2 m of the curve all the way (measured 1.2 m: where the skier swings out around the
-    # post, 0.9 m from the curve, and at 14 m/s on the slope's S of 44 m wavelength), to its end.
-    assert dist.max() < 2.0, dist.max()
-    assert np.linalg.norm(xy[-1] - CURVE[-1][:2]) < 2.0
-    # Around the post: the foot keeps the clearance, less what it moves between the planner's
-    # samples (0.1 s) and the frames (1/24 s): at most a third of a metre at 10 m/s.
+    assert np.abs(samples[0] - CURVE[0][:2]).max() < 1e-6        # projected: x, y kept
+    # The post stands across the curve, so the figure must leave it to pass on either side ...
     feet = dict(ops_path.obstacle_footprints(world["post"].users_collection[0]))
     post = Obstacles(polygons=[feet["Post"]])
+    assert post.min_distance(samples).min() < 0.0
+    # ... and does, keeping the clearance (measured 0.53 m) up to what the planner cannot see: it
+    # checks every 0.1 s, 0.7 m at 7 m/s, and such a chord between two points at the clearance
+    # from a corner comes 0.5 - sqrt(0.5^2 - 0.35^2) = 0.14 m closer in between.
     gap = post.min_distance(xy)
-    assert gap.min() > DEFAULT_CLEARANCE - 0.35, gap.min()
-    # ... which the curve itself does not: the obstacle changed the run.
-    assert post.min_distance(samples).min() < DEFAULT_CLEARANCE
+    assert gap.min() > DEFAULT_CLEARANCE - 0.15, gap.min()
+    # Elsewhere it follows the curve (and the straight run-out beyond its end, up to where the
+    # end test stops it): within 2.5 m all the way.  Measured 2.05 m swinging out around the post
+    # (it reaches 0.7 m to the right of the curve, the figure passes it there with the clearance
+    # and overshoots) and 1.7 m at the last bend of the S, at 12 m/s; the end 2.7 m from the
+    # curve's last point (the run stops once its progress along the curve passes the end).
+    ahead = path.extended(20.0).sample(64)
+    dist = np.min(np.linalg.norm(xy[:, None] - ahead[None], axis=2), axis=1)
+    assert dist.max() < 2.5, dist.max()
+    assert np.linalg.norm(xy[-1] - CURVE[-1][:2]) < 3.0
 
 
 def test_the_feet_ride_on_the_mesh_in_its_surface(world):
     cv = world["curves"]
     x, y, z = (cv[("location", i)] for i in range(3))
     assert z.max() - z.min() > 8.0                       # it went down the hill
-    # Within 1 cm of a ray cast on every frame (measured: float32 keys, ~1e-5 m).
-    assert np.abs(z - ray(world["ground"], x, y)).max() < 0.01
+    # On the mesh on every frame (the issue asks for 1 cm of a ray cast; measured 9e-5 m: float32
+    # keys at heights up to 17 m).
+    assert np.abs(z - ray(world["ground"], x, y)).max() < 1e-3
     # +Z of the figure is the normal of the smooth field read from the mesh under the foot (the
     # skis lie in the surface; measured 7e-6 deg: float32 keys) ...
     up = object_up(cv)
