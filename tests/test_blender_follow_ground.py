@@ -4,6 +4,7 @@ way, and the result baked on the mesh; a cancelled plan, a curve off the mesh an
 not a height field leave the scene as it was."""
 import math
 import os
+import re
 import tempfile
 
 import numpy as np
@@ -261,3 +262,21 @@ def test_a_mesh_that_is_not_a_height_field_is_reported(world, shape):
                                            r"\(-?[\d.]+, -?[\d.]+\) m a face lies [\d.]+ m under"):
         bpy.ops.turning.follow_path()
     assert snapshot() == before, diff(before, snapshot())
+
+
+
+def test_a_plan_that_fails_near_the_ground_edge_says_where_it_ends(world):
+    """The planner clips every branch that leaves the ground, so a plan failing within one
+    horizon's reach of the mesh's edge gets a note saying where the ground ends (planning such a
+    run to its failure searches the whole tree: the note is tested on the failure itself)."""
+    from blender_turning.blender.follow_ground import edge_note, read_follow_ground
+    from blender_turning.core.errors import PlanInfeasible
+    fig = world["fig"]
+    ground = read_follow_ground(fig, bpy.context.evaluated_depsgraph_get())
+    near = PlanInfeasible(3.0, (0.0, 16.5))                    # the mesh ends at y = 20
+    assert re.fullmatch(r" \(ground 'Slope' ends 3\.5 m from there; the planner looks one "
+                        r"horizon, up to 30 m, ahead, .*\)", edge_note(near, ground, 30.0))
+    assert edge_note(near, ground, 3.0) == ""                   # out of its reach
+    assert edge_note(PlanInfeasible(3.0, (0.0, -50.0)), ground, 20.0) == ""
+    assert edge_note(ValueError("x"), ground, 30.0) == ""
+    assert edge_note(near, None, 30.0) == ""                    # flat ground has no edge
