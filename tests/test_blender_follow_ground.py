@@ -280,3 +280,27 @@ def test_a_plan_that_fails_near_the_ground_edge_says_where_it_ends(world):
     assert edge_note(PlanInfeasible(3.0, (0.0, -50.0)), ground, 20.0) == ""
     assert edge_note(ValueError("x"), ground, 30.0) == ""
     assert edge_note(near, None, 30.0) == ""                    # flat ground has no edge
+
+
+def test_the_plan_starts_at_the_speed_keyed_at_the_first_frame(world):
+    """A keyed Speed: the plan on the ground starts at its value at the scene's first frame (the
+    speed is a state from there), whatever frame is current; friction and drag are the
+    figure's."""
+    from blender_turning.blender.follow_ground import plan_inputs
+    from blender_turning.blender.scene_adapters import figure_from_settings
+    sc = world["scene"]
+    fig = add_figure("SKIER")
+    fig.turning.ground = world["ground"]
+    fig.turning.terrain.friction, fig.turning.terrain.drag_area = 0.08, 0.4
+    fig.turning.speed = 6.0
+    fig.keyframe_insert("turning.speed", frame=sc.frame_start)
+    fig.turning.speed = 15.0
+    fig.keyframe_insert("turning.speed", frame=sc.frame_start + 40)
+    sc.frame_set(sc.frame_start + 40)
+    dg = bpy.context.evaluated_depsgraph_get()
+    figure, ground, terrain = plan_inputs(bpy.context, fig, figure_from_settings(fig.turning), dg)
+    assert figure.body.V_cm == pytest.approx(6.0)
+    assert ground.name == "Slope" and terrain["ground"] is ground.field
+    assert (terrain["resistance"].mu, terrain["resistance"].CdA) == pytest.approx((0.08, 0.4))
+    fig.turning.ground = None
+    assert plan_inputs(bpy.context, fig, figure, dg)[1:] == (None, {})

@@ -93,9 +93,12 @@ def over_mesh(ground: MeshGround, xy) -> np.ndarray:
                      for x, y in xy], bool)
 
 
-def check_path_on_ground(path_obj, path, ground: MeshGround) -> None:
+def check_path_on_ground(path_obj, path, ground: MeshGround | None) -> None:
     """Raise :class:`SceneInputError` if the path (a :class:`..core.path.HermitePath`, the
-    curve's ground projection) leaves the Ground mesh, naming where and how far along."""
+    curve's ground projection) leaves the Ground mesh, naming where and how far along (``ground
+    = None``, flat: it cannot)."""
+    if ground is None:
+        return
     xy = path.sample(SAMPLES_PER_SEGMENT)
     off = np.flatnonzero(~over_mesh(ground, xy))
     if off.size == 0:
@@ -110,15 +113,22 @@ def check_path_on_ground(path_obj, path, ground: MeshGround) -> None:
         "or extend the ground under it")
 
 
-def terrain_inputs(fig, figure, scene) -> tuple:
-    """``(figure, resistance)`` for planning on the ground: the figure starting at the Speed
-    setting at the scene's first frame (it is a state from there), and the Slope Friction, Drag
-    Area and Air Density of ``turning.terrain``."""
-    fps = scene.render.fps / scene.render.fps_base
-    first = FrameRange(scene.frame_start, scene.frame_start + 1, fps)
+def plan_inputs(context, fig, figure, depsgraph) -> tuple:
+    """``(figure, ground, terrain)`` for planning: on flat ground ``(figure, None, {})``; on the
+    figure's Ground mesh the mesh read and checked (:func:`read_follow_ground`), the figure
+    starting at the Speed setting at the scene's first frame (the speed is a state from there),
+    and ``terrain`` the :class:`.follow_job.FollowJob` keywords: the mesh's height field and the
+    Slope Friction, Drag Area and Air Density of ``turning.terrain``."""
+    ground = read_follow_ground(fig, depsgraph)
+    if ground is None:
+        return figure, None, {}
+    scene = context.scene
+    first = FrameRange(scene.frame_start, scene.frame_start + 1,
+                       scene.render.fps / scene.render.fps_base)
     V0 = float(sampled_setting(fig, "speed", first)[0])
     figure = replace(figure, body=replace(figure.body, V_cm=V0))
-    return figure, resistance_from_settings(fig.turning)
+    return figure, ground, {"ground": ground.field,
+                            "resistance": resistance_from_settings(fig.turning)}
 
 
 def edge_note(exc, ground: MeshGround | None, reach: float) -> str:

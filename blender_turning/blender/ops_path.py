@@ -58,14 +58,9 @@ def prepare(context, fig) -> FollowJob:
     figure = figure_from_settings(s)
     if s.plan_curvature_rate > 0:
         figure = replace(figure, limits=replace(figure.limits, dC_f_max=s.plan_curvature_rate))
-    ground = follow_ground.read_follow_ground(fig, depsgraph)      # None: flat
-    terrain = {}
-    if ground is not None:
-        figure, resistance = follow_ground.terrain_inputs(fig, figure, context.scene)
-        terrain = {"ground": ground.field, "resistance": resistance}
+    figure, ground, terrain = follow_ground.plan_inputs(context, fig, figure, depsgraph)
     job = FollowJob(figure, control, footprints, clearance=DEFAULT_CLEARANCE, **terrain)
-    if ground is not None:
-        follow_ground.check_path_on_ground(s.path, job.path, ground)
+    follow_ground.check_path_on_ground(s.path, job.path, ground)     # flat: nothing to check
     job.footprints = footprints                        # names, for the report of a failed plan
     job.mesh_ground = ground
     return job
