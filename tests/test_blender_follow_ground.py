@@ -304,3 +304,23 @@ def test_the_plan_starts_at_the_speed_keyed_at_the_first_frame(world):
     assert (terrain["resistance"].mu, terrain["resistance"].CdA) == pytest.approx((0.08, 0.4))
     fig.turning.ground = None
     assert plan_inputs(bpy.context, fig, figure, dg)[1:] == (None, {})
+
+
+def test_bake_turns_draws_its_foot_track_on_the_ground_too(world):
+    """Both operators write the track through the same bake: on a Ground mesh it lies on it."""
+    sc = world["scene"]
+    sc.cursor.location = (0.0, -25.0, 0.0)                     # on the rounded edge, facing
+    sc.cursor.rotation_euler = (0.0, 0.0, math.radians(-180.0))     # -y: down the hill
+    assert bpy.ops.turning.add_figure(sport="SNOWBOARDER") == {"FINISHED"}
+    fig = bpy.context.view_layer.objects.active
+    sc.cursor.rotation_euler = (0.0, 0.0, 0.0)
+    fig.turning.ground = world["ground"]
+    assert bpy.ops.turning.bake_turns(frame_range="CUSTOM", frame_start=1,
+                                      frame_end=97) == {"FINISHED"}
+    track = fig.turning.foot_track.data.splines[0].points
+    co = np.empty(4 * len(track))
+    track.foreach_get("co", co)
+    co = co.reshape(-1, 4)
+    assert co[:, 2].max() - co[:, 2].min() > 2.0
+    np.testing.assert_allclose(co[:, 2] - ray(world["ground"], co[:, 0], co[:, 1]), 0.01,
+                               atol=1e-3)
