@@ -6,6 +6,7 @@ import math
 import os
 import re
 import tempfile
+import time
 
 import numpy as np
 import pytest
@@ -108,6 +109,18 @@ def object_up(curves) -> np.ndarray:
                      np.cos(b) * np.cos(a)], -1)
 
 
+def modal_operator(fig):
+    """A stand-in ``self`` for ``TURNING_OT_follow_path.modal`` with the job started."""
+    op_cls = bpy.types.TURNING_OT_follow_path
+    reports = []
+    fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),
+                           "_cleanup": op_cls._cleanup, "_complete": op_cls._complete})()
+    fake._job = ops_path.prepare(bpy.context, fig)
+    fake._fig_uid, fake._timer = fig.session_uid, object()
+    fake._job.start()
+    return op_cls, fake, reports
+
+
 @pytest.fixture(scope="module")
 def world(registered):
     """The shelf-and-slope Ground mesh, a post standing on it beside the curve, an Obstacles
@@ -128,13 +141,21 @@ def world(registered):
     s.ground, s.path, s.obstacles = ground, make_curve(CURVE), obstacles
     s.speed = START_SPEED
     bpy.context.view_layer.objects.active = fig
-    result = bpy.ops.turning.follow_path()
+    # As with a window: the plan in the background job, the modal operator polling it.
+    op_cls, fake, reports = modal_operator(fig)
+    wm = WindowManager()
+    timer = type("E", (), {"type": "TIMER"})()
+    while (result := op_cls.modal(fake, Context(wm), timer)) == {"RUNNING_MODAL"}:
+        time.sleep(0.02)                    # Blender's timer ticks; leave the planner the GIL
     return {"scene": sc, "field": field, "ground": ground, "post": post, "fig": fig,
-            "result": result, "curves": curves_of(fig)}
+            "result": result, "reports": reports, "progress": wm.progress,
+            "curves": curves_of(fig)}
 
 
 def test_the_run_follows_the_projected_curve_around_the_post(world):
-    assert world["result"] == {"FINISHED"}
+    assert world["result"] == {"FINISHED"}, world["reports"]
+    progress = [v for v in world["progress"] if isinstance(v, int)]
+    assert progress == sorted(progress) and progress[-1] == 100 and "end" in world["progress"]
     cv = world["curves"]
     xy = np.column_stack([cv[("location", 0)], cv[("location", 1)]])
     path = HermitePath.from_bezier(ops_path.bezier_control_points(world["fig"].turning.path))
@@ -214,14 +235,8 @@ def test_cancelled_follow_on_the_ground_leaves_the_scene_unchanged(world):
     fig.turning.ground, fig.turning.path = world["ground"], make_curve(CURVE, "Cancel Path")
     bpy.context.view_layer.objects.active = fig
     before = snapshot()
-    op_cls = bpy.types.TURNING_OT_follow_path
-    reports = []
-    fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),
-                           "_cleanup": op_cls._cleanup, "_complete": op_cls._complete})()
-    fake._job = ops_path.prepare(bpy.context, fig)
+    op_cls, fake, reports = modal_operator(fig)
     assert fake._job.mesh_ground is not None
-    fake._fig_uid, fake._timer = fig.session_uid, object()
-    fake._job.start()
     wm = WindowManager()
     assert op_cls.modal(fake, Context(wm), type("E", (), {"type": "ESC"})()) == {"CANCELLED"}
     assert fake._job.done() and "end" in wm.progress
