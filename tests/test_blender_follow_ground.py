@@ -140,6 +140,7 @@ def world(registered):
     s = fig.turning
     s.ground, s.path, s.obstacles = ground, make_curve(CURVE), obstacles
     s.speed = START_SPEED
+    s.terrain.target_speed = 10.0           # for Bake Turns; Follow Path says it is not used
     bpy.context.view_layer.objects.active = fig
     # As with a window: the plan in the background job, the modal operator polling it.
     op_cls, fake, reports = modal_operator(fig)
@@ -154,6 +155,8 @@ def world(registered):
 
 def test_the_run_follows_the_projected_curve_around_the_post(world):
     assert world["result"] == {"FINISHED"}, world["reports"]
+    assert re.fullmatch(r"Follow Path: baked Skier over frames 1-\d+ \(Target Speed is not used: "
+                        r".*the drawn line sets the speed\)", world["reports"][-1][1])
     progress = [v for v in world["progress"] if isinstance(v, int)]
     assert progress == sorted(progress) and progress[-1] == 100 and "end" in world["progress"]
     cv = world["curves"]
