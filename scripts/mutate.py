@@ -53,6 +53,7 @@ TERRAIN = [T + "test_terrain.py", T + "test_terrain_symbolic.py", T + "test_terr
 MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
+FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
 
 
 @dataclass(frozen=True)
@@ -324,6 +325,27 @@ MUTANTS = [
     M("rebake_removes_all_curves", "blender/bake.py",
       "for fc in [fc for fc in bag.fcurves if fc.data_path in paths]:",
       "for fc in list(bag.fcurves):", BAKE, "bake"),
+    # -- Follow Path on a Ground mesh (issue 10) -------------------------------------------------
+    M("follow_ground_is_an_obstacle", "blender/ops_path.py",
+      "(s.foot_track, s.path, s.ground)", "(s.foot_track, s.path)", FOLLOW_GROUND, "bake"),
+    M("follow_ground_obstacles_dropped", "blender/ops_path.py",
+      "job = FollowJob(figure, control, footprints,", "job = FollowJob(figure, control, [],",
+      FOLLOW_GROUND, "bake"),
+    M("follow_ground_planned_flat", "blender/follow_ground.py",
+      'return figure, ground, {"ground": ground.field,', 'return figure, ground, {"ground": None,',
+      FOLLOW_GROUND, "bake"),
+    M("follow_ground_start_speed_current", "blender/follow_ground.py",
+      'V0 = float(sampled_setting(fig, "speed", first)[0])', "V0 = float(fig.turning.speed)",
+      FOLLOW_GROUND, "bake"),
+    M("follow_ground_upright", "blender/ops_path.py",
+      "normal=surface_normals(traj, ground))", "normal=None)", FOLLOW_GROUND, "bake"),
+    M("follow_ground_track_flat", "blender/ops_bake.py",
+      "z=traj.z)", "z=None)", FOLLOW_GROUND, "bake"),
+    M("follow_ground_any_mesh", "blender/follow_ground.py",
+      "    check_height_field(obj, depsgraph, ground)\n", "", FOLLOW_GROUND, "bake"),
+    M("follow_ground_path_anywhere", "blender/follow_ground.py",
+      "off = np.flatnonzero(~over_mesh(ground, xy))", "off = np.flatnonzero(xy[:, 0] != xy[:, 0])",
+      FOLLOW_GROUND, "bake"),
 ]
 
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",

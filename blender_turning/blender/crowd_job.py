@@ -39,7 +39,7 @@ from ..crowd.runner import crowd_tasks, run_task
 from . import bake
 from .ops_bake import apply_bake
 from .ops_common import check_figure
-from .pipeline import map_track, started
+from .pipeline import map_track, on_ground, started, surface_normals
 from .scene_adapters import FrameRange
 
 #: Where this package's modules live: the root of the names the pickled tasks carry.
@@ -123,9 +123,11 @@ class CrowdFollow:
         from .ops_path import prepare             # ops_path dispatches here: import when used
         figs = [self.figure(i) for i in range(len(self.uids))]
         members = []
+        self.grounds = []                       # each figure's Ground mesh as read (or None)
         for i, fig in enumerate(figs):
             self.current = fig.name
             job = prepare(context, fig)
+            self.grounds.append(getattr(job, "mesh_ground", None))
             # Names of the crowd's own (a CSV file name each): the object names may hold '/'.
             members.append(CrowdFigure(f"f{i}", job.figure, FollowPath(figure_scene(f"f{i}", job)),
                                        time_offset=float(fig.turning.crowd.time_offset)))
@@ -206,10 +208,15 @@ class CrowdFollow:
             offset = float(r.trajectory.t[0])
             shown = started(frames, offset)
             k0 = shown.start - frames.start
-            traj = r.trajectory.resample(fps, start=k0 / fps)     # on the scene's clock
+            ground = self.grounds[i]
+            traj = r.trajectory.resample(fps, start=k0 / fps,     # on the scene's clock
+                                         ground=getattr(ground, "field", None))
             traj = type(traj)(traj.data[:, :shown.end - shown.start + 1], traj.meta)
             shown = FrameRange(shown.start, shown.start + len(traj) - 1, fps)
-            track = map_track(fig.turning.sport, traj, shown, obj=fig)
+            if ground is not None:              # the foot on the mesh, as ops_path.finish does
+                traj = on_ground(traj, ground)
+            track = map_track(fig.turning.sport, traj, shown, obj=fig,
+                              normal=surface_normals(traj, ground))
             bake.check_track(fig, track)
             computed.append((fig, traj, track))
         scene.frame_end = frames.end

@@ -26,16 +26,18 @@ class FollowJob:
     ``control`` are the path's Bezier control points (3 k + 1, 2) in world metres, ``footprints``
     a list of ``(name, polygon (k, 2))``, ``clearance`` the distance kept from them (m).  The
     problem, its run-out, time limit, start state and end test come from the core's one builder
-    (:class:`~..core.follow_problem.FollowSetup`), as for a scene file.
+    (:class:`~..core.follow_problem.FollowSetup`), as for a scene file; on terrain (``ground``, a
+    core surface, and ``resistance``; ``follow_ground.py``) it is the terrain problem.
     """
 
     def __init__(self, figure, control, footprints, clearance: float = DEFAULT_CLEARANCE,
-                 settings: PlannerSettings | None = None):
+                 settings: PlannerSettings | None = None, ground=None, resistance=None):
         self.figure = figure
         self.path = HermitePath.from_bezier(np.asarray(control, float))
         self.obstacles = Obstacles(polygons=[p for _, p in footprints], clearance=clearance)
         self.setup = FollowSetup(figure, self.path, self.obstacles,
-                                 settings or PlannerSettings())
+                                 settings or PlannerSettings(), ground=ground,
+                                 resistance=resistance)
         self.problem = self.setup.problem()
         self.length = self.path.length()
         self.duration = self.setup.time_limit()

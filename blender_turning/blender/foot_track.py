@@ -115,8 +115,14 @@ def _new_track(fig_obj):
     return obj
 
 
-def write_foot_track(fig_obj, x, y):
-    """Create or refill the curve object showing the foot's path of ``fig_obj``; return it."""
+#: The track is drawn this far above the ground under the foot (m), so it is not hidden in it.
+LIFT = 0.01
+
+
+def write_foot_track(fig_obj, x, y, z=None):
+    """Create or refill the curve object showing the foot's path of ``fig_obj``; return it.
+    ``z``: the ground's height under the foot on every point (default 0); the track is drawn
+    :data:`LIFT` above it, on a Ground mesh on its surface."""
     obj = owned_track(fig_obj)
     if obj is None or obj.type != "CURVE":
         obj = _new_track(fig_obj)
@@ -127,7 +133,8 @@ def write_foot_track(fig_obj, x, y):
     sp = curve.splines.new("POLY")
     n = len(x)
     sp.points.add(n - 1)
-    co = np.column_stack([x, y, np.full(n, 0.01), np.ones(n)]).astype(np.float32)
+    lift = LIFT + (np.zeros(n) if z is None else np.asarray(z, float))
+    co = np.column_stack([x, y, lift, np.ones(n)]).astype(np.float32)
     sp.points.foreach_set("co", co.ravel())
     curve.update_tag()
     return obj

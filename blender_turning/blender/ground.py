@@ -40,16 +40,44 @@ class MeshGround:
 
     def heights(self, x, y) -> np.ndarray:
         """The mesh's height under each ``(x, y)``: what a ray cast from above returns (the
-        smooth field's where none hits, off the mesh's edge).  A grid mesh is evaluated from its
-        lattice (:class:`_GridMesh`); any other by ``Object.ray_cast`` in the object's own
-        space (Blender keeps the evaluated mesh's BVH tree between calls and bakes, where a
-        ``BVHTree`` of our own cost ~0.2 s to build for a 200 m x 200 m, 1 m mesh)."""
+        smooth field's where none hits, off the mesh's edge)."""
+        x, y = np.asarray(x, float), np.asarray(y, float)
+        z = self.top(x, y)
+        off = np.isnan(z)
+        if off.any():
+            z[off] = np.asarray(self.field.derivatives(x[off], y[off])[0], float)
+        return z
+
+    def top(self, x, y) -> np.ndarray:
+        """The height of the mesh's topmost face over each ``(x, y)``, NaN where a ray cast
+        straight down misses it.  A grid mesh is evaluated from its lattice (:class:`_GridMesh`);
+        any other by ``Object.ray_cast`` in the object's own space (Blender keeps the evaluated
+        mesh's BVH tree between calls and bakes, where a ``BVHTree`` of our own cost ~0.2 s to
+        build for a 200 m x 200 m, 1 m mesh)."""
+        x, y = np.asarray(x, float).ravel(), np.asarray(y, float).ravel()
+        z = np.full(len(x), np.nan)
         if self.grid is not None:
-            x, y = np.asarray(x, float), np.asarray(y, float)
             on = self.grid.contains(x, y)
-            z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
             z[on] = self.grid.heights(x[on], y[on])
             return z
+        import bpy
+        obj = bpy.data.objects.get(self.name)
+        if obj is None:
+            raise ValueError(f"ground {self.name!r} was deleted while baking")
+        ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+        m = np.array(ev.matrix_world)
+        inv = np.linalg.inv(m)
+        # From 1 m above the mesh's box: the BVH works in float32, a ray from 1 km above
+        # would carry ~0.3 mm of round-off into the hit.
+        top = float(np.max(np.array(ev.bound_box) @ m[2, :3] + m[2, 3])) + 1.0
+        origins = np.stack([x, y, np.full_like(x, top)], -1) @ inv[:3, :3].T + inv[:3, 3]
+        down = tuple(-inv[:3, 2])
+        cast = ev.ray_cast
+        for k, o in enumerate(origins.tolist()):
+            hit, loc = cast(o, down)[:2]
+            if hit:
+                z[k] = m[2, 0] * loc[0] + m[2, 1] * loc[1] + m[2, 2] * loc[2] + m[2, 3]
+        return z
         import bpy
         obj = bpy.data.objects.get(self.name)
         if obj is None:

@@ -103,7 +103,7 @@ def apply_bake(fig, traj, track, step: int = 1):
     result = bake.bake_pose_track(fig, every_nth(track, step))
     if step > 1:
         set_hermite_handles(fig, slopes)
-    foot_track.write_foot_track(fig, traj.x, traj.y)
+    foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z)     # on the ground
     return result
 
 

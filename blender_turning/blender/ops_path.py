@@ -11,11 +11,11 @@ import bpy
 from ..core.errors import PlanInfeasible
 from ..core.follow_problem import DEFAULT_CLEARANCE
 from ..core.obstacles import Obstacles
-from . import bake, crowd_job
+from . import bake, crowd_job, follow_ground
 from .follow_job import Cancelled, FollowJob
 from .ops_bake import apply_bake
 from .ops_common import check_figure, end_modal, poll_figure, report_error
-from .pipeline import map_track
+from .pipeline import map_track, on_ground, surface_normals
 from .props import figure_settings
 from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
                              figure_from_settings, obstacle_footprints)
@@ -25,10 +25,10 @@ from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
 
 def own_objects(fig) -> set:
     """The figure's own objects, never its obstacles: its armature, body and equipment (children),
-    its foot track and its path curve."""
+    its foot track, its path curve and its Ground mesh."""
     own = {fig, *fig.children_recursive}
     s = fig.turning
-    own.update(o for o in (s.foot_track, s.path) if o is not None)
+    own.update(o for o in (s.foot_track, s.path, s.ground) if o is not None)
     return own
 
 
@@ -58,8 +58,11 @@ def prepare(context, fig) -> FollowJob:
     figure = figure_from_settings(s)
     if s.plan_curvature_rate > 0:
         figure = replace(figure, limits=replace(figure.limits, dC_f_max=s.plan_curvature_rate))
-    job = FollowJob(figure, control, footprints, clearance=DEFAULT_CLEARANCE)
+    figure, ground, terrain = follow_ground.plan_inputs(context, fig, figure, depsgraph)
+    job = FollowJob(figure, control, footprints, clearance=DEFAULT_CLEARANCE, **terrain)
+    follow_ground.check_path_on_ground(s.path, job.path, ground)     # flat: nothing to check
     job.footprints = footprints                        # names, for the report of a failed plan
+    job.mesh_ground = ground
     return job
 
 
@@ -78,10 +81,14 @@ def finish(context, fig, job, result):
     fps = scene.render.fps / scene.render.fps_base
     n = int(math.floor(result.trajectory.duration * fps + 1e-9))
     frames = FrameRange(scene.frame_start, scene.frame_start + max(n, 1), fps)
-    traj = result.trajectory.resample(fps, start=0.0)
+    ground = getattr(job, "mesh_ground", None)
+    traj = result.trajectory.resample(fps, start=0.0, ground=getattr(ground, "field", None))
     traj = type(traj)(traj.data[:, :frames.end - frames.start + 1], traj.meta)
+    if ground is not None:
+        traj = on_ground(traj, ground)    # the foot on the mesh, as a terrain Bake Turns
     check_figure(fig)                     # the rig may have changed while the plan ran
-    track = map_track(fig.turning.sport, traj, frames, obj=fig)   # may raise: nothing written
+    track = map_track(fig.turning.sport, traj, frames, obj=fig,   # may raise: nothing written
+                      normal=surface_normals(traj, ground))
     bake.check_track(fig, track)
     scene.frame_end = frames.end
     apply_bake(fig, traj, track)
@@ -123,13 +130,15 @@ class TURNING_OT_follow_path(bpy.types.Operator):
                 self.report({"WARNING"}, "Follow Path cancelled; the scene is unchanged")
                 return {"CANCELLED"}
             note = nearest_obstacle(job.error, getattr(job, "footprints", ()))
+            note += follow_ground.edge_note(job.error, getattr(job, "mesh_ground", None),
+                                            job.problem.reach())
             return report_error(self, "Follow Path", fig.name, job.error, note)
         try:
             frames = finish(context, fig, job, job.result)
         except Exception as exc:
             return report_error(self, "Follow Path", fig.name, exc)
         self.report({"INFO"}, f"Follow Path: baked {fig.name} over frames "
-                              f"{frames.start}-{frames.end}")
+                              f"{frames.start}-{frames.end}{follow_ground.target_speed_note(fig)}")
         return {"FINISHED"}
 
     def execute(self, context):

@@ -89,6 +89,12 @@ def _with_z(traj, z):
     return type(traj).from_columns({**traj.columns(), "z": np.asarray(z, float)}, traj.meta)
 
 
+def on_ground(traj, ground):
+    """``traj`` with its foot height ``z`` on every row a ray cast onto ``ground`` (a
+    :class:`.ground.MeshGround`): exactly on the mesh, not on its smooth field."""
+    return _with_z(traj, ground.heights(traj.x, traj.y))
+
+
 def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="read"):
     """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames`` from ``start``
     (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.
@@ -128,7 +134,7 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
                     ground=ground.field, resistance=resistance_from_settings(s),
                     target_speed=target)
     traj = resampled(on_crowd_clock(traj, offset), shown, ground.field, frames.start)
-    return _with_z(traj, ground.heights(traj.x, traj.y))
+    return on_ground(traj, ground)
 
 
 def surface_normals(traj, ground) -> np.ndarray | None:
