@@ -70,10 +70,12 @@ class Scene:
         """The planning problem (the path with its run-out: :mod:`.follow_problem`)."""
         return self.setup().problem()
 
-    def run(self) -> FollowResult:
+    def run(self, on_replan=None) -> FollowResult:
         """Follow the path to its end (raises ``PathNotFinished`` at the time limit), or for
-        ``duration`` seconds."""
-        return self.setup().run(self.state0, self.C_f0, self.duration, meta={"scene": self.name})
+        ``duration`` seconds.  ``on_replan(t, xy, fraction)``: called before every replanning
+        (:func:`.planner.receding.follow`), e.g. for a progress bar."""
+        return self.setup().run(self.state0, self.C_f0, self.duration, meta={"scene": self.name},
+                                on_replan=on_replan)
 
 
 def check_horizon(settings: PlannerSettings, where: str = "") -> None:
