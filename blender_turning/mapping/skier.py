@@ -31,6 +31,9 @@ SIDES = (("L", -1.0), ("R", 1.0))
 HAND_NEUTRAL = (0.06, 0.30, -0.36)
 HAND_PLANT = (0.10, 0.40, -0.33)
 POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
+#: An arm whose grip offset moved less than this (m) in an aiming pass has settled: another pass
+#: would give the same numbers to rounding, so it leaves the loop.
+SETTLED = 1e-12
 
 
 @dataclass(frozen=True)
@@ -201,7 +204,7 @@ class SkierMapping(Mapping):
                 grip[moving_aim], offset[moving_aim] = g, g - wr
                 if np.max(np.abs(grip - target), initial=0.0) < 2e-4:    # ~10x per two passes
                     break
-                moving_aim = moving_aim[step > 1e-12]
+                moving_aim = moving_aim[step > SETTLED]
             ik_limb(b, arm.upper, arm.lower, aim_wrist, elbow_dir)     # the arm's pose, once
             axis = free_axis(grip)
             # Held: aim at the hole.  Lifting off: at a point moving from the hole to the free
