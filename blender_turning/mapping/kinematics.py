@@ -55,10 +55,12 @@ def quat_to_matrix(q):
     q = np.asarray(q, float)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
+    xx, yy, zz, xy, xz, yz, wx, wy, wz = x * x, y * y, z * z, x * y, x * z, y * z, w * x, w * y, w * z
+    m = np.empty(q.shape[:-1] + (3, 3))
+    m[..., 0, 0], m[..., 0, 1], m[..., 0, 2] = 1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)
+    m[..., 1, 0], m[..., 1, 1], m[..., 1, 2] = 2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)
+    m[..., 2, 0], m[..., 2, 1], m[..., 2, 2] = 2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)
+    return m
 
 
 def quat_from_matrix(m):
@@ -78,11 +80,15 @@ def quat_from_matrix(m):
         s = k == case
         if not np.any(s):
             continue
+        s = slice(None) if s.all() else s          # one case for every frame: no copies
         a = m[s]
         if case == 0:
             r = np.sqrt(1.0 + tr[s]) * 2.0
-            q[s] = np.stack([0.25 * r, (a[:, 2, 1] - a[:, 1, 2]) / r,
-                             (a[:, 0, 2] - a[:, 2, 0]) / r, (a[:, 1, 0] - a[:, 0, 1]) / r], 1)
+            v = np.empty((len(a), 4))
+            v[:, 0] = 0.25 * r
+            v[:, 1] = (a[:, 2, 1] - a[:, 1, 2]) / r
+            v[:, 2] = (a[:, 0, 2] - a[:, 2, 0]) / r
+            v[:, 3] = (a[:, 1, 0] - a[:, 0, 1]) / r
         else:
             i, j, kk = case - 1, case % 3, (case + 1) % 3
             r = np.sqrt(1.0 + a[:, i, i] - a[:, j, j] - a[:, kk, kk]) * 2.0
@@ -91,7 +97,7 @@ def quat_from_matrix(m):
             v[:, 1 + i] = 0.25 * r
             v[:, 1 + j] = (a[:, j, i] + a[:, i, j]) / r
             v[:, 1 + kk] = (a[:, kk, i] + a[:, i, kk]) / r
-            q[s] = v
+        q[s] = v
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     return q.reshape(shape + (4,))
