@@ -4,21 +4,29 @@ bake (``blender.bake.bake_pose_track``, whole F-curves with ``foreach_set``, as
 ``scripts/bench_bake.py``), each step timed; the rigs are built untimed.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_crowd_bake.py [--figures 100] [--workers 2]
+
+With ``--against DIR`` (a copy of another commit's tree, e.g. ``git archive 4da8091 | tar -x -C
+/tmp/base``) it runs the same benchmark on that tree's package and on this one, each in a fresh
+process, interleaved ``--repeat`` times (the machine may be shared: the load hits both alike),
+and prints the best of each step for both.
 """
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import platform
+import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
+if "--root" in sys.argv:                 # the package of another tree (a run for --against)
+    ROOT = Path(sys.argv[sys.argv.index("--root") + 1]).resolve()
+sys.path.insert(0, str(ROOT))
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-bench-"))
 
 import bpy  # noqa: E402
@@ -37,7 +45,13 @@ def main() -> int:
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--fps", type=int, default=24)
     ap.add_argument("--workers", type=int, default=1, help="processes mapping the figures")
+    ap.add_argument("--against", help="another tree to compare with, interleaved")
+    ap.add_argument("--repeat", type=int, default=3, help="rounds with --against (best kept)")
+    ap.add_argument("--root", help=argparse.SUPPRESS)
+    ap.add_argument("--json", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.against:
+        return compare(args)
     registered = not hasattr(bpy.types.Object, "turning")
     if registered:                     # the figure settings and their nested groups
         props_rig.register()
@@ -70,6 +84,10 @@ def main() -> int:
             props_mod.unregister()
             props_rig.unregister()
     frames = sum(len(tr.frames) for tr in tracks)
+    if args.json:
+        print("JSON" + json.dumps({"simulate": t_sim, "map": t_map, "bake": t_bake,
+                                   "frames": frames}))
+        return 0
     print(f"crowd bake: {len(objs)} skiers x {args.seconds:g} s x {args.fps} fps ({frames} "
           f"frames); Blender {bpy.app.version_string}, Python {platform.python_version()}, "
           f"{os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}")
@@ -77,6 +95,38 @@ def main() -> int:
     print(f"  simulate {t_sim:.2f} s, map ({args.workers} worker(s)) {t_map:.2f} s, "
           f"bake {t_bake:.2f} s; "
           f"total {t_sim + t_map + t_bake:.2f} s")
+    return 0
+
+
+def compare(args) -> int:
+    """The benchmark on ``--against``'s tree (the baseline) and on this one, each in a fresh
+    process, interleaved; the best of ``--repeat`` rounds of each step."""
+    trees = {"baseline": Path(args.against).resolve(), "this": ROOT}
+    best = {k: {} for k in trees}
+    loads = [os.getloadavg()[0]]
+    for _ in range(args.repeat):
+        for name, root in trees.items():
+            out = subprocess.run(
+                [sys.executable, __file__, "--root", str(root), "--json", "--figures",
+                 str(args.figures), "--seconds", str(args.seconds), "--fps", str(args.fps),
+                 "--workers", str(args.workers)], capture_output=True, text=True, check=True,
+                env=dict(os.environ, PYTHONPATH=str(root)))
+            r = json.loads(next(line[4:] for line in out.stdout.splitlines()
+                                if line.startswith("JSON")))
+            r["total"] = r["simulate"] + r["map"] + r["bake"]
+            for k, v in r.items():
+                best[name][k] = min(best[name].get(k, v), v)
+            loads.append(os.getloadavg()[0])
+    print(f"crowd bake: {args.figures} skiers x {args.seconds:g} s x {args.fps} fps "
+          f"({best['this']['frames']} frames); Blender {bpy.app.version_string}, Python "
+          f"{platform.python_version()}, {os.cpu_count()} CPUs, load average "
+          f"{min(loads):.1f}-{max(loads):.1f}; best of {args.repeat}, interleaved, each run in "
+          f"a fresh process\n")
+    print("| tree | simulate s | map s | bake s | total s |\n|---|---|---|---|---|")
+    for name, root in trees.items():
+        b = best[name]
+        print(f"| {name} ({root}) | {b['simulate']:.2f} | {b['map']:.2f} | {b['bake']:.2f} | "
+              f"{b['total']:.2f} |")
     return 0
 
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The main job: a slalom simulated by the core (trajectory CSV, plot, the paper's figures), then
-# the Blender demo: all four figures for a few seconds, baked and rendered small with Workbench.
+# the Blender demo: all four figures and a ski school for a few seconds, baked and rendered small
+# with Workbench.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/env.sh"
@@ -13,7 +14,8 @@ py="$root/.venv/bin/python"
 "$py" -m blender_turning figures --out "$out/figures"
 echo "demo: trajectory $out/slalom.csv, plot $out/slalom.png, figures in $out/figures"
 # The Blender demo (bpy wheel, background): skier, snowboarder and telemark skier down a snowy
-# mountain, a cyclist on a road over a hill, one follow shot each, 4 s at 320x180.  Prints its
+# mountain, a cyclist on a road over a hill, one follow shot each, and a ski school (an
+# instructor and 8 pupils) with a shot of its own, 4 s at 320x180.  Prints its
 # progress, then where the frames (frames/<figure>/, shots.png) and .blend are.
 "$py" "$root/scripts/render_job.py" --config "$root/scripts/configs/demo.toml" \
   --output "$out/blender_demo" | grep --line-buffered -v "| Saved:"

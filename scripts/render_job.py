@@ -45,6 +45,7 @@ from blender_turning.core.ranges import RANGES, Range  # noqa: E402
 from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
 
 sys.path.insert(0, str(ROOT / "scripts"))
+import render_crowds  # noqa: E402
 import render_terrain  # noqa: E402
 
 ENGINES = ("WORKBENCH", "EEVEE", "CYCLES")
@@ -62,7 +63,8 @@ class ConfigError(ValueError):
 # (blender_turning/core/ranges.py) with the field validator every file format uses.
 
 _KNOWN = {
-    "": {"job", "render", "camera", "ground", "figures", "paths", "obstacles", "terrain"},
+    "": {"job", "render", "camera", "ground", "figures", "paths", "obstacles", "terrain",
+         "crowds"},
     "job": {"name", "seconds", "fps", "frame_step", "output"},
     "render": {"engine", "resolution", "format", "samples"},
     "camera": {"follow", "distance", "height", "lens"},
@@ -167,6 +169,47 @@ def _cli_choice(given, flag, choices):
     return value
 
 
+def read_figure(f, earlier, paths, obstacles, terrains) -> dict:
+    """One ``[[figures]]`` table (or a crowd's leader), checked against the config's paths,
+    obstacle groups, terrains and the ``earlier`` figures' names."""
+    lean, heading = RANGES["theta_max"].deg(), RANGES["heading"].deg()
+    sport = f.string("sport").lower()
+    if sport not in SPORTS:
+        f.fail("sport", f"= {sport!r} is not one of {', '.join(SPORTS)}")
+    fig = {"sport": sport, "control": f.string("control", "turns", choices=("turns", "path")),
+           "name": f.string("name", sport.title()),
+           "start": tuple(float(v) for v in f.xy("start", [0.0, 0.0])),
+           "direction_deg": f.number("direction_deg", heading, 90.0),
+           "period": f.number("period", "period", 2.0),
+           "lean_deg": f.number("lean_deg", lean, 20.0),
+           "heading_deg": f.number("heading_deg", heading, None),
+           "path": f.string("path", None),
+           "obstacles": f.string("obstacles", None),
+           "plan_curvature_rate": f.number("plan_curvature_rate", "plan_curvature_rate",
+                                           None),
+           "ground": f.string("ground", None),
+           "speed": f.number("speed", "V_cm", None),
+           "target_speed": f.number("target_speed", "target_speed", 0.0),
+           "tracks": f.boolean("tracks", True),
+           "body": None, "crowd": None}
+    if fig["ground"] is not None and fig["ground"] not in terrains:
+        f.fail("ground", f"= {fig['ground']!r} is not a [terrain.<name>] of the config")
+    fall = math.degrees(PRESETS[sport].limits.theta_fall)
+    if fig["lean_deg"] >= fall:
+        f.fail("lean_deg", f"= {fig['lean_deg']:g} is not below the {sport}'s fall angle "
+                           f"({fall:g} deg)")
+    if not fig["name"].strip():
+        f.fail("name", "= '' is empty")
+    if any(fig["name"] == g["name"] for g in earlier):
+        f.fail("name", f"= {fig['name']!r} is the name of an earlier figure")
+    if fig["control"] == "path" and fig["path"] not in paths:
+        f.fail("path", f"= {fig['path']!r} is not a [paths.<name>] of the config"
+                       f"{nearest(fig['path'], paths) if paths and fig['path'] else ''}")
+    if fig["obstacles"] and not any(o["group"] == fig["obstacles"] for o in obstacles):
+        f.fail("obstacles", f"= {fig['obstacles']!r} names no obstacle group")
+    return fig
+
+
 def load_config(path: Path, overrides) -> dict:
     src = str(path)
     try:
@@ -251,50 +294,23 @@ def load_config(path: Path, overrides) -> dict:
                           "height": o.number("height", "object_height", 1.8)})
     terrains = _terrains(top)
     figures = top.tables("figures", _KNOWN["figure"])
-    if not figures:
+    if not figures and not top.has("crowds"):
         raise ConfigError(f"{src}: the config has no [[figures]]")
     cfg["figures"] = []
-    lean, heading = RANGES["theta_max"].deg(), RANGES["heading"].deg()
     for f in figures:
-        sport = f.string("sport").lower()
-        if sport not in SPORTS:
-            f.fail("sport", f"= {sport!r} is not one of {', '.join(SPORTS)}")
-        fig = {"sport": sport, "control": f.string("control", "turns", choices=("turns", "path")),
-               "name": f.string("name", sport.title()),
-               "start": tuple(float(v) for v in f.xy("start", [0.0, 0.0])),
-               "direction_deg": f.number("direction_deg", heading, 90.0),
-               "period": f.number("period", "period", 2.0),
-               "lean_deg": f.number("lean_deg", lean, 20.0),
-               "heading_deg": f.number("heading_deg", heading, None),
-               "path": f.string("path", None),
-               "obstacles": f.string("obstacles", None),
-               "plan_curvature_rate": f.number("plan_curvature_rate", "plan_curvature_rate",
-                                               None),
-               "ground": f.string("ground", None),
-               "speed": f.number("speed", "V_cm", None),
-               "target_speed": f.number("target_speed", "target_speed", 0.0),
-               "tracks": f.boolean("tracks", True)}
-        if fig["ground"] is not None and fig["ground"] not in terrains:
-            f.fail("ground", f"= {fig['ground']!r} is not a [terrain.<name>] of the config")
-        fall = math.degrees(PRESETS[sport].limits.theta_fall)
-        if fig["lean_deg"] >= fall:
-            f.fail("lean_deg", f"= {fig['lean_deg']:g} is not below the {sport}'s fall angle "
-                               f"({fall:g} deg)")
-        if not fig["name"].strip():
-            f.fail("name", "= '' is empty")
-        if any(fig["name"] == g["name"] for g in cfg["figures"]):
-            f.fail("name", f"= {fig['name']!r} is the name of an earlier figure")
-        if fig["control"] == "path" and fig["path"] not in paths:
-            f.fail("path", f"= {fig['path']!r} is not a [paths.<name>] of the config"
-                           f"{nearest(fig['path'], paths) if paths and fig['path'] else ''}")
-        if fig["obstacles"] and not any(o["group"] == fig["obstacles"] for o in obstacles):
-            f.fail("obstacles", f"= {fig['obstacles']!r} names no obstacle group")
-        cfg["figures"].append(fig)
+        cfg["figures"].append(read_figure(f, cfg["figures"], paths, obstacles, terrains))
+    cfg["crowds"] = render_crowds.read_crowds(top, cfg["figures"], paths, obstacles, terrains,
+                                              read_figure)
     names = [fig["name"] for fig in cfg["figures"]]
     cfg["terrain"] = terrains
     if cfg["camera"]["follow"] not in ("all", "each", *names):
         cam.fail("follow", f"= {cfg['camera']['follow']!r} is not 'all', 'each' or a figure's name "
                            f"({', '.join(names)})")
+    if cfg["camera"]["follow"] == "each" and not (
+            any(f["crowd"] is None for f in cfg["figures"])
+            or any(c["shot"] for c in cfg["crowds"])):
+        cam.fail("follow", "= 'each' gives a shot to every [[figures]] entry and every crowd "
+                           "with shot = true: there is none")
     cfg["paths"], cfg["obstacles"] = paths, obstacles
     return cfg
 
@@ -374,6 +390,9 @@ def add_figure(bpy, fig, cfg, paths, groups, grounds):
         s.heading = math.radians(fig["heading_deg"])
     if fig["speed"] is not None:
         s.speed = fig["speed"]
+    if fig["body"] is not None:                      # a crowd's follower: its own body
+        s.mass, s.com_height, s.inertia = (fig["body"][k] for k in ("mass", "com_height",
+                                                                     "inertia"))
     if fig["ground"] is not None:                    # rides on that terrain's mesh
         s.ground = grounds[fig["ground"]]
         s.terrain.target_speed = fig["target_speed"]
@@ -559,10 +578,13 @@ def _run(bpy, cfg, render):
             render_terrain.make_tracks(bpy, obj, grounds[fig["ground"]], _material,
                                        range(scene.frame_start, frame_end + 1))
     cameras = []
-    if cfg["camera"]["follow"] == "each":
-        cameras = render_terrain.make_follow_cameras(
-            bpy, figures, cfg["camera"]["distance"], cfg["camera"]["height"],
-            cfg["camera"]["lens"])
+    if cfg["camera"]["follow"] == "each":      # a shot per figure, and one per crowd
+        cam = cfg["camera"]
+        alone = [o for o, fig in zip(figures, cfg["figures"]) if fig["crowd"] is None]
+        cameras = render_terrain.make_follow_cameras(bpy, alone, cam["distance"],
+                                                     cam["height"], cam["lens"])
+        cameras += render_crowds.make_crowd_cameras(bpy, cfg["crowds"], figures,
+                                                    cam["distance"], cam["height"], cam["lens"])
         scene.camera = cameras[0][1]
     else:
         locs = make_camera(bpy, cfg, figures)

@@ -32,7 +32,8 @@ def png_size(path):
 
 
 def test_demo_job_renders_tiny_frames(tmp_path):
-    """The demo (issue 10): the figures on terrain, one follow shot per figure, and a sheet."""
+    """The demo (issue 10): the figures on terrain, one follow shot per figure, a shot of the
+    ski school (issue 11), and a sheet."""
     r = run_job("--config", CONFIGS / "demo.toml", "--resolution", "32x24", "--seconds", "0.25",
                 "--output", tmp_path)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
@@ -42,7 +43,10 @@ def test_demo_job_renders_tiny_frames(tmp_path):
         assert len(frames) == 4                # 0.25 s at 24 fps, frame_step 2: frames 1, 3, 5, 7
         assert all(png_size(f) == (32, 24) for f in frames)
         assert f"baked {name}" in r.stdout
-    assert png_size(tmp_path / "shots.png") == (64, 48)          # 2 x 2 shots
+    school = sorted((tmp_path / "frames" / "School").glob("frame_*.png"))
+    assert len(school) == 4 and "baked School 8" in r.stdout and "baked Instructor" in r.stdout
+    assert not (tmp_path / "frames" / "Instructor").exists()     # the crowd's one shot only
+    assert png_size(tmp_path / "shots.png") == (64, 72)          # 5 shots, 2 columns
     # White snow under a blue sky: the skier's shot looks down the slope, its lower half is
     # snow (measured median 228 of 255 at 320 x 180; 190 before the exposure, Filmic ~150).
     import bpy
@@ -56,7 +60,7 @@ def test_demo_job_renders_tiny_frames(tmp_path):
     top = rgb[-3:].reshape(-1, 3)
     assert np.median(top[:, 2] - top[:, 0]) > 0.3                    # the sky is blue
     assert (tmp_path / "demo.blend").stat().st_size > 0
-    assert "rendered frame 7 (16/16)" in r.stdout and f"blend: {tmp_path / 'demo.blend'}" in r.stdout
+    assert "rendered frame 7 (20/20)" in r.stdout and f"blend: {tmp_path / 'demo.blend'}" in r.stdout
 
 
 @pytest.mark.parametrize("config", sorted(p.name for p in CONFIGS.glob("*.toml")))

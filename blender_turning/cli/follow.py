@@ -5,7 +5,8 @@ statistics (JSON: one entry per replanning and totals) and a plot of path, obsta
 When no plan survives, the error names the time and the position; when the time limit (three times
 the time to ride the path) comes before the end of the path, how far along it got (arc length);
 either is one line on stderr, exit 2, and no trajectory or statistics are written (``--plot``
-still draws the track up to there, to show where it went wrong).
+still draws the track up to there, to show where it went wrong).  While it plans, a progress bar
+(share of the path, course time planned, time left) goes to stderr when it is a terminal.
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ from ..core.errors import PathNotFinished, PlanInfeasible
 from ..core.scene import check_horizon, load_scene
 from ..core.validate import check
 from .common import Outputs, require_matplotlib
+from .progress import Progress
 
 
 def register(sub):
@@ -54,7 +56,9 @@ def run(args) -> int:
     for flag in ("out", "stats", "plot"):
         outputs.reserve(f"--{flag}", getattr(args, flag))
     try:
-        result = scene.run()
+        with Progress(100, "%", "follow") as bar:
+            result = scene.run(on_replan=_progress(bar, scene.duration))
+            bar.update(100, note=f"{result.trajectory.duration:.1f} s of course planned")
     except (PlanInfeasible, PathNotFinished) as exc:
         # The plot of the failed run (where it got stuck) is the one output written.
         if args.plot and exc.trajectory is not None:
@@ -84,6 +88,15 @@ def run(args) -> int:
           f"{'' if result.reached_end else ' (stopped at the given duration)'}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0
+
+
+def _progress(bar, duration):
+    """The planner's ``on_replan`` drawing ``bar``: the share of the path done (of ``duration``
+    when the scene gives one) and the course time planned so far."""
+    def on_replan(t, xy, fraction):
+        done = t / duration if duration else fraction
+        bar.update(min(int(100 * done), 99), note=f"{t:.1f} s of course planned")
+    return on_replan
 
 
 def _settings(st) -> dict:

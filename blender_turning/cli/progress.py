@@ -8,8 +8,9 @@ import time
 
 
 class Progress:
-    """``update(done, total)`` after each piece of work; ``close()`` at the end (or use
-    ``with``).  Does nothing unless ``stream`` is a terminal."""
+    """``update(done, total)`` after each piece of work (``note``: a short text shown after the
+    count, e.g. the course time planned); ``close()`` at the end (or use ``with``).  Does nothing
+    unless ``stream`` is a terminal.  ``unit="%"`` counts percent."""
 
     def __init__(self, total: int, unit: str, desc: str, stream=None):
         self.stream = sys.stderr if stream is None else stream
@@ -24,16 +25,19 @@ class Progress:
                 return
             self._bar = tqdm(total=total, unit=unit, desc=desc, file=self.stream)
 
-    def update(self, done: int, total: int | None = None) -> None:
+    def update(self, done: int, total: int | None = None, note: str = "") -> None:
         if not self.on:
             return
         if self._bar is not None:
+            if note:
+                self._bar.set_postfix_str(note, refresh=False)
             self._bar.update(done - self._bar.n)
             return
         spent = time.perf_counter() - self._start
-        left = spent * (self.total - done) / done if done else float("nan")
-        self.stream.write(f"\r{self.desc}: {done}/{self.total} {self.unit}s, "
-                          f"{spent:.0f} s, about {left:.0f} s left ")
+        left = f"about {spent * (self.total - done) / done:.0f} s left" if done else "..."
+        count = f"{done}%" if self.unit == "%" else f"{done}/{self.total} {self.unit}s"
+        self.stream.write(f"\r{self.desc}: {count}{f', {note}' if note else ''}, "
+                          f"{spent:.0f} s, {left} ")
         self.stream.flush()
 
     __call__ = update

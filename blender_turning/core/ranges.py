@@ -147,6 +147,8 @@ RANGES: dict[str, Range] = {
     "job_seconds": Range(0.0, 600.0, "s", "ten minutes of animation a job", lo_open=True),
     "job_fps": Range(1, 240, "1/s", "Blender's frame rates", integer=True),
     "frame_step": Range(1, 1000, "", "render every n-th frame", integer=True),
+    "job_crowd_count": Range(1, 200, "", "followers in a job's crowd (each a rig to bake and "
+                             "render)", integer=True),
     "pixels": Range(4, 8192, "px", "Blender renders 4 to 8192 pixels a side", integer=True),
     "render_samples": Range(1, 4096, "", "EEVEE/Cycles samples a pixel", integer=True),
     "camera_distance": Range(0.1, 1e4, "m", "how far behind the figures the camera follows"),

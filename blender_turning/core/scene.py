@@ -71,14 +71,16 @@ class Scene:
         """The planning problem (the path with its run-out: :mod:`.follow_problem`)."""
         return self.setup().problem()
 
-    def run(self, movers=None) -> FollowResult:
+    def run(self, movers=None, on_replan=None) -> FollowResult:
         """Follow the path to its end (raises ``PathNotFinished`` at the time limit), or for
         ``duration`` seconds; around ``movers`` too (other figures' bodies, a
-        :class:`.moving.MovingBodies` on this figure's clock), if given."""
+        :class:`.moving.MovingBodies` on this figure's clock), if given.  ``on_replan(t, xy,
+        fraction)``: called before every replanning (:func:`.planner.receding.follow`), e.g. for
+        a progress bar."""
         setup = self.setup()
         problem = None if movers is None else around(setup.problem(), movers)
         return setup.run(self.state0, self.C_f0, self.duration, problem=problem,
-                         meta={"scene": self.name})
+                         meta={"scene": self.name}, on_replan=on_replan)
 
 
 def check_horizon(settings: PlannerSettings, where: str = "") -> None:

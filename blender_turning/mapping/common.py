@@ -13,10 +13,10 @@ import numpy as np
 
 from . import bones as B
 from .kinematics import (PoseBuilder, frame_from_yx, quat_from_axis_angle, quat_mul, quat_to_matrix,
-                         two_bone_ik)
+                         stack_dot, two_bone_ik)
 
 __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "static_force",
-           "add_local_rotation", "lean", "carried", "ik_limb", "place_on_ground",
+           "add_local_rotation", "lean", "carried", "limb_frames", "ik_limb", "place_on_ground",
            "body_axes", "mesh_points", "leg_lengths"]
 
 
@@ -93,7 +93,7 @@ def lean(b: PoseBuilder, theta_v):
 def carried(b: PoseBuilder, bone: str, carrier: str) -> np.ndarray:
     """The pose ``bone`` would have if rigidly attached to ``carrier`` as in the rest pose."""
     skel = b.skel
-    return b.pose(carrier) @ (np.linalg.inv(skel.rest_of(carrier)) @ skel.rest_of(bone))
+    return stack_dot(b.pose(carrier), np.linalg.inv(skel.rest_of(carrier)) @ skel.rest_of(bone))
 
 
 def leg_lengths(skel, upper: str, lower: str):
@@ -111,23 +111,32 @@ def _length(skel, bone):
     raise ValueError(f"bone {bone!r} has no connected child to measure its length")
 
 
-def ik_limb(b: PoseBuilder, upper: str, lower: str, target, pole, twist=None, reach=0.9999):
-    """Two-bone IK (analytic): pose ``upper`` and ``lower`` so that ``lower``'s tail reaches
-    ``target`` (n, 3), bending towards ``pole`` (n, 3) rotated by ``twist`` (n,) rad about the
-    root-target line.  The hinge is each bone's X axis (the rigs' limbs hinge about X).
-    Returns the point reached (n, 3)."""
-    base = b.unposed(upper)
-    root = base[:, :3, 3]
-    l1, l2 = leg_lengths(b.skel, upper, lower)
+def limb_frames(root, hinge_x, target, pole, l1: float, l2: float, twist=None, reach=0.9999):
+    """Two-bone IK (analytic) without touching a pose: the armature-space rotations (n, 3, 3) of
+    the upper and lower bones whose chain from ``root`` (n, 3) reaches ``target``, bending
+    towards ``pole`` rotated by ``twist`` (n,) rad about the root-target line, with the hinge
+    (each bone's X) on the side of ``hinge_x`` (the upper bone's unposed X).  Returns
+    ``(upper_rot, lower_rot, end)``, ``end`` the point reached."""
     pole = np.broadcast_to(np.asarray(pole, float), root.shape)
     if twist is not None:
         pole = rotate_about(pole, target - root, twist)
     mid, end = two_bone_ik(root, target, l1, l2, pole, reach)
     n = np.cross(end - root, pole)
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    n *= np.where(np.sum(n * base[:, :3, 0], axis=-1) < 0, -1.0, 1.0)[:, None]
-    b.set_pose(upper, frame_from_yx(mid - root, n))
-    b.set_pose(lower, frame_from_yx(end - mid, n))
+    n *= np.where(np.sum(n * hinge_x, axis=-1) < 0, -1.0, 1.0)[:, None]
+    return frame_from_yx(mid - root, n), frame_from_yx(end - mid, n), end
+
+
+def ik_limb(b: PoseBuilder, upper: str, lower: str, target, pole, twist=None, reach=0.9999):
+    """Two-bone IK (analytic): pose ``upper`` and ``lower`` so that ``lower``'s tail reaches
+    ``target`` (n, 3), bending towards ``pole`` (n, 3) rotated by ``twist`` (n,) rad about the
+    root-target line.  The hinge is each bone's X axis (the rigs' limbs hinge about X).
+    Returns the point reached (n, 3)."""
+    base = b.unposed(upper)
+    r_up, r_low, end = limb_frames(base[:, :3, 3], base[:, :3, 0], target, pole,
+                                   *leg_lengths(b.skel, upper, lower), twist, reach)
+    b.set_pose(upper, r_up)
+    b.set_pose(lower, r_low)
     return end
 
 
@@ -151,9 +160,9 @@ def place_on_ground(b: PoseBuilder, spec, bone: str, rotation, anchor_rest, anch
     rest = b.skel.rest_of(bone)
     corners = mesh_points(spec, bone)                           # bone frame
     anchor = rest[:3, :3].T @ (np.asarray(anchor_rest, float) - rest[:3, 3])
-    cz = np.einsum("nij,kj->nki", rotation, corners)[..., 2]
+    cz = rotation[:, 2, :] @ corners.T                          # the corners' heights (n, k)
     head = np.empty((b.n, 3))
-    head[:, :2] = anchor_xy - (rotation @ anchor)[:, :2]
+    head[:, :2] = anchor_xy - stack_dot(rotation, anchor)[:, :2]
     head[:, 2] = -cz.min(axis=1)
     b.set_pose(bone, rotation, head)
     return head

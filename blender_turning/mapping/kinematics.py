@@ -21,7 +21,7 @@ import numpy as np
 
 __all__ = ["quat_mul", "quat_conj", "quat_from_axis_angle", "quat_to_matrix", "quat_from_matrix",
            "quat_continuous", "vec_roll_to_mat3", "rest_matrix", "translation", "rotation4",
-           "rot_axis_angle", "two_bone_ik", "frame_from_yx", "Skeleton", "PoseBuilder"]
+           "rot_axis_angle", "stack_dot", "two_bone_ik", "frame_from_yx", "Skeleton", "PoseBuilder"]
 
 IDENTITY_QUAT = np.array([1.0, 0.0, 0.0, 0.0])
 
@@ -55,10 +55,12 @@ def quat_to_matrix(q):
     q = np.asarray(q, float)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1)], -2)
+    xx, yy, zz, xy, xz, yz, wx, wy, wz = x * x, y * y, z * z, x * y, x * z, y * z, w * x, w * y, w * z
+    m = np.empty(q.shape[:-1] + (3, 3))
+    m[..., 0, 0], m[..., 0, 1], m[..., 0, 2] = 1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)
+    m[..., 1, 0], m[..., 1, 1], m[..., 1, 2] = 2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)
+    m[..., 2, 0], m[..., 2, 1], m[..., 2, 2] = 2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)
+    return m
 
 
 def quat_from_matrix(m):
@@ -78,11 +80,15 @@ def quat_from_matrix(m):
         s = k == case
         if not np.any(s):
             continue
+        s = slice(None) if s.all() else s          # one case for every frame: no copies
         a = m[s]
         if case == 0:
             r = np.sqrt(1.0 + tr[s]) * 2.0
-            q[s] = np.stack([0.25 * r, (a[:, 2, 1] - a[:, 1, 2]) / r,
-                             (a[:, 0, 2] - a[:, 2, 0]) / r, (a[:, 1, 0] - a[:, 0, 1]) / r], 1)
+            v = np.empty((len(a), 4))
+            v[:, 0] = 0.25 * r
+            v[:, 1] = (a[:, 2, 1] - a[:, 1, 2]) / r
+            v[:, 2] = (a[:, 0, 2] - a[:, 2, 0]) / r
+            v[:, 3] = (a[:, 1, 0] - a[:, 0, 1]) / r
         else:
             i, j, kk = case - 1, case % 3, (case + 1) % 3
             r = np.sqrt(1.0 + a[:, i, i] - a[:, j, j] - a[:, kk, kk]) * 2.0
@@ -91,7 +97,7 @@ def quat_from_matrix(m):
             v[:, 1 + i] = 0.25 * r
             v[:, 1 + j] = (a[:, j, i] + a[:, i, j]) / r
             v[:, 1 + kk] = (a[:, kk, i] + a[:, i, kk]) / r
-            q[s] = v
+        q[s] = v
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     return q.reshape(shape + (4,))
@@ -173,6 +179,15 @@ def rotation4(r):
     return m
 
 
+def stack_dot(a, k):
+    """``a @ k`` for a stack ``a`` (..., r, c) and one matrix (c, m) or vector (c,) ``k``, as one
+    2-D product over the whole stack: numpy's matmul loops over a stack of small matrices, about
+    8x slower than this at a thousand frames."""
+    a = np.asarray(a, float)
+    k = np.asarray(k, float)
+    return (a.reshape(-1, a.shape[-1]) @ k).reshape(a.shape[:-1] + k.shape[1:])
+
+
 def rigid_inverse(m):
     """Inverse of rigid transforms (..., 4, 4) (a rotation and a translation, as every pose here
     is): ``[R^T, -R^T t]``, exact where a general 4x4 inverse is ~20x slower per frame."""
@@ -230,6 +245,7 @@ class Skeleton:
         self.parents = tuple(parents)   # parent name or None
         self.rest = np.asarray(rest, float)            # (k, 4, 4)
         self.connected = tuple(bool(c) for c in connected)
+        self._relative = {}                             # name -> rest_relative (4, 4)
         for n, p in zip(self.names, self.parents):
             if p is not None and self.index.get(p, len(self.names)) >= self.index[n]:
                 raise ValueError(f"bone {n!r}: parent {p!r} must come before it")
@@ -258,9 +274,15 @@ class Skeleton:
 
     def rest_relative(self, name: str) -> np.ndarray:
         """``rest_arm_parent^-1 @ rest_arm`` (the rest matrix itself for a root bone)."""
-        i = self.i(name)
-        p = self.parents[i]
-        return self.rest[i] if p is None else np.linalg.inv(self.rest_of(p)) @ self.rest[i]
+        rel = self._relative.get(name)
+        if rel is None:
+            i = self.i(name)
+            p = self.parents[i]
+            rel = np.array(self.rest[i] if p is None
+                           else np.linalg.inv(self.rest_of(p)) @ self.rest[i])
+            rel.setflags(write=False)                  # shared by every caller
+            self._relative[name] = rel
+        return rel
 
     def carry(self, poses: dict, bone: str, p_rest) -> np.ndarray:
         """Where bone ``bone``'s pose (from :meth:`fk`) carries the armature-space rest point
@@ -320,27 +342,34 @@ class PoseBuilder:
 
     def pose(self, name) -> np.ndarray:
         """Current armature-space pose (n, 4, 4) of ``name``, from its ancestors' channels."""
+        return self._pose(name).copy()
+
+    def _pose(self, name) -> np.ndarray:
+        """:meth:`pose`, the cached array itself (not to be changed)."""
         cached = self._poses.get(name)
         if cached is not None:
-            return cached.copy()
+            return cached
         i = self.skel.i(name)
-        p = self.skel.parents[i]
-        m = np.broadcast_to(self.skel.rest_relative(name), (self.n, 4, 4))
-        if p is not None:
-            m = self.pose(p) @ m
-        if name in self.loc and not self.skel.connected[i]:
-            m = m @ translation(self.loc[name])
-        if name in self.rot:
-            m = m @ rotation4(quat_to_matrix(self.rot[name]))
-        m = np.array(m)
+        m = self._unposed(name)
+        loc = self.loc.get(name) if not self.skel.connected[i] else None
+        rot = self.rot.get(name)
+        if loc is not None or rot is not None:       # T(location) @ R(quaternion), one matrix
+            local = translation(np.zeros((self.n, 3)) if loc is None else loc)
+            if rot is not None:
+                local[:, :3, :3] = quat_to_matrix(rot)
+            m = m @ local
         self._poses[name] = m
-        return m.copy()
+        return m
+
+    def _unposed(self, name) -> np.ndarray:
+        p = self.skel.parents[self.skel.i(name)]
+        m = self.skel.rest_relative(name)
+        return np.array(np.broadcast_to(m, (self.n, 4, 4))) if p is None else \
+            stack_dot(self._pose(p), m)
 
     def unposed(self, name) -> np.ndarray:
         """The pose ``name`` would have with identity channels (its parent as now posed)."""
-        p = self.skel.parents[self.skel.i(name)]
-        m = self.skel.rest_relative(name)
-        return np.array(np.broadcast_to(m, (self.n, 4, 4)) if p is None else self.pose(p) @ m)
+        return self._unposed(name)
 
     def set_pose(self, name, rotation, head=None):
         """Give ``name`` the armature-space rotation (n, 3, 3) and head (n, 3) (or keep its head).

@@ -16,9 +16,9 @@ import numpy as np
 from ..core.params import check_range
 from . import bones as B
 from .base import Mapping
-from .common import (carried, ik_limb, phase_window, place_on_ground, rot_y, rot_z,
-                     smoothstep)
-from .kinematics import frame_from_yx
+from .common import (carried, ik_limb, leg_lengths, limb_frames, phase_window, place_on_ground,
+                     rot_y, rot_z, smoothstep)
+from .kinematics import frame_from_yx, rigid_inverse, stack_dot
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
                    twist_upper_body)
@@ -31,6 +31,9 @@ SIDES = (("L", -1.0), ("R", 1.0))
 HAND_NEUTRAL = (0.06, 0.30, -0.36)
 HAND_PLANT = (0.10, 0.40, -0.33)
 POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
+#: An arm whose grip offset moved less than this (m) in an aiming pass has settled: another pass
+#: would give the same numbers to rounding, so it leaves the loop.
+SETTLED = 1e-12
 
 
 @dataclass(frozen=True)
@@ -130,7 +133,7 @@ class SkierMapping(Mapping):
             dy, yaw, _ = layout[s]
             # The foot goes where the leaned body axis through the hip meets the ankle height.
             xy = np.stack([hip[:, 0] + np.tan(th) * (hip[:, 2] - a_rest[2]), a_rest[1] + dy], 1)
-            R = rot_z(yaw) @ rot_y(-tilts[s]) @ skel.rest_of(ski)[:3, :3]
+            R = stack_dot(rot_z(yaw) @ rot_y(-tilts[s]), skel.rest_of(ski)[:3, :3])
             place_on_ground(b, spec, ski, R, a_rest, xy)
             ankles[s] = self.ankle_on_ski(b, s, layout)
         return ankles
@@ -151,7 +154,7 @@ class SkierMapping(Mapping):
         swings back to trailing over ``pole_swing`` of phase.
         """
         skel = b.skel
-        chest = b.pose(B.CHEST)[:, :3, :3] @ skel.rest_of(B.CHEST)[:3, :3].T
+        chest = stack_dot(b.pose(B.CHEST)[:, :3, :3], skel.rest_of(B.CHEST)[:3, :3].T)
         reach = 0.98 * (skel.length(B.side("upper_arm", "L")) + skel.length(B.side("forearm", "L")))
         place = b.placement
         for s, sx in SIDES:
@@ -163,10 +166,10 @@ class SkierMapping(Mapping):
             shoulder = b.unposed(B.side("upper_arm", s))[:, :3, 3]
             hand = shoulder + np.einsum("nij,nj->ni", chest,
                                         (1 - w)[:, None] * neutral + w[:, None] * planted)
-            elbow_dir = chest @ (sx * 0.4 * right - fwd - 0.3 * up)     # elbows back and out
+            elbow_dir = stack_dot(chest, sx * 0.4 * right - fwd - 0.3 * up)  # elbows back, out
             pole = B.side("pole", s)
             length = skel.length(pole)
-            arm = (b, B.side("upper_arm", s), B.side("forearm", s), elbow_dir, pole)
+            arm = _Arm(b, B.side("upper_arm", s), B.side("forearm", s), elbow_dir, pole)
 
             def free_axis(grip):
                 beta = POLE_AIM_TRAIL + w * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
@@ -176,8 +179,8 @@ class SkierMapping(Mapping):
                 return (rho[:, None] * horiz + dz[:, None] * up) / length
 
             # Free swing first; its grip sits `offset` from the wrist the IK aims.
-            grip = _reach(*arm, hand)
-            offset = grip - _wrist(b, s)
+            grip, wrist = arm.reach(hand)
+            offset = grip - wrist
             free = hand + offset
             plan = _plan_plants(place, d, o.pole_hold, o.pole_swing, grip + length * free_axis(grip),
                                 free, shoulder + offset, length, reach)
@@ -189,11 +192,20 @@ class SkierMapping(Mapping):
             out = target[plan.after] - plan.tip_at[plan.after]
             r = np.linalg.norm(out, axis=1, keepdims=True)
             target[plan.after] = plan.tip_at[plan.after] + out * np.maximum(r, length) / r
-            for _ in range(12):      # the offset turns with the hand: aim again with the new one
-                grip = _reach(*arm, target - offset)
-                offset = grip - _wrist(b, s)
+            # The offset turns with the hand: aim again with the new one.  Each frame is solved on
+            # its own, so a frame whose offset no longer moves (a free swing, after one pass)
+            # would only give the same numbers again: it leaves the loop, the rest go on.
+            moving_aim = np.arange(len(target))
+            aim_wrist = target - offset
+            for _ in range(12):
+                aim_wrist[moving_aim] = target[moving_aim] - offset[moving_aim]
+                g, wr = arm.reach(aim_wrist[moving_aim], moving_aim)
+                step = np.max(np.abs(g - wr - offset[moving_aim]), axis=1, initial=0.0)
+                grip[moving_aim], offset[moving_aim] = g, g - wr
                 if np.max(np.abs(grip - target), initial=0.0) < 2e-4:    # ~10x per two passes
                     break
+                moving_aim = moving_aim[step > SETTLED]
+            ik_limb(b, arm.upper, arm.lower, aim_wrist, elbow_dir)     # the arm's pose, once
             axis = free_axis(grip)
             # Held: aim at the hole.  Lifting off: at a point moving from the hole to the free
             # swing's tip (both on or above the snow, so the tip stays out of it).
@@ -209,10 +221,32 @@ class SkierMapping(Mapping):
             b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
 
 
-def _wrist(b, s):
-    """Armature-space tail of the forearm (where the arm's IK puts its target)."""
-    m = b.pose(B.side("forearm", s))
-    return m[:, :3, 3] + b.skel.length(B.side("forearm", s)) * m[:, :3, 1]
+class _Arm:
+    """The arm's two-bone IK (``common.ik_limb``) solved without writing the pose, for the
+    aiming loop of ``arms_and_poles``: only the arm moves while it aims (the chest, and the
+    hand's and the pole's rest offsets from the forearm, stay put), so where a wrist target puts
+    the wrist and the pole's grip follows from the two limb rotations alone, not through the
+    builder's quaternions and pose chain (the same values to rounding)."""
+
+    def __init__(self, b, upper, lower, elbow_dir, pole):
+        skel = b.skel
+        base = b.unposed(upper)
+        self.upper, self.lower = upper, lower
+        self.root, self.hinge, self.elbow = base[:, :3, 3], base[:, :3, 0], elbow_dir
+        self.lengths = leg_lengths(skel, upper, lower)
+        self.lower_head = skel.rest_relative(lower)[:3, 3]       # in the upper bone's frame
+        self.fore = skel.length(lower)
+        # The grip in the lower bone's frame (through the hand, posed or not).
+        self.grip = (rigid_inverse(b.pose(lower)) @ b.unposed(pole))[:, :3, 3]
+
+    def reach(self, wrist, idx=slice(None)):
+        """Aim the wrist (the forearm's tail) of frames ``idx`` at ``wrist`` (k, 3); return
+        ``(grip, wrist)``, where the pole's grip and the wrist then are (armature space)."""
+        r_up, r_low, _ = limb_frames(self.root[idx], self.hinge[idx], wrist, self.elbow[idx],
+                                     *self.lengths)
+        head = self.root[idx] + stack_dot(r_up, self.lower_head)
+        return (head + np.einsum("nij,nj->ni", r_low, self.grip[idx]),
+                head + self.fore * r_low[:, :, 1])
 
 
 @dataclass
@@ -236,12 +270,9 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> 
     tip_at, grip_at = tips.copy(), free.copy()
     # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
     inside = (np.abs(d) <= hold) | ((d < 0) & (d > -hold - swing) & (tips[:, 2] < 1e-3))
-    starts = np.nonzero(inside & ~np.concatenate([[False], inside[:-1]]))[0]
-    for i0 in starts:
-        i1 = i0
-        while i1 + 1 < n and inside[i1 + 1]:
-            i1 += 1
-        idx = np.arange(i0, i1 + 1)
+    edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
+    for i0, i1 in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):   # runs [i0, i1)
+        idx = np.arange(i0, i1)
         P = place.to_world(tips[i0], i0)
         local = place.to_local(np.broadcast_to(P, (len(idx), 3)), idx)
         away = free[idx] - local
@@ -252,18 +283,12 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> 
         held[idx], tip_at[idx], grip_at[idx] = True, local, grip
         # Lift off: from the last held pose to the free swing over `swing` of phase.
         r = idx[-1]
-        j = r + 1
-        while j < n and 0.0 <= d[j] - d[r] < swing:
-            u[j] = float(smoothstep((d[j] - d[r]) / swing))
-            after[j], grip_at[j] = True, grip[-1]
-            j += 1
+        dd = d[r + 1:] - d[r]
+        stop = np.nonzero(~((dd >= 0.0) & (dd < swing)))[0]
+        j = r + 1 + (int(stop[0]) if len(stop) else len(dd))
+        u[r + 1:j] = smoothstep(dd[:j - r - 1] / swing)
+        after[r + 1:j], grip_at[r + 1:j] = True, grip[-1]
         # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
         # rises off the snow along that line) while it swings free.
         tip_at[r + 1:j] = place.to_local(np.broadcast_to(P, (j - r - 1, 3)), np.arange(r + 1, j))
     return _Plants(held, after, u, tip_at, grip_at)
-
-
-def _reach(b, upper, lower, elbow_dir, pole, wrist):
-    """Arm IK to the ``wrist`` target; returns where that puts the pole's grip."""
-    ik_limb(b, upper, lower, wrist, elbow_dir)
-    return b.unposed(pole)[:, :3, 3]

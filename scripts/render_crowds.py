@@ -1,0 +1,160 @@
+"""Crowds in the headless job (scripts/render_job.py, issue 11): ``[[crowds]]`` tables, each a
+formation of figures around a leader, and a shot of each crowd.
+
+A crowd is a leader (``[crowds.leader]``, a figure table like ``[[figures]]``, on the
+parametric controller) and the followers :func:`blender_turning.crowd.follow_leader` makes from
+it: ``count`` of them, follower ``i`` ``i * gap_m`` behind the leader along its mean heading
+(``gap_s``: that long at the leader's speed), ``lateral_m`` to its left (a number, or a list
+cycled over the followers), with small random differences of body (``body_jitter``: ``m``,
+``l``, ``I_v``), start (``timing_jitter_s``) and turn period (``period_jitter``) drawn from
+``seed``.  Every member is an ordinary figure of the job: its own rig, baked by the same
+operator as the others, on the leader's ground.
+
+In the Blender scene each figure starts at frame 1 from its own place, so a follower's time
+behind the leader becomes a distance behind it (``gap_s`` x the leader's speed, the timing
+jitter likewise) and it starts its turns at the leader's phase at the leader's start: a line of
+skiers a gap apart down the slope, each turning in its own lane, rather than each retracing the
+leader's turns late (the core's crowd clock: ``crowd.run_crowd``).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from blender_turning.core.params import preset
+from blender_turning.crowd import CrowdFigure, Turns, follow_leader
+from blender_turning.crowd.reader import CROWD_RANGES
+
+KNOWN = {"name", "formation", "leader", "count", "gap_s", "gap_m", "lateral_m", "seed",
+         "body_jitter", "timing_jitter_s", "period_jitter", "shot"}
+
+
+def read_crowds(top, figures: list, paths, obstacles, terrains, read_figure) -> list:
+    """Read the ``[[crowds]]`` of the config ``top``; append every member (leader first) to
+    ``figures`` as a figure dict with ``crowd`` set to the crowd's name; return the crowds
+    ``[{"name", "members", "shot"}]``.  ``read_figure`` reads and checks the leader's table as
+    a ``[[figures]]`` one."""
+    crowds = []
+    for c in top.tables("crowds", KNOWN):
+        name = c.string("name", f"Crowd {len(crowds) + 1}")
+        if not name.strip() or any(ch in name for ch in "/\\\0") or name.startswith("."):
+            c.fail("name", f"= {name!r} is not a plain name (it names the shot's folder)")
+        if any(name == k["name"] for k in crowds):
+            c.fail("name", f"= {name!r} is the name of an earlier crowd")
+        c.string("formation", "follow_leader", choices=("follow_leader",))
+        lead = read_figure(c.table("leader", required=True), figures, paths, obstacles,
+                           terrains)
+        if lead["control"] != "turns":
+            c.fail("leader.control", f"= {lead['control']!r}: a crowd's leader turns on the "
+                                     "parametric controller ('turns')")
+        count = c.number("count", "job_crowd_count")
+        if c.has("gap_s") == c.has("gap_m"):
+            c.fail("gap_m", "or gap_s: exactly one is needed")
+        by = "time" if c.has("gap_s") else "distance"
+        gap = c.number("gap_s" if by == "time" else "gap_m", CROWD_RANGES["gap_s" if by == "time"
+                                                                         else "gap_m"])
+        lateral = c.numbers("lateral_m", CROWD_RANGES["lateral_m"]) \
+            if isinstance(c.value("lateral_m", 0.0), list) \
+            else c.number("lateral_m", CROWD_RANGES["lateral_m"], 0.0)
+        leader = _leader(lead)
+        try:
+            followers = follow_leader(
+                leader, count, gap, by, lateral, c.number("seed", CROWD_RANGES["seed"], 0),
+                c.number("body_jitter", CROWD_RANGES["jitter"], 0.0),
+                c.number("timing_jitter_s", CROWD_RANGES["timing_jitter_s"], 0.0),
+                c.number("period_jitter", CROWD_RANGES["jitter"], 0.0), f"{name} ")
+        except ValueError as exc:                 # e.g. a timing jitter over half the gap
+            c.fail("formation", f"follow_leader: {exc}")
+        members = [dict(lead, crowd=name)]
+        for f in followers:
+            if any(f.name == g["name"] for g in figures + members):
+                c.fail("name", f"= {name!r}: its follower {f.name!r} has the name of another "
+                               "figure")
+            members.append(_member(lead, f, name))
+        figures.extend(members)
+        crowds.append({"name": name, "members": [m["name"] for m in members],
+                       "shot": c.boolean("shot", True)})
+    return crowds
+
+
+def _leader(lead) -> CrowdFigure:
+    """The leader as the core's crowd figure: its sport's body at its speed, its turns."""
+    fig = preset(lead["sport"])
+    if lead["speed"] is not None:
+        fig = replace(fig, body=replace(fig.body, V_cm=lead["speed"]))
+    heading = lead["heading_deg"]
+    return CrowdFigure(lead["name"], fig, Turns(lead["period"], math.radians(lead["lean_deg"]),
+                                               None if heading is None
+                                               else math.radians(heading)),
+                       position=lead["start"])
+
+
+def _member(lead: dict, f: CrowdFigure, crowd: str) -> dict:
+    """A follower as a figure of the job: the leader's settings, its own start (behind the
+    leader by its time offset at the leader's speed, along the leader's mean heading), period
+    and body."""
+    heading = lead["heading_deg"] if lead["heading_deg"] is not None else lead["direction_deg"]
+    back = f.time_offset * f.figure.body.V_cm
+    d = np.array([math.cos(math.radians(heading)), math.sin(math.radians(heading))])
+    start = np.asarray(f.position) - back * d
+    b = f.figure.body
+    return dict(lead, name=f.name, start=(float(start[0]), float(start[1])),
+                period=f.controller.period, body={"mass": b.m, "com_height": b.l,
+                                                  "inertia": b.I_v}, crowd=crowd)
+
+
+def make_crowd_cameras(bpy, crowds, figures, distance, height, lens):
+    """One camera per crowd with ``shot``, framing the leader and the school from ahead and to
+    the side (downhill of them, looking back up the line) as they come down; returns
+    ``[(crowd name, camera)]``.  ``distance`` and ``height`` are the single figures' (the
+    config's camera): the crowd's camera stands back by the line's length as well."""
+    from blender_turning.blender import bake, compat
+    scene = bpy.context.scene
+    frames = np.arange(scene.frame_start, scene.frame_end + 1)
+    by_name = {o.name: o for o in figures}
+    out = []
+    for crowd in crowds:
+        if not crowd["shot"]:
+            continue
+        locs = np.array([_locations(compat, by_name[n], frames) for n in crowd["members"]])
+        lead = locs[0]
+        # The aim point: the middle of the school, a little towards the leader, smoothed over
+        # half a second so the shot does not swing with every turn.
+        aim = 0.1 * lead + 0.9 * locs.mean(axis=0)                      # (frames, 3)
+        k = max(1, int(round(0.5 * scene.render.fps)))
+        kernel = np.ones(k) / k
+        smooth = np.stack([np.convolve(np.pad(aim[:, i], (k // 2, k - 1 - k // 2), mode="edge"),
+                                       kernel, mode="valid") for i in range(3)], 1)
+        target = bpy.data.objects.new(f"Camera Target {crowd['name']}", None)
+        scene.collection.objects.link(target)
+        compat.assign_new_action(target, target.name)
+        bake.write_channels(compat.channels(target),
+                            [("location", i, "Object Transforms", smooth[:, i] + (i == 2) * 0.9)
+                             for i in range(3)], frames.astype(float))
+        d = lead[-1, :2] - lead[0, :2]
+        d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-6 else np.array([0.0, 1.0])
+        side = np.array([-d[1], d[0]])
+        # The line's length (the leader to the farthest follower, along the heading) at the
+        # start: the camera stands back by part of it, ahead of the leader and to the side, so
+        # the whole school is in the picture, the leader nearest.
+        length = float(np.max(np.abs((locs[:, 0, :2] - lead[0, :2]) @ d)))
+        reach = distance + 0.7 * length
+        offset = 0.5 * reach * d + 0.85 * reach * side
+        cam_data = bpy.data.cameras.new(f"Camera {crowd['name']}")
+        cam_data.lens = lens
+        cam = bpy.data.objects.new(f"Camera {crowd['name']}", cam_data)
+        scene.collection.objects.link(cam)
+        cam.location = (offset[0], offset[1], height + 0.1 * length)
+        c = cam.constraints.new("COPY_LOCATION")
+        c.target, c.use_offset = target, True
+        c = cam.constraints.new("TRACK_TO")
+        c.target, c.track_axis, c.up_axis = target, "TRACK_NEGATIVE_Z", "UP_Y"
+        out.append((crowd["name"], cam))
+    return out
+
+
+def _locations(compat, obj, frames):
+    fcs = {fc.array_index: fc for fc in compat.channels(obj).fcurves if fc.data_path == "location"}
+    return np.array([[fcs[i].evaluate(f) for i in range(3)] for f in frames])

@@ -1,0 +1,108 @@
+"""Issue 11: a render job with a crowd (scripts/render_job.py ``[[crowds]]``) builds and bakes
+the leader and its N followers, each its own rig, and a shot of the crowd (no render)."""
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import pytest
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
+pytest.importorskip("bpy")
+
+pytestmark = pytest.mark.blender
+ROOT = Path(__file__).resolve().parents[1]
+JOB = ROOT / "scripts" / "render_job.py"
+
+CONFIG = """
+[job]
+seconds = 0.5
+fps = 24
+[camera]
+follow = "each"
+[terrain.mountain]
+kind = "ski_slope"
+length = 120.0
+width = 60.0
+[[figures]]
+sport = "snowboarder"
+ground = "mountain"
+start = [15.0, 30.0]
+direction_deg = -90.0
+heading_deg = -90.0
+[[crowds]]
+name = "School"
+count = 3
+gap_m = 3.0
+lateral_m = [-1.0, 1.0]
+seed = 3
+body_jitter = 0.05
+period_jitter = 0.05
+[crowds.leader]
+sport = "skier"
+name = "Instructor"
+ground = "mountain"
+start = [-4.0, 30.0]
+direction_deg = -90.0
+speed = 9.0
+period = 2.2
+lean_deg = 18.0
+heading_deg = -90.0
+"""
+
+# Read back in a fresh interpreter: every armature, its first baked location, its keys and
+# settings, and the cameras with what their shots aim at.
+READ = """
+import json, sys, bpy
+sys.path.insert(0, sys.argv[2])
+from blender_turning import blender as addon
+from blender_turning.blender import compat
+addon.register()
+bpy.ops.wm.open_mainfile(filepath=sys.argv[1])
+out = {"figures": {}, "cameras": sorted(o.name for o in bpy.data.objects if o.type == "CAMERA")}
+for o in bpy.data.objects:
+    if o.type != "ARMATURE":
+        continue
+    fcs = list(compat.channels(o).fcurves)
+    loc = {fc.array_index: fc for fc in fcs if fc.data_path == "location"}
+    out["figures"][o.name] = {"data": o.data.name, "action": o.animation_data.action.name,
+                              "start": [loc[i].evaluate(1.0) for i in range(2)],
+                              "keys": len(loc[0].keyframe_points), "curves": len(fcs),
+                              "mass": o.turning.mass, "period": o.turning.period}
+addon.unregister()
+print("JSON" + json.dumps(out))
+"""
+
+
+def test_a_crowd_job_builds_and_bakes_its_leader_and_followers(tmp_path):
+    cfg = tmp_path / "crowd.toml"
+    cfg.write_text(CONFIG)
+    r = subprocess.run([sys.executable, str(JOB), "--config", str(cfg), "--no-render",
+                        "--output", str(tmp_path / "out")], capture_output=True, text=True,
+                       timeout=600, cwd=ROOT)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    assert "5 figure(s)" in r.stdout                  # the snowboarder, the leader, 3 followers
+    blend = tmp_path / "out" / "crowd.blend"
+    r = subprocess.run([sys.executable, "-c", READ, str(blend), str(ROOT)], capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    got = json.loads(next(line[4:] for line in r.stdout.splitlines() if line.startswith("JSON")))
+    figs = got["figures"]
+    crowd = ["Instructor", "School 1", "School 2", "School 3"]
+    assert sorted(figs) == sorted(crowd + ["Snowboarder"])
+    # N + 1 figures, each baked on its own rig and action over the job's 13 frames.
+    assert len({figs[n]["data"] for n in crowd}) == 4 == len({figs[n]["action"] for n in crowd})
+    assert all(figs[n]["keys"] == 13 and figs[n]["curves"] > 50 for n in crowd)
+    # In a line behind the leader (3 m apart uphill, alternating 1 m left and right), each with
+    # its own drawn body and period.
+    x0, y0 = figs["Instructor"]["start"]
+    for i, n in enumerate(crowd[1:], start=1):
+        x, y = figs[n]["start"]
+        assert abs(y - (y0 + 3.0 * i)) < 0.3 and abs(x - (x0 + (-1.0 if i % 2 else 1.0))) < 0.3
+    masses = {round(figs[n]["mass"], 6) for n in crowd}
+    periods = {round(figs[n]["period"], 6) for n in crowd}
+    assert len(masses) == 4 and len(periods) == 4
+    # One shot per lone figure and one for the crowd (not one per member).
+    assert got["cameras"] == ["Camera School", "Camera Snowboarder"]

@@ -1,0 +1,139 @@
+"""Issue 11: crowds in the headless render job (scripts/render_job.py ``[[crowds]]``, built by
+scripts/render_crowds.py): the config is validated like the other job keys (one line naming the
+key, nothing built), and a crowd expands into its leader and followers as figures of the job."""
+import math
+import subprocess
+import sys
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from cli_helpers import ROOT, one_line_error
+
+JOB = ROOT / "scripts" / "render_job.py"
+sys.path.insert(0, str(ROOT / "scripts"))
+import render_job  # noqa: E402
+
+from blender_turning.core.params import PRESETS  # noqa: E402
+
+CROWD = """
+[terrain.mountain]
+kind = "ski_slope"
+[[crowds]]
+name = "School"
+count = 8
+gap_m = 3.0
+lateral_m = [-1.0, 1.0]
+seed = 3
+body_jitter = 0.05
+period_jitter = 0.05
+{extra}
+[crowds.leader]
+sport = "skier"
+name = "Instructor"
+ground = "mountain"
+start = [-4.0, 50.0]
+direction_deg = -90.0
+speed = 9.0
+period = 2.2
+lean_deg = 18.0
+heading_deg = -90.0
+{leader}
+"""
+
+
+def load(tmp_path, text):
+    cfg = tmp_path / "job.toml"
+    cfg.write_text(text)
+    flags = SimpleNamespace(name=None, seconds=None, frame_step=None, output=str(tmp_path / "o"),
+                            engine=None, resolution=None, device=None, frames=None,
+                            no_render=False)
+    return render_job.load_config(cfg, flags)
+
+
+def test_a_crowd_is_its_leader_and_followers_in_a_line_behind(tmp_path):
+    cfg = load(tmp_path, CROWD.format(extra="", leader=""))
+    figs = cfg["figures"]
+    assert [f["name"] for f in figs] == ["Instructor"] + [f"School {i}" for i in range(1, 9)]
+    assert cfg["crowds"] == [{"name": "School", "members": [f["name"] for f in figs],
+                              "shot": True}]
+    assert all(f["crowd"] == "School" and f["sport"] == "skier" and f["ground"] == "mountain"
+               for f in figs)
+    lead, followers = figs[0], figs[1:]
+    assert lead["body"] is None and lead["start"] == (-4.0, 50.0)
+    # Heading -90 deg (down -y): follower i is 3 i m behind, uphill (+y), and lateral_m to the
+    # left of the heading (+x): -1, +1, -1, ... m.
+    for i, f in enumerate(followers, start=1):
+        assert f["start"][1] == pytest.approx(50.0 + 3.0 * i, abs=1e-9)
+        assert f["start"][0] == pytest.approx(-4.0 + (-1.0 if i % 2 else 1.0), abs=1e-9)
+        body = PRESETS["skier"].body
+        for key, base in (("mass", body.m), ("com_height", body.l), ("inertia", body.I_v)):
+            assert abs(f["body"][key] / base - 1.0) <= 0.05
+        assert abs(f["period"] / 2.2 - 1.0) <= 0.05
+        assert {k: v for k, v in f.items() if k not in ("name", "start", "period", "body")} == \
+            {k: v for k, v in lead.items() if k not in ("name", "start", "period", "body")}
+    # The draws differ between followers (seeded: the same every run).
+    assert len({f["period"] for f in followers}) == 8
+    assert load(tmp_path, CROWD.format(extra="", leader=""))["figures"] == figs
+
+
+def test_a_time_gap_is_that_long_at_the_leaders_speed(tmp_path):
+    cfg = load(tmp_path, CROWD.format(extra="", leader="").replace("gap_m = 3.0", "gap_s = 0.5"))
+    ys = [f["start"][1] for f in cfg["figures"]]
+    assert np.allclose(np.diff(ys), 0.5 * 9.0)
+
+
+def test_the_demo_has_a_ski_school_of_eight_with_a_shot(tmp_path):
+    cfg = load(tmp_path, (ROOT / "scripts" / "configs" / "demo.toml").read_text())
+    assert cfg["camera"]["follow"] == "each"
+    (school,) = cfg["crowds"]
+    assert school["shot"] and len(school["members"]) >= 9
+    alone = [f["name"] for f in cfg["figures"] if f["crowd"] is None]
+    assert alone == ["Skier", "Snowboarder", "Telemark", "Cyclist"]
+
+
+@pytest.mark.parametrize("extra, leader, names", [
+    ("count = 0", "", ["crowds[0].count = 0", "[1, 200]"]),
+    ("", 'control = "path"\npath = "p"',
+     ["crowds[0].leader.path = 'p' is not a [paths.<name>]"]),
+    ("gap_s = 1.0", "", ["crowds[0].gap_m", "exactly one"]),
+    ("lateral_x = 2", "", ["crowds[0]", "lateral_x"]),
+    ("body_jitter = 0.5", "", ["crowds[0].body_jitter = 0.5", "[0, 0.3]"]),
+    ('formation = "peloton"', "", ["crowds[0].formation = 'peloton'"]),
+    ("timing_jitter_s = 2.0", "", ["crowds[0].formation", "timing_jitter"]),
+    ("", 'sport = "unicyclist"', ["crowds[0].leader.sport = 'unicyclist'"]),
+    ("", 'ground = "moon"', ["crowds[0].leader.ground = 'moon'"]),
+])
+def test_bad_crowds_name_the_key(tmp_path, extra, leader, names):
+    text = CROWD
+    for line in (extra, leader):                      # the given value replaces the default
+        for given in filter(None, line.splitlines()):
+            key = given.split("=")[0].strip()
+            text = "\n".join(t for t in text.splitlines() if not t.startswith(f"{key} = "))
+    text = text.format(extra=extra, leader=leader)
+    cfg = tmp_path / "job.toml"
+    cfg.write_text(text)
+    r = subprocess.run([sys.executable, str(JOB), "--config", str(cfg), "--output",
+                        str(tmp_path / "out")], capture_output=True, text=True, timeout=120)
+    line = one_line_error(r, *names)
+    assert line.startswith("render_job: error: ") and r.stdout == ""
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_path_leader_is_refused(tmp_path):
+    text = ('[paths.p]\npoints = [[0, 0], [0, -20]]\n'
+            + CROWD.format(extra="", leader='control = "path"\npath = "p"'))
+    with pytest.raises(ValueError, match=r"crowds\[0\].leader.control = 'path'"):
+        load(tmp_path, text)
+
+
+def test_follower_names_may_not_clash_and_each_needs_a_shot(tmp_path):
+    with pytest.raises(ValueError, match=r"follower 'School 1' has the name of another figure"):
+        load(tmp_path, '[[figures]]\nsport = "skier"\nname = "School 1"\n'
+             + CROWD.format(extra="", leader=""))
+    with pytest.raises(ValueError, match=r"camera.follow = 'each'.*there is none"):
+        load(tmp_path, '[camera]\nfollow = "each"\n' + CROWD.format(extra="shot = false",
+                                                                     leader=""))
+    assert math.isfinite(load(tmp_path, CROWD.format(extra="shot = false", leader=""))
+                         ["figures"][1]["period"])
