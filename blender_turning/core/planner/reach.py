@@ -108,9 +108,7 @@ class ReachBound:
         ang = state[THETA_DIR][:, None] + self.phi[None, :]                         # (m, D)
         proj = rel[..., 0, None] * np.cos(ang)[:, None, :] + \
             rel[..., 1, None] * np.sin(ang)[:, None, :]                              # (m, W, D)
-        H = self.H[cell]                                                            # (m, K, D)
-        out = np.empty((len(cell), len(k)))
-        for i, kk in enumerate(np.asarray(k) - 1):
-            out[:, i] = np.minimum((proj - H[:, None, kk, :]).max(axis=2).min(axis=1),
-                                   far - self.L[kk])
-        return np.maximum(out, 0.0)
+        kk = np.asarray(k) - 1
+        H = self.H[cell[:, None], kk[None, :]]                                      # (m, n, D)
+        out = (proj[:, None] - H[:, :, None]).max(axis=3).min(axis=2)               # (m, n)
+        return np.maximum(np.minimum(out, np.asarray(far)[..., None] - self.L[kk]), 0.0)

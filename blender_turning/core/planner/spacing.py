@@ -79,10 +79,8 @@ class PairFloor:
         lo, hi = self._region(n)
         used = np.flatnonzero((r <= hi[-1]).any(axis=0))      # samples in some node's region
         r, ahead, apart = r[:, used], ahead[:, used], self.apart[used]
-        c = np.empty((m, n))
-        for k in range(n):
-            inside = (ahead >= lo[k]) & (r <= hi[k])
-            c[:, k] = np.where(inside, apart, np.inf).min(axis=1, initial=np.inf)
+        inside = (ahead[:, None, :] >= lo[None, :, None]) & (r[:, None, :] <= hi[None, :, None])
+        c = np.where(inside, apart, np.inf).min(axis=2, initial=np.inf)         # (m, n)
         return np.clip(c - self.b, 0.0, self.a)
 
     def _region(self, n):
