@@ -187,15 +187,16 @@ class Problem:
             if len(j):
                 terms[:, j - 1] = np.maximum(terms[:, j - 1], rb.sample_bounds(
                     self.distance.samples, state, C_f, j))
-        # Each bound also holds, less b per sample, for the samples after and before it.
-        run = terms[:, 0].copy()
-        for j in range(1, terms.shape[1]):
-            run = np.maximum(run - b, terms[:, j])
-            terms[:, j] = run
-        terms = np.where(k[None, :] <= K[:, None], terms, 0.0)
-        for j in range(terms.shape[1] - 2, -1, -1):
-            terms[:, j] = np.maximum(terms[:, j], terms[:, j + 1] - b)
-        return terms
+        # Each bound also holds, less b per sample, for the samples after and before it (one
+        # row per sample while sweeping: contiguous, no temporaries).
+        T = terms.T.copy()
+        less = np.empty(len(d_last))
+        for j in range(1, len(T)):
+            np.maximum(np.subtract(T[j - 1], b, out=less), T[j], out=T[j])
+        T = np.where(k[:, None] <= K[None, :], T, 0.0)
+        for j in range(len(T) - 2, -1, -1):
+            np.maximum(T[j], np.subtract(T[j + 1], b, out=less), out=T[j])
+        return np.ascontiguousarray(T.T)
 
     def reach_bound(self):
         """The :class:`.reach.ReachBound` of this problem, or ``None`` where it does not apply."""
@@ -296,10 +297,10 @@ class Problem:
             cost = cost + d
         if len(self.obstacles):   # the foot's and the body's ground point's moves, step by step
             track = P[:, :THETA_V + 1].transpose(1, 0, 2)           # (4, steps + 1, m)
-            n = track.shape[1]
-            pts = np.concatenate([track[:2], self.body_point(track)], axis=1)
-            a = pts[:, np.r_[0:n - 1, n:2 * n - 1]]
-            b = pts[:, np.r_[1:n, n + 1:2 * n]]
+            foot, body = track[:2], self.body_point(track)
+            # Step k's segments (foot's, then body's) run from t0 + k dt to t0 + (k + 1) dt.
+            a = np.concatenate([foot[:, :-1], body[:, :-1]], axis=1)
+            b = np.concatenate([foot[:, 1:], body[:, 1:]], axis=1)
             collided = self.obstacles.collides(a.reshape(2, -1).T, b.reshape(2, -1).T)
             collided = collided.reshape(-1, m).any(axis=0)
         else:

@@ -99,10 +99,14 @@ class PairFloor:
         m, n = terms.shape
         if n == 0:
             return np.zeros(m)
-        t = terms.copy()
-        t[:, 0] = np.maximum(t[:, 0], np.where(K >= 1, c[:, 0] - d_last, 0.0))
-        prev2, prev = np.zeros(m), t[:, 0].copy()
+        t = terms.T.copy()                      # one row per sample: contiguous
+        t[0] = np.maximum(t[0], np.where(K >= 1, c[:, 0] - d_last, 0.0))
+        c = np.where(K[None, :] > np.arange(n)[:, None], c.T[:n], 0.0)
+        prev2, prev = np.zeros(m), t[0].copy()
+        pair, single = np.empty(m), np.empty(m)
         for k in range(1, n):
-            pair = np.maximum(t[:, k - 1] + t[:, k], np.where(K > k, c[:, k], 0.0))
-            prev2, prev = prev, np.maximum(prev + t[:, k], prev2 + pair)
+            np.maximum(np.add(t[k - 1], t[k], out=pair), c[k], out=pair)
+            np.add(prev, t[k], out=single)
+            np.add(prev2, pair, out=pair)
+            prev2, prev = prev, np.maximum(single, pair, out=prev2)
         return prev
