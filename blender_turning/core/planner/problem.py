@@ -187,16 +187,13 @@ class Problem:
             if len(j):
                 terms[:, j - 1] = np.maximum(terms[:, j - 1], rb.sample_bounds(
                     self.distance.samples, state, C_f, j))
-        # Each bound also holds, less b per sample, for the samples after and before it (one
-        # row per sample while sweeping: contiguous, no temporaries).
-        T = terms.T.copy()
-        less = np.empty(len(d_last))
-        for j in range(1, len(T)):
-            np.maximum(np.subtract(T[j - 1], b, out=less), T[j], out=T[j])
-        T = np.where(k[:, None] <= K[None, :], T, 0.0)
-        for j in range(len(T) - 2, -1, -1):
-            np.maximum(T[j], np.subtract(T[j + 1], b, out=less), out=T[j])
-        return np.ascontiguousarray(T.T)
+        # Each bound also holds, less b per sample, for the samples after and before it:
+        # sample j is at least max over i of (bound_i - |j - i| b), first over i <= j (running
+        # maxima of bound_i + i b, less j b), then, past the horizon cut, over i >= j.
+        kb = b * k
+        terms = np.maximum.accumulate(terms + kb, axis=1) - kb
+        terms = np.where(k[None, :] <= K[:, None], terms, 0.0)
+        return np.maximum.accumulate((terms - kb)[:, ::-1], axis=1)[:, ::-1] + kb
 
     def reach_bound(self):
         """The :class:`.reach.ReachBound` of this problem, or ``None`` where it does not apply."""
