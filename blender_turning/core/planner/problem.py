@@ -189,7 +189,8 @@ class Problem:
                     self.distance.samples, state, C_f, j))
         # Each bound also holds, less b per sample, for the samples after and before it:
         # sample j is at least max over i of (bound_i - |j - i| b), first over i <= j (running
-        # maxima of bound_i + i b, less j b), then, past the horizon cut, over i >= j.
+        # maxima of bound_i + i b, less j b), then, past the horizon cut, over i >= j.  (The
+        # sums round to ~1e-15 m, far inside the search's relative tolerance of 1e-9.)
         kb = b * k
         terms = np.maximum.accumulate(terms + kb, axis=1) - kb
         terms = np.where(k[None, :] <= K[:, None], terms, 0.0)
