@@ -154,7 +154,8 @@ class Problem:
             return None
         return self._pairs.floor(state, int(np.max(K, initial=0)))
 
-    def sample_bounds(self, d_last, depth, state=None, C_f=None, reach: bool = False):
+    def sample_bounds(self, d_last, depth, state=None, C_f=None, reach: bool = False,
+                      direct=None):
         """Lower bounds on ``d`` at each sample still to come after nodes at ``depth`` whose last
         sample was ``d_last`` from the path, shape ``(m, K)`` (0 past a node's horizon).
 
@@ -167,6 +168,8 @@ class Problem:
         bound's range; so the sample is at least ``d(arc point) - r(tau)``.  With ``reach``, the
         samples are also bounded by the distance from the path samples to where the foot can be
         then (``reach.py``; while the heading can still turn through less than pi).
+        ``direct``: these nodes' :meth:`direct_bounds`, when already known (the search adds the
+        reach bound to the nodes that pass the cheaper bounds).
         """
         st = self.settings
         d_last = np.atleast_1d(np.asarray(d_last, float))
@@ -174,13 +177,12 @@ class Problem:
                             d_last.shape)
         b = self.v_max * st.sample_dt
         k = np.arange(1, int(np.max(K, initial=0)) + 1)
-        terms = np.maximum(d_last[:, None] - b * k[None, :], 0.0)
         if state is None or not len(k) or not len(d_last):
-            return np.where(k[None, :] <= K[:, None], terms, 0.0)
+            return np.where(k[None, :] <= K[:, None],
+                            np.maximum(d_last[:, None] - b * k[None, :], 0.0), 0.0)
         C_f = np.asarray(C_f, float)
-        n = min(self._lookahead.shape[0], len(k)) if self._lookahead is not None else 0
-        if n:
-            terms[:, :n] = np.maximum(terms[:, :n], self._arc_bound(state, C_f, n))
+        terms = self.direct_bounds(d_last, state, C_f, len(k)) if direct is None else \
+            direct[:, :len(k)].copy()
         rb = self.reach_bound() if reach else None
         if rb is not None:
             j = k[k <= rb.samples]
@@ -195,6 +197,16 @@ class Problem:
         terms = np.maximum.accumulate(terms + kb, axis=1) - kb
         terms = np.where(k[None, :] <= K[:, None], terms, 0.0)
         return np.maximum.accumulate((terms - kb)[:, ::-1], axis=1)[:, ::-1] + kb
+
+    def direct_bounds(self, d_last, state, C_f, n):
+        """The Lipschitz and arc bounds of :meth:`sample_bounds` on the next ``n`` samples, shape
+        ``(m, n)``, before they are carried to the samples around them."""
+        b = self.v_max * self.settings.sample_dt
+        terms = np.maximum(d_last[:, None] - b * np.arange(1, n + 1)[None, :], 0.0)
+        a = min(self._lookahead.shape[0], n) if self._lookahead is not None else 0
+        if a:
+            terms[:, :a] = np.maximum(terms[:, :a], self._arc_bound(state, C_f, a))
+        return terms
 
     def reach_bound(self):
         """The :class:`.reach.ReachBound` of this problem, or ``None`` where it does not apply."""
