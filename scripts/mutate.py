@@ -45,6 +45,7 @@ OBSTACLES = [T + "test_obstacles.py", T + "test_mutation_guards_planner.py"]
 TRAJ = [T + "test_mutation_guards_core.py", T + "test_trajectory.py", T + "test_cli_simulate.py"]
 PLANNER = [T + "test_mutation_guards_planner.py", T + "test_planner_search.py",
            T + "test_planner_fall_table.py"]
+FUSED = [T + "test_planner_flat_stage.py"]
 MAPPING = [T + "test_mutation_guards_mapping.py", T + "test_mapping_skier.py",
            T + "test_mapping.py", T + "test_mapping_snowboarder.py",
            T + "test_mapping_telemark.py", T + "test_mapping_cyclist.py"]
@@ -233,8 +234,8 @@ MUTANTS = [
       "return 2.0 * self.total_bound(terms, d_last, depth, state).reshape(d_last.shape)",
       PLANNER),
     M("planner_fall_right_undetected", "core/planner/problem.py",
-      "fell |= ~(np.abs(x[THETA_V]) <= st.theta_bound)",
-      "fell |= ~(x[THETA_V] <= st.theta_bound)", PLANNER),
+      "fell |= ~(np.abs(P[1:, THETA_V]) <= st.theta_bound)",
+      "fell |= ~(P[1:, THETA_V] <= st.theta_bound)", PLANNER),
     M("arc_radius_halved", "core/planner/problem.py",
       "return r[:, per - 1::per] * (1 + 1e-6) + 1e-9",
       "return 0.5 * r[:, per - 1::per] * (1 + 1e-6) + 1e-9", PLANNER),
@@ -244,10 +245,18 @@ MUTANTS = [
       "self.a = st.sample_dt * v_min", "self.a = 2.0 * st.sample_dt * v_min", PLANNER),
     M("queue_clip_too_early", "core/planner/search.py",
       "if prio > ub + tol():", "if prio > 0.8 * ub + tol():", PLANNER),
+    # -- the fused stage (issue 11): the same RK4 as the generic one --------------------------
+    M("fused_alpha_gravity_sign", "core/planner/flat_stage.py",
+      "np.subtract(out[4], a, out=out[4])", "np.add(out[4], a, out=out[4])", FUSED),
+    M("fused_floats_half_step_full", "core/planner/flat_stage.py",
+      "vf * c2, om + half * ao,", "vf * c2, om + h * ao,", FUSED),
+    M("fused_fourth_stage_rate_halved", "core/planner/flat_stage.py",
+      "np.maximum(D[2:-1:3], first - sh), first + sh)",
+      "np.maximum(D[2:-1:3], first - shalf), first + shalf)", FUSED),
     # -- path following (issue 7, item 5) ------------------------------------------------------
     M("body_not_checked", "core/planner/problem.py",
-      "pts = np.concatenate([P[:2], self.body_point(P)], axis=1)",
-      "pts = np.concatenate([P[:2], P[:2]], axis=1)", [T + "test_planner_body.py"]),
+      "foot, body = track[:2], self.body_point(track)",
+      "foot, body = track[:2], track[:2]", [T + "test_planner_body.py"]),
     M("body_on_the_wrong_side", "core/planner/problem.py",
       "state[Y] + off * np.cos(th)", "state[Y] - off * np.cos(th)", [T + "test_planner_body.py"]),
     M("end_by_half_plane", "core/path.py",

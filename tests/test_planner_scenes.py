@@ -12,7 +12,9 @@ from blender_turning.core.errors import PlanInfeasible
 from blender_turning.core.scene import load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
-NAMES = ["tree_skiing", "slalom", "cyclist_corner", "potholes"]
+NAMES = ["tree_skiing", "slalom", "cyclist_corner", "potholes",
+         # Issue 11: scenes tried as a user would.
+         "snowboard_hairpin", "cyclist_chicane", "start_facing_away"]
 _RUNS = {}
 
 

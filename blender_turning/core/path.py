@@ -208,8 +208,20 @@ class PathDistance:
         ``|P - S|^2 = |P|^2 - 2 P.S + |S|^2``: one matrix product finds the nearest sample; the
         distance itself is then computed directly (so it has full precision near the path).
         """
-        key = flat @ self._key_p + self._key_s         # (m, n): |S|^2 - 2 P.S
-        return np.argmin(key, axis=1)
+        if len(flat) < 8 or len(self.samples) < 16:
+            key = flat @ self._key_p + self._key_s     # (m, n): |S|^2 - 2 P.S
+            return np.argmin(key, axis=1)
+        # Only samples that can be nearest to some point of the points' bounding box: a sample
+        # nearer to the box than another is to its farthest corner (exact, with a margin for
+        # rounding; the planner's batches are close together and keep a tenth of the samples).
+        S = self.samples
+        lo, hi = flat.min(axis=0), flat.max(axis=0)
+        gap = np.maximum(np.maximum(lo - S, S - hi), 0.0)
+        far = np.maximum(np.abs(S - lo), np.abs(S - hi))
+        reach = np.einsum("nk,nk->n", far, far).min()
+        keep = np.flatnonzero(np.einsum("nk,nk->n", gap, gap) <= reach * (1 + 1e-9) + 1e-12)
+        key = flat @ self._key_p[:, keep] + self._key_s[keep]
+        return keep[np.argmin(key, axis=1)]
 
     def nearest_index(self, P) -> np.ndarray:
         """Index (into the full sample list) of the nearest sample to each point."""

@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from ..dynamics import THETA_V
+from . import flat_stage
 
 __all__ = ["FallTable"]
 
@@ -48,32 +49,27 @@ class FallTable:
         c0 = cf.ravel()
         u = np.full(m, lim.dC_f_max)
         T = np.full(m, _NEVER, np.int64)
-        lost = np.zeros(m, bool)                 # left the checked range: claim nothing
         h, steps = st.dt, st.steps_per_stage
-        k1, k2, k3, k4 = (np.empty_like(x) for _ in range(4))
-        anchor = c0
-        for n in range(max(st.n_stages, st.viable_stages) * steps):
-            tau = (n % steps) * h
-            if n % steps == 0:                  # a new stage starts from the curvature reached
-                c0, anchor = anchor, anchor
-            cf_s, _, _ = problem._rhs(x, V, tau, c0, u, anchor, h, k1)
-            problem._rhs(x + 0.5 * h * k1, V, tau + 0.5 * h, c0, u, cf_s, 0.5 * h, k2)
-            problem._rhs(x + 0.5 * h * k2, V, tau + 0.5 * h, c0, u, cf_s, 0.5 * h, k3)
-            problem._rhs(x + h * k3, V, tau + h, c0, u, cf_s, h, k4)
-            x = x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
-            anchor = problem._rhs(x, V, tau + h, c0, u, cf_s, h, k1)[0] if (n + 1) % steps == 0 \
-                else cf_s
-            lean = x[THETA_V]
-            lost |= ~(lean >= -problem._lean_checked)
-            hit = (lean > self.bound) & ~lost & (T == _NEVER)
-            T[hit] = n + 1
+        end = (steps - 1) * h + h
+        live = np.arange(m)            # columns neither fallen yet nor out of the checked range
+        for stage in range(max(st.n_stages, st.viable_stages)):
+            # Each stage starts from the curvature reached (flat_stage.py: the search's RK4).
+            CF, c0 = flat_stage.curvatures(c0, u[:len(live)], h, steps, lim.C_f_max,
+                                           lim.dC_f_max, end)
+            P = flat_stage.integrate(x, CF, h, V, problem.body)
+            going = np.ones(len(live), bool)
+            for k, lean in enumerate(P[1:, THETA_V], stage * steps + 1):
+                hit = going & (lean > self.bound) & (lean >= -problem._lean_checked)
+                T[live[hit]] = k
+                going &= ~hit & (lean >= -problem._lean_checked)   # lost: claim nothing
+            live, x, c0 = live[going], P[-1][:, going], c0[going]
         self.T = T.reshape(th.shape)
 
     @staticmethod
     def for_problem(problem) -> "FallTable | None":
         """The table, if the monotonicity it rests on holds for this problem (else ``None``)."""
         st, lim, b = problem.settings, problem.limits, problem.body
-        if not problem.speed.is_constant or problem._physical_binds:
+        if not problem._fused:          # a varying speed, the physical limit binding, terrain
             return None
         key = (b, lim, st.dt, st.t_stage, max(st.n_stages, st.viable_stages), st.theta_bound,
                float(problem.speed.V[0]))

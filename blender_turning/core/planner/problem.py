@@ -29,6 +29,7 @@ from ..dynamics import PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, leg_force, ste
 from ..obstacles import Obstacles
 from ..params import Figure
 from ..path import PathDistance
+from . import flat_stage
 from .settings import PlannerSettings, SpeedProfile
 
 __all__ = ["Problem", "StageResult"]
@@ -98,6 +99,8 @@ class Problem:
         self._fall_table = False                  # built on first use (fall_table.py)
         self._reach = False                       # built on first use (reach.py)
         self._pairs = False                       # built on first use (spacing.py)
+        #: The stage's RK4 fused on flat ground at a constant speed (flat_stage.py).
+        self._fused = flat_stage.applies(self)
 
     def fall_table(self):
         """The :class:`.fall_table.FallTable` of this problem, or ``None`` where it does not
@@ -167,7 +170,8 @@ class Problem:
             return None
         return self._pairs.floor(state, int(np.max(K, initial=0)))
 
-    def sample_bounds(self, d_last, depth, state=None, C_f=None, reach: bool = False):
+    def sample_bounds(self, d_last, depth, state=None, C_f=None, reach: bool = False,
+                      direct=None):
         """Lower bounds on ``d`` at each sample still to come after nodes at ``depth`` whose last
         sample was ``d_last`` from the path, shape ``(m, K)`` (0 past a node's horizon).
 
@@ -180,6 +184,8 @@ class Problem:
         bound's range; so the sample is at least ``d(arc point) - r(tau)``.  With ``reach``, the
         samples are also bounded by the distance from the path samples to where the foot can be
         then (``reach.py``; while the heading can still turn through less than pi).
+        ``direct``: these nodes' :meth:`direct_bounds`, when already known (the search adds the
+        reach bound to the nodes that pass the cheaper bounds).
         """
         st = self.settings
         d_last = np.atleast_1d(np.asarray(d_last, float))
@@ -187,27 +193,35 @@ class Problem:
                             d_last.shape)
         b = self.v_max * st.sample_dt
         k = np.arange(1, int(np.max(K, initial=0)) + 1)
-        terms = np.maximum(d_last[:, None] - b * k[None, :], 0.0)
         if state is None or not len(k) or not len(d_last):
-            return np.where(k[None, :] <= K[:, None], terms, 0.0)
+            return np.where(k[None, :] <= K[:, None],
+                            np.maximum(d_last[:, None] - b * k[None, :], 0.0), 0.0)
         C_f = np.asarray(C_f, float)
-        n = min(self._lookahead.shape[0], len(k)) if self._lookahead is not None else 0
-        if n:
-            terms[:, :n] = np.maximum(terms[:, :n], self._arc_bound(state, C_f, n))
+        terms = self.direct_bounds(d_last, state, C_f, len(k)) if direct is None else \
+            direct[:, :len(k)].copy()
         rb = self.reach_bound() if reach else None
         if rb is not None:
             j = k[k <= rb.samples]
             if len(j):
                 terms[:, j - 1] = np.maximum(terms[:, j - 1], rb.sample_bounds(
                     self.distance.samples, state, C_f, j))
-        # Each bound also holds, less b per sample, for the samples after and before it.
-        run = terms[:, 0].copy()
-        for j in range(1, terms.shape[1]):
-            run = np.maximum(run - b, terms[:, j])
-            terms[:, j] = run
+        # Each bound also holds, less b per sample, for the samples after and before it:
+        # sample j is at least max over i of (bound_i - |j - i| b), first over i <= j (running
+        # maxima of bound_i + i b, less j b), then, past the horizon cut, over i >= j.  (The
+        # sums round to ~1e-15 m, far inside the search's relative tolerance of 1e-9.)
+        kb = b * k
+        terms = np.maximum.accumulate(terms + kb, axis=1) - kb
         terms = np.where(k[None, :] <= K[:, None], terms, 0.0)
-        for j in range(terms.shape[1] - 2, -1, -1):
-            terms[:, j] = np.maximum(terms[:, j], terms[:, j + 1] - b)
+        return np.maximum.accumulate((terms - kb)[:, ::-1], axis=1)[:, ::-1] + kb
+
+    def direct_bounds(self, d_last, state, C_f, n):
+        """The Lipschitz and arc bounds of :meth:`sample_bounds` on the next ``n`` samples, shape
+        ``(m, n)``, before they are carried to the samples around them."""
+        b = self.v_max * self.settings.sample_dt
+        terms = np.maximum(d_last[:, None] - b * np.arange(1, n + 1)[None, :], 0.0)
+        a = min(self._lookahead.shape[0], n) if self._lookahead is not None else 0
+        if a:
+            terms[:, :a] = np.maximum(terms[:, :a], self._arc_bound(state, C_f, a))
         return terms
 
     def reach_bound(self):
@@ -279,23 +293,63 @@ class Problem:
 
         Classical RK4 with step ``dt``; at the start of each step the curvature is bounded
         relative to the previous step's (the rate bound), and inside the step relative to the
-        step's start, exactly as :func:`..dynamics.rk4_step` does."""
+        step's start, exactly as :func:`..dynamics.rk4_step` does (:meth:`_integrate`; on flat
+        ground at a constant speed the same numbers from the fused :mod:`.flat_stage`)."""
         st = self.settings
         u = np.asarray(u, float)
         C_f0 = np.asarray(C_f0, float)
         x = np.array(state, float)
-        s = np.array(s0, float)
         m = x.shape[1]
-        anchor = C_f0
+        rec = None
+        if self._fused and not record:
+            CF, cf_end = flat_stage.curvatures(
+                np.broadcast_to(C_f0, (m,)), np.broadcast_to(u, (m,)), st.dt,
+                st.steps_per_stage, self.limits.C_f_max, self.limits.dC_f_max, st.t_stage)
+            P = flat_stage.integrate(x, CF, st.dt, float(self.speed.V[0]), self.body)
+            fell = np.zeros(m, bool)
+        else:
+            P, cf_end, fell, rec = self._integrate(x, C_f0, u, t0, s0, record)
+        # P: the state at every step's end, shape (steps + 1, rows, m).  The distance travelled
+        # (the steps' chords), the cost (the path distance at every sample, Section 6) and a
+        # fall (the lean past its bound at a step's end; NaN counts).
+        s = np.array(s0, float)
+        for ds in np.hypot(P[1:, X] - P[:-1, X], P[1:, Y] - P[:-1, Y]):
+            s = s + ds
+        fell |= ~(np.abs(P[1:, THETA_V]) <= st.theta_bound).all(axis=0)
+        per = st.steps_per_sample
+        D = self.distance(P[per::per, :2].transpose(0, 2, 1))      # (samples, m)
         cost = np.zeros(m)
-        d = np.zeros(m)
-        fell = np.zeros(m, bool)
-        bad = np.zeros(m, bool)
-        track = [x[:THETA_V + 1]]          # x, y, theta_dir, theta_v at every step's end
+        for d in D:
+            cost = cost + d
+        collided = np.zeros(m, bool)
+        if len(self.obstacles) or self.movers is not None:
+            # The foot's and the body's ground point's moves, step by step.
+            track = P[:, :THETA_V + 1].transpose(1, 0, 2)           # (4, steps + 1, m)
+            foot, body = track[:2], self.body_point(track)
+            if len(self.obstacles):
+                # Step k's segments (foot's, then body's) run from t0 + k dt to t0 + (k + 1) dt.
+                a = np.concatenate([foot[:, :-1], body[:, :-1]], axis=1)
+                b = np.concatenate([foot[:, 1:], body[:, 1:]], axis=1)
+                hit = self.obstacles.collides(a.reshape(2, -1).T, b.reshape(2, -1).T)
+                collided = hit.reshape(-1, m).any(axis=0)
+            if self.movers is not None:   # the same steps, at their times (core/moving.py)
+                collided |= self.movers.collides(foot, body, t0, st.dt)
+        return StageResult(P[-1].copy(), np.asarray(cf_end, float) * np.ones(m), s, cost, D[-1],
+                           collided, fell, rec)
+
+    def _integrate(self, x, C_f0, u, t0, s0, record):
+        """The stage's RK4 through :meth:`_rhs` (any problem).  Returns ``(P, cf_end, bad,
+        record)``: the states at every step boundary (shape ``(steps + 1, rows, m)``), the
+        curvature at the end, the columns ``_rhs`` clipped, and with ``record`` the per-step
+        columns."""
+        st = self.settings
+        s = np.array(s0, float)
+        anchor = C_f0
+        bad = np.zeros(x.shape[1], bool)
+        P = [x]
         rec = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")} if record else None
         h = st.dt
         half = 0.5 * h
-        check = len(self.obstacles) > 0 or self.movers is not None
         k1, k2, k3, k4 = (np.empty_like(x) for _ in range(4))
         for k in range(st.steps_per_stage):
             tau = k * h
@@ -311,31 +365,13 @@ class Problem:
             self._rhs(x + half * k2, V, tau + half, C_f0, u, cf, half, k3, bad)
             self._rhs(x + h * k3, V, tau + h, C_f0, u, cf, h, k4, bad)
             new = x + (h / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
-            if check:
-                track.append(new[:THETA_V + 1])
             s = s + np.hypot(new[X] - x[X], new[Y] - x[Y])
             x, anchor = new, cf
-            fell |= ~(np.abs(x[THETA_V]) <= st.theta_bound)       # NaN counts as fallen
-            if (k + 1) % st.steps_per_sample == 0:
-                d = self.distance(x[:2].T)
-                cost = cost + d
+            P.append(x)
         # The curvature in force at the end of the stage (the next stage's C0).
         cf_end = self._rhs(x, self._speed_at(t0 + st.t_stage, s), st.t_stage, C_f0, u, anchor,
                            h, k1, bad)[0]
-        fell |= bad
-        if check:   # the foot's and the body's ground point's moves, step by step
-            P = np.stack(track, axis=1)                          # (4, steps + 1, m)
-            pts = np.concatenate([P[:2], self.body_point(P)], axis=1)
-            a = pts[:, np.r_[0:len(track) - 1, len(track):2 * len(track) - 1]]
-            b = pts[:, np.r_[1:len(track), len(track) + 1:2 * len(track)]]
-            collided = self.obstacles.collides(a.reshape(2, -1).T, b.reshape(2, -1).T)
-            collided = collided.reshape(-1, m).any(axis=0)
-            if self.movers is not None:   # the same steps, at their times (core/moving.py)
-                collided |= self.movers.collides(P[:2], pts[:, len(track):], t0, h)
-        else:
-            collided = np.zeros(m, bool)
-        return StageResult(x, np.asarray(cf_end, float) * np.ones(m), s, cost, d, collided,
-                           fell, rec)
+        return np.stack(P), cf_end, bad, rec
 
     def end_rates(self, x, cf, t, s):
         """``(alpha_v, V_f)`` of the state ``x`` (shape ``(5, 1)``) at curvature ``cf``."""

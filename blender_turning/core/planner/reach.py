@@ -105,12 +105,14 @@ class ReachBound:
             part = np.argpartition(r2, nearest, axis=1)
             far = np.sqrt(np.take_along_axis(r2, part[:, nearest:], 1).min(axis=1))
             rel = np.take_along_axis(rel, part[:, :nearest, None], 1)
-        ang = state[THETA_DIR][:, None] + self.phi[None, :]                         # (m, D)
-        proj = rel[..., 0, None] * np.cos(ang)[:, None, :] + \
-            rel[..., 1, None] * np.sin(ang)[:, None, :]                              # (m, W, D)
-        H = self.H[cell]                                                            # (m, K, D)
-        out = np.empty((len(cell), len(k)))
-        for i, kk in enumerate(np.asarray(k) - 1):
-            out[:, i] = np.minimum((proj - H[:, None, kk, :]).max(axis=2).min(axis=1),
-                                   far - self.L[kk])
+        ang = state[THETA_DIR][None, :] + self.phi[:, None]                         # (D, m)
+        rel = rel.transpose(2, 1, 0)                                                # (2, W, m)
+        proj = rel[0] * np.cos(ang)[:, None] + rel[1] * np.sin(ang)[:, None]        # (D, W, m)
+        kk = np.asarray(k) - 1
+        H = self.H[cell[None, :], kk[:, None]]                                      # (n, m, D)
+        # max over the directions, min over the path samples: elementwise along leading axes.
+        best = proj[0][None] - H[:, None, :, 0]                                     # (n, W, m)
+        for j in range(1, proj.shape[0]):
+            np.maximum(best, proj[j][None] - H[:, None, :, j], out=best)
+        out = np.minimum(best.min(axis=1), np.asarray(far) - self.L[kk][:, None]).T  # (m, n)
         return np.maximum(out, 0.0)

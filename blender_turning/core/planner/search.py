@@ -190,24 +190,29 @@ def _expand(problem: Problem, nodes: _Nodes, ids):
     return r, par, ch
 
 
-def _bound(problem, r, depth, togo, reach, cols, pairs=None):
+def _bound(problem, r, depth, togo, reach, cols, pairs=None, direct=None):
     """Lower bound on the cost still to come after children ``cols`` of a stage result: the
     per-sample bounds (``Problem.sample_bounds``) combined by ``Problem.total_bound`` and, given
     the previous search's ``togo`` (proof.py, which covers all stages but the last), ``togo`` plus
-    the bounds on the last stage's samples.  ``pairs``: the pair floors, when already known."""
+    the bounds on the last stage's samples.  ``pairs``: the pair floors, ``direct``: the direct
+    bounds (``Problem.direct_bounds``), when already known.  Returns the bound and the direct
+    bounds."""
     st = problem.settings
     if not st.lower_bound:
-        return np.zeros(len(cols)) if togo is None else togo
+        return (np.zeros(len(cols)) if togo is None else togo), None
     depth = depth[cols]
     state = r.state[:, cols]
-    terms = problem.sample_bounds(r.d_last[cols], depth, state, r.C_f[cols], reach)
+    n = int(np.max(st.n_stages - depth, initial=0)) * st.samples_per_stage
+    if direct is None and n:
+        direct = problem.direct_bounds(r.d_last[cols], state, r.C_f[cols], n)
+    terms = problem.sample_bounds(r.d_last[cols], depth, state, r.C_f[cols], reach, direct)
     h = problem.total_bound(terms, r.d_last[cols], depth, state, pairs)
     if togo is None or not terms.shape[1]:
-        return h if togo is None else np.maximum(h, togo)
+        return (h if togo is None else np.maximum(h, togo)), direct
     per = st.samples_per_stage
     K = (st.n_stages - depth) * per
     last = np.take_along_axis(terms, np.maximum(K[:, None] - per + np.arange(per), 0), 1)
-    return np.maximum(h, togo + np.where(K[:, None] >= per, last, 0.0).sum(axis=1))
+    return np.maximum(h, togo + np.where(K[:, None] >= per, last, 0.0).sum(axis=1)), direct
 
 
 def _root(q, state, C_f, t0, s0, old):
@@ -317,8 +322,11 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         ids = []
         # Batches expand nodes past the optimum when the bound is not yet tight: take whole
         # batches only from the previous plan's bound; else a quarter, and until a first complete
-        # plan, batches growing with the search.
-        limit = st.batch if hot else max(1, st.batch // 4)
+        # plan, batches growing with the search.  A long search takes batches of up to a quarter
+        # of the nodes it has expanded (at most 4 whole ones): the overshoot is then small
+        # against the search, and numpy's cost per call is spread over more nodes (issue 11).
+        limit = max(st.batch if hot else max(1, st.batch // 4),
+                    min(4 * st.batch, expanded // 4))
         if ub == np.inf:
             limit = min(limit, max(8, expanded // 4))
         while heap and len(ids) < limit:
@@ -376,8 +384,8 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         i = np.flatnonzero(inner)
         pairs = problem.pair_floors(r.state[:, i], (N - depth[i]) * st.samples_per_stage) \
             if st.lower_bound and len(i) else None
-        prio[i] = f[i] + _bound(problem, r, depth, None if togo is None else togo[i], False, i,
-                                pairs)
+        h, direct = _bound(problem, r, depth, None if togo is None else togo[i], False, i, pairs)
+        prio[i] = f[i] + h
         # What this search proves about each child (proof.py): f + h, f for a leaf, inf if none.
         nodes.child_f[par, ch] = f
         keep = inner & ~(prio > ub + tol())
@@ -386,7 +394,7 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
             k = i[sub]
             prio[k] = np.maximum(prio[k], f[k] + _bound(
                 problem, r, depth, None if togo is None else togo[k], True, k,
-                None if pairs is None else pairs[sub]))
+                None if pairs is None else pairs[sub], None if direct is None else direct[sub])[0])
             keep[k] = ~(prio[k] > ub + tol())
         # A dead last node keeps its f: one stage on (the next search) it may have a live one.
         # (A doomed one does not: it falls within the horizon and M stages, as does every node

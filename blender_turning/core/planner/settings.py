@@ -55,7 +55,8 @@ class PlannerSettings:
     the same subtree (``proof.py``; exact)."""
     batch: int = 128
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
-    one node at a time).  Any value returns the same optimum."""
+    one node at a time; a long search grows its batches up to 4 times this, ``search.py``).  Any
+    value returns the same optimum."""
     vectorize_children: bool = True
     """Simulate the q children of a node as one (5, q) array (False: one child at a time)."""
     max_expansions: int = 0

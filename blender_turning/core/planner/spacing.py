@@ -79,10 +79,8 @@ class PairFloor:
         lo, hi = self._region(n)
         used = np.flatnonzero((r <= hi[-1]).any(axis=0))      # samples in some node's region
         r, ahead, apart = r[:, used], ahead[:, used], self.apart[used]
-        c = np.empty((m, n))
-        for k in range(n):
-            inside = (ahead >= lo[k]) & (r <= hi[k])
-            c[:, k] = np.where(inside, apart, np.inf).min(axis=1, initial=np.inf)
+        inside = (ahead[:, None, :] >= lo[None, :, None]) & (r[:, None, :] <= hi[None, :, None])
+        c = np.where(inside, apart, np.inf).min(axis=2, initial=np.inf)         # (m, n)
         return np.clip(c - self.b, 0.0, self.a)
 
     def _region(self, n):
@@ -101,10 +99,14 @@ class PairFloor:
         m, n = terms.shape
         if n == 0:
             return np.zeros(m)
-        t = terms.copy()
-        t[:, 0] = np.maximum(t[:, 0], np.where(K >= 1, c[:, 0] - d_last, 0.0))
-        prev2, prev = np.zeros(m), t[:, 0].copy()
+        t = terms.T.copy()                      # one row per sample: contiguous
+        t[0] = np.maximum(t[0], np.where(K >= 1, c[:, 0] - d_last, 0.0))
+        c = np.where(K[None, :] > np.arange(n)[:, None], c.T[:n], 0.0)
+        prev2, prev = np.zeros(m), t[0].copy()
+        pair, single = np.empty(m), np.empty(m)
         for k in range(1, n):
-            pair = np.maximum(t[:, k - 1] + t[:, k], np.where(K > k, c[:, k], 0.0))
-            prev2, prev = prev, np.maximum(prev + t[:, k], prev2 + pair)
+            np.maximum(np.add(t[k - 1], t[k], out=pair), c[k], out=pair)
+            np.add(prev, t[k], out=single)
+            np.add(prev2, pair, out=pair)
+            prev2, prev = prev, np.maximum(single, pair, out=prev2)
         return prev
