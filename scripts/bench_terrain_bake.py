@@ -44,6 +44,8 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--cell", type=float, default=1.0, help="mesh grid spacing, m")
+    ap.add_argument("--profile", type=int, default=0, metavar="N",
+                    help="instead of timing: cProfile the first terrain bake, print N lines")
     args = ap.parse_args(argv)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     addon.register()
@@ -75,6 +77,16 @@ def main(argv=None):
         mesh_ground._READ.clear()                      # the first bake over this mesh
         bake(name)
 
+    if args.profile:
+        import cProfile
+        import pstats
+        bake("flat"), cold("terrain")                  # warm: imports, first calls
+        prof = cProfile.Profile()
+        prof.runcall(cold, "terrain")
+        pstats.Stats(prof).sort_stats("tottime").print_stats(args.profile)
+        pstats.Stats(prof).sort_stats("cumulative").print_stats(args.profile)
+        addon.unregister()
+        return
     depsgraph = bpy.context.evaluated_depsgraph_get
     read = mesh_ground.read_ground(mountain, depsgraph())
     parts = {

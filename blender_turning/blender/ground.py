@@ -8,7 +8,7 @@ import hashlib
 
 import numpy as np
 
-from ..core.terrain import HeightField
+from ..core.terrain import HeightField, LazyHeightField
 
 #: Most grid points a ground is sampled at (a 200 m x 200 m terrain at 0.25 m is 641,601).
 MAX_SAMPLES = 1_000_000
@@ -19,7 +19,8 @@ def _world_triangles(obj, depsgraph):
     ev = obj.evaluated_get(depsgraph)
     mesh = ev.to_mesh()
     try:
-        co = np.empty(len(mesh.vertices) * 3)
+        # float32 as Blender stores them (~5x faster to read than into float64; the same values).
+        co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
         mesh.vertices.foreach_get("co", co)
         mesh.calc_loop_triangles()
         tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
@@ -27,7 +28,7 @@ def _world_triangles(obj, depsgraph):
     finally:
         ev.to_mesh_clear()
     m = np.array(obj.matrix_world)
-    world = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
+    world = co.astype(float).reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
     return world, tris.reshape(-1, 3)
 
 
@@ -60,44 +61,6 @@ class MeshGround:
             on = self.grid.contains(x, y)
             z[on] = self.grid.heights(x[on], y[on])
             return z
-        import bpy
-        obj = bpy.data.objects.get(self.name)
-        if obj is None:
-            raise ValueError(f"ground {self.name!r} was deleted while baking")
-        ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
-        m = np.array(ev.matrix_world)
-        inv = np.linalg.inv(m)
-        # From 1 m above the mesh's box: the BVH works in float32, a ray from 1 km above
-        # would carry ~0.3 mm of round-off into the hit.
-        top = float(np.max(np.array(ev.bound_box) @ m[2, :3] + m[2, 3])) + 1.0
-        origins = np.stack([x, y, np.full_like(x, top)], -1) @ inv[:3, :3].T + inv[:3, 3]
-        down = tuple(-inv[:3, 2])
-        cast = ev.ray_cast
-        for k, o in enumerate(origins.tolist()):
-            hit, loc = cast(o, down)[:2]
-            if hit:
-                z[k] = m[2, 0] * loc[0] + m[2, 1] * loc[1] + m[2, 2] * loc[2] + m[2, 3]
-        return z
-        import bpy
-        obj = bpy.data.objects.get(self.name)
-        if obj is None:
-            raise ValueError(f"ground {self.name!r} was deleted while baking")
-        ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
-        x, y = np.asarray(x, float), np.asarray(y, float)
-        z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
-        m = np.array(ev.matrix_world)
-        inv = np.linalg.inv(m)
-        # From 1 m above the mesh's box: the BVH works in float32, a ray from 1 km above
-        # would carry ~0.3 mm of round-off into the hit.
-        top = float(np.max(np.array(ev.bound_box) @ m[2, :3] + m[2, 3])) + 1.0
-        origins = np.stack([x, y, np.full_like(x, top)], -1) @ inv[:3, :3].T + inv[:3, 3]
-        down = tuple(-inv[:3, 2])
-        cast = ev.ray_cast
-        for k, o in enumerate(origins.tolist()):
-            hit, loc = cast(o, down)[:2]
-            if hit:
-                z[k] = m[2, 0] * loc[0] + m[2, 1] * loc[1] + m[2, 2] * loc[2] + m[2, 3]
-        return z
 
 
 def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
@@ -123,11 +86,7 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
         return kept[1]
     lo, hi = world.min(0), world.max(0)
     if cell is None:
-        # Each triangle's shortest side seen from above (a quad's diagonal is never it).
-        xy = world[:, :2]
-        edges = np.min([np.linalg.norm(xy[tris[:, k]] - xy[tris[:, k - 1]], axis=1)
-                        for k in range(3)], axis=0)
-        cell = 0.25 * float(np.median(edges[edges > 0])) if np.any(edges > 0) else 1.0
+        cell = 0.25 * _median_shortest_side(world, tris)
     nx = int(np.floor((hi[0] - lo[0]) / cell)) + 1
     ny = int(np.floor((hi[1] - lo[1]) / cell)) + 1
     if nx < 2 or ny < 2:
@@ -135,22 +94,46 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     if nx * ny > MAX_SAMPLES:
         raise ValueError(f"ground {obj.name!r} needs {nx * ny} samples at {cell:g} m; "
                          f"at most {MAX_SAMPLES}: use a coarser cell")
-    xs = lo[0] + cell * np.arange(nx)
-    ys = lo[1] + cell * np.arange(ny)
+    x0, y0, cell = float(lo[0]), float(lo[1]), float(cell)
     grid = _grid_mesh(world, tris)
     if grid is not None:
-        h = grid.heights(xs[None, :], ys[:, None])
+        # The lattice covers the grid: its samples are computed as the run visits them.
+        field = LazyHeightField(lambda rows, cols: grid.heights(x0 + cell * cols[None, :],
+                                                                y0 + cell * rows[:, None]),
+                                nx, ny, x0, y0, cell)
     else:
-        h = _rasterize(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
-    if np.isnan(h).all():
-        raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
-    _fill_nearest(h)
-    ground = MeshGround(obj.name, HeightField(h, float(xs[0]), float(ys[0]), float(cell)), grid)
+        h = _rasterize(world, tris, x0, y0, cell, nx, ny)
+        if np.isnan(h).all():
+            raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
+        _fill_nearest(h)
+        field = HeightField(h, x0, y0, cell)
+    ground = MeshGround(obj.name, field, grid)
     _READ.pop(obj.name, None)
     while len(_READ) >= _KEEP:                              # the oldest read goes
         _READ.pop(next(iter(_READ)))
     _READ[obj.name] = (key, ground)
     return ground
+
+
+def _median_shortest_side(world, tris) -> float:
+    """The median of each triangle's shortest side seen from above (a quad's diagonal is never
+    it), 1 m when all are degenerate: ``np.median`` of the sides' lengths, from their squares
+    (the same order) and the square roots of the middle one or two only."""
+    X, Y = world[:, 0][tris], world[:, 1][tris]             # (k, 3) each
+
+    def side(a, b):
+        dx, dy = X[:, a] - X[:, b], Y[:, a] - Y[:, b]
+        return dx * dx + dy * dy
+
+    sq = np.minimum(np.minimum(side(0, 2), side(1, 0)), side(2, 1))
+    sq = sq[sq > 0]
+    if not len(sq):
+        return 1.0
+    mid = len(sq) // 2
+    if len(sq) % 2:
+        return float(np.sqrt(np.partition(sq, mid)[mid]))
+    part = np.partition(sq, [mid - 1, mid])
+    return float(np.median(np.sqrt(part[mid - 1:mid + 1])))
 
 
 #: Grounds read, by object name: ``(digest of the world-space mesh and cell, MeshGround)``.
@@ -231,26 +214,37 @@ def _rasterize(world, tris, x0, y0, cell, nx, ny):
 
 class _GridMesh:
     """A grid mesh's triangles as planes over its lattice cells (:func:`_grid_mesh`): the mesh's
-    exact height anywhere over the lattice from where the point lies in its cell."""
+    exact height anywhere over the lattice from where the point lies in its cell.  ``Z``: the
+    lattice's heights ``(rows, columns)``; ``main``: per cell, split along (0,0)-(1,1)."""
 
-    def __init__(self, lo, step, n, plane, main):
-        self.lo, self.step, self.n, self.plane, self.main = lo, step, n, plane, main
+    def __init__(self, lo, step, n, Z, main):
+        self.lo, self.step, self.n, self.Z, self.main = lo, step, n, Z.ravel(), main
 
     def contains(self, x, y):
         hi = self.lo + self.step * (np.array(self.n) - 1)
         return (x >= self.lo[0]) & (x <= hi[0]) & (y >= self.lo[1]) & (y <= hi[1])
 
     def heights(self, x, y):
-        """The mesh's height at ``(x, y)`` (arrays that broadcast; inside :meth:`contains`)."""
+        """The mesh's height at ``(x, y)`` (arrays that broadcast; inside :meth:`contains`).
+
+        Each cell's two triangles are planes over ``(u, v)`` in [0, 1]^2, ``h = c0 + a u + b
+        v``: the first holds ``u >= v`` (split along the main diagonal) or ``u + v <= 1``
+        (across), the second the rest; their coefficients from the cell's corners."""
         n0, n1 = self.n
         fx = np.clip((x - self.lo[0]) / self.step[0], 0.0, n0 - 1)
         fy = np.clip((y - self.lo[1]) / self.step[1], 0.0, n1 - 1)
         i = np.minimum(fx.astype(np.int64), n0 - 2)
         j = np.minimum(fy.astype(np.int64), n1 - 2)
         u, v = fx - i, fy - j
-        c = j * (n0 - 1) + i
-        k = 2 * c + np.where(self.main[c], u < v, u + v > 1.0)
-        return self.plane[0][k] + self.plane[1][k] * u + self.plane[2][k] * v
+        main = self.main[j * (n0 - 1) + i]
+        second = np.where(main, u < v, u + v > 1.0)
+        k = j * n0 + i
+        Z = self.Z
+        z00, z10, z01, z11 = Z[k], Z[k + 1], Z[k + n0], Z[k + n0 + 1]
+        c0 = np.where(second & ~main, z01 + z10 - z11, z00)
+        a = np.where(second, z11 - z01, z10 - z00)
+        b = np.where(second == main, z01 - z00, z11 - z10)
+        return c0 + a * u + b * v
 
 
 def _grid_mesh(world, tris) -> _GridMesh | None:
@@ -273,19 +267,25 @@ def _grid_mesh(world, tris) -> _GridMesh | None:
     idx = np.rint((xy - lo) / step).astype(np.int64)
     if n[0] * n[1] != len(world) or np.abs(lo + idx * step - xy).max() > 1e-4 * step.min():
         return None
-    node = idx[:, 1] * n[0] + idx[:, 0]
+    ix, iy = np.ascontiguousarray(idx.T)
+    node = iy * n[0] + ix
     if len(np.unique(node)) != len(node):
         return None
     Z = np.empty(len(node))
     Z[node] = world[:, 2]
     Z = Z.reshape(n[1], n[0])
     # Each triangle within one lattice cell; the cell's diagonal from the corners it holds.
-    ti, tj = idx[tris, 0], idx[tris, 1]                    # (k, 3)
-    ci, cj = ti.min(1), tj.min(1)
-    if (ti.max(1) - ci != 1).any() or (tj.max(1) - cj != 1).any():
+    # (Column by column: numpy's reductions along a short last axis cost ~10x more here.)
+    ti, tj = ix[tris], iy[tris]                            # (k, 3)
+    ti0, ti1, ti2, tj0, tj1, tj2 = ti[:, 0], ti[:, 1], ti[:, 2], tj[:, 0], tj[:, 1], tj[:, 2]
+    ci = np.minimum(np.minimum(ti0, ti1), ti2)
+    cj = np.minimum(np.minimum(tj0, tj1), tj2)
+    if ((np.maximum(np.maximum(ti0, ti1), ti2) - ci != 1).any()
+            or (np.maximum(np.maximum(tj0, tj1), tj2) - cj != 1).any()):
         return None
-    corner = (ti - ci[:, None]) + 2 * (tj - cj[:, None])   # 0: (0,0) 1: (1,0) 2: (0,1) 3: (1,1)
-    mask = (1 << corner).sum(1)               # a triangle's corners as bits: 11, 13 / 7, 14
+    # A triangle's corners as bits (0: (0,0) 1: (1,0) 2: (0,1) 3: (1,1)): 11, 13 / 7, 14.
+    mask = ((1 << ((ti0 - ci) + 2 * (tj0 - cj))) + (1 << ((ti1 - ci) + 2 * (tj1 - cj)))
+            + (1 << ((ti2 - ci) + 2 * (tj2 - cj))))
     cell_id = cj * (n[0] - 1) + ci
     cells = (n[0] - 1) * (n[1] - 1)
     both = np.bincount(cell_id, weights=mask, minlength=cells)
@@ -293,17 +293,7 @@ def _grid_mesh(world, tris) -> _GridMesh | None:
     # holes (0 or one triangle), overlaps or other shapes (no other sums give 24 or 21).
     if ((both != 24) & (both != 21)).any():
         return None
-    main = both == 24
-    # Each cell's two triangles as planes over (u, v) in [0, 1]^2: h = c0 + a u + b v; the first
-    # holds u >= v (along the main diagonal) or u + v <= 1 (across), the second the rest.
-    z00, z10 = Z[:-1, :-1].ravel(), Z[:-1, 1:].ravel()
-    z01, z11 = Z[1:, :-1].ravel(), Z[1:, 1:].ravel()
-    plane = np.empty((cells, 2, 3))
-    plane[:, 0] = np.where(main[:, None], np.stack([z00, z10 - z00, z11 - z10], 1),
-                           np.stack([z00, z10 - z00, z01 - z00], 1))
-    plane[:, 1] = np.where(main[:, None], np.stack([z00, z11 - z01, z01 - z00], 1),
-                           np.stack([z01 + z10 - z11, z11 - z01, z11 - z10], 1))
-    return _GridMesh(lo, step, n, plane.reshape(-1, 3).T, main)
+    return _GridMesh(lo, step, n, Z, both == 24)
 
 
 def _fill_nearest(h):

@@ -54,25 +54,27 @@ class TerrainStage:
         own_law = None if base.terrain_cf_law is Controller.terrain_cf_law else \
             controller.terrain_cf_law(ground)
         self._plumb = base.equilibrium_lean is Controller.equilibrium_lean
+        # The course the plumb lean is taken along (plumb_lean_along): read once, as its cosine
+        # and sine when constant; else kept for the time last asked (a step's stages 2 and 3
+        # share one), and asked again by :meth:`lean` at each step's start (the brake's course
+        # moves between steps, :class:`.braking.TargetSpeed`).
+        self._heading = getattr(controller, "heading", None) if self._plumb else None
+        H = getattr(self._heading, "constant_value", None)
+        self._course = [None, 1.0, 0.0] if H is None else [math.inf, math.cos(H), math.sin(H)]
         self.stage = self._build(body, limits, resistance, own_law)
 
-    def _equilibrium(self, t, x, y, d, g_n, g_b, nx, ny, nz):
-        """The controller's equilibrium lean (:meth:`.Controller.equilibrium_lean`) at the
-        frame of ``(x, y)`` heading ``d``."""
-        ctl = self.controller
-        if not self._plumb:
-            return ctl.equilibrium_lean(surface_frame(self.ground, x, y, d, self._g), t)
-        heading = getattr(ctl, "heading", None)
-        if heading is None:
-            return math.atan2(-g_b, g_n)                        # plumb_lean
-        H = heading(t)                                          # plumb_lean_along
-        cH, sH = math.cos(H), math.sin(H)
-        p = -(nx * cH + ny * sH) / nz
-        return math.atan2(self._g * (nx * sH - ny * cH) / math.sqrt(1.0 + p * p), g_n)
+    def _along(self, t):
+        """``(cos H, sin H)`` of the course at ``t``."""
+        course = self._course
+        if course[0] != t and course[0] != math.inf:
+            H = self._heading(t)
+            course[0], course[1], course[2] = t, math.cos(H), math.sin(H)
+        return course[1], course[2]
 
     def lean(self, t: float, x: float, y: float, d: float, theta_v: float, dv) -> float:
-        """``theta_v`` from the controller's equilibrium lean at ``(x, y)`` heading ``d``
-        (``dv``: :attr:`derivatives` there)."""
+        """``theta_v`` from the controller's equilibrium lean
+        (:meth:`.Controller.equilibrium_lean`) at ``(x, y)`` heading ``d`` (``dv``:
+        :attr:`derivatives` there), at the start of a step: the course is read anew."""
         _, hx, hy, _, _, _ = dv
         c, s = math.cos(d), math.sin(d)
         p = hx * c + hy * s
@@ -80,8 +82,16 @@ class TerrainStage:
         nz = 1.0 / math.sqrt(1.0 + hx * hx + hy * hy)
         nx, ny = -hx * nz, -hy * nz
         g = self._g
-        return theta_v - self._equilibrium(t, x, y, d, g * nz, -g * (nx * s - ny * c) * it,
-                                           nx, ny, nz)
+        if not self._plumb:
+            return theta_v - self.controller.equilibrium_lean(
+                surface_frame(self.ground, x, y, d, g), t)
+        if self._heading is None:                               # plumb_lean
+            return theta_v - math.atan2(g * (nx * s - ny * c) * it, g * nz)
+        if self._course[0] != math.inf:
+            self._course[0] = None
+        cH, sH = self._along(t)                                 # plumb_lean_along
+        q = -(nx * cH + ny * sH) / nz
+        return theta_v - math.atan2(g * (nx * sH - ny * cH) / math.sqrt(1.0 + q * q), g * nz)
 
     def _build(self, body, limits, resistance, own_law):
         g, l, J, m = body.g, body.l, body.J, body.m
@@ -89,9 +99,13 @@ class TerrainStage:
         law_J, law_l = self.controller.body.J, self.controller.body.l
         cmax, rate = limits.C_f_max, limits.dC_f_max
         rated = rate != math.inf
-        sin, cos, sqrt, inf, copysign = math.sin, math.cos, math.sqrt, math.inf, math.copysign
-        derivatives, equilibrium = self.derivatives, self._equilibrium
+        sin, cos, sqrt, atan2 = math.sin, math.cos, math.sqrt, math.atan2
+        inf, copysign = math.inf, math.copysign
+        derivatives, ground, ctl = self.derivatives, self.ground, self.controller
         alpha_law = self.controller.scalar_alpha_law() if own_law is None else None
+        # The equilibrium lean: along the course (0), the plumb lean (1), the controller's (2).
+        kind = (0 if self._heading is not None else 1) if self._plumb else 2
+        course, along = self._course, self._along
 
         def stage(t, x, y, d, th, om, V, anchor, tau, dv=None):
             """``(x', y', theta_dir', theta_v', omega_v', V_cm', alpha_v, V_f, C_f)``."""
@@ -107,14 +121,23 @@ class TerrainStage:
             kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz * it * it
             g_n, g_b = g * nz, -g * bz
             sn, cs = sin(th), cos(th)
+            VV = V * V
             if alpha_law is None:
                 cf = own_law(t, (x, y, d, th, om, V))
             else:
                 # The lean law about the equilibrium lean, then Eq. (1) on terrain.
-                eq = equilibrium(t, x, y, d, g_n, g_b, nx, ny, nz)
-                k = ((g_n + V * V * kappa) * sn + g_b * cs
+                if kind == 0:                                   # plumb_lean_along the course
+                    cH, sH = (course[1], course[2]) if course[0] == t or \
+                        course[0] == inf else along(t)
+                    q = -(nx * cH + ny * sH) / nz
+                    eq = atan2(g * (nx * sH - ny * cH) / sqrt(1.0 + q * q), g_n)
+                elif kind == 1:                                 # plumb_lean
+                    eq = atan2(-g_b, g_n)
+                else:
+                    eq = ctl.equilibrium_lean(surface_frame(ground, x, y, d, g), t)
+                k = ((g_n + VV * kappa) * sn + g_b * cs
                      - alpha_law(t, (x, y, d, th - eq, om)) * law_J)
-                den = k * law_l * sn + V * V * cs
+                den = k * law_l * sn + VV * cs
                 cf = k / den if den > 0.0 else copysign(inf, k)
             # Section 3: |C_f| <= C_f_max, the physical branch on the side of the lean, the rate.
             ls = l * sn
@@ -132,7 +155,7 @@ class TerrainStage:
             N = m * (G_n - l * (alpha * sn + om * om * cs))
             hor = tx * tx + ty * ty
             turn = V_f * (cf * (tx * by - ty * bx) / hor + kappa * (tx * ny - ty * nx) / hor)
-            return (V_f * tx, V_f * ty, turn, om, alpha, -g * tz - mu * N / m - kd * V * V,
+            return (V_f * tx, V_f * ty, turn, om, alpha, -g * tz - mu * N / m - kd * VV,
                     alpha, V_f, cf)
 
         return stage
