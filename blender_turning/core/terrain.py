@@ -107,8 +107,11 @@ class HeightField:
                                 h, np.take(h, [n - 1], axis) + last,
                                 np.take(h, [n - 1], axis) + 2 * last], axis)
         self._h = h
-        self._x_lo, self._x_hi, self._y_lo, self._y_hi = self.extent
         self._coef = {}                    # cell index -> its bicubic's coefficients (_cell)
+        self.derivatives_one = _float_derivatives(self)
+
+    def __reduce__(self):                  # derivatives_one is a closure: send the heights
+        return HeightField, (self._h[2:-2, 2:-2].copy(), self.x0, self.y0, self.cell)
 
     def _store(self, r0, c0):
         """The padded grid, holding at least the 4 x 4 stencils with top-left corners
@@ -157,20 +160,44 @@ class HeightField:
         return (ev(wy, wx), ev(wy, dwx) / c, ev(dwy, wx) / c,
                 ev(wy, ddwx) / (c * c), ev(dwy, dwx) / (c * c), ev(ddwy, wx) / (c * c))
 
-    def derivatives_one(self, x: float, y: float):
-        """:meth:`derivatives` on Python floats (one figure, :mod:`.terrain_one_figure`): the same
-        bicubic as a polynomial in the cell, ``h = sum_ab A[b][a] u^a v^b`` (:meth:`_cell`),
-        evaluated by Horner's rule: ~60 multiply-adds, no numpy (~2.3 us a point against ~15 us
-        for the 4 x 4 stencil sliced out of the grid and weighted on floats)."""
-        if not (self._x_lo <= x <= self._x_hi and self._y_lo <= y <= self._y_hi):
-            return self.derivatives(x, y)                       # raises OffTerrain
-        fx = (x - self.x0) / self.cell
-        fy = (y - self.y0) / self.cell
-        i = min(int(fx), self.nx - 2)
-        j = min(int(fy), self.ny - 2)
-        A = self._coef.get(j * self.nx + i)
+    def _cell(self, i: int, j: int):
+        """The 16 coefficients ``A[b][a]`` (row-major) of cell ``(i, j)``'s bicubic in
+        ``u^a v^b``: the Catmull-Rom weights are ``w(u) = M (1, u, u^2, u^3)``, so
+        ``h = w(v)^T P w(u) = (1, v, ..)^T (M^T P M) (1, u, ..)`` with ``P`` the 4 x 4 stencil.
+        Computed once per cell a figure visits (all cells of a 0.25 m mesh would be 80 MB)."""
+        P = self._store(j + 1, i + 1)[j + 1:j + 5, i + 1:i + 5]
+        A = tuple((_CR_POWERS.T @ P @ _CR_POWERS).ravel().tolist())
+        self._coef[j * self.nx + i] = A
+        return A
+
+
+def _float_derivatives(field: HeightField):
+    """``field.derivatives_one(x, y)``: :meth:`HeightField.derivatives` on Python floats (one
+    figure, :mod:`.terrain_one_figure`): the same bicubic as a polynomial in the cell,
+    ``h = sum_ab A[b][a] u^a v^b`` (:meth:`HeightField._cell`), evaluated by Horner's rule: ~60
+    multiply-adds, no numpy (~1 us a point against ~15 us for the 4 x 4 stencil sliced out of
+    the grid and weighted on floats).  A closure over the grid's constants (an attribute lookup
+    on the field costs more than a multiply-add)."""
+    x_lo, x_hi, y_lo, y_hi = field.extent
+    x0, y0, c = field.x0, field.y0, field.cell
+    cc = c * c
+    i_max, j_max, nx = field.nx - 2, field.ny - 2, field.nx
+    coef, cell, derivatives = field._coef.get, field._cell, field.derivatives
+
+    def derivatives_one(x: float, y: float):
+        if not (x_lo <= x <= x_hi and y_lo <= y <= y_hi):
+            return derivatives(x, y)                            # raises OffTerrain
+        fx = (x - x0) / c
+        fy = (y - y0) / c
+        i = int(fx)
+        if i > i_max:
+            i = i_max
+        j = int(fy)
+        if j > j_max:
+            j = j_max
+        A = coef(j * nx + i)
         if A is None:
-            A = self._cell(i, j)
+            A = cell(i, j)
         a00, a01, a02, a03, a10, a11, a12, a13, a20, a21, a22, a23, a30, a31, a32, a33 = A
         u, v = fx - i, fy - j
         # Each power of v: its polynomial in u (r), d/du (d) and d2/du2 (e).
@@ -186,8 +213,6 @@ class HeightField:
         e1 = 2.0 * a12 + 6.0 * u * a13
         e2 = 2.0 * a22 + 6.0 * u * a23
         e3 = 2.0 * a32 + 6.0 * u * a33
-        c = self.cell
-        cc = c * c
         return (r0 + v * (r1 + v * (r2 + v * r3)),
                 (d0 + v * (d1 + v * (d2 + v * d3))) / c,
                 (r1 + v * (2.0 * r2 + 3.0 * v * r3)) / c,
@@ -195,15 +220,7 @@ class HeightField:
                 (d1 + v * (2.0 * d2 + 3.0 * v * d3)) / cc,
                 (2.0 * r2 + 6.0 * v * r3) / cc)
 
-    def _cell(self, i: int, j: int):
-        """The 16 coefficients ``A[b][a]`` (row-major) of cell ``(i, j)``'s bicubic in
-        ``u^a v^b``: the Catmull-Rom weights are ``w(u) = M (1, u, u^2, u^3)``, so
-        ``h = w(v)^T P w(u) = (1, v, ..)^T (M^T P M) (1, u, ..)`` with ``P`` the 4 x 4 stencil.
-        Computed once per cell a figure visits (all cells of a 0.25 m mesh would be 80 MB)."""
-        P = self._store(j + 1, i + 1)[j + 1:j + 5, i + 1:i + 5]
-        A = tuple((_CR_POWERS.T @ P @ _CR_POWERS).ravel().tolist())
-        self._coef[j * self.nx + i] = A
-        return A
+    return derivatives_one
 
 
 class LazyHeightField(HeightField):
@@ -219,7 +236,7 @@ class LazyHeightField(HeightField):
     :attr:`_h` (all of it: the planner's slope bound) computes the rest; a pickled one (the crowd's
     worker processes) travels as the plain :class:`HeightField` of all samples."""
 
-    TILE = 32
+    TILE = 64
 
     def __init__(self, sample, nx: int, ny: int, x0: float, y0: float, cell: float):
         if min(nx, ny) < 2:
@@ -232,8 +249,8 @@ class LazyHeightField(HeightField):
         self._data = np.empty((self.ny + 4, self.nx + 4))
         T = self.TILE
         self._done = np.zeros((-(-(self.ny + 4) // T), -(-(self.nx + 4) // T)), bool)
-        self._x_lo, self._x_hi, self._y_lo, self._y_hi = self.extent
         self._coef = {}
+        self.derivatives_one = _float_derivatives(self)
 
     @property
     def _h(self):
@@ -255,10 +272,13 @@ class LazyHeightField(HeightField):
             tiles = {(a, b) for a in (a0, a1) for b in (b0, b1)}
         else:
             r0, c0 = np.ravel(r0), np.ravel(c0)
-            tiles = set()
-            for a in (r0 // T, (r0 + 3) // T):
-                for b in (c0 // T, (c0 + 3) // T):
-                    tiles.update(zip(a.tolist(), b.tolist()))
+            W = done.shape[1]
+            a0, a1, b0, b1 = r0 // T * W, (r0 + 3) // T * W, c0 // T, (c0 + 3) // T
+            k = np.unique(np.concatenate([a0 + b0, a0 + b1, a1 + b0, a1 + b1]))
+            k = k[~done.ravel()[k]]
+            if not len(k):
+                return self._data
+            tiles = zip(*np.divmod(k, W))
         for a, b in tiles:
             if not done[a, b]:
                 self._fill(a * T, min((a + 1) * T, self.ny + 4),

@@ -75,31 +75,27 @@ class TerrainStage:
         """``theta_v`` from the controller's equilibrium lean
         (:meth:`.Controller.equilibrium_lean`) at ``(x, y)`` heading ``d`` (``dv``:
         :attr:`derivatives` there), at the start of a step: the course is read anew."""
-        _, hx, hy, _, _, _ = dv
-        c, s = math.cos(d), math.sin(d)
-        p = hx * c + hy * s
-        it = 1.0 / math.sqrt(1.0 + p * p)
-        nz = 1.0 / math.sqrt(1.0 + hx * hx + hy * hy)
-        nx, ny = -hx * nz, -hy * nz
-        g = self._g
         if not self._plumb:
             return theta_v - self.controller.equilibrium_lean(
-                surface_frame(self.ground, x, y, d, g), t)
+                surface_frame(self.ground, x, y, d, self._g), t)
+        _, hx, hy, _, _, _ = dv
         if self._heading is None:                               # plumb_lean
-            return theta_v - math.atan2(g * (nx * s - ny * c) * it, g * nz)
+            c, s = math.cos(d), math.sin(d)
+            p = hx * c + hy * s
+            return theta_v - math.atan((hy * c - hx * s) / math.sqrt(1.0 + p * p))
         if self._course[0] != math.inf:
             self._course[0] = None
         cH, sH = self._along(t)                                 # plumb_lean_along
-        q = -(nx * cH + ny * sH) / nz
-        return theta_v - math.atan2(g * (nx * sH - ny * cH) / math.sqrt(1.0 + q * q), g * nz)
+        q = hx * cH + hy * sH
+        return theta_v - math.atan((hy * cH - hx * sH) / math.sqrt(1.0 + q * q))
 
     def _build(self, body, limits, resistance, own_law):
-        g, l, J, m = body.g, body.l, body.J, body.m
+        g, l, J = body.g, body.l, body.J
         mu, kd = resistance.mu, resistance.drag_k(body.m)
         law_J, law_l = self.controller.body.J, self.controller.body.l
         cmax, rate = limits.C_f_max, limits.dC_f_max
         rated = rate != math.inf
-        sin, cos, sqrt, atan2 = math.sin, math.cos, math.sqrt, math.atan2
+        sin, cos, sqrt, atan = math.sin, math.cos, math.sqrt, math.atan
         inf, copysign = math.inf, math.copysign
         derivatives, ground, ctl = self.derivatives, self.ground, self.controller
         alpha_law = self.controller.scalar_alpha_law() if own_law is None else None
@@ -110,16 +106,17 @@ class TerrainStage:
         def stage(t, x, y, d, th, om, V, anchor, tau, dv=None):
             """``(x', y', theta_dir', theta_v', omega_v', V_cm', alpha_v, V_f, C_f)``."""
             _, hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
-            # The foot's frame (docs/TERRAIN.md Section 1): t, n, b = n x t.
+            # The foot's frame (docs/TERRAIN.md Section 1) through the slope along the heading
+            # p: t = (c, s, p) / sqrt(1 + p^2), n = (-hx, -hy, 1) nz (module doc).
             c, s = cos(d), sin(d)
             p = hx * c + hy * s
-            it = 1.0 / sqrt(1.0 + p * p)
+            w = sqrt(1.0 + p * p)
+            tz = p / w
             nz = 1.0 / sqrt(1.0 + hx * hx + hy * hy)
-            tx, ty, tz = c * it, s * it, p * it
-            nx, ny = -hx * nz, -hy * nz
-            bx, by, bz = ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx
-            kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz * it * it
-            g_n, g_b = g * nz, -g * bz
+            across = hx * s - hy * c                  # -b_z / (nz it): the slope across
+            kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz / (w * w)
+            g_n = g * nz
+            g_b = g_n * across / w
             sn, cs = sin(th), cos(th)
             VV = V * V
             if alpha_law is None:
@@ -129,10 +126,10 @@ class TerrainStage:
                 if kind == 0:                                   # plumb_lean_along the course
                     cH, sH = (course[1], course[2]) if course[0] == t or \
                         course[0] == inf else along(t)
-                    q = -(nx * cH + ny * sH) / nz
-                    eq = atan2(g * (nx * sH - ny * cH) / sqrt(1.0 + q * q), g_n)
+                    q = hx * cH + hy * sH
+                    eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))
                 elif kind == 1:                                 # plumb_lean
-                    eq = atan2(-g_b, g_n)
+                    eq = atan(-across / w)
                 else:
                     eq = ctl.equilibrium_lean(surface_frame(ground, x, y, d, g), t)
                 k = ((g_n + VV * kappa) * sn + g_b * cs
@@ -149,13 +146,13 @@ class TerrainStage:
                 cf = anchor - step if cf < anchor - step else \
                     anchor + step if cf > anchor + step else cf
             # Eq. (21), Eq. (2) on terrain, the normal force and the speed (Sections 2-3).
-            V_f = V * (1.0 / (1.0 - cf * ls))
+            V_f = V / (1.0 - cf * ls)
             G_n = g_n + V_f * V_f * kappa
             alpha = (G_n * sn + (g_b - V * V_f * cf) * cs) / J
-            N = m * (G_n - l * (alpha * sn + om * om * cs))
-            hor = tx * tx + ty * ty
-            turn = V_f * (cf * (tx * by - ty * bx) / hor + kappa * (tx * ny - ty * nx) / hor)
-            return (V_f * tx, V_f * ty, turn, om, alpha, -g * tz - mu * N / m - kd * VV,
-                    alpha, V_f, cf)
+            # N / m, and theta_dir' = V_f (C_f turn_gain + kappa_n bend_gain) (module doc).
+            N_m = G_n - l * (alpha * sn + om * om * cs)
+            turn = V_f * nz * (cf * (w * w) + kappa * across * w)
+            u = V_f / w
+            return (u * c, u * s, turn, om, alpha, -g * tz - mu * N_m - kd * VV, alpha, V_f, cf)
 
         return stage
