@@ -22,11 +22,9 @@ def _world_triangles(obj, depsgraph):
     try:
         # Through the attributes: float32 positions and the corners' vertices are read as one
         # block each (``vertices.foreach_get("co")`` costs ~3 ms, into float64 the same values).
-        co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
-        mesh.attributes["position"].data.foreach_get("vector", co)
+        co = _attribute(mesh, "position", "vector", 3 * len(mesh.vertices), np.float32)
         co = co.reshape(-1, 3)
-        corners = np.empty(len(mesh.loops), dtype=np.int32)
-        mesh.attributes[".corner_vert"].data.foreach_get("value", corners)
+        corners = _attribute(mesh, ".corner_vert", "value", len(mesh.loops), np.int32)
         mesh.calc_loop_triangles()
         faces = np.empty(len(mesh.loop_triangle_polygons), dtype=np.int32)
         mesh.loop_triangle_polygons.foreach_get("value", faces)
@@ -39,6 +37,14 @@ def _world_triangles(obj, depsgraph):
     m = np.array(obj.matrix_world)
     world = co.astype(float) @ m[:3, :3].T + m[:3, 3]
     return world, tris.reshape(-1, 3)
+
+
+def _attribute(mesh, name, prop, size, dtype):
+    """The mesh attribute ``name`` as a flat array of ``size`` (an empty mesh has none)."""
+    out = np.empty(size, dtype=dtype)
+    if size:
+        mesh.attributes[name].data.foreach_get(prop, out)
+    return out
 
 
 def _quad_triangles(co, corners, faces):
@@ -101,6 +107,24 @@ class MeshGround:
             on = self.grid.contains(x, y)
             z[on] = self.grid.heights(x[on], y[on])
             return z
+        import bpy
+        obj = bpy.data.objects.get(self.name)
+        if obj is None:
+            raise ValueError(f"ground {self.name!r} was deleted while baking")
+        ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+        m = np.array(ev.matrix_world)
+        inv = np.linalg.inv(m)
+        # From 1 m above the mesh's box: the BVH works in float32, a ray from 1 km above
+        # would carry ~0.3 mm of round-off into the hit.
+        top = float(np.max(np.array(ev.bound_box) @ m[2, :3] + m[2, 3])) + 1.0
+        origins = np.stack([x, y, np.full_like(x, top)], -1) @ inv[:3, :3].T + inv[:3, 3]
+        down = tuple(-inv[:3, 2])
+        cast = ev.ray_cast
+        for k, o in enumerate(origins.tolist()):
+            hit, loc = cast(o, down)[:2]
+            if hit:
+                z[k] = m[2, 0] * loc[0] + m[2, 1] * loc[1] + m[2, 2] * loc[2] + m[2, 3]
+        return z
 
 
 def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
