@@ -17,6 +17,13 @@ MAX_SAMPLES = 1_000_000
 def _world_triangles(obj, depsgraph):
     """The evaluated mesh's vertices in world space and its triangles (Blender's loop
     triangles, as vertex indices), as numpy arrays."""
+    return _read_mesh(obj, depsgraph)[1:]
+
+
+def _read_mesh(obj, depsgraph, cell=None, known: bytes | None = None):
+    """``(key, world, tris)``: a digest of what a read depends on (the evaluated mesh, its
+    placement, ``cell``), and :func:`_world_triangles`'s arrays, ``None`` when the key is
+    ``known`` (the read kept is still good)."""
     ev = obj.evaluated_get(depsgraph)
     mesh = ev.to_mesh()
     try:
@@ -28,15 +35,24 @@ def _world_triangles(obj, depsgraph):
         mesh.calc_loop_triangles()
         faces = np.empty(len(mesh.loop_triangle_polygons), dtype=np.int32)
         mesh.loop_triangle_polygons.foreach_get("value", faces)
+        m = np.array(obj.matrix_world)
+        # The triangles follow from the positions and the faces' corners (faces: each
+        # triangle's face, hence each face's size): they need not be hashed.
+        h = hashlib.blake2b(co.tobytes(), digest_size=20)
+        for part in (corners, faces, m):
+            h.update(part.tobytes())
+        h.update(repr(cell).encode())
+        key = h.digest()
+        if key == known:
+            return key, None, None
         tris = _quad_triangles(co, corners, faces)
         if tris is None:            # not all quads, or a quad Blender's rule could split either way
             tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
             mesh.loop_triangles.foreach_get("vertices", tris)     # ~7-10 ms for 80,000
     finally:
         ev.to_mesh_clear()
-    m = np.array(obj.matrix_world)
     world = co.astype(float) @ m[:3, :3].T + m[:3, 3]
-    return world, tris.reshape(-1, 3)
+    return key, world, tris.reshape(-1, 3)
 
 
 def _attribute(mesh, name, prop, size, dtype):
@@ -141,13 +157,12 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     row (then column); raises ``ValueError`` naming the object when it has no faces."""
     if obj is None or obj.type != 'MESH':
         raise ValueError(f"ground {getattr(obj, 'name', obj)!r} is not a mesh object")
-    world, tris = _world_triangles(obj, depsgraph)
+    kept = _READ.get(obj.name)
+    key, world, tris = _read_mesh(obj, depsgraph, cell, kept and kept[0])
+    if world is None:
+        return kept[1]
     if len(tris) == 0:
         raise ValueError(f"ground {obj.name!r} has no faces")
-    key = _digest(world, tris, cell)
-    kept = _READ.get(obj.name)
-    if kept is not None and kept[0] == key:
-        return kept[1]
     lo, hi = world.min(0), world.max(0)
     if cell is None:
         cell = 0.25 * _median_shortest_side(world, tris)
@@ -206,14 +221,6 @@ def _median_shortest_side(world, tris) -> float:
 #: placement or the cell changes the digest.
 _READ: dict[str, tuple[bytes, MeshGround]] = {}
 _KEEP = 4
-
-
-def _digest(world, tris, cell) -> bytes:
-    """A digest of what a read depends on: world-space vertices, triangles, cell."""
-    h = hashlib.blake2b(world.tobytes(), digest_size=20)
-    h.update(tris.tobytes())
-    h.update(repr(cell).encode())
-    return h.digest()
 
 
 #: Most grid points a side of the triangles rasterized together (bigger ones go one by one).

@@ -61,7 +61,7 @@ class TerrainStage:
         self._heading = getattr(controller, "heading", None) if self._plumb else None
         H = getattr(self._heading, "constant_value", None)
         self._course = [None, 1.0, 0.0] if H is None else [math.inf, math.cos(H), math.sin(H)]
-        self.stage = self._build(body, limits, resistance, own_law)
+        self.stage, self.lean = self._build(body, limits, resistance, own_law)
 
     def _along(self, t):
         """``(cos H, sin H)`` of the course at ``t``."""
@@ -70,24 +70,6 @@ class TerrainStage:
             H = self._heading(t)
             course[0], course[1], course[2] = t, math.cos(H), math.sin(H)
         return course[1], course[2]
-
-    def lean(self, t: float, x: float, y: float, d: float, theta_v: float, dv) -> float:
-        """``theta_v`` from the controller's equilibrium lean
-        (:meth:`.Controller.equilibrium_lean`) at ``(x, y)`` heading ``d`` (``dv``:
-        :attr:`derivatives` there), at the start of a step: the course is read anew."""
-        if not self._plumb:
-            return theta_v - self.controller.equilibrium_lean(
-                surface_frame(self.ground, x, y, d, self._g), t)
-        _, hx, hy, _, _, _ = dv
-        if self._heading is None:                               # plumb_lean
-            c, s = math.cos(d), math.sin(d)
-            p = hx * c + hy * s
-            return theta_v - math.atan((hy * c - hx * s) / math.sqrt(1.0 + p * p))
-        if self._course[0] != math.inf:
-            self._course[0] = None
-        cH, sH = self._along(t)                                 # plumb_lean_along
-        q = hx * cH + hy * sH
-        return theta_v - math.atan((hy * cH - hx * sH) / math.sqrt(1.0 + q * q))
 
     def _build(self, body, limits, resistance, own_law):
         g, l, J = body.g, body.l, body.J
@@ -102,6 +84,29 @@ class TerrainStage:
         # The equilibrium lean: along the course (0), the plumb lean (1), the controller's (2).
         kind = (0 if self._heading is not None else 1) if self._plumb else 2
         course, along = self._course, self._along
+        row = [None, None, None, 0.0]           # the last lean's dv, t, heading, equilibrium
+
+        def lean(t, x, y, d, theta_v, dv):
+            """``theta_v`` from the controller's equilibrium lean
+            (:meth:`.Controller.equilibrium_lean`) at ``(x, y)`` heading ``d`` (``dv``:
+            :attr:`derivatives` there), at the start of a step: the course is read anew, and
+            the step's first stage (given the same ``dv``) takes the equilibrium from here."""
+            if kind == 2:
+                eq = ctl.equilibrium_lean(surface_frame(ground, x, y, d, g), t)
+            elif kind == 1:                                     # plumb_lean
+                hx, hy = dv[1], dv[2]
+                c, s = cos(d), sin(d)
+                p = hx * c + hy * s
+                eq = atan((hy * c - hx * s) / sqrt(1.0 + p * p))
+            else:                                               # plumb_lean_along
+                if course[0] != inf:
+                    course[0] = None
+                hx, hy = dv[1], dv[2]
+                cH, sH = along(t)
+                q = hx * cH + hy * sH
+                eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))
+            row[0], row[1], row[2], row[3] = dv, t, d, eq
+            return theta_v - eq
 
         def stage(t, x, y, d, th, om, V, anchor, tau, dv=None):
             """``(x', y', theta_dir', theta_v', omega_v', V_cm', alpha_v, V_f, C_f)``."""
@@ -123,7 +128,9 @@ class TerrainStage:
                 cf = own_law(t, (x, y, d, th, om, V))
             else:
                 # The lean law about the equilibrium lean, then Eq. (1) on terrain.
-                if kind == 0:                                   # plumb_lean_along the course
+                if dv is not None and dv is row[0] and t == row[1] and d == row[2]:
+                    eq = row[3]                                 # the row's, from lean
+                elif kind == 0:                                 # plumb_lean_along the course
                     cH, sH = (course[1], course[2]) if course[0] == t or \
                         course[0] == inf else along(t)
                     q = hx * cH + hy * sH
@@ -155,4 +162,4 @@ class TerrainStage:
             u = V_f / w
             return (u * c, u * s, turn, om, alpha, -g * tz - mu * N_m - kd * VV, alpha, V_f, cf)
 
-        return stage
+        return stage, lean
