@@ -109,6 +109,7 @@ class HeightField:
         self._h = h
         self._coef = {}                    # cell index -> its bicubic's coefficients (_cell)
         self.derivatives_one = _float_derivatives(self)
+        self.slopes_one = _float_derivatives(self, height=False)
 
     def __reduce__(self):                  # derivatives_one is a closure: send the heights
         return HeightField, (self._h[2:-2, 2:-2].copy(), self.x0, self.y0, self.cell)
@@ -171,13 +172,14 @@ class HeightField:
         return A
 
 
-def _float_derivatives(field: HeightField):
+def _float_derivatives(field: HeightField, height: bool = True):
     """``field.derivatives_one(x, y)``: :meth:`HeightField.derivatives` on Python floats (one
     figure, :mod:`.terrain_one_figure`): the same bicubic as a polynomial in the cell,
     ``h = sum_ab A[b][a] u^a v^b`` (:meth:`HeightField._cell`), evaluated by Horner's rule: ~60
     multiply-adds, no numpy (~1 us a point against ~15 us for the 4 x 4 stencil sliced out of
     the grid and weighted on floats).  A closure over the grid's constants (an attribute lookup
-    on the field costs more than a multiply-add)."""
+    on the field costs more than a multiply-add).  ``height=False``: ``field.slopes_one``, the
+    five derivatives without ``h`` (what the stepper needs; 12 multiply-adds fewer)."""
     x_lo, x_hi, y_lo, y_hi = field.extent
     x0, y0, c = field.x0, field.y0, field.cell
     cc = c * c
@@ -186,7 +188,8 @@ def _float_derivatives(field: HeightField):
 
     def derivatives_one(x: float, y: float):
         if not (x_lo <= x <= x_hi and y_lo <= y <= y_hi):
-            return derivatives(x, y)                            # raises OffTerrain
+            out = derivatives(x, y)                             # raises OffTerrain
+            return out if height else out[1:]
         fx = (x - x0) / c
         fy = (y - y0) / c
         i = int(fx)
@@ -201,7 +204,6 @@ def _float_derivatives(field: HeightField):
         a00, a01, a02, a03, a10, a11, a12, a13, a20, a21, a22, a23, a30, a31, a32, a33 = A
         u, v = fx - i, fy - j
         # Each power of v: its polynomial in u (r), d/du (d) and d2/du2 (e).
-        r0 = a00 + u * (a01 + u * (a02 + u * a03))
         r1 = a10 + u * (a11 + u * (a12 + u * a13))
         r2 = a20 + u * (a21 + u * (a22 + u * a23))
         r3 = a30 + u * (a31 + u * (a32 + u * a33))
@@ -213,12 +215,15 @@ def _float_derivatives(field: HeightField):
         e1 = 2.0 * a12 + 6.0 * u * a13
         e2 = 2.0 * a22 + 6.0 * u * a23
         e3 = 2.0 * a32 + 6.0 * u * a33
-        return (r0 + v * (r1 + v * (r2 + v * r3)),
-                (d0 + v * (d1 + v * (d2 + v * d3))) / c,
-                (r1 + v * (2.0 * r2 + 3.0 * v * r3)) / c,
-                (e0 + v * (e1 + v * (e2 + v * e3))) / cc,
-                (d1 + v * (2.0 * d2 + 3.0 * v * d3)) / cc,
-                (2.0 * r2 + 6.0 * v * r3) / cc)
+        hx = (d0 + v * (d1 + v * (d2 + v * d3))) / c
+        hy = (r1 + v * (2.0 * r2 + 3.0 * v * r3)) / c
+        hxx = (e0 + v * (e1 + v * (e2 + v * e3))) / cc
+        hxy = (d1 + v * (2.0 * d2 + 3.0 * v * d3)) / cc
+        hyy = (2.0 * r2 + 6.0 * v * r3) / cc
+        if not height:
+            return hx, hy, hxx, hxy, hyy
+        r0 = a00 + u * (a01 + u * (a02 + u * a03))
+        return r0 + v * (r1 + v * (r2 + v * r3)), hx, hy, hxx, hxy, hyy
 
     return derivatives_one
 
@@ -251,6 +256,7 @@ class LazyHeightField(HeightField):
         self._done = np.zeros((-(-(self.ny + 4) // T), -(-(self.nx + 4) // T)), bool)
         self._coef = {}
         self.derivatives_one = _float_derivatives(self)
+        self.slopes_one = _float_derivatives(self, height=False)
 
     @property
     def _h(self):

@@ -45,9 +45,10 @@ class TerrainStage:
 
     def __init__(self, body: BodyParams, limits: Limits, resistance: Resistance, ground,
                  controller: Controller):
-        one = getattr(ground, "derivatives_one", None)
-        self.derivatives = one if one is not None else (
-            lambda x, y: [float(v) for v in ground.derivatives(x, y)])
+        # (h_x, h_y, h_xx, h_xy, h_yy) at a point: the height itself is not needed.
+        slopes, one = getattr(ground, "slopes_one", None), getattr(ground, "derivatives_one", None)
+        self.derivatives = slopes if slopes is not None else (lambda x, y: one(x, y)[1:]) \
+            if one is not None else (lambda x, y: [float(v) for v in ground.derivatives(x, y)[1:]])
         self.ground, self.controller = ground, controller
         self._g = body.g
         base = type(controller)
@@ -94,14 +95,14 @@ class TerrainStage:
             if kind == 2:
                 eq = ctl.equilibrium_lean(surface_frame(ground, x, y, d, g), t)
             elif kind == 1:                                     # plumb_lean
-                hx, hy = dv[1], dv[2]
+                hx, hy = dv[0], dv[1]
                 c, s = cos(d), sin(d)
                 p = hx * c + hy * s
                 eq = atan((hy * c - hx * s) / sqrt(1.0 + p * p))
             else:                                               # plumb_lean_along
                 if course[0] != inf:
                     course[0] = None
-                hx, hy = dv[1], dv[2]
+                hx, hy = dv[0], dv[1]
                 cH, sH = along(t)
                 q = hx * cH + hy * sH
                 eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))
@@ -110,7 +111,7 @@ class TerrainStage:
 
         def stage(t, x, y, d, th, om, V, anchor, tau, dv=None):
             """``(x', y', theta_dir', theta_v', omega_v', V_cm', alpha_v, V_f, C_f)``."""
-            _, hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
+            hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
             # The foot's frame (docs/TERRAIN.md Section 1) through the slope along the heading
             # p: t = (c, s, p) / sqrt(1 + p^2), n = (-hx, -hy, 1) nz (module doc).
             c, s = cos(d), sin(d)
