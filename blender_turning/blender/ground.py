@@ -80,24 +80,29 @@ def _quad_triangles(co, corners, faces):
     if len(corners) != 4 * n or len(faces) != 2 * n or \
             not np.array_equal(faces, np.repeat(np.arange(n, dtype=faces.dtype), 2)):
         return None
-    q = corners.reshape(n, 4)
-    P = co.astype(float)
-    v1 = P[q[:, 0]]
-    d12, d13, d14 = P[q[:, 1]] - v1, P[q[:, 2]] - v1, P[q[:, 3]] - v1
+    q0, q1, q2, q3 = np.ascontiguousarray(corners.reshape(n, 4).T)
+    # In float64 from the float32 positions, coordinate by coordinate (contiguous gathers).
+    d12, d13, d14 = [], [], []
+    for k in range(3):
+        X = co[:, k].astype(float)
+        x1 = X[q0]
+        d12.append(X[q1] - x1)
+        d13.append(X[q2] - x1)
+        d14.append(X[q3] - x1)
 
     def cross(a, b):
-        return (a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
-                a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
+        return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
 
     (ax, ay, az), (bx, by, bz) = cross(d12, d13), cross(d14, d13)
     dot = ax * bx + ay * by + az * bz
     size = np.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
     if not np.all(np.abs(dot) > 1e-4 * size):
         return None
-    flip = (dot > 0.0)[:, None]
-    first = np.where(flip, q[:, [0, 1, 3]], q[:, [0, 1, 2]])
-    second = np.where(flip, q[:, [1, 2, 3]], q[:, [0, 2, 3]])
-    return np.stack([first, second], 1).reshape(-1, 3)
+    flip = dot > 0.0
+    tris = np.empty((n, 2, 3), dtype=corners.dtype)
+    tris[:, 0, 0], tris[:, 0, 1], tris[:, 0, 2] = q0, q1, np.where(flip, q3, q2)
+    tris[:, 1, 0], tris[:, 1, 1], tris[:, 1, 2] = np.where(flip, q1, q0), q2, q3
+    return tris.reshape(-1, 3)
 
 
 class MeshGround:
@@ -204,7 +209,7 @@ def _median_shortest_side(world, tris) -> float:
     """The median of each triangle's shortest side seen from above (a quad's diagonal is never
     it), 1 m when all are degenerate: ``np.median`` of the sides' lengths, from their squares
     (the same order) and the square roots of the middle one or two only."""
-    X, Y = world[:, 0][tris], world[:, 1][tris]             # (k, 3) each
+    X, Y = (np.ascontiguousarray(world[:, k])[tris] for k in (0, 1))    # (k, 3) each
 
     def side(a, b):
         dx, dy = X[:, a] - X[:, b], Y[:, a] - Y[:, b]
