@@ -1,7 +1,8 @@
 """Ground mesh <-> the core's height field (docs/TERRAIN.md).  The core stays bpy-free: a mesh
 object the user picks as ground is read once into a :class:`..core.terrain.HeightField` (what
-ray casts from above on a regular grid return, rasterized in numpy; kept while the mesh does not
-change); the demo's mountain goes the other way."""
+ray casts from above on a regular grid return, rasterized in numpy, or for a grid mesh sampled
+from its lattice where a run goes; kept while the mesh does not change); the demo's mountain goes
+the other way."""
 from __future__ import annotations
 
 import hashlib
@@ -161,11 +162,13 @@ def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
 
 def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     """Sample the mesh object ``obj`` (with its modifiers) into a height field over its
-    horizontal bounding box.  ``cell`` (m) defaults to a quarter of the median of each triangle's
-    shortest side seen from above: the spline through the samples then rounds the mesh's creases by about a
-    centimetre on a 1 m mogul mesh (measured: 1.2 cm at a quarter, 2 cm at half).
-    Grid points the mesh does not cover take the height of the nearest covered point in their
-    row (then column); raises ``ValueError`` naming the object when it has no faces."""
+    horizontal bounding box.  ``cell`` (m) defaults to a quarter of the median of each
+    triangle's shortest side seen from above: the spline through the samples then rounds the
+    mesh's creases by about a centimetre on a 1 m mogul mesh (measured: 1.2 cm at a quarter,
+    2 cm at half).  A grid mesh's samples are computed as a run visits them
+    (:class:`..core.terrain.LazyHeightField`); any other mesh is rasterized whole.  Grid
+    points the mesh does not cover take the height of the nearest covered point in their row
+    (then column); raises ``ValueError`` naming the object when it has no faces."""
     if obj is None or obj.type != 'MESH':
         raise ValueError(f"ground {getattr(obj, 'name', obj)!r} is not a mesh object")
     kept = _READ.get(obj.name)

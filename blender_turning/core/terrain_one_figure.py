@@ -7,15 +7,15 @@ Here one RK4 stage is one function on floats with the body's constants bound as 
 :mod:`.one_figure` does on flat ground, written out from the same equations:
 
 - the foot's frame (docs/TERRAIN.md Section 1; :func:`.terrain.surface_frame`) from the
-  surface's derivatives on floats (``HeightField.slopes_one``, :meth:`.terrain.Plane.derivatives_one`),
-  written through the slope along the heading ``p = h_x c + h_y s`` and across it
-  ``a = h_x s - h_y c`` (``c, s`` the heading's cosine and sine, ``w = sqrt(1 + p^2)``,
-  ``n_z = 1 / sqrt(1 + h_x^2 + h_y^2)``): with ``t = (c, s, p) / w`` and
-  ``n = (-h_x, -h_y, 1) n_z``, ``b = n x t`` has ``b_z = -n_z a / w``, so the lateral gravity is
-  ``g n_z a / w``, the plumb lean ``atan(-a / w)``, the turn gain
+  surface's derivatives on floats (``HeightField.slopes_one``,
+  :meth:`.terrain.Plane.derivatives_one`), written through the slope along the heading
+  ``p = h_x c + h_y s`` and across it ``a = h_x s - h_y c`` (``c, s`` the heading's cosine and
+  sine, ``w = sqrt(1 + p^2)``, ``n_z = 1 / sqrt(1 + h_x^2 + h_y^2)``): with ``t = (c, s, p) / w``
+  and ``n = (-h_x, -h_y, 1) n_z``, ``b = n x t`` has ``b_z = -n_z a / w``, so the lateral
+  gravity is ``g n_z a / w``, the plumb lean ``atan(-a / w)``, the turn gain
   ``(t_x b_y - t_y b_x) / (t_x^2 + t_y^2) = n_z w^2`` and the bend gain
-  ``(t_x n_y - t_y n_x) / (t_x^2 + t_y^2) = n_z a w`` (the same numbers as
-  :func:`.terrain.surface_frame`'s to round-off, ~25 fewer operations a stage);
+  ``(t_x n_y - t_y n_x) / (t_x^2 + t_y^2) = n_z a w`` (:func:`.terrain.surface_frame`'s numbers
+  to round-off, ~25 fewer operations a stage);
 - the controller's lean law about the local plumb lean
   (:meth:`.controllers.base.Controller.equilibrium_lean`,
   :func:`.terrain_dynamics.plumb_lean_along`: ``atan((h_y cos H - h_x sin H) / sqrt(1 + q^2))``,

@@ -2,11 +2,12 @@
 
 :func:`simulate_terrain` steps one figure on a surface (:mod:`.terrain`) with friction and drag
 (:class:`.terrain_dynamics.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
-``C_f`` bounded at every stage as on flat ground, as :func:`.terrain_dynamics.terrain_rk4_step`).  Each step the controller is re-targeted
-to the current speed (:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from
-the local plumb lean (:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1)
-on terrain (:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes
-by turning across the hill (docs/TERRAIN.md Section 6).
+``C_f`` bounded at every stage as on flat ground, as :func:`.terrain_dynamics.terrain_rk4_step`).
+Each step the controller is re-targeted to the current speed
+(:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from the local plumb lean
+(:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1) on terrain
+(:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes by turning
+across the hill (docs/TERRAIN.md Section 6).
 
 :func:`.simulate.simulate` sends a run here when it is given a ground that is not flat, friction
 or drag, or a target speed; flat ground without them stays on today's path.
