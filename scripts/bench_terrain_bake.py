@@ -5,9 +5,10 @@ a figure that stays on 200 m for a minute) against the same bake on flat ground,
 slalom lean 5 deg, period 3 s, heading +x from (-95, 10).
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_terrain_bake.py [--repeat 3] [--cell 1.0]
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_terrain_bake.py --profile 30   # cProfile
 
 Timed: the whole bake as the operator does it (``BakeJob``: read the mesh, simulate, resample,
-ray-cast the feet, map, write F-curves), best of ``--repeat``, the cases interleaved: the
+the feet's heights on the mesh, map, write F-curves), best of ``--repeat``, the cases interleaved: the
 terrain bake the first time over the mesh (reading it) and again (the read is kept while the
 mesh is unchanged: a figure's settings changed); and the parts: reading the mesh, and the
 simulation with its resampling (and, on terrain, the feet's heights on the mesh) alone.
