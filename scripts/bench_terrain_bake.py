@@ -5,9 +5,10 @@ a figure that stays on 200 m for a minute) against the same bake on flat ground,
 slalom lean 5 deg, period 3 s, heading +x from (-95, 10).
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_terrain_bake.py [--repeat 3] [--cell 1.0]
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_terrain_bake.py --profile 30   # cProfile
 
 Timed: the whole bake as the operator does it (``BakeJob``: read the mesh, simulate, resample,
-ray-cast the feet, map, write F-curves), best of ``--repeat``, the cases interleaved: the
+the feet's heights on the mesh, map, write F-curves), best of ``--repeat``, the cases interleaved: the
 terrain bake the first time over the mesh (reading it) and again (the read is kept while the
 mesh is unchanged: a figure's settings changed); and the parts: reading the mesh, and the
 simulation with its resampling (and, on terrain, the feet's heights on the mesh) alone.
@@ -44,6 +45,8 @@ def main(argv=None):
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--cell", type=float, default=1.0, help="mesh grid spacing, m")
+    ap.add_argument("--profile", type=int, default=0, metavar="N",
+                    help="instead of timing: cProfile the first terrain bake, print N lines")
     args = ap.parse_args(argv)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     addon.register()
@@ -75,6 +78,16 @@ def main(argv=None):
         mesh_ground._READ.clear()                      # the first bake over this mesh
         bake(name)
 
+    if args.profile:
+        import cProfile
+        import pstats
+        bake("flat"), cold("terrain")                  # warm: imports, first calls
+        prof = cProfile.Profile()
+        prof.runcall(cold, "terrain")
+        pstats.Stats(prof).sort_stats("tottime").print_stats(args.profile)
+        pstats.Stats(prof).sort_stats("cumulative").print_stats(args.profile)
+        addon.unregister()
+        return
     depsgraph = bpy.context.evaluated_depsgraph_get
     read = mesh_ground.read_ground(mountain, depsgraph())
     parts = {

@@ -50,7 +50,7 @@ MAPPING = [T + "test_mutation_guards_mapping.py", T + "test_mapping_skier.py",
            T + "test_mapping.py", T + "test_mapping_snowboarder.py",
            T + "test_mapping_telemark.py", T + "test_mapping_cyclist.py"]
 TERRAIN = [T + "test_terrain.py", T + "test_terrain_symbolic.py", T + "test_terrain_sim.py",
-           T + "test_terrain_fast.py"]
+           T + "test_terrain_fast.py", T + "test_terrain_lazy.py"]
 MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
@@ -210,20 +210,24 @@ MUTANTS = [
     M("fused_no_normal_acceleration", "core/terrain_one_figure.py",
       "G_n = g_n + V_f * V_f * kappa", "G_n = g_n", TERRAIN),
     M("fused_normal_force_static", "core/terrain_one_figure.py",
-      "N = m * (G_n - l * (alpha * sn + om * om * cs))", "N = m * G_n", TERRAIN),
+      "N_m = G_n - l * (alpha * sn + om * om * cs)", "N_m = G_n", TERRAIN),
     M("fused_heading_rate_no_bend", "core/terrain_one_figure.py",
-      "+ kappa * (tx * ny - ty * nx) / hor)", ")", TERRAIN),
+      "(cf * (w * w) + kappa * across * w)", "(cf * (w * w))", TERRAIN),
     M("fused_inverse_no_curvature", "core/terrain_one_figure.py",
-      "k = ((g_n + V * V * kappa) * sn", "k = ((g_n) * sn", TERRAIN),
+      "k = ((g_n + VV * kappa) * sn", "k = ((g_n) * sn", TERRAIN),
     M("fused_plumb_along_unnormalized", "core/terrain_one_figure.py",
-      "(nx * sH - ny * cH) / math.sqrt(1.0 + p * p), g_n)", "(nx * sH - ny * cH), g_n)",
-      TERRAIN),
+      "                    eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))",
+      "                    eq = atan((hy * cH - hx * sH))", TERRAIN),
     M("fused_lean_not_relative", "core/terrain_one_figure.py",
       "alpha_law(t, (x, y, d, th - eq, om))", "alpha_law(t, (x, y, d, th, om))", TERRAIN),
     M("fused_no_rate_bound", "core/terrain_one_figure.py",
       "if rated and anchor is not None:", "if False:", TERRAIN),
     M("heightfield_cell_polynomial", "core/terrain.py",
       "e3 = 2.0 * a32 + 6.0 * u * a33", "e3 = 2.0 * a32 + 6.0 * a33", TERRAIN),
+    M("lazy_extension_flipped", "core/terrain.py",
+      "k = np.where(idx < 0, -idx,", "k = np.where(idx < 0, idx,", TERRAIN),
+    M("lazy_stencil_one_tile_row", "core/terrain.py",
+      "a0, a1, b0, b1 = r0 // T, (r0 + 3) // T,", "a0, a1, b0, b1 = r0 // T, r0 // T,", TERRAIN),
     # -- planner (Section 6) -------------------------------------------------------------------
     M("v_max_without_eq21", "core/planner/problem.py",
       "self.v_max = self.speed.max / (1.0 - slip)", "self.v_max = self.speed.max", PLANNER),

@@ -164,3 +164,71 @@ def test_a_grid_mesh_is_rasterized_by_its_lattice():
     assert grid is None and np.isnan(general).any()
     odd = _triangle_grid(np.ones((11, 15), bool), np.cumsum(rng.uniform(0.9, 1.1, 16)), ys, z)
     assert _both(odd)[0] is None               # uneven columns (+-10%)
+
+
+def _loop_triangles(obj):
+    """Blender's own loop triangles of the evaluated mesh, as vertex indices."""
+    ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    mesh = ev.to_mesh()
+    mesh.calc_loop_triangles()
+    tris = np.empty(3 * len(mesh.loop_triangles), np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tris)
+    ev.to_mesh_clear()
+    return tris.reshape(-1, 3)
+
+
+def test_quads_are_split_as_blender_splits_them(monkeypatch):
+    """A mesh of quads is split by Blender's rule (corners (0, 1, 2) and (0, 2, 3), or (0, 1, 3)
+    and (1, 2, 3) where the 0-2 diagonal leaves the quad) without reading its triangles: the
+    same triangles as Blender's on quads bent and skewed at random, starting at any corner
+    (both splits common), and on the demo mountain; a mesh of triangles is read from Blender."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    rng = np.random.default_rng(4)
+    n = 24
+    X, Y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    co = np.stack([X + rng.uniform(-0.45, 0.45, X.shape), Y + rng.uniform(-0.45, 0.45, X.shape),
+                   rng.normal(0.0, 2.0, X.shape)], -1).reshape(-1, 3)
+    ii, jj = np.meshgrid(np.arange(n - 1), np.arange(n - 1))
+    a = (jj * n + ii).ravel()
+    q = np.stack([a, a + 1, a + n + 1, a + n], -1)
+    q = np.array([np.roll(r, k) for r, k in zip(q, rng.integers(0, 4, len(q)))])
+    mesh = bpy.data.meshes.new("Bent")
+    mesh.from_pydata(co.tolist(), [], q.tolist())
+    mesh.update()
+    obj = bpy.data.objects.new("Bent", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    want = _loop_triangles(obj)
+    flipped = np.mean(want[0::2, 2] == q[:, 3])                 # split along 1-3
+    assert 0.2 < flipped < 0.8
+    rule, by_rule = ground._quad_triangles, []
+    monkeypatch.setattr(ground, "_quad_triangles",
+                        lambda *a: by_rule.append(rule(*a)) or by_rule[-1])
+    depsgraph = bpy.context.evaluated_depsgraph_get
+    np.testing.assert_array_equal(ground._world_triangles(obj, depsgraph())[1], want)
+    assert by_rule[-1] is not None                              # not Blender's, read
+    mountain = _mountain()
+    np.testing.assert_array_equal(ground._world_triangles(mountain, depsgraph())[1],
+                                  _loop_triangles(mountain))
+    assert by_rule[-1] is not None
+    rng = np.random.default_rng(9)
+    tri = _triangle_grid(rng.random((5, 6)) < 0.5, np.arange(7.0), np.arange(6.0),
+                         rng.normal(0.0, 0.5, (6, 7)))
+    np.testing.assert_array_equal(ground._world_triangles(tri, depsgraph())[1],
+                                  _loop_triangles(tri))
+    assert by_rule[-1] is None                                  # triangles: Blender's, read
+
+
+def test_a_grid_mesh_is_sampled_where_the_run_goes():
+    """A grid mesh's height field is sampled as a run visits it (a few tiles of the grid for a
+    point), and is the field of all its lattice heights, bit for bit."""
+    from blender_turning.core.terrain import HeightField, LazyHeightField
+    obj = _mountain(location=(3.0, -2.0, 1.0))
+    read = ground.read_ground(obj, bpy.context.evaluated_depsgraph_get())
+    field = read.field
+    assert isinstance(field, LazyHeightField) and not field._done.any()
+    x_lo, _, y_lo, _ = field.extent
+    field.derivatives_one(x_lo + 1.0, y_lo + 1.0)
+    assert 0 < field._done.sum() < field._done.size
+    xs, ys = x_lo + field.cell * np.arange(field.nx), y_lo + field.cell * np.arange(field.ny)
+    full = HeightField(read.grid.heights(xs[None, :], ys[:, None]), x_lo, y_lo, field.cell)
+    np.testing.assert_array_equal(field._h, full._h)

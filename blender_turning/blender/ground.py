@@ -1,34 +1,109 @@
 """Ground mesh <-> the core's height field (docs/TERRAIN.md).  The core stays bpy-free: a mesh
 object the user picks as ground is read once into a :class:`..core.terrain.HeightField` (what
-ray casts from above on a regular grid return, rasterized in numpy; kept while the mesh does not
-change); the demo's mountain goes the other way."""
+ray casts from above on a regular grid return, rasterized in numpy, or for a grid mesh sampled
+from its lattice where a run goes; kept while the mesh does not change); the demo's mountain goes
+the other way."""
 from __future__ import annotations
 
 import hashlib
 
 import numpy as np
 
-from ..core.terrain import HeightField
+from ..core.terrain import HeightField, LazyHeightField
 
 #: Most grid points a ground is sampled at (a 200 m x 200 m terrain at 0.25 m is 641,601).
 MAX_SAMPLES = 1_000_000
 
 
 def _world_triangles(obj, depsgraph):
-    """The evaluated mesh's vertices in world space and its triangles, as numpy arrays."""
+    """The evaluated mesh's vertices in world space and its triangles (Blender's loop
+    triangles, as vertex indices), as numpy arrays."""
+    return _read_mesh(obj, depsgraph)[1:]
+
+
+def _read_mesh(obj, depsgraph, cell=None, known: bytes | None = None):
+    """``(key, world, tris)``: a digest of what a read depends on (the evaluated mesh, its
+    placement, ``cell``), and :func:`_world_triangles`'s arrays, ``None`` when the key is
+    ``known`` (the read kept is still good)."""
     ev = obj.evaluated_get(depsgraph)
     mesh = ev.to_mesh()
     try:
-        co = np.empty(len(mesh.vertices) * 3)
-        mesh.vertices.foreach_get("co", co)
+        # Through the attributes: float32 positions and the corners' vertices are read as one
+        # block each (``vertices.foreach_get("co")`` costs ~3 ms, into float64 the same values).
+        co = _attribute(mesh, "position", "vector", 3 * len(mesh.vertices), np.float32)
+        co = co.reshape(-1, 3)
+        corners = _attribute(mesh, ".corner_vert", "value", len(mesh.loops), np.int32)
         mesh.calc_loop_triangles()
-        tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
-        mesh.loop_triangles.foreach_get("vertices", tris)
+        faces = np.empty(len(mesh.loop_triangle_polygons), dtype=np.int32)
+        mesh.loop_triangle_polygons.foreach_get("value", faces)
+        m = np.array(obj.matrix_world)
+        # The triangles follow from the positions and the faces' corners (faces: each
+        # triangle's face, hence each face's size): they need not be hashed.
+        h = hashlib.blake2b(co.tobytes(), digest_size=20)
+        for part in (corners, faces, m):
+            h.update(part.tobytes())
+        h.update(repr(cell).encode())
+        key = h.digest()
+        if key == known:
+            return key, None, None
+        tris = _quad_triangles(co, corners, faces)
+        if tris is None:            # not all quads, or a quad Blender's rule could split either way
+            tris = np.empty(len(mesh.loop_triangles) * 3, dtype=np.int32)
+            mesh.loop_triangles.foreach_get("vertices", tris)     # ~7-10 ms for 80,000
     finally:
         ev.to_mesh_clear()
-    m = np.array(obj.matrix_world)
-    world = co.reshape(-1, 3) @ m[:3, :3].T + m[:3, 3]
-    return world, tris.reshape(-1, 3)
+    world = co.astype(float) @ m[:3, :3].T + m[:3, 3]
+    return key, world, tris.reshape(-1, 3)
+
+
+def _attribute(mesh, name, prop, size, dtype):
+    """The mesh attribute ``name`` as a flat array of ``size`` (an empty mesh has none)."""
+    out = np.empty(size, dtype=dtype)
+    if size:
+        mesh.attributes[name].data.foreach_get(prop, out)
+    return out
+
+
+def _column_min(a) -> np.ndarray:
+    """``a.min(0)`` of an (n, k) array column by column (numpy's reduction over the first axis of
+    a few columns costs ~30x more: ~1.8 ms for the min and max of 40,401 vertices)."""
+    return np.array([a[:, k].min() for k in range(a.shape[1])])
+
+
+def _quad_triangles(co, corners, faces):
+    """The loop triangles of a mesh of quads only, as Blender makes them
+    (``mesh_calc_tessellation_for_face``: corners (0, 1, 2) and (0, 2, 3), or (0, 1, 3) and
+    (1, 2, 3) where ``is_quad_flip_v3_first_third_fast`` finds the 0-2 diagonal outside the
+    quad), from the positions ``co`` (object space), the corners' vertices and each
+    triangle's face; ``None`` when a face is not a quad or a quad's test is within round-off of
+    its threshold (Blender tests in float32; then its own triangles are read)."""
+    n = len(corners) // 4
+    if len(corners) != 4 * n or len(faces) != 2 * n or \
+            not np.array_equal(faces, np.repeat(np.arange(n, dtype=faces.dtype), 2)):
+        return None
+    q0, q1, q2, q3 = np.ascontiguousarray(corners.reshape(n, 4).T)
+    # In float64 from the float32 positions, coordinate by coordinate (contiguous gathers).
+    d12, d13, d14 = [], [], []
+    for k in range(3):
+        X = co[:, k].astype(float)
+        x1 = X[q0]
+        d12.append(X[q1] - x1)
+        d13.append(X[q2] - x1)
+        d14.append(X[q3] - x1)
+
+    def cross(a, b):
+        return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+    (ax, ay, az), (bx, by, bz) = cross(d12, d13), cross(d14, d13)
+    dot = ax * bx + ay * by + az * bz
+    size = np.sqrt((ax * ax + ay * ay + az * az) * (bx * bx + by * by + bz * bz))
+    if not np.all(np.abs(dot) > 1e-4 * size):
+        return None
+    flip = dot > 0.0
+    tris = np.empty((n, 2, 3), dtype=corners.dtype)
+    tris[:, 0, 0], tris[:, 0, 1], tris[:, 0, 2] = q0, q1, np.where(flip, q3, q2)
+    tris[:, 1, 0], tris[:, 1, 1], tris[:, 1, 2] = np.where(flip, q1, q0), q2, q3
+    return tris.reshape(-1, 3)
 
 
 class MeshGround:
@@ -78,26 +153,6 @@ class MeshGround:
             if hit:
                 z[k] = m[2, 0] * loc[0] + m[2, 1] * loc[1] + m[2, 2] * loc[2] + m[2, 3]
         return z
-        import bpy
-        obj = bpy.data.objects.get(self.name)
-        if obj is None:
-            raise ValueError(f"ground {self.name!r} was deleted while baking")
-        ev = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
-        x, y = np.asarray(x, float), np.asarray(y, float)
-        z = np.asarray(self.field.derivatives(x, y)[0], float).copy()
-        m = np.array(ev.matrix_world)
-        inv = np.linalg.inv(m)
-        # From 1 m above the mesh's box: the BVH works in float32, a ray from 1 km above
-        # would carry ~0.3 mm of round-off into the hit.
-        top = float(np.max(np.array(ev.bound_box) @ m[2, :3] + m[2, 3])) + 1.0
-        origins = np.stack([x, y, np.full_like(x, top)], -1) @ inv[:3, :3].T + inv[:3, 3]
-        down = tuple(-inv[:3, 2])
-        cast = ev.ray_cast
-        for k, o in enumerate(origins.tolist()):
-            hit, loc = cast(o, down)[:2]
-            if hit:
-                z[k] = m[2, 0] * loc[0] + m[2, 1] * loc[1] + m[2, 2] * loc[2] + m[2, 3]
-        return z
 
 
 def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
@@ -107,27 +162,24 @@ def height_field_of(obj, depsgraph, cell: float | None = None) -> HeightField:
 
 def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     """Sample the mesh object ``obj`` (with its modifiers) into a height field over its
-    horizontal bounding box.  ``cell`` (m) defaults to a quarter of the median of each triangle's
-    shortest side seen from above: the spline through the samples then rounds the mesh's creases by about a
-    centimetre on a 1 m mogul mesh (measured: 1.2 cm at a quarter, 2 cm at half).
-    Grid points the mesh does not cover take the height of the nearest covered point in their
-    row (then column); raises ``ValueError`` naming the object when it has no faces."""
+    horizontal bounding box.  ``cell`` (m) defaults to a quarter of the median of each
+    triangle's shortest side seen from above: the spline through the samples then rounds the
+    mesh's creases by about a centimetre on a 1 m mogul mesh (measured: 1.2 cm at a quarter,
+    2 cm at half).  A grid mesh's samples are computed as a run visits them
+    (:class:`..core.terrain.LazyHeightField`); any other mesh is rasterized whole.  Grid
+    points the mesh does not cover take the height of the nearest covered point in their row
+    (then column); raises ``ValueError`` naming the object when it has no faces."""
     if obj is None or obj.type != 'MESH':
         raise ValueError(f"ground {getattr(obj, 'name', obj)!r} is not a mesh object")
-    world, tris = _world_triangles(obj, depsgraph)
+    kept = _READ.get(obj.name)
+    key, world, tris = _read_mesh(obj, depsgraph, cell, kept and kept[0])
+    if world is None:
+        return kept[1]
     if len(tris) == 0:
         raise ValueError(f"ground {obj.name!r} has no faces")
-    key = _digest(world, tris, cell)
-    kept = _READ.get(obj.name)
-    if kept is not None and kept[0] == key:
-        return kept[1]
-    lo, hi = world.min(0), world.max(0)
+    lo, hi = _column_min(world), -_column_min(-world)
     if cell is None:
-        # Each triangle's shortest side seen from above (a quad's diagonal is never it).
-        xy = world[:, :2]
-        edges = np.min([np.linalg.norm(xy[tris[:, k]] - xy[tris[:, k - 1]], axis=1)
-                        for k in range(3)], axis=0)
-        cell = 0.25 * float(np.median(edges[edges > 0])) if np.any(edges > 0) else 1.0
+        cell = 0.25 * _median_shortest_side(world, tris)
     nx = int(np.floor((hi[0] - lo[0]) / cell)) + 1
     ny = int(np.floor((hi[1] - lo[1]) / cell)) + 1
     if nx < 2 or ny < 2:
@@ -135,22 +187,46 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     if nx * ny > MAX_SAMPLES:
         raise ValueError(f"ground {obj.name!r} needs {nx * ny} samples at {cell:g} m; "
                          f"at most {MAX_SAMPLES}: use a coarser cell")
-    xs = lo[0] + cell * np.arange(nx)
-    ys = lo[1] + cell * np.arange(ny)
+    x0, y0, cell = float(lo[0]), float(lo[1]), float(cell)
     grid = _grid_mesh(world, tris)
     if grid is not None:
-        h = grid.heights(xs[None, :], ys[:, None])
+        # The lattice covers the grid: its samples are computed as the run visits them.
+        field = LazyHeightField(lambda rows, cols: grid.heights(x0 + cell * cols[None, :],
+                                                                y0 + cell * rows[:, None]),
+                                nx, ny, x0, y0, cell)
     else:
-        h = _rasterize(world, tris, float(xs[0]), float(ys[0]), float(cell), nx, ny)
-    if np.isnan(h).all():
-        raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
-    _fill_nearest(h)
-    ground = MeshGround(obj.name, HeightField(h, float(xs[0]), float(ys[0]), float(cell)), grid)
+        h = _rasterize(world, tris, x0, y0, cell, nx, ny)
+        if np.isnan(h).all():
+            raise ValueError(f"ground {obj.name!r}: no ray from above hit it")
+        _fill_nearest(h)
+        field = HeightField(h, x0, y0, cell)
+    ground = MeshGround(obj.name, field, grid)
     _READ.pop(obj.name, None)
     while len(_READ) >= _KEEP:                              # the oldest read goes
         _READ.pop(next(iter(_READ)))
     _READ[obj.name] = (key, ground)
     return ground
+
+
+def _median_shortest_side(world, tris) -> float:
+    """The median of each triangle's shortest side seen from above (a quad's diagonal is never
+    it), 1 m when all are degenerate: ``np.median`` of the sides' lengths, from their squares
+    (the same order) and the square roots of the middle one or two only."""
+    X, Y = (np.ascontiguousarray(world[:, k])[tris] for k in (0, 1))    # (k, 3) each
+
+    def side(a, b):
+        dx, dy = X[:, a] - X[:, b], Y[:, a] - Y[:, b]
+        return dx * dx + dy * dy
+
+    sq = np.minimum(np.minimum(side(0, 2), side(1, 0)), side(2, 1))
+    sq = sq[sq > 0]
+    if not len(sq):
+        return 1.0
+    mid = len(sq) // 2
+    if len(sq) % 2:
+        return float(np.sqrt(np.partition(sq, mid)[mid]))
+    part = np.partition(sq, [mid - 1, mid])
+    return float(np.median(np.sqrt(part[mid - 1:mid + 1])))
 
 
 #: Grounds read, by object name: ``(digest of the world-space mesh and cell, MeshGround)``.
@@ -159,14 +235,6 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
 #: placement or the cell changes the digest.
 _READ: dict[str, tuple[bytes, MeshGround]] = {}
 _KEEP = 4
-
-
-def _digest(world, tris, cell) -> bytes:
-    """A digest of what a read depends on: world-space vertices, triangles, cell."""
-    h = hashlib.blake2b(world.tobytes(), digest_size=20)
-    h.update(tris.tobytes())
-    h.update(repr(cell).encode())
-    return h.digest()
 
 
 #: Most grid points a side of the triangles rasterized together (bigger ones go one by one).
@@ -231,26 +299,37 @@ def _rasterize(world, tris, x0, y0, cell, nx, ny):
 
 class _GridMesh:
     """A grid mesh's triangles as planes over its lattice cells (:func:`_grid_mesh`): the mesh's
-    exact height anywhere over the lattice from where the point lies in its cell."""
+    exact height anywhere over the lattice from where the point lies in its cell.  ``Z``: the
+    lattice's heights ``(rows, columns)``; ``main``: per cell, split along (0,0)-(1,1)."""
 
-    def __init__(self, lo, step, n, plane, main):
-        self.lo, self.step, self.n, self.plane, self.main = lo, step, n, plane, main
+    def __init__(self, lo, step, n, Z, main):
+        self.lo, self.step, self.n, self.Z, self.main = lo, step, n, Z.ravel(), main
 
     def contains(self, x, y):
         hi = self.lo + self.step * (np.array(self.n) - 1)
         return (x >= self.lo[0]) & (x <= hi[0]) & (y >= self.lo[1]) & (y <= hi[1])
 
     def heights(self, x, y):
-        """The mesh's height at ``(x, y)`` (arrays that broadcast; inside :meth:`contains`)."""
+        """The mesh's height at ``(x, y)`` (arrays that broadcast; inside :meth:`contains`).
+
+        Each cell's two triangles are planes over ``(u, v)`` in [0, 1]^2, ``h = c0 + a u + b
+        v``: the first holds ``u >= v`` (split along the main diagonal) or ``u + v <= 1``
+        (across), the second the rest; their coefficients from the cell's corners."""
         n0, n1 = self.n
         fx = np.clip((x - self.lo[0]) / self.step[0], 0.0, n0 - 1)
         fy = np.clip((y - self.lo[1]) / self.step[1], 0.0, n1 - 1)
         i = np.minimum(fx.astype(np.int64), n0 - 2)
         j = np.minimum(fy.astype(np.int64), n1 - 2)
         u, v = fx - i, fy - j
-        c = j * (n0 - 1) + i
-        k = 2 * c + np.where(self.main[c], u < v, u + v > 1.0)
-        return self.plane[0][k] + self.plane[1][k] * u + self.plane[2][k] * v
+        main = self.main[j * (n0 - 1) + i]
+        second = np.where(main, u < v, u + v > 1.0)
+        k = j * n0 + i
+        Z = self.Z
+        z00, z10, z01, z11 = Z[k], Z[k + 1], Z[k + n0], Z[k + n0 + 1]
+        c0 = np.where(second & ~main, z01 + z10 - z11, z00)
+        a = np.where(second, z11 - z01, z10 - z00)
+        b = np.where(second == main, z01 - z00, z11 - z10)
+        return c0 + a * u + b * v
 
 
 def _grid_mesh(world, tris) -> _GridMesh | None:
@@ -261,7 +340,7 @@ def _grid_mesh(world, tris) -> _GridMesh | None:
     plane there: the general rasterization's heights (to round-off) for 200 m x 200 m at
     0.25 m in ~40 ms instead of ~0.14 s, and the feet's heights without ray casts."""
     xy = world[:, :2]
-    lo = xy.min(0)
+    lo = _column_min(xy)
     n, step = [], []
     for k in (0, 1):                                        # lattice columns, then rows
         gaps = np.diff(np.sort(xy[:, k]))
@@ -273,19 +352,25 @@ def _grid_mesh(world, tris) -> _GridMesh | None:
     idx = np.rint((xy - lo) / step).astype(np.int64)
     if n[0] * n[1] != len(world) or np.abs(lo + idx * step - xy).max() > 1e-4 * step.min():
         return None
-    node = idx[:, 1] * n[0] + idx[:, 0]
+    ix, iy = np.ascontiguousarray(idx.T)
+    node = iy * n[0] + ix
     if len(np.unique(node)) != len(node):
         return None
     Z = np.empty(len(node))
     Z[node] = world[:, 2]
     Z = Z.reshape(n[1], n[0])
     # Each triangle within one lattice cell; the cell's diagonal from the corners it holds.
-    ti, tj = idx[tris, 0], idx[tris, 1]                    # (k, 3)
-    ci, cj = ti.min(1), tj.min(1)
-    if (ti.max(1) - ci != 1).any() or (tj.max(1) - cj != 1).any():
+    # (Column by column: numpy's reductions along a short last axis cost ~10x more here.)
+    ti, tj = ix[tris], iy[tris]                            # (k, 3)
+    ti0, ti1, ti2, tj0, tj1, tj2 = ti[:, 0], ti[:, 1], ti[:, 2], tj[:, 0], tj[:, 1], tj[:, 2]
+    ci = np.minimum(np.minimum(ti0, ti1), ti2)
+    cj = np.minimum(np.minimum(tj0, tj1), tj2)
+    if ((np.maximum(np.maximum(ti0, ti1), ti2) - ci != 1).any()
+            or (np.maximum(np.maximum(tj0, tj1), tj2) - cj != 1).any()):
         return None
-    corner = (ti - ci[:, None]) + 2 * (tj - cj[:, None])   # 0: (0,0) 1: (1,0) 2: (0,1) 3: (1,1)
-    mask = (1 << corner).sum(1)               # a triangle's corners as bits: 11, 13 / 7, 14
+    # A triangle's corners as bits (0: (0,0) 1: (1,0) 2: (0,1) 3: (1,1)): 11, 13 / 7, 14.
+    mask = ((1 << ((ti0 - ci) + 2 * (tj0 - cj))) + (1 << ((ti1 - ci) + 2 * (tj1 - cj)))
+            + (1 << ((ti2 - ci) + 2 * (tj2 - cj))))
     cell_id = cj * (n[0] - 1) + ci
     cells = (n[0] - 1) * (n[1] - 1)
     both = np.bincount(cell_id, weights=mask, minlength=cells)
@@ -293,17 +378,7 @@ def _grid_mesh(world, tris) -> _GridMesh | None:
     # holes (0 or one triangle), overlaps or other shapes (no other sums give 24 or 21).
     if ((both != 24) & (both != 21)).any():
         return None
-    main = both == 24
-    # Each cell's two triangles as planes over (u, v) in [0, 1]^2: h = c0 + a u + b v; the first
-    # holds u >= v (along the main diagonal) or u + v <= 1 (across), the second the rest.
-    z00, z10 = Z[:-1, :-1].ravel(), Z[:-1, 1:].ravel()
-    z01, z11 = Z[1:, :-1].ravel(), Z[1:, 1:].ravel()
-    plane = np.empty((cells, 2, 3))
-    plane[:, 0] = np.where(main[:, None], np.stack([z00, z10 - z00, z11 - z10], 1),
-                           np.stack([z00, z10 - z00, z01 - z00], 1))
-    plane[:, 1] = np.where(main[:, None], np.stack([z00, z11 - z01, z01 - z00], 1),
-                           np.stack([z01 + z10 - z11, z11 - z01, z11 - z10], 1))
-    return _GridMesh(lo, step, n, plane.reshape(-1, 3).T, main)
+    return _GridMesh(lo, step, n, Z, both == 24)
 
 
 def _fill_nearest(h):

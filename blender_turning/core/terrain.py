@@ -26,7 +26,8 @@ import numpy as np
 
 from .validate import check
 
-__all__ = ["Plane", "HeightField", "FLAT", "SurfaceFrame", "surface_frame", "OffTerrain"]
+__all__ = ["Plane", "HeightField", "LazyHeightField", "FLAT", "SurfaceFrame", "surface_frame",
+           "OffTerrain"]
 
 
 class OffTerrain(ValueError):
@@ -58,7 +59,6 @@ class Plane:
     def flat(self) -> bool:
         """True for the paper's horizontal ground."""
         return self.slope == 0.0
-
     def derivatives_one(self, x: float, y: float):
         """:meth:`derivatives` on Python floats."""
         m = math.tan(self.slope)
@@ -107,10 +107,18 @@ class HeightField:
                                 h, np.take(h, [n - 1], axis) + last,
                                 np.take(h, [n - 1], axis) + 2 * last], axis)
         self._h = h
-        self._x_lo, self._x_hi, self._y_lo, self._y_hi = self.extent
         self._coef = {}                    # cell index -> its bicubic's coefficients (_cell)
-        self._x_lo, self._x_hi, self._y_lo, self._y_hi = self.extent
-        self._coef = {}                    # cell index -> its bicubic's coefficients (_cell)
+        self.derivatives_one = _float_derivatives(self)
+        self.slopes_one = _float_derivatives(self, height=False)
+
+    def __reduce__(self):                  # derivatives_one is a closure: send the heights
+        return HeightField, (self._h[2:-2, 2:-2].copy(), self.x0, self.y0, self.cell)
+
+    def _store(self, r0, c0):
+        """The padded grid, holding at least the 4 x 4 stencils with top-left corners
+        ``(r0, c0)`` (padded indices, ints or arrays): all of it here; :class:`LazyHeightField`
+        computes what is asked for."""
+        return self._h
 
     @property
     def flat(self) -> bool:
@@ -144,7 +152,7 @@ class HeightField:
         # Stencil rows j-1..j+2 and columns i-1..i+2 of the data: +2 for the padding.
         rows = (j + 1)[..., None] + np.arange(4)
         cols = (i + 1)[..., None] + np.arange(4)
-        patch = self._h[rows[..., :, None], cols[..., None, :]]         # (..., 4, 4)
+        patch = self._store(j + 1, i + 1)[rows[..., :, None], cols[..., None, :]]  # (.., 4, 4)
 
         def ev(a, b):
             return np.einsum("...j,...ji,...i->...", a, patch, b)
@@ -153,25 +161,49 @@ class HeightField:
         return (ev(wy, wx), ev(wy, dwx) / c, ev(dwy, wx) / c,
                 ev(wy, ddwx) / (c * c), ev(dwy, dwx) / (c * c), ev(ddwy, wx) / (c * c))
 
+    def _cell(self, i: int, j: int):
+        """The 16 coefficients ``A[b][a]`` (row-major) of cell ``(i, j)``'s bicubic in
+        ``u^a v^b``: the Catmull-Rom weights are ``w(u) = M (1, u, u^2, u^3)``, so
+        ``h = w(v)^T P w(u) = (1, v, ..)^T (M^T P M) (1, u, ..)`` with ``P`` the 4 x 4 stencil.
+        Computed once per cell a figure visits (all cells of a 0.25 m mesh would be 80 MB)."""
+        P = self._store(j + 1, i + 1)[j + 1:j + 5, i + 1:i + 5]
+        A = tuple((_CR_POWERS.T @ P @ _CR_POWERS).ravel().tolist())
+        self._coef[j * self.nx + i] = A
+        return A
 
-    def derivatives_one(self, x: float, y: float):
-        """:meth:`derivatives` on Python floats (one figure, :mod:`.terrain_one_figure`): the same
-        bicubic as a polynomial in the cell, ``h = sum_ab A[b][a] u^a v^b`` (:meth:`_cell`),
-        evaluated by Horner's rule: ~60 multiply-adds, no numpy (~2.3 us a point against ~15 us
-        for the 4 x 4 stencil sliced out of the grid and weighted on floats)."""
-        if not (self._x_lo <= x <= self._x_hi and self._y_lo <= y <= self._y_hi):
-            return self.derivatives(x, y)                       # raises OffTerrain
-        fx = (x - self.x0) / self.cell
-        fy = (y - self.y0) / self.cell
-        i = min(int(fx), self.nx - 2)
-        j = min(int(fy), self.ny - 2)
-        A = self._coef.get(j * self.nx + i)
+
+def _float_derivatives(field: HeightField, height: bool = True):
+    """``field.derivatives_one(x, y)``: :meth:`HeightField.derivatives` on Python floats (one
+    figure, :mod:`.terrain_one_figure`): the same bicubic as a polynomial in the cell,
+    ``h = sum_ab A[b][a] u^a v^b`` (:meth:`HeightField._cell`), evaluated by Horner's rule: ~60
+    multiply-adds, no numpy (~1 us a point against ~15 us for the 4 x 4 stencil sliced out of
+    the grid and weighted on floats).  A closure over the grid's constants (an attribute lookup
+    on the field costs more than a multiply-add).  ``height=False``: ``field.slopes_one``, the
+    five derivatives without ``h`` (what the stepper needs; 12 multiply-adds fewer)."""
+    x_lo, x_hi, y_lo, y_hi = field.extent
+    x0, y0, c = field.x0, field.y0, field.cell
+    cc = c * c
+    i_max, j_max, nx = field.nx - 2, field.ny - 2, field.nx
+    coef, cell, derivatives = field._coef.get, field._cell, field.derivatives
+
+    def derivatives_one(x: float, y: float):
+        if not (x_lo <= x <= x_hi and y_lo <= y <= y_hi):
+            out = derivatives(x, y)                             # raises OffTerrain
+            return out if height else out[1:]
+        fx = (x - x0) / c
+        fy = (y - y0) / c
+        i = int(fx)
+        if i > i_max:
+            i = i_max
+        j = int(fy)
+        if j > j_max:
+            j = j_max
+        A = coef(j * nx + i)
         if A is None:
-            A = self._cell(i, j)
+            A = cell(i, j)
         a00, a01, a02, a03, a10, a11, a12, a13, a20, a21, a22, a23, a30, a31, a32, a33 = A
         u, v = fx - i, fy - j
         # Each power of v: its polynomial in u (r), d/du (d) and d2/du2 (e).
-        r0 = a00 + u * (a01 + u * (a02 + u * a03))
         r1 = a10 + u * (a11 + u * (a12 + u * a13))
         r2 = a20 + u * (a21 + u * (a22 + u * a23))
         r3 = a30 + u * (a31 + u * (a32 + u * a33))
@@ -183,24 +215,105 @@ class HeightField:
         e1 = 2.0 * a12 + 6.0 * u * a13
         e2 = 2.0 * a22 + 6.0 * u * a23
         e3 = 2.0 * a32 + 6.0 * u * a33
-        c = self.cell
-        cc = c * c
-        return (r0 + v * (r1 + v * (r2 + v * r3)),
-                (d0 + v * (d1 + v * (d2 + v * d3))) / c,
-                (r1 + v * (2.0 * r2 + 3.0 * v * r3)) / c,
-                (e0 + v * (e1 + v * (e2 + v * e3))) / cc,
-                (d1 + v * (2.0 * d2 + 3.0 * v * d3)) / cc,
-                (2.0 * r2 + 6.0 * v * r3) / cc)
+        hx = (d0 + v * (d1 + v * (d2 + v * d3))) / c
+        hy = (r1 + v * (2.0 * r2 + 3.0 * v * r3)) / c
+        hxx = (e0 + v * (e1 + v * (e2 + v * e3))) / cc
+        hxy = (d1 + v * (2.0 * d2 + 3.0 * v * d3)) / cc
+        hyy = (2.0 * r2 + 6.0 * v * r3) / cc
+        if not height:
+            return hx, hy, hxx, hxy, hyy
+        r0 = a00 + u * (a01 + u * (a02 + u * a03))
+        return r0 + v * (r1 + v * (r2 + v * r3)), hx, hy, hxx, hxy, hyy
 
-    def _cell(self, i: int, j: int):
-        """The 16 coefficients ``A[b][a]`` (row-major) of cell ``(i, j)``'s bicubic in
-        ``u^a v^b``: the Catmull-Rom weights are ``w(u) = M (1, u, u^2, u^3)``, so
-        ``h = w(v)^T P w(u) = (1, v, ..)^T (M^T P M) (1, u, ..)`` with ``P`` the 4 x 4 stencil.
-        Computed once per cell a figure visits (all cells of a 0.25 m mesh would be 80 MB)."""
-        P = self._h[j + 1:j + 5, i + 1:i + 5]
-        A = tuple((_CR_POWERS.T @ P @ _CR_POWERS).ravel().tolist())
-        self._coef[j * self.nx + i] = A
-        return A
+    return derivatives_one
+
+
+class LazyHeightField(HeightField):
+    """A :class:`HeightField` whose samples are computed when first needed, in tiles of
+    :attr:`TILE` x :attr:`TILE` padded samples: the same field, bit for bit, as
+    ``HeightField(sample(arange(ny), arange(nx)), x0, y0, cell)``, for the part of the grid a run
+    visits.  ``sample(rows, cols)`` returns the heights at ``(x0 + cols[None, :] cell, y0 +
+    rows[:, None] cell)`` (data indices in range), elementwise (a point's height must not
+    depend on the others asked with it).
+
+    A Ground mesh read in Blender (:func:`..blender.ground.read_ground`) is one: a 200 m x 200 m
+    mesh at 0.25 m is 641,601 samples, of which a minute's run visits a few percent.  Reading
+    :attr:`_h` (all of it: the planner's slope bound) computes the rest; a pickled one (the crowd's
+    worker processes) travels as the plain :class:`HeightField` of all samples."""
+
+    TILE = 64
+
+    def __init__(self, sample, nx: int, ny: int, x0: float, y0: float, cell: float):
+        if min(nx, ny) < 2:
+            raise ValueError(f"the grid is {ny} x {nx}; at least 2 x 2 is needed")
+        self.cell = check("cell", cell, "cell")
+        self.x0 = check("x0", x0, "coordinate")
+        self.y0 = check("y0", y0, "coordinate")
+        self.ny, self.nx = int(ny), int(nx)
+        self._sample = sample
+        self._data = np.empty((self.ny + 4, self.nx + 4))
+        T = self.TILE
+        self._done = np.zeros((-(-(self.ny + 4) // T), -(-(self.nx + 4) // T)), bool)
+        self._coef = {}
+        self.derivatives_one = _float_derivatives(self)
+        self.slopes_one = _float_derivatives(self, height=False)
+
+    @property
+    def _h(self):
+        """The whole padded grid (every tile computed)."""
+        if not self._done.all():
+            self._fill(0, self.ny + 4, 0, self.nx + 4)
+            self._done[:] = True
+        return self._data
+
+    def __reduce__(self):
+        return HeightField, (self._h[2:-2, 2:-2].copy(), self.x0, self.y0, self.cell)
+
+    def _store(self, r0, c0):
+        T, done = self.TILE, self._done
+        if type(r0) is int:                                 # one stencil (derivatives_one)
+            a0, a1, b0, b1 = r0 // T, (r0 + 3) // T, c0 // T, (c0 + 3) // T
+            if done[a0, b0] and done[a1, b1] and done[a0, b1] and done[a1, b0]:
+                return self._data
+            tiles = {(a, b) for a in (a0, a1) for b in (b0, b1)}
+        else:
+            r0, c0 = np.ravel(r0), np.ravel(c0)
+            W = done.shape[1]
+            a0, a1, b0, b1 = r0 // T * W, (r0 + 3) // T * W, c0 // T, (c0 + 3) // T
+            k = np.unique(np.concatenate([a0 + b0, a0 + b1, a1 + b0, a1 + b1]))
+            k = k[~done.ravel()[k]]
+            if not len(k):
+                return self._data
+            tiles = zip(*np.divmod(k, W))
+        for a, b in tiles:
+            if not done[a, b]:
+                self._fill(a * T, min((a + 1) * T, self.ny + 4),
+                           b * T, min((b + 1) * T, self.nx + 4))
+                done[a, b] = True
+        return self._data
+
+    def _fill(self, r_lo, r_hi, c_lo, c_hi):
+        """Padded rows ``r_lo:r_hi``, columns ``c_lo:c_hi``: the samples, and outside the grid
+        :class:`HeightField`'s linear extension (rows first, then columns, as it pads)."""
+        ra, rb, rk = _extension(np.arange(r_lo, r_hi) - 2, self.ny)
+        ca, cb, ck = _extension(np.arange(c_lo, c_hi) - 2, self.nx)
+        rows, cols = np.union1d(ra, rb), np.union1d(ca, cb)
+        S = np.asarray(self._sample(rows, cols), dtype=float)
+        if not np.isfinite(S).all():
+            raise ValueError("heights holds a value that is not a finite number")
+        pa, pb = np.searchsorted(rows, ra), np.searchsorted(rows, rb)
+        R = S[pa] + rk[:, None] * (S[pa] - S[pb])
+        qa, qb = np.searchsorted(cols, ca), np.searchsorted(cols, cb)
+        self._data[r_lo:r_hi, c_lo:c_hi] = R[:, qa] + ck * (R[:, qa] - R[:, qb])
+
+
+def _extension(idx, n):
+    """Data indices ``idx`` (``-2 .. n + 1``) as ``(a, b, k)``: the padded value is ``h[a] + k
+    (h[a] - h[b])``, :class:`HeightField`'s linear extension (``k = 0`` inside)."""
+    a = np.clip(idx, 0, n - 1)
+    b = np.where(idx < 0, 1, np.where(idx > n - 1, n - 2, a))
+    k = np.where(idx < 0, -idx, np.where(idx > n - 1, idx - (n - 1), 0)).astype(float)
+    return a, b, k
 
 
 #: Catmull-Rom weights of the 4 stencil points as polynomials: ``w_k(u) = sum_a M[k, a] u^a``

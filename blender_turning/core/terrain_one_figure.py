@@ -7,11 +7,20 @@ Here one RK4 stage is one function on floats with the body's constants bound as 
 :mod:`.one_figure` does on flat ground, written out from the same equations:
 
 - the foot's frame (docs/TERRAIN.md Section 1; :func:`.terrain.surface_frame`) from the
-  surface's derivatives on floats (:meth:`.terrain.HeightField.derivatives_one`,
-  :meth:`.terrain.Plane.derivatives_one`);
+  surface's derivatives on floats (``HeightField.slopes_one``,
+  :meth:`.terrain.Plane.derivatives_one`), written through the slope along the heading
+  ``p = h_x c + h_y s`` and across it ``a = h_x s - h_y c`` (``c, s`` the heading's cosine and
+  sine, ``w = sqrt(1 + p^2)``, ``n_z = 1 / sqrt(1 + h_x^2 + h_y^2)``): with ``t = (c, s, p) / w``
+  and ``n = (-h_x, -h_y, 1) n_z``, ``b = n x t`` has ``b_z = -n_z a / w``, so the lateral
+  gravity is ``g n_z a / w``, the plumb lean ``atan(-a / w)``, the turn gain
+  ``(t_x b_y - t_y b_x) / (t_x^2 + t_y^2) = n_z w^2`` and the bend gain
+  ``(t_x n_y - t_y n_x) / (t_x^2 + t_y^2) = n_z a w`` (:func:`.terrain.surface_frame`'s numbers
+  to round-off, ~25 fewer operations a stage);
 - the controller's lean law about the local plumb lean
   (:meth:`.controllers.base.Controller.equilibrium_lean`,
-  :func:`.terrain_dynamics.plumb_lean_along`) and Eq. (1) on terrain
+  :func:`.terrain_dynamics.plumb_lean_along`: ``atan((h_y cos H - h_x sin H) / sqrt(1 + q^2))``,
+  ``q = h_x cos H + h_y sin H`` along the course ``H``, read once when it is constant) and
+  Eq. (1) on terrain
   (:func:`.terrain_dynamics.terrain_inverse_cf`), docs/TERRAIN.md Section 6;
 - Section 3's bounds on ``C_f`` (:func:`.dynamics.bound_cf`);
 - Eq. (21), Eq. (2) on terrain, the normal force and the speed equation
@@ -45,76 +54,105 @@ class TerrainStage:
 
     def __init__(self, body: BodyParams, limits: Limits, resistance: Resistance, ground,
                  controller: Controller):
-        one = getattr(ground, "derivatives_one", None)
-        self.derivatives = one if one is not None else (
-            lambda x, y: [float(v) for v in ground.derivatives(x, y)])
+        # (h_x, h_y, h_xx, h_xy, h_yy) at a point: the height itself is not needed.
+        slopes, one = getattr(ground, "slopes_one", None), getattr(ground, "derivatives_one", None)
+        self.derivatives = slopes if slopes is not None else (lambda x, y: one(x, y)[1:]) \
+            if one is not None else (lambda x, y: [float(v) for v in ground.derivatives(x, y)[1:]])
         self.ground, self.controller = ground, controller
         self._g = body.g
         base = type(controller)
         own_law = None if base.terrain_cf_law is Controller.terrain_cf_law else \
             controller.terrain_cf_law(ground)
         self._plumb = base.equilibrium_lean is Controller.equilibrium_lean
-        self.stage = self._build(body, limits, resistance, own_law)
+        # The course the plumb lean is taken along (plumb_lean_along): read once, as its cosine
+        # and sine when constant; else kept for the time last asked (a step's stages 2 and 3
+        # share one), and asked again by :meth:`lean` at each step's start (the brake's course
+        # moves between steps, :class:`.braking.TargetSpeed`).
+        self._heading = getattr(controller, "heading", None) if self._plumb else None
+        H = getattr(self._heading, "constant_value", None)
+        self._course = [None, 1.0, 0.0] if H is None else [math.inf, math.cos(H), math.sin(H)]
+        self.stage, self.lean = self._build(body, limits, resistance, own_law)
 
-    def _equilibrium(self, t, x, y, d, g_n, g_b, nx, ny, nz):
-        """The controller's equilibrium lean (:meth:`.Controller.equilibrium_lean`) at the
-        frame of ``(x, y)`` heading ``d``."""
-        ctl = self.controller
-        if not self._plumb:
-            return ctl.equilibrium_lean(surface_frame(self.ground, x, y, d, self._g), t)
-        heading = getattr(ctl, "heading", None)
-        if heading is None:
-            return math.atan2(-g_b, g_n)                        # plumb_lean
-        H = heading(t)                                          # plumb_lean_along
-        cH, sH = math.cos(H), math.sin(H)
-        p = -(nx * cH + ny * sH) / nz
-        return math.atan2(self._g * (nx * sH - ny * cH) / math.sqrt(1.0 + p * p), g_n)
-
-    def lean(self, t: float, x: float, y: float, d: float, theta_v: float, dv) -> float:
-        """``theta_v`` from the controller's equilibrium lean at ``(x, y)`` heading ``d``
-        (``dv``: :attr:`derivatives` there)."""
-        _, hx, hy, _, _, _ = dv
-        c, s = math.cos(d), math.sin(d)
-        p = hx * c + hy * s
-        it = 1.0 / math.sqrt(1.0 + p * p)
-        nz = 1.0 / math.sqrt(1.0 + hx * hx + hy * hy)
-        nx, ny = -hx * nz, -hy * nz
-        g = self._g
-        return theta_v - self._equilibrium(t, x, y, d, g * nz, -g * (nx * s - ny * c) * it,
-                                           nx, ny, nz)
+    def _along(self, t):
+        """``(cos H, sin H)`` of the course at ``t``."""
+        course = self._course
+        if course[0] != t and course[0] != math.inf:
+            H = self._heading(t)
+            course[0], course[1], course[2] = t, math.cos(H), math.sin(H)
+        return course[1], course[2]
 
     def _build(self, body, limits, resistance, own_law):
-        g, l, J, m = body.g, body.l, body.J, body.m
+        g, l, J = body.g, body.l, body.J
         mu, kd = resistance.mu, resistance.drag_k(body.m)
         law_J, law_l = self.controller.body.J, self.controller.body.l
         cmax, rate = limits.C_f_max, limits.dC_f_max
         rated = rate != math.inf
-        sin, cos, sqrt, inf, copysign = math.sin, math.cos, math.sqrt, math.inf, math.copysign
-        derivatives, equilibrium = self.derivatives, self._equilibrium
+        sin, cos, sqrt, atan = math.sin, math.cos, math.sqrt, math.atan
+        inf, copysign = math.inf, math.copysign
+        derivatives, ground, ctl = self.derivatives, self.ground, self.controller
         alpha_law = self.controller.scalar_alpha_law() if own_law is None else None
+        # The equilibrium lean: along the course (0), the plumb lean (1), the controller's (2).
+        kind = (0 if self._heading is not None else 1) if self._plumb else 2
+        course, along = self._course, self._along
+        row = [None, 0.0]                       # the last lean's dv and equilibrium lean
+
+        def lean(t, x, y, d, theta_v, dv):
+            """``theta_v`` from the controller's equilibrium lean
+            (:meth:`.Controller.equilibrium_lean`) at ``(x, y)`` heading ``d`` (``dv``:
+            :attr:`derivatives` there), at the start of a step: the course is read anew, and
+            the step's first stage (given this same ``dv``: the same point, time and heading)
+            takes the equilibrium from here."""
+            if kind == 2:
+                eq = ctl.equilibrium_lean(surface_frame(ground, x, y, d, g), t)
+            elif kind == 1:                                     # plumb_lean
+                hx, hy = dv[0], dv[1]
+                c, s = cos(d), sin(d)
+                p = hx * c + hy * s
+                eq = atan((hy * c - hx * s) / sqrt(1.0 + p * p))
+            else:                                               # plumb_lean_along
+                if course[0] != inf:
+                    course[0] = None
+                hx, hy = dv[0], dv[1]
+                cH, sH = along(t)
+                q = hx * cH + hy * sH
+                eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))
+            row[0], row[1] = dv, eq
+            return theta_v - eq
 
         def stage(t, x, y, d, th, om, V, anchor, tau, dv=None):
             """``(x', y', theta_dir', theta_v', omega_v', V_cm', alpha_v, V_f, C_f)``."""
-            _, hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
-            # The foot's frame (docs/TERRAIN.md Section 1): t, n, b = n x t.
+            hx, hy, hxx, hxy, hyy = derivatives(x, y) if dv is None else dv
+            # The foot's frame (docs/TERRAIN.md Section 1) through the slope along the heading
+            # p: t = (c, s, p) / sqrt(1 + p^2), n = (-hx, -hy, 1) nz (module doc).
             c, s = cos(d), sin(d)
             p = hx * c + hy * s
-            it = 1.0 / sqrt(1.0 + p * p)
+            w = sqrt(1.0 + p * p)
+            tz = p / w
             nz = 1.0 / sqrt(1.0 + hx * hx + hy * hy)
-            tx, ty, tz = c * it, s * it, p * it
-            nx, ny = -hx * nz, -hy * nz
-            bx, by, bz = ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx
-            kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz * it * it
-            g_n, g_b = g * nz, -g * bz
+            across = hx * s - hy * c                  # -b_z / (nz it): the slope across
+            kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz / (w * w)
+            g_n = g * nz
+            g_b = g_n * across / w
             sn, cs = sin(th), cos(th)
+            VV = V * V
             if alpha_law is None:
                 cf = own_law(t, (x, y, d, th, om, V))
             else:
                 # The lean law about the equilibrium lean, then Eq. (1) on terrain.
-                eq = equilibrium(t, x, y, d, g_n, g_b, nx, ny, nz)
-                k = ((g_n + V * V * kappa) * sn + g_b * cs
+                if dv is not None and dv is row[0]:
+                    eq = row[1]                                 # the row's, from lean
+                elif kind == 0:                                 # plumb_lean_along the course
+                    cH, sH = (course[1], course[2]) if course[0] == t or \
+                        course[0] == inf else along(t)
+                    q = hx * cH + hy * sH
+                    eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))
+                elif kind == 1:                                 # plumb_lean
+                    eq = atan(-across / w)
+                else:
+                    eq = ctl.equilibrium_lean(surface_frame(ground, x, y, d, g), t)
+                k = ((g_n + VV * kappa) * sn + g_b * cs
                      - alpha_law(t, (x, y, d, th - eq, om)) * law_J)
-                den = k * law_l * sn + V * V * cs
+                den = k * law_l * sn + VV * cs
                 cf = k / den if den > 0.0 else copysign(inf, k)
             # Section 3: |C_f| <= C_f_max, the physical branch on the side of the lean, the rate.
             ls = l * sn
@@ -126,13 +164,13 @@ class TerrainStage:
                 cf = anchor - step if cf < anchor - step else \
                     anchor + step if cf > anchor + step else cf
             # Eq. (21), Eq. (2) on terrain, the normal force and the speed (Sections 2-3).
-            V_f = V * (1.0 / (1.0 - cf * ls))
+            V_f = V / (1.0 - cf * ls)
             G_n = g_n + V_f * V_f * kappa
             alpha = (G_n * sn + (g_b - V * V_f * cf) * cs) / J
-            N = m * (G_n - l * (alpha * sn + om * om * cs))
-            hor = tx * tx + ty * ty
-            turn = V_f * (cf * (tx * by - ty * bx) / hor + kappa * (tx * ny - ty * nx) / hor)
-            return (V_f * tx, V_f * ty, turn, om, alpha, -g * tz - mu * N / m - kd * V * V,
-                    alpha, V_f, cf)
+            # N / m, and theta_dir' = V_f (C_f turn_gain + kappa_n bend_gain) (module doc).
+            N_m = G_n - l * (alpha * sn + om * om * cs)
+            turn = V_f * nz * (cf * (w * w) + kappa * across * w)
+            u = V_f / w
+            return (u * c, u * s, turn, om, alpha, -g * tz - mu * N_m - kd * VV, alpha, V_f, cf)
 
-        return stage
+        return stage, lean

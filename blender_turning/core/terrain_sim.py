@@ -2,11 +2,12 @@
 
 :func:`simulate_terrain` steps one figure on a surface (:mod:`.terrain`) with friction and drag
 (:class:`.terrain_dynamics.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
-``C_f`` bounded at every stage as on flat ground, as :func:`.terrain_dynamics.terrain_rk4_step`).  Each step the controller is re-targeted
-to the current speed (:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from
-the local plumb lean (:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1)
-on terrain (:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes
-by turning across the hill (docs/TERRAIN.md Section 6).
+``C_f`` bounded at every stage as on flat ground, as :func:`.terrain_dynamics.terrain_rk4_step`).
+Each step the controller is re-targeted to the current speed
+(:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from the local plumb lean
+(:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1) on terrain
+(:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes by turning
+across the hill (docs/TERRAIN.md Section 6).
 
 :func:`.simulate.simulate` sends a run here when it is given a ground that is not flat, friction
 or drag, or a target speed; flat ground without them stays on today's path.
@@ -127,6 +128,7 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
     x0, x1, x2, x3, x4, x5 = (float(v) for v in st)
     h, w6 = 0.5 * dt, dt / 6.0
     rows = []
+    append = rows.append
     V_now = body.V_cm
     for i in range(n):
         t = i * dt
@@ -145,7 +147,7 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
         begin(t, (x0, x1, x2, rel, x4))
         a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, dt,
                                                        dv)
-        rows.append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel))
+        append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel))
         if abs(rel) > fall:
             return rows, "fell"
         if x5 < MIN_SPEED:
@@ -153,12 +155,15 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
         if i + 1 == n:
             break
         try:
-            b0, b1, b2, b3, b4, b5 = stage(t + h, x0 + h * a0, x1 + h * a1, x2 + h * a2,
-                                           x3 + h * a3, x4 + h * a4, x5 + h * a5, cf, h)[:6]
-            c0, c1, c2, c3, c4, c5 = stage(t + h, x0 + h * b0, x1 + h * b1, x2 + h * b2,
-                                           x3 + h * b3, x4 + h * b4, x5 + h * b5, cf, h)[:6]
-            d0, d1, d2, d3, d4, d5 = stage(t + dt, x0 + dt * c0, x1 + dt * c1, x2 + dt * c2,
-                                           x3 + dt * c3, x4 + dt * c4, x5 + dt * c5, cf, dt)[:6]
+            b0, b1, b2, b3, b4, b5, _, _, _ = stage(
+                t + h, x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4,
+                x5 + h * a5, cf, h)
+            c0, c1, c2, c3, c4, c5, _, _, _ = stage(
+                t + h, x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4,
+                x5 + h * b5, cf, h)
+            d0, d1, d2, d3, d4, d5, _, _, _ = stage(
+                t + dt, x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
+                x5 + dt * c5, cf, dt)
         except OffTerrain:
             return rows, "left"
         x0 += w6 * (a0 + 2.0 * (b0 + c0) + d0)
