@@ -27,7 +27,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 from blender_turning.blender import bake, compat, rig_builder  # noqa: E402
-from blender_turning.blender import props as props_mod, props_rig  # noqa: E402
+from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange, settings_from_preset  # noqa: E402
 
@@ -87,14 +87,12 @@ def main(argv=None) -> int:
 
     registered = not hasattr(bpy.types.Object, "turning")
     if registered:
-        props_rig.register()           # the figure settings nest the rig's group (issue 8)
-        props_mod.register()
+        addon.register()               # the figure settings and their nested groups
     try:
         return _bench(args, sports)
     finally:
         if registered:                 # bpy 4.2 crashes at exit on a registered PointerProperty
-            props_mod.unregister()
-            props_rig.unregister()
+            addon.unregister()
 
 
 def _bench(args, sports) -> int:

@@ -32,8 +32,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning.blender import bake, rig_builder  # noqa: E402
-from blender_turning.blender import props_rig  # noqa: E402
-from blender_turning.blender import props as props_mod  # noqa: E402
+from blender_turning import blender as addon  # noqa: E402
 from blender_turning.core import preset  # noqa: E402
 from blender_turning.crowd import (Crowd, CrowdFigure, Turns, follow_leader,  # noqa: E402
                                    map_crowd, run_crowd)
@@ -54,8 +53,7 @@ def main() -> int:
         return compare(args)
     registered = not hasattr(bpy.types.Object, "turning")
     if registered:                     # the figure settings and their nested groups
-        props_rig.register()
-        props_mod.register()
+        addon.register()               # the figure settings and their nested groups
     try:
         bpy.ops.wm.read_factory_settings(use_empty=True)
         fig = preset("skier")
@@ -81,8 +79,7 @@ def main() -> int:
         t_bake = time.perf_counter() - t
     finally:
         if registered:
-            props_mod.unregister()
-            props_rig.unregister()
+            addon.unregister()
     frames = sum(len(tr.frames) for tr in tracks)
     if args.json:
         print("JSON" + json.dumps({"simulate": t_sim, "map": t_map, "bake": t_bake,
