@@ -26,6 +26,7 @@ import numpy as np
 from blender_turning.core.params import preset
 from blender_turning.crowd import CrowdFigure, Turns, follow_leader
 from blender_turning.crowd.reader import CROWD_RANGES
+from render_terrain import follow_target, key_locations, tracking_camera
 
 KNOWN = {"name", "formation", "leader", "count", "gap_s", "gap_m", "lateral_m", "seed",
          "body_jitter", "timing_jitter_s", "period_jitter", "shot"}
@@ -110,7 +111,7 @@ def make_crowd_cameras(bpy, crowds, figures, distance, height, lens):
     the side (downhill of them, looking back up the line) as they come down; returns
     ``[(crowd name, camera)]``.  ``distance`` and ``height`` are the single figures' (the
     config's camera): the crowd's camera stands back by the line's length as well."""
-    from blender_turning.blender import bake, compat
+    from blender_turning.blender import compat
     scene = bpy.context.scene
     frames = np.arange(scene.frame_start, scene.frame_end + 1)
     by_name = {o.name: o for o in figures}
@@ -118,21 +119,11 @@ def make_crowd_cameras(bpy, crowds, figures, distance, height, lens):
     for crowd in crowds:
         if not crowd["shot"]:
             continue
-        locs = np.array([_locations(compat, by_name[n], frames) for n in crowd["members"]])
+        locs = np.array([key_locations(compat, by_name[n], frames) for n in crowd["members"]])
         lead = locs[0]
-        # The aim point: the middle of the school, a little towards the leader, smoothed over
-        # half a second so the shot does not swing with every turn.
-        aim = 0.1 * lead + 0.9 * locs.mean(axis=0)                      # (frames, 3)
-        k = max(1, int(round(0.5 * scene.render.fps)))
-        kernel = np.ones(k) / k
-        smooth = np.stack([np.convolve(np.pad(aim[:, i], (k // 2, k - 1 - k // 2), mode="edge"),
-                                       kernel, mode="valid") for i in range(3)], 1)
-        target = bpy.data.objects.new(f"Camera Target {crowd['name']}", None)
-        scene.collection.objects.link(target)
-        compat.assign_new_action(target, target.name)
-        bake.write_channels(compat.channels(target),
-                            [("location", i, "Object Transforms", smooth[:, i] + (i == 2) * 0.9)
-                             for i in range(3)], frames.astype(float))
+        # The aim point: the middle of the school, a little towards the leader.
+        target = follow_target(bpy, f"Camera Target {crowd['name']}",
+                               0.1 * lead + 0.9 * locs.mean(axis=0), frames)
         d = lead[-1, :2] - lead[0, :2]
         d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-6 else np.array([0.0, 1.0])
         side = np.array([-d[1], d[0]])
@@ -142,19 +133,7 @@ def make_crowd_cameras(bpy, crowds, figures, distance, height, lens):
         length = float(np.max(np.abs((locs[:, 0, :2] - lead[0, :2]) @ d)))
         reach = distance + 0.7 * length
         offset = 0.5 * reach * d + 0.85 * reach * side
-        cam_data = bpy.data.cameras.new(f"Camera {crowd['name']}")
-        cam_data.lens = lens
-        cam = bpy.data.objects.new(f"Camera {crowd['name']}", cam_data)
-        scene.collection.objects.link(cam)
-        cam.location = (offset[0], offset[1], height + 0.1 * length)
-        c = cam.constraints.new("COPY_LOCATION")
-        c.target, c.use_offset = target, True
-        c = cam.constraints.new("TRACK_TO")
-        c.target, c.track_axis, c.up_axis = target, "TRACK_NEGATIVE_Z", "UP_Y"
-        out.append((crowd["name"], cam))
+        out.append((crowd["name"], tracking_camera(bpy, f"Camera {crowd['name']}", lens,
+                                                   (offset[0], offset[1],
+                                                    height + 0.1 * length), target)))
     return out
-
-
-def _locations(compat, obj, frames):
-    fcs = {fc.array_index: fc for fc in compat.channels(obj).fcurves if fc.data_path == "location"}
-    return np.array([[fcs[i].evaluate(f) for i in range(3)] for f in frames])

@@ -112,41 +112,59 @@ def make_tracks(bpy, fig_obj, ground_obj, material, frames):
 def make_follow_cameras(bpy, figures, distance, height, lens):
     """One camera per figure, behind it (uphill of its mean direction) and to its side, aimed at
     its body; returns ``[(figure name, camera)]``."""
-    from blender_turning.blender import bake, compat
+    from blender_turning.blender import compat
     scene = bpy.context.scene
     frames = np.arange(scene.frame_start, scene.frame_end + 1)
     out = []
     for fig in figures:
-        fcs = {fc.array_index: fc for fc in compat.channels(fig).fcurves
-               if fc.data_path == "location"}
-        locs = np.array([[fcs[i].evaluate(f) for i in range(3)] for f in frames])
-        # The aim point: the body's middle, smoothed over half a second so the shot does not
-        # swing with every turn.
-        k = max(1, int(round(0.5 * scene.render.fps)))
-        kernel = np.ones(k) / k
-        smooth = np.stack([np.convolve(np.pad(locs[:, i], (k // 2, k - 1 - k // 2), mode="edge"),
-                                       kernel, mode="valid") for i in range(3)], 1)
-        target = bpy.data.objects.new(f"Camera Target {fig.name}", None)
-        scene.collection.objects.link(target)
-        compat.assign_new_action(target, target.name)
-        bake.write_channels(compat.channels(target),
-                            [("location", i, "Object Transforms", smooth[:, i] + (i == 2) * 0.9)
-                             for i in range(3)], frames.astype(float))
+        locs = key_locations(compat, fig, frames)
+        # The aim point: the body's middle.
+        target = follow_target(bpy, f"Camera Target {fig.name}", locs, frames)
         d = locs[-1, :2] - locs[0, :2]
         d = d / np.linalg.norm(d) if np.linalg.norm(d) > 1e-6 else np.array([0.0, 1.0])
         side = np.array([-d[1], d[0]])
         offset = -0.75 * distance * d + 0.65 * distance * side
-        cam_data = bpy.data.cameras.new(f"Camera {fig.name}")
-        cam_data.lens = lens
-        cam = bpy.data.objects.new(f"Camera {fig.name}", cam_data)
-        scene.collection.objects.link(cam)
-        cam.location = (offset[0], offset[1], height)
-        c = cam.constraints.new("COPY_LOCATION")
-        c.target, c.use_offset = target, True
-        c = cam.constraints.new("TRACK_TO")
-        c.target, c.track_axis, c.up_axis = target, "TRACK_NEGATIVE_Z", "UP_Y"
-        out.append((fig.name, cam))
+        out.append((fig.name, tracking_camera(bpy, f"Camera {fig.name}", lens,
+                                              (offset[0], offset[1], height), target)))
     return out
+
+
+def key_locations(compat, obj, frames) -> np.ndarray:
+    """``obj``'s keyed location at every frame of ``frames``: shape ``(frames, 3)``."""
+    fcs = {fc.array_index: fc for fc in compat.channels(obj).fcurves if fc.data_path == "location"}
+    return np.array([[fcs[i].evaluate(f) for i in range(3)] for f in frames])
+
+
+def follow_target(bpy, name, aim, frames):
+    """An empty keyed at ``aim`` (``(frames, 3)``) 0.9 m up, smoothed over half a second so a
+    shot aimed at it does not swing with every turn."""
+    from blender_turning.blender import bake, compat
+    scene = bpy.context.scene
+    k = max(1, int(round(0.5 * scene.render.fps)))
+    kernel = np.ones(k) / k
+    smooth = np.stack([np.convolve(np.pad(aim[:, i], (k // 2, k - 1 - k // 2), mode="edge"),
+                                   kernel, mode="valid") for i in range(3)], 1)
+    target = bpy.data.objects.new(name, None)
+    scene.collection.objects.link(target)
+    compat.assign_new_action(target, target.name)
+    bake.write_channels(compat.channels(target),
+                        [("location", i, "Object Transforms", smooth[:, i] + (i == 2) * 0.9)
+                         for i in range(3)], np.asarray(frames, float))
+    return target
+
+
+def tracking_camera(bpy, name, lens, offset, target):
+    """A camera at ``offset`` from ``target`` (it moves with it) that looks at it."""
+    cam_data = bpy.data.cameras.new(name)
+    cam_data.lens = lens
+    cam = bpy.data.objects.new(name, cam_data)
+    bpy.context.scene.collection.objects.link(cam)
+    cam.location = offset
+    c = cam.constraints.new("COPY_LOCATION")
+    c.target, c.use_offset = target, True
+    c = cam.constraints.new("TRACK_TO")
+    c.target, c.track_axis, c.up_axis = target, "TRACK_NEGATIVE_Z", "UP_Y"
+    return cam
 
 
 def light_the_snow(bpy):
