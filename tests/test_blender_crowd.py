@@ -283,21 +283,33 @@ def test_follow_path_bakes_every_selected_figure_as_alone(scene):
     assert end == max(len(c["location", 0][0]) for c in together)
 
 
-def modal_crowd(figs):
+def modal_crowd(figs, avoid=True, clearance=1.0):
     """A stand-in ``self`` for ``TURNING_OT_follow_path.modal`` with several figures planning."""
     reports = []
     fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg))})()
     fake._timer, fake._job = object(), None
+    fake.avoid, fake.clearance = avoid, clearance
     fake._crowd = crowd_job.prepare_crowd(fake, bpy.context, figs)
     fake._crowd.start()
     return bpy.types.TURNING_OT_follow_path, fake, reports
+
+
+def started_workers(job, timeout=60.0):
+    """The worker processes of ``job``, once the planning thread's first plans have been handed
+    to them (as the modal operator's timer does)."""
+    import time
+    end = time.monotonic() + timeout
+    while not job._pool._processes and time.monotonic() < end:
+        job.pump()
+        time.sleep(0.01)
+    return list(job._pool._processes.values())
 
 
 def test_esc_ends_the_workers_and_leaves_the_scene_unchanged(scene):
     figs = path_figures()
     before = snapshot()
     op_cls, fake, reports = modal_crowd(figs)
-    procs = list(fake._crowd._pool._processes.values())
+    procs = started_workers(fake._crowd)
     assert procs
     wm = WindowManager()
     assert op_cls.modal(fake, Context(wm), ESC) == {"CANCELLED"}
@@ -458,6 +470,6 @@ def test_the_crowd_panel_draws_the_settings_and_add_crowd(scene):
     cls.draw(fake, bpy.context)
     drawn = [c[1][1] for c in calls if c[0] == "prop"] + [c[1][0] for c in calls
                                                          if c[0] == "operator_menu_enum"]
-    assert drawn == ["time_offset", "first_turn", "turning.add_crowd"]
+    assert drawn == ["time_offset", "first_turn", "priority", "turning.add_crowd"]
     assert any("act on 1 figure (the selection)" in c[2].get("text", "") for c in calls
                if c[0] == "label")
