@@ -83,7 +83,7 @@ def test_crossing_figures_collide_alone_and_keep_the_clearance_avoiding(scene):
 def test_avoiding_is_the_core_priority_run_in_the_planning_order(scene):
     figs = crossing()
     figs[1].turning.crowd.priority = -1                 # the second plans first now
-    figs[1].turning.crowd.time_offset = 0.25            # and starts a little later
+    figs[1].turning.crowd.time_offset = 0.05            # and starts a little later
     got = planned(figs, avoid=True, clearance=1.5)
     members = []
     for fig in figs:
@@ -98,6 +98,7 @@ def test_avoiding_is_the_core_priority_run_in_the_planning_order(scene):
     assert got[0].plan["priority"]["after"] == [figs[1].name]
     alone = planned(figs, avoid=False)
     np.testing.assert_array_equal(got[1].trajectory.data, alone[1].trajectory.data)
+    assert closest(figs[::-1], alone[::-1])[0] < 1.0            # measured 0.5 m: 0.05 s apart
     assert closest(figs[::-1], got[::-1])[0] >= 1.5 - 1e-3
 
 
@@ -144,6 +145,22 @@ def test_esc_while_avoiding_ends_the_planning_and_leaves_the_scene_unchanged(sce
     assert not job._thread.is_alive()                   # the runner's thread ended too
     assert "cancelled" in reports[-1][1]
     assert snapshot() == before, diff(before, snapshot())
+
+
+def test_esc_before_the_workers_got_the_plans_ends_the_planning_thread(scene):
+    import time
+    figs = crossing()
+    job = crowd_job.CrowdFollow(figs, avoid=True)
+    job.read(bpy.context)
+    job.start()
+    end = time.monotonic() + 60
+    while not job._executor._queued and time.monotonic() < end:     # asked for, not pumped
+        time.sleep(0.01)
+    assert job._executor._queued
+    job.cancel()
+    assert not job._thread.is_alive()
+    with pytest.raises(Exception):
+        job.results()
 
 
 def test_the_crowd_panel_shows_the_planning_order(scene):

@@ -137,10 +137,10 @@ class PumpedExecutor:
         fut = Future()
         with self._lock:
             self._futures.append(fut)
-            if self._closed:
-                fut.cancel()
-            else:
+            if not self._closed:
                 self._queued.append((fut, fn, arg))
+                return fut
+        _drop(fut)
         return fut
 
     def pump(self) -> None:
@@ -156,11 +156,19 @@ class PumpedExecutor:
 
     def close(self) -> None:
         with self._lock:
-            self._closed, self._queued = True, []
+            self._closed, queued, self._queued = True, self._queued, []
             futures = list(self._futures)
-        for fut in futures:
-            if not fut.cancel():               # running: fail it (unless it has just ended)
-                _settle(fut, exc=CancelledError())
+        for fut, _, _ in queued:
+            _drop(fut)
+        for fut in futures:                    # in the pool: fail it (unless it has just ended)
+            _settle(fut, exc=CancelledError())
+
+
+def _drop(fut: Future) -> None:
+    """Cancel a pending ``fut`` and tell its waiters (``as_completed`` hears of a cancel only
+    through ``set_running_or_notify_cancel``)."""
+    fut.cancel()
+    fut.set_running_or_notify_cancel()
 
 
 def _settle(fut: Future, result=None, exc=None) -> None:
