@@ -324,7 +324,7 @@ def test_modal_follow_path_shows_one_progress_bar_then_bakes_all(scene):
     figs = path_figures(2)
     op_cls, fake, reports = modal_crowd(figs)
     wm = WindowManager()
-    end = time.monotonic() + 300
+    end = time.monotonic() + 120
     while (ret := op_cls.modal(fake, Context(wm), TIMER)) == {"RUNNING_MODAL"} and \
             time.monotonic() < end:
         time.sleep(0.05)

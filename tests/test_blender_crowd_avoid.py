@@ -132,6 +132,20 @@ def test_a_figure_with_no_way_round_is_named_with_those_in_its_way(scene):
     assert snapshot() == before, diff(before, snapshot())
 
 
+def test_of_several_figures_without_a_plan_the_first_in_planning_order_is_named(scene):
+    from test_blender_operators import make_wall
+    figs = crossing(starts=((-20, 0), (-20, 0.2)))
+    walls = bpy.data.collections.new("Walls")
+    scene.collection.children.link(walls)
+    walls.objects.link(make_wall("Wall", (15.0, 0.0), (1.0, 60.0)))    # across the first's way
+    figs[0].turning.obstacles = walls
+    # Skier.001 (active: first in the selection) plans second and fails where Skier stands
+    assert bpy.context.view_layer.objects.active == figs[1]
+    with pytest.raises(RuntimeError, match=r"Follow Path: Skier: no feasible plan.*\(and 1 more "
+                                           r"figures\); nothing was written"):
+        bpy.ops.turning.follow_path()
+
+
 def test_esc_while_avoiding_ends_the_planning_and_leaves_the_scene_unchanged(scene):
     figs = crossing()
     before = snapshot()
