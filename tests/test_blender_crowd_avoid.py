@@ -187,3 +187,9 @@ def test_the_crowd_panel_shows_the_planning_order(scene):
     panel_crowd.VIEW3D_PT_turning_crowd.draw(fake, bpy.context)
     labels = [c[2].get("text", "") for c in calls if c[0] == "label"]
     assert "Follow Path plans: Skier.001, Skier" in labels
+
+
+def test_crowd_names_are_the_objects_where_a_crowd_figure_can_have_them():
+    # a crowd figure's name is its CSV file's: no path separator, no leading dot; unique
+    assert crowd_job.member_names(["a/b", "a_b", ".x", "ok", "c\\d"]) == \
+        ["a_b_1", "a_b", "_x", "ok", "c_d"]
