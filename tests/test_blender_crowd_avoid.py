@@ -34,12 +34,12 @@ def scene(registered):
     return sc
 
 
-def crossing(starts=((-20, 0), (0, -20))):
-    """Two skiers (10 m/s) whose straight paths cross at the origin, where both arrive 2 s in."""
+def crossing(starts=((-20, 0), (0, -20)), at=(0, 0)):
+    """Two skiers (10 m/s) whose straight paths cross at ``at``, where both arrive 2 s in."""
     figs = []
     for i, (x, y) in enumerate(starts):
         fig = add("SKIER", at=(x, y, 0.0))
-        fig.turning.path = make_path([(x, y), (0, 0), (-x, -y)], f"Path{i}")
+        fig.turning.path = make_path([(x, y), at, (2 * at[0] - x, 2 * at[1] - y)], f"Path{i}")
         figs.append(fig)
     for fig in figs:
         fig.select_set(True)
@@ -100,6 +100,20 @@ def test_avoiding_is_the_core_priority_run_in_the_planning_order(scene):
     np.testing.assert_array_equal(got[1].trajectory.data, alone[1].trajectory.data)
     assert closest(figs[::-1], alone[::-1])[0] < 1.0            # measured 0.5 m: 0.05 s apart
     assert closest(figs[::-1], got[::-1])[0] >= 1.5 - 1e-3
+
+
+def test_pairs_that_cannot_meet_plan_in_parallel_workers(scene):
+    figs = crossing() + crossing(starts=((180, 0), (200, -20)), at=(200, 0))   # 200 m away
+    job = crowd_job.CrowdFollow(figs, avoid=True, clearance=CLEARANCE)
+    job.read(bpy.context)
+    job.start()
+    job.wait()
+    started = len(job._pool._processes)
+    got = [r for _, r in job.results()]
+    assert [r.plan["priority"]["group"] for r in got] == [0, 0, 1, 1]
+    assert started == 2                                 # one worker process per group
+    np.testing.assert_array_equal(got[1].trajectory.data, planned(figs[:2], True)[1]
+                                  .trajectory.data)
 
 
 def test_follow_path_avoids_by_default_and_bakes_the_plans(scene):
