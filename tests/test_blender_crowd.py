@@ -386,7 +386,7 @@ def extension_package(monkeypatch):
 
 def test_workers_load_tasks_of_the_package_under_its_extension_name(scene, extension_package):
     ext = extension_package
-    job_mod = importlib.import_module(ext + ".blender.crowd_job")
+    job_mod = importlib.import_module(ext + ".blender.workers")
     crowd_mod = importlib.import_module(ext + ".crowd")
     core = importlib.import_module(ext + ".core")
     assert job_mod._worker_stubs() == [("bl_ext_test", []),
