@@ -2,9 +2,11 @@
 their Planning Order, each around the bodies of those before it, through the crowd runner's
 priority planning (the CLI's), in worker processes; a figure with no way round is named with
 the figures in its way and nothing is written; Esc ends the planning and changes nothing."""
+import math
 import os
 import signal
 import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -114,6 +116,47 @@ def test_pairs_that_cannot_meet_plan_in_parallel_workers(scene):
     assert started == 2                                 # one worker process per group
     np.testing.assert_array_equal(got[1].trajectory.data, planned(figs[:2], True)[1]
                                   .trajectory.data)
+
+
+def crowd_file(figs, priority, clearance) -> dict:
+    """The crossing as a crowd scene file for the CLI: each figure's body and limits as Follow
+    Path reads them (float32 settings, its preset's planner curvature rate), its curve's Bezier
+    control points, its start offset."""
+    out = []
+    for fig in figs:
+        f = ops_path.prepare(bpy.context, fig).figure
+        b, lim = f.body, f.limits
+        assert math.radians(math.degrees(lim.theta_fall)) == lim.theta_fall   # exact in the file
+        out.append({"name": fig.name, "preset": "skier", "time_offset": fig.turning.crowd
+                    .time_offset, "body": {"m": b.m, "l": b.l, "I_v": b.I_v, "V_cm": b.V_cm,
+                                           "g": b.g},
+                    "limits": {"C_f_max": lim.C_f_max, "dC_f_max": lim.dC_f_max,
+                               "theta_fall_deg": math.degrees(lim.theta_fall)},
+                    "follow": {"path": {"bezier": ops_path.bezier_control_points(
+                        fig.turning.path).tolist()}}})
+    return {"name": "crossing", "duration": 10, "figures": out, "priority": priority,
+            "clearance": clearance}
+
+
+def test_avoiding_equals_the_cli_crowd_of_the_same_scene(scene, tmp_path):
+    import json
+    import subprocess
+    import sys
+    from blender_turning.core.trajectory import Trajectory
+    figs = crossing()
+    figs[0].turning.crowd.priority = 2
+    got = planned(figs, avoid=True, clearance=1.25)
+    (tmp_path / "crossing.json").write_text(json.dumps(
+        crowd_file(figs, [figs[1].name, figs[0].name], 1.25)))
+    run = subprocess.run([sys.executable, "-m", "blender_turning", "crowd",
+                          str(tmp_path / "crossing.json"), "--out", str(tmp_path / "out")],
+                         capture_output=True, text=True, env={**os.environ, "PYTHONPATH": str(
+                             Path(__file__).resolve().parents[1])})
+    assert run.returncode == 0, run.stderr
+    for fig, r in zip(figs, got):                        # bit for bit (the CSVs hold repr)
+        cli = Trajectory.from_csv(tmp_path / "out" / f"{fig.name}.csv")
+        np.testing.assert_array_equal(r.trajectory.data, cli.data, err_msg=fig.name)
+    assert np.abs(got[0].trajectory.y).max() > 0.5       # it gave way to the other
 
 
 def test_follow_path_avoids_by_default_and_bakes_the_plans(scene):
