@@ -85,7 +85,7 @@ def main():
         return one_by_one()
 
     def in_workers():
-        job = crowd_job.CrowdFollow(figs)
+        job = crowd_job.CrowdFollow(figs, avoid=False)    # each alone, as the baseline
         job.read(ctx)
         t0 = time.perf_counter()
         job.start()

@@ -283,21 +283,33 @@ def test_follow_path_bakes_every_selected_figure_as_alone(scene):
     assert end == max(len(c["location", 0][0]) for c in together)
 
 
-def modal_crowd(figs):
+def modal_crowd(figs, avoid=True, clearance=1.0):
     """A stand-in ``self`` for ``TURNING_OT_follow_path.modal`` with several figures planning."""
     reports = []
     fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg))})()
     fake._timer, fake._job = object(), None
+    fake.avoid, fake.clearance = avoid, clearance
     fake._crowd = crowd_job.prepare_crowd(fake, bpy.context, figs)
     fake._crowd.start()
     return bpy.types.TURNING_OT_follow_path, fake, reports
+
+
+def started_workers(job, timeout=60.0):
+    """The worker processes of ``job``, once the planning thread's first plans have been handed
+    to them (as the modal operator's timer does)."""
+    import time
+    end = time.monotonic() + timeout
+    while not job._pool._processes and time.monotonic() < end:
+        job.pump()
+        time.sleep(0.01)
+    return list(job._pool._processes.values())
 
 
 def test_esc_ends_the_workers_and_leaves_the_scene_unchanged(scene):
     figs = path_figures()
     before = snapshot()
     op_cls, fake, reports = modal_crowd(figs)
-    procs = list(fake._crowd._pool._processes.values())
+    procs = started_workers(fake._crowd)
     assert procs
     wm = WindowManager()
     assert op_cls.modal(fake, Context(wm), ESC) == {"CANCELLED"}
@@ -312,7 +324,9 @@ def test_modal_follow_path_shows_one_progress_bar_then_bakes_all(scene):
     figs = path_figures(2)
     op_cls, fake, reports = modal_crowd(figs)
     wm = WindowManager()
-    while (ret := op_cls.modal(fake, Context(wm), TIMER)) == {"RUNNING_MODAL"}:
+    end = time.monotonic() + 120
+    while (ret := op_cls.modal(fake, Context(wm), TIMER)) == {"RUNNING_MODAL"} and \
+            time.monotonic() < end:
         time.sleep(0.05)
     assert ret == {"FINISHED"}, reports
     values = [v for v in wm.progress if isinstance(v, int)]
@@ -372,7 +386,7 @@ def extension_package(monkeypatch):
 
 def test_workers_load_tasks_of_the_package_under_its_extension_name(scene, extension_package):
     ext = extension_package
-    job_mod = importlib.import_module(ext + ".blender.crowd_job")
+    job_mod = importlib.import_module(ext + ".blender.workers")
     crowd_mod = importlib.import_module(ext + ".crowd")
     core = importlib.import_module(ext + ".core")
     assert job_mod._worker_stubs() == [("bl_ext_test", []),
@@ -458,6 +472,6 @@ def test_the_crowd_panel_draws_the_settings_and_add_crowd(scene):
     cls.draw(fake, bpy.context)
     drawn = [c[1][1] for c in calls if c[0] == "prop"] + [c[1][0] for c in calls
                                                          if c[0] == "operator_menu_enum"]
-    assert drawn == ["time_offset", "first_turn", "turning.add_crowd"]
+    assert drawn == ["time_offset", "first_turn", "priority", "turning.add_crowd"]
     assert any("act on 1 figure (the selection)" in c[2].get("text", "") for c in calls
                if c[0] == "label")

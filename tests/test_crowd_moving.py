@@ -55,6 +55,14 @@ def test_a_step_collides_only_while_the_body_is_there():
         b.collides(foot, body, [5.0, 5.0, 5.0], 0.05)
 
 
+def test_a_body_of_one_sample_is_there_for_no_step():
+    """A figure whose plan failed at its start leaves one sample: a moment, not a step (as a
+    body's last sample ends its last step), so nothing collides with it, and nothing fails."""
+    b = MovingBodies.from_tracks([("stuck", track([2.0], 0.0, 0.0), 1.0)], clearance=0.3)
+    foot, body = steps([[-1.0, 0.0], [-1.0, 0.0]], [[1.0, 0.0]] * 2)
+    np.testing.assert_array_equal(b.collides(foot, body, [1.9, 2.0], 0.1), [False, False])
+
+
 def test_bodies_that_cross_between_the_samples_collide():
     """At both ends of the step they are 0.78 m apart, half way through on top of each other:
     the rule holds in continuous time (core/moving.py), not only at the samples."""

@@ -1,92 +1,52 @@
-"""Follow Path for several figures at once (issue 11): one plan per figure, in worker processes.
+"""Follow Path for several figures at once (issue 11): the crowd runner's plans, in worker
+processes.
 
 Each figure is read as the single-figure Follow Path reads it (:func:`.ops_path.prepare`: its
 path, obstacles, settings), made a core path-following :class:`~..core.scene.Scene` with the
-same start, planner settings and problem, and the whole selection a :class:`~..crowd.Crowd`.
-The crowd runner splits it into one task per figure (:func:`~..crowd.runner.crowd_tasks`) and
-:func:`~..crowd.runner.run_task` plans each in a worker process of a
-:class:`concurrent.futures.ProcessPoolExecutor`.  Every figure's plan depends on its own data
-only, so each is bit for bit the plan Follow Path makes for that figure alone.
+same start, planner settings and problem, and the whole selection a :class:`~..crowd.Crowd`,
+planned by :func:`~..crowd.runner.run_crowd`, the CLI's ``crowd`` planner:
 
-The workers are started with ``spawn``, never ``fork``: a forked copy of Blender would carry its
-threads and its state into the child.  They get plain data (the core's frozen dataclasses and
-numpy arrays) and import only the bpy-free core; nothing of bpy crosses.  The tasks are
-submitted on the main thread, which is also where the pool starts its processes, while
-``__main__`` is hidden (:func:`_plain_main`): ``spawn`` would otherwise run the script Blender
-was started with (``blender -b --python job.py``) again in every worker.  As an extension this
-package is ``bl_ext.<repository>.blender_turning...``, whose first two names Blender makes at run
-time; the workers make the same names first (:func:`_worker_stubs`), so the pickled tasks load.
+- *Avoid Each Other* (:class:`CrowdOptions`, on by default): the crowd's ``priority`` names every
+  figure in planning order, by its *Planning Order* (``turning.crowd.priority``, lower first; the
+  selection's order is not stable in Blender) and then by name; each figure plans around the
+  bodies (foot to CM ground point) of those before it, keeping ``clearance``
+  (:mod:`..crowd.priority`: groups that cannot see each other plan in parallel, merged and
+  planned again where one would have seen another).  The result is the CLI's priority planning
+  of the same crowd, bit for bit.
+- Off: one task per figure; each plan is bit for bit the plan Follow Path makes for that
+  figure alone.
 
-Nothing is written until every figure has its plan; Esc (:meth:`CrowdFollow.cancel`) drops the
-tasks not started and ends the worker processes, and writes nothing.
+The runner runs on a planning thread; the tasks it submits go to worker processes (spawned, on
+the main thread: :mod:`.workers`) through a :class:`~.workers.PumpedExecutor` that the modal
+operator's timer pumps (:meth:`CrowdFollow.pump`), so Blender's UI stays responsive.
+
+Nothing is written until every figure has its plan; Esc (:meth:`CrowdFollow.cancel`) fails the
+runner's calls (its thread ends), drops the tasks not started and ends the worker processes,
+and writes nothing.
 """
 from __future__ import annotations
 
 import math
-import multiprocessing
 import os
-import sys
-import types
-from concurrent.futures import ProcessPoolExecutor
-from contextlib import contextmanager
+import re
+import threading
 
 import bpy
+from bpy.props import BoolProperty, FloatProperty
 
 from ..core.follow_problem import start_state
+from ..core.ranges import RANGES
 from ..core.scene import Scene
+from ..core.validate import check
 from ..crowd import Crowd, CrowdFigure, FollowPath
-from ..crowd.runner import crowd_tasks, run_task
+from ..crowd.model import BODY_CLEARANCE
+from ..crowd.runner import run_crowd
 from . import bake
 from .ops_bake import apply_bake
 from .ops_common import check_figure
 from .pipeline import map_track, on_ground, started, surface_normals
 from .scene_adapters import FrameRange
-
-#: Where this package's modules live: the root of the names the pickled tasks carry.
-PACKAGE = __name__.rsplit(".", 2)[0]
-
-_STUB_CODE = """
-import sys, types
-for name, path in stubs:
-    if name not in sys.modules:
-        module = types.ModuleType(name)
-        module.__path__ = list(path)
-        sys.modules[name] = module
-"""
-
-
-def _worker_stubs() -> list:
-    """``[(name, __path__)]`` of the packages above this one that have no file of their own
-    (Blender's ``bl_ext`` and ``bl_ext.<repository>``), for the workers to make before they
-    load a task; empty when the package is imported under its own name."""
-    parts = PACKAGE.split(".")
-    out = []
-    for i in range(1, len(parts)):
-        module = sys.modules.get(".".join(parts[:i]))
-        if module is not None and getattr(module, "__file__", None) is None \
-                and hasattr(module, "__path__"):
-            out.append((".".join(parts[:i]), list(module.__path__)))
-    return out
-
-
-@contextmanager
-def _plain_main():
-    """``__main__`` as an empty module while worker processes start (see the module's text)."""
-    saved = sys.modules.get("__main__")
-    sys.modules["__main__"] = types.ModuleType("__main__")
-    try:
-        yield
-    finally:
-        if saved is not None:
-            sys.modules["__main__"] = saved
-
-
-def worker_pool(workers: int) -> ProcessPoolExecutor:
-    """A pool of ``workers`` spawned processes that can load this package's tasks."""
-    # ``exec`` is a builtin, so the initializer itself needs no import of ours in the worker.
-    return ProcessPoolExecutor(max_workers=workers,
-                               mp_context=multiprocessing.get_context("spawn"),
-                               initializer=exec, initargs=(_STUB_CODE, {"stubs": _worker_stubs()}))
+from .workers import PumpedExecutor, worker_pool
 
 
 def figure_scene(name: str, job) -> Scene:
@@ -99,40 +59,74 @@ def figure_scene(name: str, job) -> Scene:
                  run_out=setup.run_out, ground=setup.ground, resistance=setup.resistance)
 
 
+_BAD_NAME = re.compile(r"[/\\\0]")
+
+
+def member_names(names) -> list:
+    """The crowd's names of the objects ``names`` (a crowd figure's name is a CSV file's): the
+    object's own where it can be, so the runner's reports name the objects; a name with a path
+    separator or a leading dot gets ``_`` for them, made unique."""
+    taken, out = set(names), []
+    for name in names:
+        if name and not name.startswith(".") and not _BAD_NAME.search(name):
+            out.append(name)
+            continue
+        base = _BAD_NAME.sub("_", name)
+        base = "_" + base[1:] if base.startswith(".") else base
+        new, k = base, 1
+        while new in taken:
+            new, k = f"{base}_{k}", k + 1
+        taken.add(new)
+        out.append(new)
+    return out
+
+
 class CrowdFollow:
     """Plan the figures ``figs`` (armature objects) along their paths, in worker processes.
 
-    :meth:`read` reads the figures, :meth:`start` submits the plans, :meth:`done` and
-    :attr:`progress` are polled by the modal operator, :meth:`results` collects them (raising
-    what a worker raised), :meth:`write` bakes them; :meth:`cancel` stops.  :attr:`current` is
-    the figure being read or written (for a report).
+    ``avoid``: with several figures, plan them in priority order (:func:`planning_order`), each
+    around the bodies of the figures before it, keeping ``clearance`` m from them (the crowd
+    runner's priority planning, :mod:`..crowd.priority`); without it each plans alone.
+
+    :meth:`read` reads the figures, :meth:`start` starts :func:`~..crowd.runner.run_crowd` on a
+    planning thread whose plans go to the worker processes through a :class:`PumpedExecutor`;
+    the modal operator calls :meth:`pump` and polls :meth:`done` and :attr:`progress`;
+    :meth:`results` collects them (raising what the planning raised), :meth:`write` bakes them;
+    :meth:`cancel` stops.  :attr:`current` is the figure being read or written (for a report).
     """
 
-    def __init__(self, figs, workers: int | None = None):
+    def __init__(self, figs, workers: int | None = None, avoid: bool = True,
+                 clearance: float = BODY_CLEARANCE):
         self.uids = [f.session_uid for f in figs]
         self.names = [f.name for f in figs]
         self.current = self.names[0]
         self.max_workers = workers
-        self.tasks = []
-        self._pool = None
-        self._futures = []
+        self.avoid = bool(avoid) and len(figs) > 1
+        self.clearance = clearance
+        self._pool = self._executor = self._thread = None
+        self._result = self._error = None
+        self._done = 0
 
     def read(self, context) -> None:
         """Read every figure as Follow Path reads one (raises ``ValueError`` naming the bad
         input; :attr:`current` names the figure)."""
         from .ops_path import prepare             # ops_path dispatches here: import when used
+        check("clearance", self.clearance, "body_clearance")
         figs = [self.figure(i) for i in range(len(self.uids))]
+        self.members = member_names(self.names)
         members = []
         self.grounds = []                       # each figure's Ground mesh as read (or None)
         for i, fig in enumerate(figs):
             self.current = fig.name
             job = prepare(context, fig)
             self.grounds.append(getattr(job, "mesh_ground", None))
-            # Names of the crowd's own (a CSV file name each): the object names may hold '/'.
-            members.append(CrowdFigure(f"f{i}", job.figure, FollowPath(figure_scene(f"f{i}", job)),
+            name = self.members[i]
+            members.append(CrowdFigure(name, job.figure, FollowPath(figure_scene(name, job)),
                                        time_offset=float(fig.turning.crowd.time_offset)))
-        self.crowd = Crowd("follow_path", members, duration=1.0)
-        self.tasks = crowd_tasks(self.crowd)      # one ("path", figure) task per figure
+        where = {fig.name: i for i, fig in enumerate(figs)}
+        order = [self.members[where[n]] for n in planning_order(figs)] if self.avoid else []
+        self.crowd = Crowd("follow_path", members, duration=1.0, priority=order,
+                           clearance=self.clearance)
 
     @property
     def workers(self) -> int:
@@ -140,35 +134,61 @@ class CrowdFollow:
         return max(1, min(len(self.uids), self.max_workers or os.cpu_count() or 1))
 
     def start(self) -> None:
-        """Start the workers and hand them every plan (on the main thread: see the module)."""
+        """Start the planning thread (its plans reach the workers through :meth:`pump`)."""
         self._pool = worker_pool(self.workers)
-        with _plain_main():
-            self._futures = [self._pool.submit(run_task, task) for task in self.tasks]
+        self._executor = PumpedExecutor(self._pool)
+        self._thread = threading.Thread(target=self._plan, name="turning-crowd", daemon=True)
+        self._thread.start()
+
+    def _plan(self) -> None:
+        try:
+            self._result = run_crowd(self.crowd, executor=self._executor,
+                                     progress=self._progress)
+        except BaseException as exc:              # handed to results(), on the main thread
+            self._error = exc
+
+    def _progress(self, done: int, total: int) -> None:
+        self._done = done
+
+    def pump(self) -> None:
+        """Hand the plans the runner asked for to the worker processes (main thread)."""
+        if self._executor is not None:
+            self._executor.pump()
 
     @property
     def progress(self) -> float:
-        """The fraction of figures planned."""
-        return sum(f.done() for f in self._futures) / max(len(self._futures), 1)
+        """The fraction of figures planned (a figure planned again after a merge of groups
+        counts once: :mod:`..crowd.priority`)."""
+        return self._done / len(self.names)
 
     def done(self) -> bool:
-        return bool(self._futures) and all(f.done() for f in self._futures)
+        return self._thread is not None and not self._thread.is_alive()
 
     def wait(self) -> None:
-        for fut in self._futures:
-            fut.exception()                        # blocks until the plan is done
+        """Pump until the planning thread ends (background or scripted runs)."""
+        while not self.done():
+            self.pump()
+            self._thread.join(0.02)
 
     def results(self) -> list:
         """``[(name, FigureResult)]`` in the figures' order; shuts the pool down."""
-        try:
-            out = [r for fut in self._futures for r in fut.result()]
-        finally:
-            self._shutdown()
-        return list(zip(self.names, out))
+        if self._error is not None:
+            self.cancel()
+            raise self._error
+        self._shutdown()
+        return list(zip(self.names, self._result.figures))
+
+    def rank(self, member: str) -> int:
+        """Where the crowd figure ``member`` plans (its place in the priority; alone: its place
+        in the selection)."""
+        order = self.crowd.priority or self.members
+        return order.index(member) if member in order else len(order)
 
     def cancel(self) -> None:
         """Drop the plans not started and end the worker processes; nothing is written."""
         if self._pool is None:
             return
+        self._executor.close()                    # the planning thread ends
         processes = list((getattr(self._pool, "_processes", None) or {}).values())
         self._pool.shutdown(wait=False, cancel_futures=True)
         # concurrent.futures cannot stop a running task before Python 3.14's
@@ -178,6 +198,7 @@ class CrowdFollow:
                 proc.terminate()
         for proc in processes:
             proc.join(5)
+        self._thread.join(5)
         self._pool = None
 
     def _shutdown(self) -> None:
@@ -237,16 +258,37 @@ def follow_figures(context) -> list:
     return [f for f in selected_figures(context) if f.turning.path is not None]
 
 
+def planning_order(figs) -> list:
+    """The names of ``figs`` in the order Follow Path plans them when they avoid each other: by
+    their *Planning Order* (``turning.crowd.priority``, lower first), then by name."""
+    return [f.name for f in sorted(figs, key=lambda f: (f.turning.crowd.priority, f.name))]
+
+
 def needs_crowd(figs) -> bool:
     """Several figures, or one that starts late, plan here; one figure from the first frame
     plans on the single-figure job (a thread, with progress along its path)."""
     return len(figs) > 1 or any(f.turning.crowd.time_offset > 0 for f in figs)
 
 
+class CrowdOptions:
+    """Follow Path's options for several figures (a mixin of the operator: its redo panel)."""
+
+    avoid: BoolProperty(
+        name="Avoid Each Other", default=True,
+        description="Several figures: plan them one after another in their Planning Order "
+                    "(Crowd panel; then by name), each around the bodies of the figures "
+                    "planned before it, keeping Clearance from them. Off: each plans alone")
+    clearance: FloatProperty(
+        name="Clearance", default=BODY_CLEARANCE, min=RANGES["body_clearance"].lo,
+        max=RANGES["body_clearance"].hi, soft_max=5.0, unit="LENGTH",
+        description="With Avoid Each Other: the distance each figure keeps from the bodies "
+                    "(foot to centre of mass) of the figures planned before it")
+
+
 def prepare_crowd(op, context, figs):
-    """The job for ``figs``, or ``None`` (reported)."""
+    """The job for ``figs`` with the operator's :class:`CrowdOptions`, or ``None`` (reported)."""
     from .ops_common import report_error
-    job = CrowdFollow(figs)
+    job = CrowdFollow(figs, avoid=op.avoid, clearance=op.clearance)
     try:
         job.read(context)
     except Exception as exc:
@@ -256,13 +298,15 @@ def prepare_crowd(op, context, figs):
 
 
 def complete_crowd(op, context, job) -> set:
-    """Collect the plans, refuse them all if one figure found none, else bake them all."""
+    """Collect the plans, refuse them all if one figure found none (the first in planning
+    order is named, and the figures in its way), else bake them all."""
     from .ops_common import report_error
     try:
         results = job.results()
     except Exception as exc:                       # a worker raised: a bug, or it was killed
         return report_error(op, TITLE, job.current, exc)
-    failed = [(name, r) for name, r in results if r.status != "ok"]
+    failed = sorted(((name, r) for name, r in results if r.status != "ok"),
+                    key=lambda nr: job.rank(nr[1].name))
     if failed:
         more = f" (and {len(failed) - 1} more figures)" if len(failed) > 1 else ""
         op.report({"ERROR"}, f"{TITLE}: {failed[0][0]}: {failed[0][1].message}{more}; "
@@ -272,9 +316,10 @@ def complete_crowd(op, context, job) -> set:
         frames = job.write(context, results)
     except Exception as exc:
         return report_error(op, TITLE, job.current, exc)
+    how = (f"each around the figures before it in the order {', '.join(job.crowd.priority)}"
+           if job.crowd.priority else f"on {job.workers} worker processes")
     op.report({"INFO"}, f"{TITLE}: baked {len(results)} figures over frames "
-                        f"{frames.start}-{frames.end} (planned on {job.workers} worker "
-                        f"processes)")
+                        f"{frames.start}-{frames.end} (planned {how})")
     return {"FINISHED"}
 
 
@@ -307,6 +352,7 @@ def crowd_modal(op, context, event) -> set:
         return {"CANCELLED"}
     if event.type != "TIMER":
         return {"PASS_THROUGH"}
+    job.pump()
     finished = job.done()
     context.window_manager.progress_update(100 if finished else int(100 * job.progress))
     if not finished:

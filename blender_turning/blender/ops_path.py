@@ -95,9 +95,10 @@ def finish(context, fig, job, result):
     return frames
 
 
-class TURNING_OT_follow_path(bpy.types.Operator):
+class TURNING_OT_follow_path(crowd_job.CrowdOptions, bpy.types.Operator):
     """Plan the selected figures' turns along their path curves around the obstacles, and bake
-    them (several figures: in worker processes, one progress bar)"""
+    them (several figures: in worker processes, one progress bar, avoiding each other in their
+    Planning Order)"""
 
     bl_idname = "turning.follow_path"
     bl_label = "Follow Path"

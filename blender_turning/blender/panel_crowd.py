@@ -1,10 +1,12 @@
-"""The Turning tab's Crowd sub-panel (issue 11): the figure's start offset and first turn, Add
-Crowd from it, and what Bake Turns / Follow Path will do (the selection, or the active Crowd
-collection's figures)."""
+"""The Turning tab's Crowd sub-panel (issue 11): the figure's start offset, first turn and
+planning order, Add Crowd from it, and what Bake Turns / Follow Path will do (the selection, or
+the active Crowd collection's figures; for Follow Path, the order the figures plan in when they
+avoid each other)."""
 from __future__ import annotations
 
 import bpy
 
+from .crowd_job import follow_figures, planning_order
 from .ops_common import crowd_collection, selected_figures
 from .panel import FigurePanel
 
@@ -18,6 +20,7 @@ class VIEW3D_PT_turning_crowd(FigurePanel, bpy.types.Panel):
         col = self.layout.column()
         col.prop(s.crowd, "time_offset")
         col.prop(s.crowd, "first_turn")
+        col.prop(s.crowd, "priority")
         self.layout.operator_menu_enum("turning.add_crowd", "formation", text="Add Crowd",
                                        icon="COMMUNITY")
         coll = crowd_collection(context)
@@ -25,6 +28,10 @@ class VIEW3D_PT_turning_crowd(FigurePanel, bpy.types.Panel):
         where = f"collection {coll.name!r}" if coll is not None and count else "the selection"
         self.layout.label(text=f"Bake and Follow Path act on {count} figure"
                                f"{'s' if count != 1 else ''} ({where})", icon="INFO")
+        paths = follow_figures(context)
+        if len(paths) > 1:
+            self.layout.label(text="Follow Path plans: " + ", ".join(planning_order(paths)),
+                              icon="SORTSIZE")
 
 
 classes = (VIEW3D_PT_turning_crowd,)

@@ -2,15 +2,17 @@
 
 A nested group of the figure's settings (one ``PointerProperty`` in :mod:`.props`), set by Add
 Crowd (:mod:`.ops_crowd`) and editable by hand: when the figure starts on the scene's clock and
-which way its first turn goes.  The bake (:mod:`.pipeline`) and Follow Path read both.  Ranges
+which way its first turn goes (the bake, :mod:`.pipeline`, and Follow Path read both), and its
+place in Follow Path's planning order when figures avoid each other (:mod:`.crowd_job`).  Ranges
 are the crowd scene file's (``crowd.reader.CROWD_RANGES``), so a value typed here is held to the
-bounds a crowd file is.
+bounds a crowd file is (the planning order's: ``core.ranges``' ``crowd_priority``).
 """
 from __future__ import annotations
 
 import bpy
-from bpy.props import EnumProperty, FloatProperty
+from bpy.props import EnumProperty, FloatProperty, IntProperty
 
+from ..core.ranges import RANGES
 from ..crowd.reader import CROWD_RANGES
 
 FIRST_TURNS = (
@@ -32,6 +34,13 @@ class TurningCrowdSettings(bpy.types.PropertyGroup):
     first_turn: EnumProperty(name="First Turn", items=FIRST_TURNS, default="LEFT",
                              options=_STATIC,
                              description="Which way the first turn goes (Bake Turns)")
+    priority: IntProperty(
+        name="Planning Order", default=0, min=int(RANGES["crowd_priority"].lo),
+        max=int(RANGES["crowd_priority"].hi), soft_min=0, soft_max=100, options=_STATIC,
+        description="Follow Path on several figures that avoid each other plans them in "
+                    "this order (lower first, equal numbers by name): each plans around the "
+                    "figures before it, so the first goes its way as if alone and the later "
+                    "ones give way")
 
 
 classes = (TurningCrowdSettings,)

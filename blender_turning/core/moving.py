@@ -178,7 +178,7 @@ class MovingBodies:
         n = self.foot.shape[1]
         # The whole stage first: the bodies whose box over its time span meets the track's.
         a, b = min(max(int(k.min()), 0), n), min(max(int(k.max()) + 2, 0), n)
-        if a >= b:
+        if a >= b or n < 2:                # one sample (a plan failed at its start): no step
             return np.zeros(m, bool)
         theirs = np.concatenate([self.foot[:, a:b], self.cm[:, a:b]], axis=1)
         body = np.asarray(body, float)

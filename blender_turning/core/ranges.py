@@ -129,6 +129,9 @@ RANGES: dict[str, Range] = {
     "clearance": Range(0.0, 100.0, "m", "the distance the track keeps from obstacles"),
     "body_clearance": Range(0.0, 100.0, "m", "the distance a crowd's figure keeps from the "
                             "bodies (foot to CM) of figures planned before it (issue 11)"),
+    "crowd_priority": Range(-10000, 10000, "", "a figure's place in the planning order of "
+                            "Blender's Follow Path on several figures: lower plans first "
+                            "(issue 11)", integer=True),
     "run_out": Range(0.0, 1e4, "m", "the straight added after the path's end"),
     "samples_per_segment": Range(1, 1000, "", "path samples per spline segment", integer=True),
     # -- scenes: terrain (issue 10, docs/TERRAIN.md) ----------------------------------------------
