@@ -30,6 +30,7 @@ import math
 import os
 import re
 import threading
+import time
 
 import bpy
 from bpy.props import BoolProperty, FloatProperty
@@ -196,8 +197,12 @@ class CrowdFollow:
         for proc in processes:
             if proc.is_alive():
                 proc.terminate()
+        # The pool's own management thread reaps its workers too: a join that loses that race
+        # returns before the exit status is known, so wait for the status itself (5 s at most).
+        end = time.monotonic() + 5.0
         for proc in processes:
-            proc.join(5)
+            while proc.exitcode is None and time.monotonic() < end:
+                proc.join(0.05)
         self._thread.join(5)
         self._pool = None
 
