@@ -25,7 +25,7 @@ import numpy as np
 
 from blender_turning.core.params import preset
 from blender_turning.crowd import CrowdFigure, Turns, follow_leader
-from blender_turning.crowd.reader import CROWD_RANGES
+from blender_turning.core.ranges import CROWD_RANGES
 from render_terrain import follow_target, key_locations, tracking_camera
 
 KNOWN = {"name", "formation", "leader", "count", "gap_s", "gap_m", "lateral_m", "seed",

@@ -278,3 +278,22 @@ def test_a_path_figure_that_fails_is_reported_not_raised(monkeypatch):
     assert [r.status for r in res.figures] == ["failed", "ok"]
     assert res["g"].trajectory is None and str(PathNotFinished(9.0, 12.0, 30.0)) == \
         res["g"].message and res.failed == (res["g"],)
+
+
+def test_formations_hold_their_arguments_to_the_crowd_files_ranges():
+    """A formation called from Python refuses exactly what a crowd file's reader refuses: both
+    read core.ranges.CROWD_RANGES (the peloton once had its own, tighter gap and spacing)."""
+    from blender_turning.core.ranges import CROWD_RANGES
+    rider = _path_figure(ROAD)
+    for call, field, rng in (
+            (lambda v: peloton(rider, 1, gap=v), "gap", CROWD_RANGES["gap_m"]),
+            (lambda v: peloton(rider, 1, gap=1.0, spacing=v), "spacing",
+             CROWD_RANGES["spacing_m"]),
+            (lambda v: synchronized(LEADER, 2, spacing=v), "spacing", CROWD_RANGES["spacing_m"]),
+            (lambda v: follow_leader(LEADER, 1, v, by="distance"), "gap", CROWD_RANGES["gap_m"]),
+            (lambda v: follow_leader(LEADER, 1, 1.0, body_jitter=v), "body_jitter",
+             CROWD_RANGES["jitter"])):
+        call(rng.hi)                                      # the largest allowed is allowed
+        with pytest.raises(ValueError, match=f"{field} = .* outside the allowed range "
+                                             rf"\[?\(?{rng.lo:g}, {rng.hi:g}\]"):
+            call(rng.hi * 1.5)

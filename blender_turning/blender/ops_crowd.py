@@ -17,7 +17,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 from ..core.errors import TurningError
 from ..core.validate import check
 from ..crowd import follow_leader, peloton, synchronized
-from ..crowd.reader import CROWD_RANGES
+from ..core.ranges import CROWD_RANGES
 from . import crowd_scene
 from .ops_common import context_figure, poll_figure, report_error
 

@@ -4,7 +4,7 @@ A nested group of the figure's settings (one ``PointerProperty`` in :mod:`.props
 Crowd (:mod:`.ops_crowd`) and editable by hand: when the figure starts on the scene's clock and
 which way its first turn goes (the bake, :mod:`.pipeline`, and Follow Path read both), and its
 place in Follow Path's planning order when figures avoid each other (:mod:`.crowd_job`).  Ranges
-are the crowd scene file's (``crowd.reader.CROWD_RANGES``), so a value typed here is held to the
+are the crowd scene file's (``core.ranges.CROWD_RANGES``), so a value typed here is held to the
 bounds a crowd file is (the planning order's: ``core.ranges``' ``crowd_priority``).
 """
 from __future__ import annotations
@@ -13,7 +13,7 @@ import bpy
 from bpy.props import EnumProperty, FloatProperty, IntProperty
 
 from ..core.ranges import RANGES
-from ..crowd.reader import CROWD_RANGES
+from ..core.ranges import CROWD_RANGES
 
 FIRST_TURNS = (
     ("LEFT", "Left", "The first turn goes left (phase 0: the lean rate starts positive)"),

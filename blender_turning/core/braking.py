@@ -40,7 +40,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .params import check_range
+from .validate import check
 
 __all__ = ["TargetSpeed"]
 
@@ -67,14 +67,10 @@ class TargetSpeed:
     """Low-pass time of the ground's gradient the rule reads, s (moguls are not fall lines)."""
 
     def __post_init__(self):
-        check_range("target_speed", self.speed, 0.0, 100.0, lo_open=True)
-        check_range("tau", self.tau, 0.0, 1e3, lo_open=True)
-        check_range("reset_time", self.reset_time, 0.0, math.inf, lo_open=True)
-        check_range("max_angle", self.max_angle, 0.0, math.pi, lo_open=True)
-        check_range("corridor", self.corridor, 0.0, 1e5, lo_open=True)
-        check_range("turn_share", self.turn_share, 0.0, 1.0, lo_open=True)
-        check_range("reach", self.reach, 0.0, math.pi, lo_open=True)
-        check_range("slope_time", self.slope_time, 0.0, 1e3)
+        check("target_speed", self.speed, "brake_speed")      # ranges: core/ranges.py
+        for name in ("tau", "reset_time", "max_angle", "corridor", "turn_share", "reach",
+                     "slope_time"):
+            check(name, getattr(self, name), f"brake_{name}")
 
 
 def _wrap(a: float) -> float:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-__all__ = ["Range", "RANGES", "MAX_STEPS", "MAX_SAMPLES"]
+__all__ = ["Range", "RANGES", "CROWD_RANGES", "MAX_STEPS", "MAX_SAMPLES"]
 
 
 @dataclass(frozen=True)
@@ -176,6 +176,37 @@ RANGES: dict[str, Range] = {
     "road_width": Range(0.0, 50.0, "m", "a road's width (0: no road)"),
     "target_speed": Range(0.0, 100.0, "m/s", "the speed a figure brakes to by turning across "
                           "the hill (0: none)"),
+    # The braking rule's own settings (core/braking.TargetSpeed; Python callers only).
+    "brake_speed": Range(0.0, 100.0, "m/s", "the speed a figure brakes to", lo_open=True),
+    "brake_tau": Range(0.0, 1e3, "s", "the time a speed error decays in", lo_open=True),
+    "brake_reset_time": Range(0.0, math.inf, "s", "the rule's integral time (inf: none)",
+                              lo_open=True),
+    "brake_max_angle": Range(0.0, math.pi, "rad", "the largest angle from the fall line",
+                             lo_open=True),
+    "brake_corridor": Range(0.0, 1e5, "m", "the half-width of the zig-zag's corridor",
+                            lo_open=True),
+    "brake_turn_share": Range(0.0, 1.0, "", "the share of the fastest mean-heading rate used",
+                              lo_open=True),
+    "brake_reach": Range(0.0, math.pi, "rad", "how far the command may lead the mean heading",
+                         lo_open=True),
+    "brake_slope_time": Range(0.0, 1e3, "s", "the low-pass time of the slope read"),
+}
+
+# The formations of a crowd (blender_turning/crowd: the scene files, the formations, Add Crowd).
+CROWD_RANGES = {
+    "seed": Range(0, 2**63 - 1, "", "any whole number", integer=True),
+    "count": Range(1, 10000, "", "figures a formation adds", integer=True),
+    "time_offset": Range(0.0, 1e5, "s", "when a figure starts on the crowd's clock"),
+    "gap_s": Range(0.0, 1e4, "s", "time between successive figures", lo_open=True),
+    "gap_m": Range(0.0, 1e4, "m", "distance between successive figures or rows",
+                   lo_open=True),
+    "sync_gap_s": Range(0.0, 1e4, "s", "time between successive figures"),
+    "lateral_m": Range(-1e3, 1e3, "m", "sideways offset, to the left of the heading"),
+    "spacing_m": Range(0.0, 1e3, "m", "distance between figures side by side"),
+    "abreast": Range(1, 100, "", "riders in a row", integer=True),
+    "jitter": Range(0.0, 0.3, "", "relative random difference, up to 30 %"),
+    "timing_jitter_s": Range(0.0, 1e3, "s", "random difference of the start time (at most "
+                             "half the gap)"),
 }
 
 MAX_STEPS = 200_000

@@ -18,6 +18,8 @@ from dataclasses import replace
 import numpy as np
 
 from ..core.params import check_range
+from ..core.ranges import CROWD_RANGES
+from ..core.validate import check
 from ..core.path import HermitePath
 from .model import CrowdFigure, FollowPath, Turns
 
@@ -101,7 +103,7 @@ def _laterals(lateral, count) -> list:
     if not vals:
         raise ValueError("lateral is an empty list")
     for v in vals:
-        check_range("lateral", v, -1e3, 1e3)
+        check("lateral", v, CROWD_RANGES["lateral_m"])
     return [float(vals[i % len(vals)]) for i in range(count)]
 
 
@@ -117,12 +119,12 @@ def follow_leader(leader: CrowdFigure, count: int, gap: float, by: str = "time",
     on ``m``, ``l``, ``I_v``), ``timing_jitter`` (s, on the start time) and ``period_jitter``
     (relative, on the turn period; turns only).  Followers are named ``<name>1 ...``
     (default: the leader's name + ``"-"``)."""
-    check_range("count", count, 1, 10000)
+    check("count", count, CROWD_RANGES["count"])
     if by not in ("time", "distance"):
         raise ValueError(f"by = {by!r} is not one of time, distance")
-    check_range("gap", gap, 0.0, 1e4, lo_open=True)
-    check_range("body_jitter", body_jitter, 0.0, 0.3)
-    check_range("period_jitter", period_jitter, 0.0, 0.3)
+    check("gap", gap, CROWD_RANGES["gap_s" if by == "time" else "gap_m"])
+    check("body_jitter", body_jitter, CROWD_RANGES["jitter"])
+    check("period_jitter", period_jitter, CROWD_RANGES["jitter"])
     gap_t = gap if by == "time" else gap / leader.figure.body.V_cm
     check_range("timing_jitter", timing_jitter, 0.0, 0.5 * gap_t)
     prefix = f"{leader.name}-" if name is None else name
@@ -151,9 +153,9 @@ def synchronized(template: CrowdFigure, count: int = 2, spacing: float = 0.0,
     name)."""
     if template.is_path:
         raise ValueError("synchronized needs a turns template (the parametric controller)")
-    check_range("count", count, 1, 10000)
-    check_range("spacing", spacing, 0.0, 1e3)
-    check_range("gap", gap, 0.0, 1e4)
+    check("count", count, CROWD_RANGES["count"])
+    check("spacing", spacing, CROWD_RANGES["spacing_m"])
+    check("gap", gap, CROWD_RANGES["sync_gap_s"])
     prefix = template.name if name is None else name
     flip = {"left": "right", "right": "left"}
     out = []
@@ -174,11 +176,11 @@ def peloton(template: CrowdFigure, count: int, gap: float, abreast: int = 2,
     ``body_jitter`` as in :func:`follow_leader`.  Named ``<name>1 ...`` from the front."""
     if not template.is_path:
         raise ValueError("peloton needs a path template (the riders follow a road)")
-    check_range("count", count, 1, 10000)
-    check_range("gap", gap, 0.0, 1e3, lo_open=True)
-    check_range("abreast", abreast, 1, 100)
-    check_range("spacing", spacing, 0.0, 1e2)
-    check_range("body_jitter", body_jitter, 0.0, 0.3)
+    check("count", count, CROWD_RANGES["count"])
+    check("gap", gap, CROWD_RANGES["gap_m"])
+    check("abreast", abreast, CROWD_RANGES["abreast"])
+    check("spacing", spacing, CROWD_RANGES["spacing_m"])
+    check("body_jitter", body_jitter, CROWD_RANGES["jitter"])
     count, abreast = int(count), int(abreast)
     rows = -(-count // abreast)
     length = template.controller.scene.path.length()

@@ -12,29 +12,14 @@ import json
 import math
 from pathlib import Path
 
-from ..core.ranges import RANGES, Range
+from ..core.ranges import CROWD_RANGES, RANGES
 from ..core.scene import read_figure, scene_from_dict
 from ..core.validate import FieldError, Fields, read_text
 from . import formations as formations_
 from .model import BODY_CLEARANCE, FIRST_TURNS, Crowd, CrowdFigure, FollowPath, Turns
 
-__all__ = ["load_crowd", "crowd_from_dict", "CROWD_RANGES"]
+__all__ = ["load_crowd", "crowd_from_dict"]
 
-CROWD_RANGES = {
-    "seed": Range(0, 2**63 - 1, "", "any whole number", integer=True),
-    "count": Range(1, 10000, "", "figures a formation adds", integer=True),
-    "time_offset": Range(0.0, 1e5, "s", "when a figure starts on the crowd's clock"),
-    "gap_s": Range(0.0, 1e4, "s", "time between successive figures", lo_open=True),
-    "gap_m": Range(0.0, 1e4, "m", "distance between successive figures or rows",
-                   lo_open=True),
-    "sync_gap_s": Range(0.0, 1e4, "s", "time between successive figures"),
-    "lateral_m": Range(-1e3, 1e3, "m", "sideways offset, to the left of the heading"),
-    "spacing_m": Range(0.0, 1e3, "m", "distance between figures side by side"),
-    "abreast": Range(1, 100, "", "riders in a row", integer=True),
-    "jitter": Range(0.0, 0.3, "", "relative random difference, up to 30 %"),
-    "timing_jitter_s": Range(0.0, 1e3, "s", "random difference of the start time (at most "
-                             "half the gap)"),
-}
 _TOP = {"name", "description", "seed", "duration", "dt", "figures", "formations", "priority",
         "clearance"}
 _FIGURE = {"name", "preset", "body", "limits", "turns", "follow", "start", "time_offset"}
