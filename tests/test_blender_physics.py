@@ -13,7 +13,7 @@ bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat  # noqa: E402
-from blender_turning.blender.ops_bake import apply_bake  # noqa: E402
+from blender_turning.blender.figure_bake import apply_bake  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
 

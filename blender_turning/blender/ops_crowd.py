@@ -19,7 +19,7 @@ from ..core.validate import check
 from ..crowd import follow_leader, peloton, synchronized
 from ..core.ranges import CROWD_RANGES
 from . import crowd_scene
-from .ops_common import context_figure, poll_figure, report_error
+from .figure_context import context_figure, poll_figure, report_error
 
 FORMATIONS = (
     ("FOLLOW_LEADER", "Follow the Leader",

@@ -7,7 +7,7 @@ from __future__ import annotations
 import bpy
 
 from .crowd_job import follow_figures, planning_order
-from .ops_common import crowd_collection, selected_figures
+from .figure_context import crowd_collection, selected_figures
 from .panel import FigurePanel
 
 

@@ -34,9 +34,7 @@ SCALAR_COLUMNS = 24
 
 def applies(problem) -> bool:
     """Does the fused stage compute exactly what ``Problem._rhs`` does for ``problem``?"""
-    from .problem import Problem
-    return (type(problem)._rhs is Problem._rhs and problem.speed.is_constant
-            and not problem._physical_binds)
+    return problem.flat_rhs and problem.speed.is_constant and not problem._physical_binds
 
 
 def curvatures(C0, u, h, steps, cmax, rate, t_stage):

@@ -102,6 +102,11 @@ class Problem:
         #: The stage's RK4 fused on flat ground at a constant speed (flat_stage.py).
         self._fused = flat_stage.applies(self)
 
+    @property
+    def flat_rhs(self) -> bool:
+        """Is this problem's right-hand side :meth:`_rhs` itself (flat ground), not a subclass's?"""
+        return type(self)._rhs is Problem._rhs
+
     def fall_table(self):
         """The :class:`.fall_table.FallTable` of this problem, or ``None`` where it does not
         apply (varying speed, or a figure for which the lean is not monotone)."""
