@@ -1,7 +1,7 @@
 """Packaging.  `pip install .` carries the whole core: every package of the source tree and the
 rigs, which live at the top of the repository (the Blender extension ships them from there) and go
 into the wheel as blender_turning/rigs.  The Blender extension is built from the manifest's
-[build] paths (exactly the add-on's files), with the README's command, on a fresh copy (issue 9)."""
+[build] paths (exactly the add-on's files), with the README's command, on a fresh copy."""
 import shutil
 import subprocess
 import sys
@@ -106,7 +106,7 @@ def fresh_copy(dest: Path) -> Path:
 def readme_build_commands() -> list:
     """The shell commands of the README's extension build block, continuation lines joined."""
     text = (ROOT / "README.md").read_text()
-    block = text.split("## Install into Blender", 1)[1].split("```bash\n", 1)[1].split("```")[0]
+    block = text.split("\n## Install\n", 1)[1].split("```bash\n", 1)[1].split("```")[0]
     block = block.replace("\\\n", " ")
     return [line.split("#", 1)[0].strip() for line in block.splitlines()
             if line.split("#", 1)[0].strip()]
