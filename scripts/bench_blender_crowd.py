@@ -1,11 +1,11 @@
-"""Benchmark of Follow Path on several figures in Blender (issue 11).  Prints a Markdown table.
+"""Benchmark of Follow Path on several figures in Blender.  Prints a Markdown table.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_blender_crowd.py [--figures 4] [--gates 4]
 
 ``--figures`` telemark figures, each with its own slalom of ``--gates`` gates 12 m apart (3 m to
 either side), are planned
 
-- one after the other in Blender's process, as Follow Path did before issue 11 (one figure at a
+- one after the other in Blender's process, as a single-figure Follow Path does (one figure at a
   time: ``follow_scene.prepare(...).run()``, the single-figure job's planner call) -- the baseline:
   *warm* (the planner's fall table, built once per body and settings and kept for the process,
   already built) and *cold* (that cache emptied first: the first plan of a session);

@@ -1,6 +1,6 @@
 """Benchmark: Follow Path of one skier on a 200 m x 200 m Ground mesh (the project's ``ski_slope``
 at ``--slope`` deg with its rolls, as a ``--cell`` m grid mesh) against the same path on flat
-ground, in the same run (issue 10: the planner in Blender).  The path runs 120 m down the fall
+ground, in the same run (the planner in Blender).  The path runs 120 m down the fall
 line in a gentle S (2 m to each side every 30 m) at x = 50 m, away from the mogul field.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_follow_ground.py [--repeat 2] [--cell 1.0]

@@ -1,4 +1,4 @@
-"""Crowds in Blender (issue 11): Add Crowd makes the core's formations, Bake Turns bakes each
+"""Crowds in Blender: Add Crowd makes the core's formations, Bake Turns bakes each
 figure the core's trajectory for its start offset, Follow Path on several figures plans each in
 a worker process exactly as it plans it alone, Esc leaves the scene unchanged, a user's rig is a
 template too, and the workers start safely from inside Blender (spawn, no script re-run, the

@@ -1,4 +1,4 @@
-"""Figures avoiding each other in Blender (issue 11): Follow Path on several figures plans them in
+"""Figures avoiding each other in Blender: Follow Path on several figures plans them in
 their Planning Order, each around the bodies of those before it, through the crowd runner's
 priority planning (the CLI's), in worker processes; a figure with no way round is named with
 the figures in its way and nothing is written; Esc ends the planning and changes nothing."""

@@ -1,4 +1,4 @@
-"""Follow Path on a Ground mesh (issue 10, the planner in Blender), on the bpy wheel: the path
+"""Follow Path on a Ground mesh (the planner in Blender), on the bpy wheel: the path
 curve projected onto the mesh, an obstacle standing on it avoided, the speed computed along the
 way, and the result baked on the mesh; a cancelled plan, a curve off the mesh and a mesh that is
 not a height field leave the scene as it was."""

@@ -1,6 +1,6 @@
 """Operators on the bpy wheel: polls that say why, presets, bad input reported with nothing
 half-written, Bake Turns reading back equal to the mapping, baking twice = once, Clear Bake,
-Follow Path (infeasible plan, cancel) leaving the scene as it was (issue 4)."""
+Follow Path (infeasible plan, cancel) leaving the scene as it was."""
 import os
 import tempfile
 import time

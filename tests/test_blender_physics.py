@@ -1,6 +1,6 @@
 """Each rig built and baked for 10 s on the bpy wheel; F-curves read back equal the mapping's
 arrays; then, on the depsgraph-evaluated pose of the baked scene (bone positions in world space),
-the physical properties of Section 7 (issue 4)."""
+the physical properties of Section 7."""
 import math
 import os
 import tempfile

@@ -1,4 +1,4 @@
-"""Operators tried as a careless user would (issue 9, Blender side): a rig that lost a bone, a
+"""Operators tried as a careless user would (Blender side): a rig that lost a bone, a
 preset of another sport, NaN typed into a setting, the user's own action through bake and Clear
 Bake in every order, NLA push-down, Shift+D, closed paths, the figure's own collection as
 obstacles, renaming or deleting the figure while it plans, and injected failures.  Every failure

@@ -1,4 +1,4 @@
-"""Follow Path for several figures at once (issue 11): the crowd runner's plans, in worker
+"""Follow Path for several figures at once: the crowd runner's plans, in worker
 processes.
 
 Each figure is read as the single-figure Follow Path reads it (:func:`.follow_scene.prepare`: its

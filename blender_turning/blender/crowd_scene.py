@@ -1,4 +1,4 @@
-"""Crowds in the scene (issue 11): a template figure as the core's crowd member, a formation's
+"""Crowds in the scene: a template figure as the core's crowd member, a formation's
 members back as figures (linked duplicates of the template), their paths as curve objects.
 
 The formation itself is the core's (:mod:`..crowd.formations`): this module only translates.

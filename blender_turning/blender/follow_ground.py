@@ -1,4 +1,4 @@
-"""Follow Path on a Ground mesh (issue 10): what ``turning.follow_path`` adds when the figure has a
+"""Follow Path on a Ground mesh: what ``turning.follow_path`` adds when the figure has a
 Ground mesh (``turning.ground``).
 
 - The mesh is read once into the core's height field (:func:`.ground.read_ground`) and checked to

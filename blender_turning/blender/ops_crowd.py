@@ -1,4 +1,4 @@
-"""``turning.add_crowd``: a formation of figures from the active one as template (issue 11); also
+"""``turning.add_crowd``: a formation of figures from the active one as template; also
 in the Add menu (Shift+A > Turning Figure > Add Crowd) and the Crowd panel.
 
 The formation is the core's (:mod:`..crowd.formations`: follow the leader, synchronised,

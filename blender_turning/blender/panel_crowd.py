@@ -1,4 +1,4 @@
-"""The Turning tab's Crowd sub-panel (issue 11): the figure's start offset, first turn and
+"""The Turning tab's Crowd sub-panel: the figure's start offset, first turn and
 planning order, Add Crowd from it, and what Bake Turns / Follow Path will do (the selection, or
 the active Crowd collection's figures; for Follow Path, the order the figures plan in when they
 avoid each other)."""

@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-#: Batches of at most this many nodes run on Python floats (measured: BENCHMARKS.md, issue 11).
+#: Batches of at most this many nodes run on Python floats (measured: BENCHMARKS.md).
 SCALAR_COLUMNS = 24
 
 
