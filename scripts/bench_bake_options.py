@@ -1,4 +1,4 @@
-"""Benchmark the animator's bake options (issue 8), each against its plain baseline in the same run:
+"""Benchmark the animator's bake options, each against its plain baseline in the same run:
 
 - the core's simulation of 60 s with a speed schedule against a constant speed (skier);
 - simulate + map with a keyed speed (ramp) against a constant speed, per figure;
@@ -25,7 +25,7 @@ import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.core import PhaseEllipse, Schedule, preset, simulate  # noqa: E402
-from blender_turning.blender.ops_bake import apply_bake  # noqa: E402
+from blender_turning.blender.figure_bake import apply_bake  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
 from bench_common import best  # noqa: E402  (scripts/)
@@ -66,7 +66,7 @@ def _bench(args) -> int:
     frames = FrameRange.of_scene(scene)
     figs = [add(s, 4.0 * i) for i, s in enumerate(SPORTS)]
     ramped = [add(s, 4.0 * i + 40) for i, s in enumerate(SPORTS)]
-    for fig in ramped:              # up 30 % and back (slower than the preset: issue 7, 3b)
+    for fig in ramped:              # up 30 % and back (slower than the preset: a turn it cannot make)
         v = fig.turning.speed
         for frame, factor in ((1, 1.0), (scene.frame_end // 3, 1.3), (scene.frame_end, 1.0)):
             fig.turning.speed = v * factor

@@ -1,12 +1,12 @@
-"""Benchmark of Follow Path on several figures in Blender (issue 11).  Prints a Markdown table.
+"""Benchmark of Follow Path on several figures in Blender.  Prints a Markdown table.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_blender_crowd.py [--figures 4] [--gates 4]
 
 ``--figures`` telemark figures, each with its own slalom of ``--gates`` gates 12 m apart (3 m to
 either side), are planned
 
-- one after the other in Blender's process, as Follow Path did before issue 11 (one figure at a
-  time: ``ops_path.prepare(...).run()``, the single-figure job's planner call) -- the baseline:
+- one after the other in Blender's process, as a single-figure Follow Path does (one figure at a
+  time: ``follow_scene.prepare(...).run()``, the single-figure job's planner call) -- the baseline:
   *warm* (the planner's fall table, built once per body and settings and kept for the process,
   already built) and *cold* (that cache emptied first: the first plan of a session);
 - all at once by the multi-figure job (``blender/crowd_job.py``): spawned worker processes, one
@@ -35,7 +35,7 @@ sys.path.insert(0, str(ROOT / "scripts"))
 from bench_common import best  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import crowd_job, ops_path  # noqa: E402
+from blender_turning.blender import crowd_job, follow_scene  # noqa: E402
 from blender_turning.core.planner import fall_table  # noqa: E402
 
 
@@ -76,7 +76,7 @@ def main():
     def one_by_one():
         kind = "cpu warm" if fall_table._CACHE else "cpu cold"
         c0 = time.process_time()
-        plans = [ops_path.prepare(ctx, f).run() for f in figs]
+        plans = [follow_scene.prepare(ctx, f).run() for f in figs]
         out.setdefault(kind, []).append(time.process_time() - c0)
         return plans
 

@@ -1,4 +1,4 @@
-"""Benchmark of the physics core (issue 2). Prints a Markdown table; timings are best of N.
+"""Benchmark of the physics core. Prints a Markdown table; timings are best of N.
 
     .venv/bin/python scripts/bench_core.py [--repeat 5]
     .venv/bin/python scripts/bench_core.py --terrain [--repeat 3]
@@ -11,7 +11,7 @@
 - A batch of 1,000 figures stepped together: figure-steps per second.  Baseline in the same run:
   50 of the figures one after another on floats.  Also the numpy floor: the cheapest RK4 step
   numpy can take for the batch (no controller, no bounds), and its sines and cosines alone.
-- ``--terrain`` (issue 10): 60 s of the same slalom through ``simulate`` on flat ground (today's
+- ``--terrain``: 60 s of the same slalom through ``simulate`` on flat ground (today's
   path, the baseline), through the terrain loop on flat ground, down an 18 deg plane and down
   the demo's mogul slope (``terrain_gen.ski_slope``, a height field), with the skier's snow
   friction and drag.  Warm: the feasibility tables the phase-ellipse controller builds per
@@ -129,7 +129,7 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--batch", type=int, default=1000)
-    ap.add_argument("--terrain", action="store_true", help="the terrain table (issue 10)")
+    ap.add_argument("--terrain", action="store_true", help="the terrain table")
     args = ap.parse_args()
     if args.terrain:
         terrain(args.repeat)

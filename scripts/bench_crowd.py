@@ -1,4 +1,4 @@
-"""Benchmark of crowds (issue 11).  Prints a Markdown table.
+"""Benchmark of crowds.  Prints a Markdown table.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_crowd.py [--skip-dask] [--course 8]
 

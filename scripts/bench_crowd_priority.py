@@ -1,4 +1,4 @@
-"""Benchmark of priority planning (issue 11): what planning around the figures planned before
+"""Benchmark of priority planning: what planning around the figures planned before
 costs against planning every figure alone.  Prints a Markdown table.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_crowd_priority.py [--repeat 3]

@@ -1,12 +1,12 @@
 """Benchmark: Follow Path of one skier on a 200 m x 200 m Ground mesh (the project's ``ski_slope``
 at ``--slope`` deg with its rolls, as a ``--cell`` m grid mesh) against the same path on flat
-ground, in the same run (issue 10: the planner in Blender).  The path runs 120 m down the fall
+ground, in the same run (the planner in Blender).  The path runs 120 m down the fall
 line in a gentle S (2 m to each side every 30 m) at x = 50 m, away from the mogul field.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_follow_ground.py [--repeat 2] [--cell 1.0]
 
 Timed, best of ``--repeat``, flat and terrain interleaved: reading the scene into a planning job
-(``ops_path.prepare``: on terrain reading the mesh, checking it is a height field and that the
+(``follow_scene.prepare``: on terrain reading the mesh, checking it is a height field and that the
 path lies over it), the plan (``FollowJob.run``), and writing it (``ops_path.finish``: resample,
 ray-cast the feet, map, F-curves); on terrain also the mesh reading and the height-field check
 alone.
@@ -29,7 +29,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import ops_path  # noqa: E402
+from blender_turning.blender import follow_scene, ops_path  # noqa: E402
 from blender_turning.blender.follow_ground import check_height_field  # noqa: E402
 from blender_turning.blender.ground import mesh_from_height_field, read_ground  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
@@ -77,7 +77,7 @@ def main(argv=None):
     for _ in range(args.repeat):
         for name, fig in figs.items():                  # interleaved: the same load for both
             t0 = time.perf_counter()
-            job = ops_path.prepare(bpy.context, fig)
+            job = follow_scene.prepare(bpy.context, fig)
             t1 = time.perf_counter()
             result = job.run()
             t2 = time.perf_counter()

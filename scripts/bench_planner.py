@@ -1,4 +1,4 @@
-"""Benchmark the path-following planner (issue 3) against the paper's plain best-first search.
+"""Benchmark the path-following planner against the paper's plain best-first search.
 
 For each scene: one receding-horizon run with the planner as shipped (warm start, the previous
 search's proof, lower bounds, fall table, children and queue nodes simulated in batches); per

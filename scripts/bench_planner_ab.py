@@ -4,9 +4,9 @@ so both see the same load on a shared machine.  Node counts are exact; walls and
 (``time.process_time``: the honest figure on a shared machine) are the minimum of ``--repeat``
 runs.  Every run starts cold (the fall table and reach bound caches emptied), as a ``follow``
 command does; CPU per course second is the planning's CPU time over the course's duration.
-``--cases issue11``: every shipped scene at N = 12, q = 7 (issue 11).
+``--cases every_scene``: every shipped scene at N = 12, q = 7.
 
-Usage: python scripts/bench_planner_ab.py --before 8b11d74 [--repeat 2] [--cases issue11]
+Usage: python scripts/bench_planner_ab.py --before 8b11d74 [--repeat 2] [--cases every_scene]
        [--json out.json]
 """
 from __future__ import annotations
@@ -24,9 +24,9 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-CASES = {"issue7": [("slalom", 12, 7), ("tree_skiing", 10, 5), ("tree_skiing", 12, 5),
+CASES = {"slalom_trees": [("slalom", 12, 7), ("tree_skiing", 10, 5), ("tree_skiing", 12, 5),
                     ("cyclist_corner", 10, 5), ("potholes", 10, 5)],
-         "issue11": [(p.stem, 12, 7) for p in sorted((ROOT / "scenes").glob("*.json"))]}
+         "every_scene": [(p.stem, 12, 7) for p in sorted((ROOT / "scenes").glob("*.json"))]}
 
 
 def import_revision(rev: str, where: Path):
@@ -82,8 +82,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--before", required=True, help="git revision to compare with")
     ap.add_argument("--repeat", type=int, default=2, help="runs of each (walls: the minimum)")
-    ap.add_argument("--cases", choices=sorted(CASES), default="issue7",
-                    help="which scenes and settings (default: issue 7's)")
+    ap.add_argument("--cases", choices=sorted(CASES), default="slalom_trees",
+                    help="which scenes and settings (default: the slalom and tree scenes)")
     ap.add_argument("--json", help="write the results here")
     args = ap.parse_args(argv)
     import blender_turning.core.scene as after

@@ -1,4 +1,4 @@
-"""Benchmark the planner on terrain (issue 10) beside the flat slalom, in one process.
+"""Benchmark the planner on terrain beside the flat slalom, in one process.
 
 Runs each scene file's whole course (``Scene.run``, its own planner settings) ``--repeat`` times
 and prints the best planning wall time, the nodes expanded, the replannings and the course's

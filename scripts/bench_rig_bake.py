@@ -1,4 +1,4 @@
-"""Benchmark (issue 8): retarget + bake of a run on a Rigify rig against the built-in skier's
+"""Benchmark: retarget + bake of a run on a Rigify rig against the built-in skier's
 map + bake, in the same run.
 
     python scripts/bench_rig_bake.py                  # on the bpy wheel (.venv); 60 s at 24 fps

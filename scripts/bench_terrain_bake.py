@@ -1,7 +1,7 @@
 """Benchmark: Bake Turns of one cyclist over 60 s at 24 fps on a 200 m x 200 m Ground mesh (the
 project's ``ski_slope`` with its rolls and mogul field but no overall slope, as a 1 m grid mesh:
 a figure that stays on 200 m for a minute) against the same bake on flat ground, in the same run
-(issue 10: within 2x).  The cyclist rides at 3 m/s with its own rolling resistance and drag,
+(within 2x).  The cyclist rides at 3 m/s with its own rolling resistance and drag,
 slalom lean 5 deg, period 3 s, heading +x from (-95, 10).
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_terrain_bake.py [--repeat 3] [--cell 1.0]

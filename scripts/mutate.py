@@ -255,7 +255,7 @@ MUTANTS = [
       "self.a = st.sample_dt * v_min", "self.a = 2.0 * st.sample_dt * v_min", PLANNER),
     M("queue_clip_too_early", "core/planner/search.py",
       "if prio > ub + tol():", "if prio > 0.8 * ub + tol():", PLANNER),
-    # -- the fused stage (issue 11): the same RK4 as the generic one --------------------------
+    # -- the fused stage: the same RK4 as the generic one --------------------------
     M("fused_alpha_gravity_sign", "core/planner/flat_stage.py",
       "np.subtract(out[4], a, out=out[4])", "np.add(out[4], a, out=out[4])", FUSED),
     M("fused_floats_half_step_full", "core/planner/flat_stage.py",
@@ -263,7 +263,7 @@ MUTANTS = [
     M("fused_fourth_stage_rate_halved", "core/planner/flat_stage.py",
       "np.maximum(D[2:-1:3], first - sh), first + sh)",
       "np.maximum(D[2:-1:3], first - shalf), first + shalf)", FUSED),
-    # -- path following (issue 7, item 5) ------------------------------------------------------
+    # -- path following ------------------------------------------------------
     M("body_not_checked", "core/planner/problem.py",
       "foot, body = track[:2], self.body_point(track)",
       "foot, body = track[:2], track[:2]", [T + "test_planner_body.py"]),
@@ -278,7 +278,7 @@ MUTANTS = [
       "    if not problem.settings.viable_stages:\n        return np.zeros(len(C_f), bool)\n"
       "    return no_way_on(", "    if True:\n        return np.zeros(len(C_f), bool)\n"
       "    return no_way_on(", [T + "test_planner_search.py"]),
-    # -- figures avoiding each other (issue 11, core/moving.py) --------------------------------
+    # -- figures avoiding each other (core/moving.py) --------------------------------
     M("movers_without_time", "core/planner/problem.py",
       "self.movers.collides(foot, body, t0, st.dt)",
       "self.movers.collides(foot, body, 0.0 * t0, st.dt)", MOVING),
@@ -345,10 +345,10 @@ MUTANTS = [
     M("rebake_removes_all_curves", "blender/bake.py",
       "for fc in [fc for fc in bag.fcurves if fc.data_path in paths]:",
       "for fc in list(bag.fcurves):", BAKE, "bake"),
-    # -- Follow Path on a Ground mesh (issue 10) -------------------------------------------------
-    M("follow_ground_is_an_obstacle", "blender/ops_path.py",
+    # -- Follow Path on a Ground mesh -------------------------------------------------
+    M("follow_ground_is_an_obstacle", "blender/follow_scene.py",
       "(s.foot_track, s.path, s.ground)", "(s.foot_track, s.path)", FOLLOW_GROUND, "bake"),
-    M("follow_ground_obstacles_dropped", "blender/ops_path.py",
+    M("follow_ground_obstacles_dropped", "blender/follow_scene.py",
       "job = FollowJob(figure, control, footprints,", "job = FollowJob(figure, control, [],",
       FOLLOW_GROUND, "bake"),
     M("follow_ground_planned_flat", "blender/follow_ground.py",
@@ -359,7 +359,7 @@ MUTANTS = [
       FOLLOW_GROUND, "bake"),
     M("follow_ground_upright", "blender/ops_path.py",
       "normal=surface_normals(traj, ground))", "normal=None)", FOLLOW_GROUND, "bake"),
-    M("follow_ground_track_flat", "blender/ops_bake.py",
+    M("follow_ground_track_flat", "blender/figure_bake.py",
       "z=traj.z)", "z=None)", FOLLOW_GROUND, "bake"),
     M("follow_ground_any_mesh", "blender/follow_ground.py",
       "    check_height_field(obj, depsgraph, ground)\n", "", FOLLOW_GROUND, "bake"),

@@ -1,4 +1,4 @@
-"""Crowds in the headless job (scripts/render_job.py, issue 11): ``[[crowds]]`` tables, each a
+"""Crowds in the headless job (scripts/render_job.py): ``[[crowds]]`` tables, each a
 formation of figures around a leader, and a shot of each crowd.
 
 A crowd is a leader (``[crowds.leader]``, a figure table like ``[[figures]]``, on the

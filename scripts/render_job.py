@@ -522,7 +522,7 @@ def setup_render(bpy, cfg):
 
 def use_gpu(bpy) -> str:
     """Point Cycles at the first GPU backend with a device (in this session's preferences: a
-    farm worker opening the .blend uses its own, see the README's "Render farms"); the backend's
+    farm worker opening the .blend uses its own, see docs/render-farms.md); the backend's
     name, or :class:`ConfigError` naming ``--device`` where there is none."""
     prefs = bpy.context.preferences.addons["cycles"].preferences
     for backend in GPU_BACKENDS:

@@ -1,4 +1,4 @@
-"""A picture for the README (issue 8): a Rigify rig (generated from Blender's Human metarig) and a
+"""The picture of docs/own-rigs.md: a Rigify rig (generated from Blender's Human metarig) and a
 Mixamo-named skeleton skiing beside the built-in skier, same settings, one frame, Workbench.
 
     python scripts/render_own_rig.py --out docs/own_rig.png [--frame 40]

@@ -1,4 +1,4 @@
-"""The render job's terrain (issue 10): a snowy mountain from ``core.terrain_gen.ski_slope``, a
+"""The render job's terrain: a snowy mountain from ``core.terrain_gen.ski_slope``, a
 hill with a road for the cyclist, the tracks the figures leave in the snow, one follow camera per
 figure and a sheet of their shots.  Used by ``scripts/render_job.py`` (``[terrain.<name>]``
 tables, a figure's ``ground``, ``camera.follow = "each"``)."""

@@ -1,4 +1,4 @@
-"""Users' rigs built on the bpy wheel for the retargeting tests (issue 8): a Rigify rig generated
+"""Users' rigs built on the bpy wheel for the retargeting tests: a Rigify rig generated
 from Blender's Human metarig, and a Mixamo-named T-pose skeleton (in centimetres, object scale
 0.01, as an FBX import gives it).  Both face -Y, as Blender characters do."""
 import math

@@ -1,4 +1,4 @@
-"""The batch API (issue 7, item 4): per-figure ellipses with heading control, and a fallen figure
+"""The batch API: per-figure ellipses with heading control, and a fallen figure
 that stops alone while the others go on."""
 import math
 

@@ -1,4 +1,4 @@
-"""The bake an animator expects (issue 8): every selected figure, frame ranges and steps, a keyed
+"""The bake an animator expects: every selected figure, frame ranges and steps, a keyed
 speed, the Add menu, tooltips and soft limits, glTF extras, sub-panels, and a .blend saved by the
 add-on at commit 8b11d74 opening and re-baking unchanged."""
 import math
@@ -381,7 +381,7 @@ def test_a_file_saved_at_8b11d74_opens_and_rebakes_the_same_motion(registered, n
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     rebaked = all_keys(fig)
     assert rebaked.keys() == saved.keys()
-    # The motion itself has changed since 8b11d74 (issue 7: the smooth phase-ellipse law, frame
+    # The motion itself has changed since 8b11d74 (the smooth phase-ellipse law, frame
     # output that obeys the model), so "unchanged" means: the old file's settings and keys are
     # read exactly as today's.  A figure made now with the same settings, keys and start bakes
     # the same keys, bit for bit.

@@ -1,5 +1,5 @@
 """Bake on the bpy wheel: whole F-curves, read back equal to the pose track; re-bake and clear
-touch only what the bake wrote (issue 4)."""
+touch only what the bake wrote."""
 import os
 import tempfile
 

@@ -1,4 +1,4 @@
-"""Crowds in Blender (issue 11): Add Crowd makes the core's formations, Bake Turns bakes each
+"""Crowds in Blender: Add Crowd makes the core's formations, Bake Turns bakes each
 figure the core's trajectory for its start offset, Follow Path on several figures plans each in
 a worker process exactly as it plans it alone, Esc leaves the scene unchanged, a user's rig is a
 template too, and the workers start safely from inside Blender (spawn, no script re-run, the
@@ -24,7 +24,7 @@ from scene_snapshot import diff, snapshot  # noqa: E402
 from test_blender_operators import add, make_path  # noqa: E402
 
 import blender_turning  # noqa: E402
-from blender_turning.blender import compat, crowd_job, ops_path  # noqa: E402
+from blender_turning.blender import compat, crowd_job, follow_scene, scene_adapters  # noqa: E402
 from blender_turning.blender import retarget_adapter as ra  # noqa: E402
 from blender_turning.core import (DEFAULT_DT, BodyParams, Figure, Limits,  # noqa: E402
                                   PhaseEllipse, Schedule, simulate)
@@ -258,7 +258,7 @@ def test_plans_in_the_workers_equal_each_figure_planned_alone(scene):
     results = job.results()
     assert [name for name, _ in results] == [f.name for f in figs]
     for fig, (_, r) in zip(figs, results):
-        alone = ops_path.prepare(bpy.context, fig).run()
+        alone = follow_scene.prepare(bpy.context, fig).run()
         got = r.trajectory.columns()
         for c, v in alone.trajectory.columns().items():       # bit for bit; t on the crowd clock
             want = v + fig.turning.crowd.time_offset if c == "t" else v
@@ -414,7 +414,7 @@ def road_figure():
 
 def path_of(fig):
     from blender_turning.core.path import HermitePath
-    return HermitePath.from_bezier(ops_path.bezier_control_points(fig.turning.path))
+    return HermitePath.from_bezier(scene_adapters.bezier_control_points(fig.turning.path))
 
 
 def test_followers_on_a_road_follow_the_core_offset_paths(scene):

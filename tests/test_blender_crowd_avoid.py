@@ -1,4 +1,4 @@
-"""Figures avoiding each other in Blender (issue 11): Follow Path on several figures plans them in
+"""Figures avoiding each other in Blender: Follow Path on several figures plans them in
 their Planning Order, each around the bodies of those before it, through the crowd runner's
 priority planning (the CLI's), in worker processes; a figure with no way round is named with
 the figures in its way and nothing is written; Esc ends the planning and changes nothing."""
@@ -19,7 +19,7 @@ from scene_snapshot import diff, snapshot  # noqa: E402
 from test_blender_crowd import ESC, curves, modal_crowd, started_workers  # noqa: E402
 from test_blender_operators import add, make_path  # noqa: E402
 
-from blender_turning.blender import crowd_job, ops_path  # noqa: E402
+from blender_turning.blender import crowd_job, follow_scene, scene_adapters  # noqa: E402
 from blender_turning.core.moving import MovingBodies, closest_approach  # noqa: E402
 from blender_turning.crowd import Crowd, CrowdFigure, FollowPath, run_crowd  # noqa: E402
 
@@ -89,7 +89,7 @@ def test_avoiding_is_the_core_priority_run_in_the_planning_order(scene):
     got = planned(figs, avoid=True, clearance=1.5)
     members = []
     for fig in figs:
-        job = ops_path.prepare(bpy.context, fig)
+        job = follow_scene.prepare(bpy.context, fig)
         members.append(CrowdFigure(fig.name, job.figure,
                                    FollowPath(crowd_job.figure_scene(fig.name, job)),
                                    time_offset=fig.turning.crowd.time_offset))
@@ -124,7 +124,7 @@ def crowd_file(figs, priority, clearance) -> dict:
     control points, its start offset."""
     out = []
     for fig in figs:
-        f = ops_path.prepare(bpy.context, fig).figure
+        f = follow_scene.prepare(bpy.context, fig).figure
         b, lim = f.body, f.limits
         assert math.radians(math.degrees(lim.theta_fall)) == lim.theta_fall   # exact in the file
         out.append({"name": fig.name, "preset": "skier", "time_offset": fig.turning.crowd
@@ -132,7 +132,7 @@ def crowd_file(figs, priority, clearance) -> dict:
                                            "g": b.g},
                     "limits": {"C_f_max": lim.C_f_max, "dC_f_max": lim.dC_f_max,
                                "theta_fall_deg": math.degrees(lim.theta_fall)},
-                    "follow": {"path": {"bezier": ops_path.bezier_control_points(
+                    "follow": {"path": {"bezier": scene_adapters.bezier_control_points(
                         fig.turning.path).tolist()}}})
     return {"name": "crossing", "duration": 10, "figures": out, "priority": priority,
             "clearance": clearance}

@@ -1,6 +1,6 @@
 """Packaging: Blender's extension tool validates and builds the add-on; the built zip installs
 into the bpy wheel, enables, runs an operator, disables; register/unregister/register leaves
-nothing behind (issue 4).  Each install runs in a fresh interpreter with its own user folder."""
+nothing behind.  Each install runs in a fresh interpreter with its own user folder."""
 import os
 import subprocess
 import sys

@@ -1,4 +1,4 @@
-"""Follow Path on a Ground mesh (issue 10, the planner in Blender), on the bpy wheel: the path
+"""Follow Path on a Ground mesh (the planner in Blender), on the bpy wheel: the path
 curve projected onto the mesh, an obstacle standing on it avoided, the speed computed along the
 way, and the result baked on the mesh; a cancelled plan, a curve off the mesh and a mesh that is
 not a height field leave the scene as it was."""
@@ -16,7 +16,7 @@ bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import diff, snapshot  # noqa: E402
 
-from blender_turning.blender import compat, ops_path  # noqa: E402
+from blender_turning.blender import compat, follow_scene, scene_adapters  # noqa: E402
 from blender_turning.blender.ground import height_field_of, mesh_from_height_field  # noqa: E402
 from blender_turning.core.follow_problem import DEFAULT_CLEARANCE  # noqa: E402
 from blender_turning.core.obstacles import Obstacles  # noqa: E402
@@ -115,7 +115,7 @@ def modal_operator(fig):
     reports = []
     fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),
                            "_cleanup": op_cls._cleanup, "_complete": op_cls._complete})()
-    fake._job = ops_path.prepare(bpy.context, fig)
+    fake._job = follow_scene.prepare(bpy.context, fig)
     fake._fig_uid, fake._timer = fig.session_uid, object()
     fake._job.start()
     return op_cls, fake, reports
@@ -161,11 +161,11 @@ def test_the_run_follows_the_projected_curve_around_the_post(world):
     assert progress == sorted(progress) and progress[-1] == 100 and "end" in world["progress"]
     cv = world["curves"]
     xy = np.column_stack([cv[("location", 0)], cv[("location", 1)]])
-    path = HermitePath.from_bezier(ops_path.bezier_control_points(world["fig"].turning.path))
+    path = HermitePath.from_bezier(scene_adapters.bezier_control_points(world["fig"].turning.path))
     samples = path.sample(64)
     assert np.abs(samples[0] - CURVE[0][:2]).max() < 1e-6        # projected: x, y kept
     # The post stands across the curve, so the figure must leave it to pass on either side ...
-    feet = dict(ops_path.obstacle_footprints(world["post"].users_collection[0]))
+    feet = dict(scene_adapters.obstacle_footprints(world["post"].users_collection[0]))
     post = Obstacles(polygons=[feet["Post"]])
     assert post.min_distance(samples).min() < 0.0
     # ... and does, keeping the clearance (measured 0.53 m) up to what the planner cannot see: it

@@ -1,4 +1,4 @@
-"""Follow Path on the bpy wheel (issue 7, item 5): a path the figure cannot finish within the time
+"""Follow Path on the bpy wheel: a path the figure cannot finish within the time
 limit is reported, with how far along it got, and nothing is written."""
 import os
 import tempfile

@@ -1,4 +1,4 @@
-"""Reading a Ground mesh cheaply (issue 10, "the bake stays fast"): exact heights by
+"""Reading a Ground mesh cheaply ("the bake stays fast"): exact heights by
 ``Object.ray_cast`` on a moved, tilted, scaled mesh, and a read kept only while the mesh, its
 placement and the cell stay the same."""
 import math

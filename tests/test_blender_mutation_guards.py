@@ -1,4 +1,4 @@
-"""Guards for bake mutants that the rest of the suite let through (issue 7, item 6): a pose track
+"""Guards for bake mutants that the rest of the suite let through: a pose track
 holding NaN is refused before anything is written; Clear Bake keeps the user's keyed
 ``turning.*`` parameters; a re-bake starts from a moved Start.  Runs on bpy 5.0 and 4.2."""
 import math

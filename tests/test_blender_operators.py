@@ -1,6 +1,6 @@
 """Operators on the bpy wheel: polls that say why, presets, bad input reported with nothing
 half-written, Bake Turns reading back equal to the mapping, baking twice = once, Clear Bake,
-Follow Path (infeasible plan, cancel) leaving the scene as it was (issue 4)."""
+Follow Path (infeasible plan, cancel) leaving the scene as it was."""
 import os
 import tempfile
 import time
@@ -13,7 +13,7 @@ bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import snapshot  # noqa: E402
 
-from blender_turning.blender import compat, ops_path, presets  # noqa: E402
+from blender_turning.blender import compat, follow_scene, presets, scene_adapters  # noqa: E402
 from blender_turning.blender.follow_job import Cancelled  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import PLAN_CURVATURE_RATE, FrameRange  # noqa: E402
@@ -208,7 +208,7 @@ def test_cancelled_follow_path_leaves_scene_unchanged(scene):
     obj = add("TELEMARK")
     obj.turning.path = make_path([(0, 0), (3, -12), (-3, -24), (0, -36)])
     before = snapshot()
-    job = ops_path.prepare(bpy.context, obj)
+    job = follow_scene.prepare(bpy.context, obj)
     job.start()
     job.cancel(wait=True)                                 # what ESC does in the modal operator
     assert isinstance(job.error, Cancelled) or job.result is not None
@@ -228,7 +228,7 @@ def test_follow_path_bakes_and_fits_the_frame_range(scene, sport):
     co = np.empty(4 * len(track))
     track.foreach_get("co", co)
     xy = co.reshape(-1, 4)[:, :2]
-    curve = ops_path.bezier_control_points(obj.turning.path)
+    curve = scene_adapters.bezier_control_points(obj.turning.path)
     from blender_turning.core.path import HermitePath
     samples = HermitePath.from_bezier(curve).sample(64)
     dist = np.min(np.linalg.norm(xy[:, None, :] - samples[None, :, :], axis=2), axis=1)
@@ -285,7 +285,7 @@ def modal_operator(obj):
     reports = []
     fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),
                            "_cleanup": op_cls._cleanup, "_complete": op_cls._complete})()
-    fake._job = ops_path.prepare(bpy.context, obj)
+    fake._job = follow_scene.prepare(bpy.context, obj)
     fake._fig_uid, fake._timer = obj.session_uid, object()
     fake._job.start()
     return op_cls, fake, reports

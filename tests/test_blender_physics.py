@@ -1,6 +1,6 @@
 """Each rig built and baked for 10 s on the bpy wheel; F-curves read back equal the mapping's
 arrays; then, on the depsgraph-evaluated pose of the baked scene (bone positions in world space),
-the physical properties of Section 7 (issue 4)."""
+the physical properties of Section 7."""
 import math
 import os
 import tempfile
@@ -13,7 +13,7 @@ bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat  # noqa: E402
-from blender_turning.blender.ops_bake import apply_bake  # noqa: E402
+from blender_turning.blender.figure_bake import apply_bake  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
 

@@ -1,5 +1,5 @@
 """The headless job (scripts/render_job.py) on the bpy wheel: builds, bakes, saves a .blend and
-renders tiny PNG frames; a bad config exits non-zero with a one-line reason (issue 4)."""
+renders tiny PNG frames; a bad config exits non-zero with a one-line reason."""
 import os
 import struct
 import subprocess
@@ -32,8 +32,8 @@ def png_size(path):
 
 
 def test_demo_job_renders_tiny_frames(tmp_path):
-    """The demo (issue 10): the figures on terrain, one follow shot per figure, a shot of the
-    ski school (issue 11), and a sheet."""
+    """The demo: the figures on terrain, one follow shot per figure, a shot of the
+    ski school, and a sheet."""
     r = run_job("--config", CONFIGS / "demo.toml", "--resolution", "32x24", "--seconds", "0.25",
                 "--output", tmp_path)
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
@@ -101,7 +101,7 @@ def test_a_failed_bake_is_one_line_exit_1_and_creates_no_output(tmp_path):
     """A config that is valid but whose figure cannot do what it asks (a path straight into a
     wall as wide as the world: no feasible plan): the operator's report, exit 1, and the output
     folder never created (it is made only after the bakes).  (A slalom too sharp for the body no
-    longer fails: the controller follows the nearest feasible turn, issue 7 item 3b.)"""
+    longer fails: the controller follows the nearest feasible turn.)"""
     cfg = tmp_path / "walled.toml"
     cfg.write_text('[paths.straight]\npoints = [[0.0, 0.0], [0.0, 30.0]]\n'
                    '[[obstacles]]\ngroup = "wall"\nkind = "box"\nat = [0.0, 60.0]\n'

@@ -1,5 +1,5 @@
 """A rig no shipped map fits, made a figure through a custom bone map edited as a list, saved
-as a preset and loaded back (issue 8)."""
+as a preset and loaded back."""
 import os
 import tempfile
 

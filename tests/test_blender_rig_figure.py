@@ -1,4 +1,4 @@
-"""The user's own rig as a figure, on the bpy wheel (issue 8): a Rigify rig and a Mixamo-named
+"""The user's own rig as a figure, on the bpy wheel: a Rigify rig and a Mixamo-named
 skeleton ski beside a built-in skier with the same settings, measured frame by frame."""
 import math
 import os

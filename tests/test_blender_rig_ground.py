@@ -1,4 +1,4 @@
-"""The user's own rig on a Ground mesh (issues 8 and 10), on the bpy wheel: a Mixamo-named
+"""The user's own rig on a Ground mesh, on the bpy wheel: a Mixamo-named
 skeleton made a skier rides a 15 deg plane beside the built-in skier with the same settings; it
 stands in the local surface as the built-in does (its object tilts with the surface), so its
 skis lie in the surface and its feet stay on them."""

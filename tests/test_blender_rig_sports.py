@@ -1,4 +1,4 @@
-"""The user's own rig as a snowboarder and a telemark skier, on the bpy wheel (issue 8): a
+"""The user's own rig as a snowboarder and a telemark skier, on the bpy wheel: a
 Rigify rig and a Mixamo-named skeleton beside the built-in figure of the sport, same settings;
 each rig is made a figure of one sport, baked, measured and given back (Remove Figure) before
 the next."""

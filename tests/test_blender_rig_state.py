@@ -1,4 +1,4 @@
-"""The user's rig keeps its state (issue 8), on the bpy wheel: Undo restores it after Make Figure
+"""The user's rig keeps its state, on the bpy wheel: Undo restores it after Make Figure
 and after Remove Figure (Blender's memfile undo runs headless), and the action it was playing
 survives a bake.  Operators called from Python push no undo step of
 their own here, so the test pushes one after each, as the window manager does after an operator

@@ -1,4 +1,4 @@
-"""Operators tried as a careless user would (issue 9, Blender side): a rig that lost a bone, a
+"""Operators tried as a careless user would (Blender side): a rig that lost a bone, a
 preset of another sport, NaN typed into a setting, the user's own action through bake and Clear
 Bake in every order, NLA push-down, Shift+D, closed paths, the figure's own collection as
 obstacles, renaming or deleting the figure while it plans, and injected failures.  Every failure
@@ -19,7 +19,8 @@ from modal_stand_ins import Context, WindowManager  # noqa: E402
 from test_blender_operators import (add, make_path, make_wall, modal_operator,  # noqa: E402,F401
                                     scene)
 
-from blender_turning.blender import bake, compat, follow_job, ops_path, pipeline  # noqa: E402
+from blender_turning.blender import (bake, compat, follow_job, follow_scene, ops_path,  # noqa: E402
+                                     pipeline)
 from blender_turning.blender import presets  # noqa: E402
 from blender_turning.blender.scene_adapters import obstacle_footprints  # noqa: E402
 
@@ -67,7 +68,7 @@ def test_lost_bone_every_operator_refuses_and_changes_nothing(scene):
             op()
         assert_unchanged(before)
     with pytest.raises(ValueError, match="no bone 'shin.R'"):     # before the planner runs
-        ops_path.prepare(bpy.context, obj)
+        follow_scene.prepare(bpy.context, obj)
 
 
 def test_lost_bone_after_bake_clear_still_works(scene):
@@ -328,14 +329,14 @@ def test_own_collection_as_obstacles_skips_the_figure_and_its_path(scene):
     course.objects.link(obj.turning.foot_track)                   # a foot track in Course too
     bpy.context.view_layer.objects.active = obj
     names = [n for n, _ in obstacle_footprints(course, bpy.context.evaluated_depsgraph_get(),
-                                               exclude=ops_path.own_objects(obj))]
+                                               exclude=follow_scene.own_objects(obj))]
     assert names == ["Cone"]
     other = add("CYCLIST", at=(30, 0, 0))                  # another figure's path: a guide too
     other.turning.path = make_path([(30, 0), (30, -40)], name="Other Path")
     course.objects.link(other.turning.path)
     bpy.context.view_layer.objects.active = obj
     names = [n for n, _ in obstacle_footprints(course, bpy.context.evaluated_depsgraph_get(),
-                                               exclude=ops_path.own_objects(obj))]
+                                               exclude=follow_scene.own_objects(obj))]
     assert sorted(names) == ["Cone", "Cyclist Body"]       # another figure is in the way
     bpy.ops.turning.clear_bake()
     assert bpy.ops.turning.follow_path() == {"FINISHED"}

@@ -1,4 +1,4 @@
-"""Bake on a Ground mesh (issue 10, In Blender): the foot follows the mesh, the equipment lies in
+"""Bake on a Ground mesh (In Blender): the foot follows the mesh, the equipment lies in
 the local surface, the body leans about the surface normal as the model says; a figure placed
 above the origin keeps its height; on the bpy wheel."""
 import math

@@ -1,4 +1,4 @@
-"""Bone maps as data (issue 8): the shipped maps load, AUTO picks by names and says which, and a
+"""Bone maps as data: the shipped maps load, AUTO picks by names and says which, and a
 rig lacking a required joint is refused with the whole list of what is missing."""
 import pytest
 

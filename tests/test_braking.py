@@ -1,4 +1,4 @@
-"""Speed control by turning across the hill (issue 10; core/braking.py, docs/TERRAIN.md Section
+"""Speed control by turning across the hill (core/braking.py, docs/TERRAIN.md Section
 6): over a grid of sports, slopes and target speeds the figures run 60 s without falling, hold
 the target where carving can, keep the turn shape, lean about the plumb lean and stay on a
 terrain of finite width.  Tolerances are the measured values (scripts/braking_grid.py) with

@@ -1,4 +1,4 @@
-"""The progress bar of the long commands (issue 11): drawn on stderr when it is a terminal,
+"""The progress bar of the long commands: drawn on stderr when it is a terminal,
 nothing in a pipeline, and the results the same either way."""
 import io
 import json

@@ -1,4 +1,4 @@
-"""``simulate`` on a slope from the command line (issue 10): the terrain flags, the straight
+"""``simulate`` on a slope from the command line: the terrain flags, the straight
 controller, the z and V_cm columns, and bad input (one line, exit 2, no file)."""
 import math
 

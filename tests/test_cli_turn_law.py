@@ -1,4 +1,4 @@
-"""The CLI's turn-control options (issue 7): --law, the --dt range and the summary line that says
+"""The CLI's turn-control options: --law, the --dt range and the summary line that says
 which turn was followed."""
 import pytest
 
@@ -17,7 +17,7 @@ def test_summary_states_the_turn_followed(capsys):
 
 
 def test_law_paper_is_the_apex_chattering_law(tmp_path):
-    """E1 with mass 70 kg and I_v 6.3 (issue 7): the default law's F_leg peak is the open loop's
+    """E1 with mass 70 kg and I_v 6.3: the default law's F_leg peak is the open loop's
     1.2737 m g; the paper's law overshoots it by 4%."""
     peaks = {}
     for law in ("smooth", "paper"):

@@ -1,4 +1,4 @@
-"""Crowds (issue 11): formations from a seed, the crowd file reader, batch == one by one."""
+"""Crowds: formations from a seed, the crowd file reader, batch == one by one."""
 import json
 import math
 import subprocess
@@ -256,11 +256,11 @@ sys.exit(1 if bad else 0)
     assert "--scheduler needs dask.distributed" in r.stderr
 
 
-def test_the_readme_crowd_example_is_a_valid_crowd_file():
+def test_the_documented_crowd_example_is_a_valid_crowd_file():
     from pathlib import Path
     root = Path(__file__).resolve().parent.parent
-    text = (root / "README.md").read_text()
-    block = text[text.index("### Crowds: `crowd`"):].split("```json\n", 1)[1].split("```")[0]
+    text = (root / "docs" / "crowds.md").read_text()
+    block = text[text.index("## Crowds on the command line"):].split("```json\n", 1)[1].split("```")[0]
     crowd = crowd_from_dict(json.loads(block), root / "scenes" / "crowds")
     assert len(crowd.figures) == 2 + 8 + 2 + 6 and crowd["guide"].figure.name == "telemark"
 

@@ -1,4 +1,4 @@
-"""Figures as moving obstacles (issue 11): the foot-CM segment, its side, its time."""
+"""Figures as moving obstacles: the foot-CM segment, its side, its time."""
 import math
 from dataclasses import replace
 

@@ -1,5 +1,5 @@
 """A crowd's result does not depend on the engine: this process, a process pool of 1 or 2
-workers, a real Dask LocalCluster of 2 worker processes (issue 11).  Exact equality."""
+workers, a real Dask LocalCluster of 2 worker processes.  Exact equality."""
 import io
 import math
 import sys

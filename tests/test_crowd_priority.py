@@ -1,4 +1,4 @@
-"""Priority planning (issue 11): each figure plans around the bodies of the figures before it
+"""Priority planning: each figure plans around the bodies of the figures before it
 (moving obstacles, core/moving.py); the search stays exact; groups and workers change nothing."""
 import json
 import math

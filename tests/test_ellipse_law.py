@@ -23,7 +23,7 @@ CASES = [("skier", 2.0, 23.0), ("skier", 3.0, 23.0), ("skier", 2.0, 7.0)] + [
                                            ((0.0, 1.5), 0.9), ((40.0, 0.0), 0.8)])
 def test_reaches_the_ellipse_as_fast_as_the_paper_law(skier, start, periods):
     """Within 1% of the ellipse (and staying there) after the number of periods the paper's law
-    needed (issue 7).  Start: (lean deg, lean rate as a multiple of omega0 theta_max).
+    needed.  Start: (lean deg, lean rate as a multiple of omega0 theta_max).
     Measured: 0.66, 0.50, 0.46, 0.42 periods."""
     w, tm = TWO_PI / 2, math.radians(23)
     s0 = (0, 0, 0, math.radians(start[0]), start[1] * w * tm)

@@ -1,4 +1,4 @@
-"""Frame output (issue 7, item 2): every row of a trajectory at a frame rate is a state of the
+"""Frame output: every row of a trajectory at a frame rate is a state of the
 model.  The state comes from RK4's dense output (cubic Hermite with the model's derivatives at
 both ends of a step), ``C_f`` from the chord between samples, and every other column from the
 row's own state and control (``Trajectory.resample`` explains the choices)."""

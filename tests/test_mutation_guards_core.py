@@ -1,4 +1,4 @@
-"""Guards for physics mutants that the rest of the suite let through (issue 7, item 6).
+"""Guards for physics mutants that the rest of the suite let through.
 
 Each test checks a relation derived independently of the code it guards (Newton's law on the
 centre of mass, the foot path's geometric curvature, the mirror symmetry of the model, closed

@@ -1,4 +1,4 @@
-"""Guards for mapping mutants that the rest of the suite let through (issue 7, item 6): the ski
+"""Guards for mapping mutants that the rest of the suite let through: the ski
 tilt's size and the direction of the skier's leg twist (Section 7), measured by forward
 kinematics on the baked channels.  ``scripts/mutate.py`` holds the mutants."""
 from dataclasses import replace

@@ -1,5 +1,5 @@
-"""Guards for planner and obstacle mutants that the rest of the suite let through (issue 7,
-item 6; Section 6): the stage simulation's heading rate and fall test, lower bounds that are
+"""Guards for planner and obstacle mutants that the rest of the suite let through
+(Section 6): the stage simulation's heading rate and fall test, lower bounds that are
 admissible *and tight* (so a bound made stronger is caught), obstacle clearance.
 ``scripts/mutate.py`` holds the mutants these tests are meant to catch.
 """

@@ -1,7 +1,10 @@
 """Packaging.  `pip install .` carries the whole core: every package of the source tree and the
 rigs, which live at the top of the repository (the Blender extension ships them from there) and go
 into the wheel as blender_turning/rigs.  The Blender extension is built from the manifest's
-[build] paths (exactly the add-on's files), with the README's command, on a fresh copy (issue 9)."""
+[build] paths_exclude_pattern (exactly the add-on's files), with the README's command, on a fresh
+copy."""
+import importlib.util
+import os
 import shutil
 import subprocess
 import sys
@@ -54,7 +57,7 @@ def test_the_wheel_carries_the_rigs_and_the_mapping_finds_them(tmp_path):
 
 
 # -- the Blender extension -------------------------------------------------------------------------
-# The package is built from the manifest's [build] paths: exactly the add-on's files.
+# The package is built from the manifest's [build] exclude patterns: exactly the add-on's files.
 
 CLI_ONLY = ("blender_turning/cli/", "blender_turning/figures/", "blender_turning/__main__.py")
 STRAYS = ("foo.blend", "foo.blend1", ".DS_Store", "blender_turning/notes.txt",
@@ -76,11 +79,46 @@ def manifest():
     return tomllib.loads((ROOT / "blender_manifest.toml").read_text())
 
 
-def test_the_manifest_lists_exactly_the_addon_files():
-    listed = set(manifest()["build"]["paths"])
-    need = addon_files(ROOT)
-    assert not need - listed, f"add to [build] paths: {sorted(need - listed)}"
-    assert not listed - need, f"not add-on files: {sorted(listed - need)}"
+def path_filter():
+    """The extension tool's own matcher of ``[build] paths_exclude_pattern`` (from the bpy wheel
+    in .venv), as a function ``excluded(path)``; a folder's path ends with ``/``."""
+    tool = ROOT / ".venv/lib/python3.11/site-packages/bpy/5.0/scripts/addons_core/bl_pkg/cli"
+    if not (tool / "blender_ext.py").is_file():
+        pytest.skip("no .venv with the bpy 5.0 wheel (scripts/env.sh makes it)")
+    spec = importlib.util.spec_from_file_location("_blender_ext", tool / "blender_ext.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod.PathPatternMatch(manifest()["build"]["paths_exclude_pattern"]).test_path
+
+
+def shipped(root: Path, excluded) -> set:
+    """The files of ``root`` the patterns keep, walked as the tool walks: a folder left out is
+    not entered."""
+    out = set()
+    for dirpath, dirs, files in os.walk(root):
+        rel = Path(dirpath).relative_to(root).as_posix()
+        rel = "" if rel == "." else rel + "/"
+        dirs[:] = [d for d in dirs if not excluded(rel + d + "/")]
+        out |= {rel + f for f in files if not excluded(rel + f)}
+    return out
+
+
+def test_the_manifest_keeps_exactly_the_addon_files(tmp_path):
+    """The exclude patterns keep the add-on's files and nothing else, also a new module of each
+    subpackage (it needs no line in the manifest) and nothing of what lies about in a tree."""
+    assert "paths" not in manifest()["build"]
+    excluded = path_filter()
+    src = fresh_copy(tmp_path / "clone")
+    new = [p.parent.relative_to(ROOT).as_posix() + "/new_module.py"
+           for p in (ROOT / "blender_turning").rglob("__init__.py")
+           if p.parent != ROOT / "blender_turning"]
+    for rel in (*STRAYS, *new):
+        (src / rel).parent.mkdir(parents=True, exist_ok=True)
+        (src / rel).write_text("stray" if rel in STRAYS else "")
+    need = addon_files(src)
+    got = shipped(src, excluded) - {"blender_manifest.toml"}
+    assert not need - got, f"left out: {sorted(need - got)}: add a '!' line for them"
+    assert not got - need, f"not add-on files: {sorted(got - need)}"
 
 
 def test_the_manifest_names_a_website_and_a_contact():
@@ -106,7 +144,7 @@ def fresh_copy(dest: Path) -> Path:
 def readme_build_commands() -> list:
     """The shell commands of the README's extension build block, continuation lines joined."""
     text = (ROOT / "README.md").read_text()
-    block = text.split("## Install into Blender", 1)[1].split("```bash\n", 1)[1].split("```")[0]
+    block = text.split("\n## Install\n", 1)[1].split("```bash\n", 1)[1].split("```")[0]
     block = block.replace("\\\n", " ")
     return [line.split("#", 1)[0].strip() for line in block.splitlines()
             if line.split("#", 1)[0].strip()]

@@ -16,7 +16,7 @@ def test_recovers_omega0_and_theta_max_of_the_parametric_controller(period, lean
     ctl = PhaseEllipse(fig.body, w, tm)
     tr = simulate(fig, ctl, 16.0, state0=(0, 0, 0, 0.0, w * tm))
     # The ellipse followed: 1.6 s / 30 deg is more than the skis allow, and the controller turns
-    # at the largest feasible lean (29.6 deg) at the same period (issue 7, item 3b).
+    # at the largest feasible lean (29.6 deg) at the same period.
     w, tm = ctl.target(16.0)
     est = estimate_phase(tr.t, tr.theta_v, tr.omega_v)
     settled = tr.t > 2.0

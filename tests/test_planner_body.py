@@ -1,4 +1,4 @@
-"""The planner checks the body as well as the foot against obstacles (issue 7, item 5): the
+"""The planner checks the body as well as the foot against obstacles: the
 ground point under the centre of mass, ``foot + l sin(theta_v) (-sin theta_dir, cos theta_dir)``."""
 import math
 

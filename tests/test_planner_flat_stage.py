@@ -1,7 +1,7 @@
 """The fused stage (planner/flat_stage.py) computes what the generic RK4 through Problem._rhs
 (dynamics.steer) computes, bit for bit; the fall table built from it is the table its definition
 gives; the nearest path sample found among the samples near a batch is the nearest of all
-(issue 11, speed)."""
+(speed)."""
 from dataclasses import replace
 
 import numpy as np

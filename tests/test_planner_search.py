@@ -1,4 +1,4 @@
-"""The branch-and-bound search returns the exhaustive search's optimum (issue 3, part 4)."""
+"""The branch-and-bound search returns the exhaustive search's optimum (part 4)."""
 import math
 from dataclasses import replace
 

@@ -1,4 +1,4 @@
-"""The path planner on terrain (issue 10): the stage simulation against the terrain model's own
+"""The path planner on terrain: the stage simulation against the terrain model's own
 RK4, the exact search against exhaustive search on small terrain problems, flat scenes planned
 exactly as before, and the shipped scenes/slope_slalom.json."""
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Retargeting in the mapping layer (issue 8), numpy only: the built-in skier's motion on a rig of
+"""Retargeting in the mapping layer, numpy only: the built-in skier's motion on a rig of
 other proportions, facing -Y, in a T-pose, scaled, with other bone names and an extra root."""
 import math
 

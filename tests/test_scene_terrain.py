@@ -1,4 +1,4 @@
-"""A scene's ``terrain`` (issue 10): read and checked like every other field, and ``follow`` on
+"""A scene's ``terrain``: read and checked like every other field, and ``follow`` on
 it writing the foot height ``z`` and the speed ``V_cm``."""
 from __future__ import annotations
 

@@ -42,7 +42,7 @@ def test_the_dynamics_run_at_the_scheduled_speed(skier):
 
 def test_accelerating_and_braking_keep_the_turns_and_the_heading(skier):
     """The controller solves Eq. (1) at the current speed: the lean keeps its peaks (23 deg, or
-    the most the skis allow at that speed: issue 7 item 3b) and the mean heading stays put while
+    the most the skis allow at that speed) and the mean heading stays put while
     the speed goes 10 -> 14 -> 8 m/s.  (Steering with the nominal 10 m/s instead falls over
     while braking, at t = 32 s.)"""
     tr = slalom(skier, RAMP)

@@ -1,4 +1,4 @@
-"""The telemark skier's own body (issue 8): boots that bend at the ball of the foot (a shell on
+"""The telemark skier's own body: boots that bend at the ball of the foot (a shell on
 the foot, bellows and duckbill toe on the toe), longer narrower skis with a toe binding, so the
 trailing heel lifts off the ski without the boot going through it."""
 import math

@@ -1,6 +1,6 @@
 """The fused float stepper on terrain (core/terrain_one_figure.py) is the array path
 (core/terrain_dynamics.py) to round-off: the height field on floats, one RK4 stage, and whole
-runs against the loop that stepped through ``terrain_rk4_step`` (issue 10, "the bake stays
+runs against the loop that stepped through ``terrain_rk4_step`` ("the bake stays
 fast")."""
 import math
 

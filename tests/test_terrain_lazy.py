@@ -1,4 +1,4 @@
-"""A height field sampled as it is visited (core/terrain.py ``LazyHeightField``, issue 10, "the
+"""A height field sampled as it is visited (core/terrain.py ``LazyHeightField``, so "the
 bake stays fast"): the same field, bit for bit, as the one of all samples, on floats and arrays,
 at the grid's edges (its linear extension) and after pickling; only the tiles a query touches
 are sampled."""

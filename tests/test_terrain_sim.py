@@ -1,4 +1,4 @@
-"""Simulation on terrain through the ``simulate`` API (issue 10): closed forms, reduction to
+"""Simulation on terrain through the ``simulate`` API: closed forms, reduction to
 today's model, mirror symmetry, the phase-ellipse slalom down a mogul slope, speed control by
 turning, frame output on terrain (docs/TERRAIN.md)."""
 import math

@@ -1,7 +1,7 @@
-"""Follow Path for several figures at once (issue 11): the crowd runner's plans, in worker
+"""Follow Path for several figures at once: the crowd runner's plans, in worker
 processes.
 
-Each figure is read as the single-figure Follow Path reads it (:func:`.ops_path.prepare`: its
+Each figure is read as the single-figure Follow Path reads it (:func:`.follow_scene.prepare`: its
 path, obstacles, settings), made a core path-following :class:`~..core.scene.Scene` with the
 same start, planner settings and problem, and the whole selection a :class:`~..crowd.Crowd`,
 planned by :func:`~..crowd.runner.run_crowd`, the CLI's ``crowd`` planner:
@@ -43,15 +43,16 @@ from ..crowd import Crowd, CrowdFigure, FollowPath
 from ..crowd.model import BODY_CLEARANCE
 from ..crowd.runner import run_crowd
 from . import bake
-from .ops_bake import apply_bake
-from .ops_common import check_figure
+from .figure_bake import apply_bake
+from .figure_context import check_figure, end_modal, report_error, selected_figures
+from .follow_scene import prepare
 from .pipeline import map_track, on_ground, started, surface_normals
 from .scene_adapters import FrameRange
 from .workers import PumpedExecutor, worker_pool
 
 
 def figure_scene(name: str, job) -> Scene:
-    """The core scene of a prepared Follow Path job (:func:`.ops_path.prepare`): the same
+    """The core scene of a prepared Follow Path job (:func:`.follow_scene.prepare`): the same
     figure, path, obstacles, planner settings, start (:func:`~..core.follow_problem.start_state`
     of the path) and problem, so its plan is the one :meth:`.follow_job.FollowJob.run` makes."""
     setup = job.setup
@@ -111,7 +112,6 @@ class CrowdFollow:
     def read(self, context) -> None:
         """Read every figure as Follow Path reads one (raises ``ValueError`` naming the bad
         input; :attr:`current` names the figure)."""
-        from .ops_path import prepare             # ops_path dispatches here: import when used
         check("clearance", self.clearance, "body_clearance")
         figs = [self.figure(i) for i in range(len(self.uids))]
         self.members = member_names(self.names)
@@ -259,7 +259,6 @@ TITLE = "Follow Path"
 def follow_figures(context) -> list:
     """The figures Follow Path plans: every selected one (or the active Crowd collection's)
     with a path curve."""
-    from .ops_common import selected_figures
     return [f for f in selected_figures(context) if f.turning.path is not None]
 
 
@@ -292,7 +291,6 @@ class CrowdOptions:
 
 def prepare_crowd(op, context, figs):
     """The job for ``figs`` with the operator's :class:`CrowdOptions`, or ``None`` (reported)."""
-    from .ops_common import report_error
     job = CrowdFollow(figs, avoid=op.avoid, clearance=op.clearance)
     try:
         job.read(context)
@@ -305,7 +303,6 @@ def prepare_crowd(op, context, figs):
 def complete_crowd(op, context, job) -> set:
     """Collect the plans, refuse them all if one figure found none (the first in planning
     order is named, and the figures in its way), else bake them all."""
-    from .ops_common import report_error
     try:
         results = job.results()
     except Exception as exc:                       # a worker raised: a bug, or it was killed
@@ -348,7 +345,6 @@ def status(context, job) -> None:
 
 def crowd_modal(op, context, event) -> set:
     """One event of the modal operator planning several figures."""
-    from .ops_common import end_modal
     job = op._crowd
     if event.type == "ESC":
         job.cancel()

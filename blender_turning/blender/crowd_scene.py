@@ -1,4 +1,4 @@
-"""Crowds in the scene (issue 11): a template figure as the core's crowd member, a formation's
+"""Crowds in the scene: a template figure as the core's crowd member, a formation's
 members back as figures (linked duplicates of the template), their paths as curve objects.
 
 The formation itself is the core's (:mod:`..crowd.formations`): this module only translates.
@@ -23,20 +23,20 @@ from ..core.path import HermitePath
 from ..crowd import CrowdFigure, FollowPath, Turns, point_at_distance
 from . import bake, retarget_adapter
 from .foot_track import OWNER as FOOT_TRACK_OWNER
-from .ops_common import CROWD_TAG
+from .figure_context import CROWD_TAG
 from .scene_adapters import figure_from_settings
 from .user_action import REST, STASHED
 
 
 def template_member(context, fig, path: bool) -> CrowdFigure:
     """The core's crowd member of the figure ``fig``: with ``path``, the scene Follow Path
-    plans for it (:func:`.ops_path.prepare`); else its turns (Section 5) from its Start.
+    plans for it (:func:`.follow_scene.prepare`); else its turns (Section 5) from its Start.
     Raises ``ValueError`` naming the bad setting."""
     s = fig.turning
     offset = float(s.crowd.time_offset)
     if path:
         from .crowd_job import figure_scene
-        from .ops_path import prepare
+        from .follow_scene import prepare
         job = prepare(context, fig)
         return CrowdFigure("m", job.figure, FollowPath(figure_scene("m", job)),
                            time_offset=offset)
@@ -152,7 +152,7 @@ def duplicate_figure(template, name: str, collection):
 def place(obj, member: CrowdFigure, template_start, path_obj=None) -> None:
     """Set the figure ``obj`` to the crowd member: body, turn period, start, first turn, start
     offset (and its path curve), and stand it at its start."""
-    from .ops_bake import reset_pose
+    from .figure_bake import reset_pose
     s = obj.turning
     body = member.figure.body
     s.mass, s.com_height, s.inertia = body.m, body.l, body.I_v

@@ -1,4 +1,4 @@
-"""Follow Path on a Ground mesh (issue 10): what ``turning.follow_path`` adds when the figure has a
+"""Follow Path on a Ground mesh: what ``turning.follow_path`` adds when the figure has a
 Ground mesh (``turning.ground``).
 
 - The mesh is read once into the core's height field (:func:`.ground.read_ground`) and checked to
@@ -11,7 +11,7 @@ Ground mesh (``turning.ground``).
   planner itself uses.  Every point of the curve must lie over the mesh; one that does not is
   refused, naming where.
 - Obstacles stay the xy footprints of their objects (``scene_adapters.obstacle_footprints``);
-  the Ground mesh itself is never one (it is the figure's own, ``ops_path.own_objects``).
+  the Ground mesh itself is never one (it is the figure's own, ``follow_scene.own_objects``).
 - The planner runs :class:`..core.planner.terrain_problem.TerrainProblem`: the speed is a
   state, starting at the Speed setting at the scene's first frame, with the figure's Slope
   Friction, Drag Area and Air Density (``turning.terrain``).  *Target Speed* is not used: it

@@ -1,4 +1,4 @@
-"""The custom bone map (issue 8): start it from a shipped map, save it as a preset (a JSON file
+"""The custom bone map: start it from a shipped map, save it as a preset (a JSON file
 in the user's presets folder, the format of ``rigs/bone_maps``) and load one back."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``turning.add_crowd``: a formation of figures from the active one as template (issue 11); also
+"""``turning.add_crowd``: a formation of figures from the active one as template; also
 in the Add menu (Shift+A > Turning Figure > Add Crowd) and the Crowd panel.
 
 The formation is the core's (:mod:`..crowd.formations`: follow the leader, synchronised,
@@ -19,7 +19,7 @@ from ..core.validate import check
 from ..crowd import follow_leader, peloton, synchronized
 from ..core.ranges import CROWD_RANGES
 from . import crowd_scene
-from .ops_common import context_figure, poll_figure, report_error
+from .figure_context import context_figure, poll_figure, report_error
 
 FORMATIONS = (
     ("FOLLOW_LEADER", "Follow the Leader",

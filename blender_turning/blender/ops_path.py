@@ -4,66 +4,19 @@ the scene exactly as it was (nothing is written until the plan is complete)."""
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import bpy
 
 from ..core.errors import PlanInfeasible
-from ..core.follow_problem import DEFAULT_CLEARANCE
 from ..core.obstacles import Obstacles
 from . import bake, crowd_job, follow_ground
-from .follow_job import Cancelled, FollowJob
-from .ops_bake import apply_bake
-from .ops_common import check_figure, end_modal, poll_figure, report_error
+from .figure_bake import apply_bake
+from .figure_context import check_figure, end_modal, poll_figure, report_error
+from .follow_job import Cancelled
+from .follow_scene import prepare
 from .pipeline import map_track, on_ground, surface_normals
 from .props import figure_settings
-from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
-                             figure_from_settings, obstacle_footprints)
-
-#: Distance the plan keeps from every obstacle footprint, m.
-
-
-def own_objects(fig) -> set:
-    """The figure's own objects, never its obstacles: its armature, body and equipment (children),
-    its foot track, its path curve and its Ground mesh."""
-    own = {fig, *fig.children_recursive}
-    s = fig.turning
-    own.update(o for o in (s.foot_track, s.path, s.ground) if o is not None)
-    return own
-
-
-def check_start_clear(control, footprints, collection) -> None:
-    """Refuse a path that starts inside an obstacle (with the clearance), naming the obstacle."""
-    start = control[:1]
-    for name, poly in footprints:
-        gap = float(Obstacles(polygons=[poly], clearance=DEFAULT_CLEARANCE).min_distance(start)[0])
-        if gap <= DEFAULT_CLEARANCE:
-            raise SceneInputError(
-                f"the path starts {'inside' if gap < 0 else f'{gap:.2f} m from'} obstacle "
-                f"{name!r} (collection {collection.name!r}; the plan keeps {DEFAULT_CLEARANCE} m from "
-                "every obstacle): move the path's first point or the obstacle, or take the "
-                "object out of the collection")
-
-
-def prepare(context, fig) -> FollowJob:
-    """Read the scene into a planning job (raises ``ValueError`` naming the bad input)."""
-    s = fig.turning
-    if s.path is None:
-        raise SceneInputError("no path curve set (Follow Path > Path)")
-    check_figure(fig)
-    depsgraph = context.evaluated_depsgraph_get()      # also brings world matrices up to date
-    control = bezier_control_points(s.path)
-    footprints = obstacle_footprints(s.obstacles, depsgraph, exclude=own_objects(fig))
-    check_start_clear(control, footprints, s.obstacles)
-    figure = figure_from_settings(s)
-    if s.plan_curvature_rate > 0:
-        figure = replace(figure, limits=replace(figure.limits, dC_f_max=s.plan_curvature_rate))
-    figure, ground, terrain = follow_ground.plan_inputs(context, fig, figure, depsgraph)
-    job = FollowJob(figure, control, footprints, clearance=DEFAULT_CLEARANCE, **terrain)
-    follow_ground.check_path_on_ground(s.path, job.path, ground)     # flat: nothing to check
-    job.footprints = footprints                        # names, for the report of a failed plan
-    job.mesh_ground = ground
-    return job
+from .scene_adapters import FrameRange
 
 
 def nearest_obstacle(exc, footprints) -> str:

@@ -1,5 +1,5 @@
-"""``turning.make_figure`` and ``turning.remove_figure``: the user's own armature as a figure
-(issue 8), and back."""
+"""``turning.make_figure`` and ``turning.remove_figure``: the user's own armature as a figure,
+and back."""
 from __future__ import annotations
 
 import math

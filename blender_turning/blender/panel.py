@@ -11,7 +11,7 @@ from __future__ import annotations
 import bpy
 
 from . import bake
-from .ops_common import context_figure, selected_figures
+from .figure_context import context_figure, selected_figures
 
 ROOT_PANEL = "VIEW3D_PT_turning"
 RIG_PANEL = "VIEW3D_PT_turning_rig"

@@ -1,4 +1,4 @@
-"""The Turning tab's Crowd sub-panel (issue 11): the figure's start offset, first turn and
+"""The Turning tab's Crowd sub-panel: the figure's start offset, first turn and
 planning order, Add Crowd from it, and what Bake Turns / Follow Path will do (the selection, or
 the active Crowd collection's figures; for Follow Path, the order the figures plan in when they
 avoid each other)."""
@@ -7,7 +7,7 @@ from __future__ import annotations
 import bpy
 
 from .crowd_job import follow_figures, planning_order
-from .ops_common import crowd_collection, selected_figures
+from .figure_context import crowd_collection, selected_figures
 from .panel import FigurePanel
 
 

@@ -1,4 +1,4 @@
-"""The Turning tab's "Your Rig" sub-panel, under Rig (issue 8): make the active armature a figure, its bone
+"""The Turning tab's "Your Rig" sub-panel, under Rig: make the active armature a figure, its bone
 map (a custom one edited as a list: our joint -> your bone, with a bone picker, saved and loaded
 as presets), remove it."""
 from __future__ import annotations

@@ -27,7 +27,7 @@ from .scene_adapters import (FrameRange, SceneInputError, controller_from_settin
 
 def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None, normal=None):
     """The sport's Section 7 mapping of ``traj`` (already at ``frames.fps``) to a pose track;
-    retargeted onto ``obj`` when it is a figure made from the user's own rig (issue 8).
+    retargeted onto ``obj`` when it is a figure made from the user's own rig.
     ``normal`` ((n, 3)): the surface normal at the foot on every frame (terrain)."""
     from ..mapping import map_trajectory      # the mapping layer's entry point
     from . import retarget_adapter

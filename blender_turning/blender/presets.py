@@ -14,7 +14,7 @@ import bpy
 from bl_operators.presets import AddPresetBase
 from bpy.props import StringProperty
 
-from .ops_common import sport_label
+from .figure_context import sport_label
 from .rig_builder import RIG_TAG
 
 #: The folder that holds ``presets/<PRESET_SUBDIR>`` (the extension root).

@@ -159,7 +159,7 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                                               "layer and no exporter writes it)")
     rig: PointerProperty(type=TurningRigSettings, options=_STATIC,
                          description="Your own rig as a figure: its bone map, stance and "
-                                     "equipment (issue 8)")
+                                     "equipment")
     ground: PointerProperty(name="Ground", type=bpy.types.Object, poll=_is_mesh,
                             options=_STATIC,
                             description="Mesh the figure rides on: its speed then follows the "
@@ -168,8 +168,7 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
     terrain: PointerProperty(type=TurningTerrainSettings, options=_STATIC,
                              description="Friction, drag and target speed on the Ground mesh")
     crowd: PointerProperty(type=TurningCrowdSettings, options=_STATIC,
-                           description="The figure's start offset and first turn in a crowd "
-                                       "(issue 11)")
+                           description="The figure's start offset and first turn in a crowd")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.

@@ -1,4 +1,4 @@
-"""A figure's place in a crowd (issue 11): ``Object.turning.crowd``.
+"""A figure's place in a crowd: ``Object.turning.crowd``.
 
 A nested group of the figure's settings (one ``PointerProperty`` in :mod:`.props`), set by Add
 Crowd (:mod:`.ops_crowd`) and editable by hand: when the figure starts on the scene's clock and

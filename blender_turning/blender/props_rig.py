@@ -1,4 +1,4 @@
-"""Settings of a figure made from the user's own armature (issue 8): ``Object.turning.rig``.
+"""Settings of a figure made from the user's own armature: ``Object.turning.rig``.
 
 A nested group of the figure's settings (one ``PointerProperty`` in :mod:`.props`): which bone
 map the rig uses (a shipped one, or the custom list edited in the panel), the equipment's

@@ -1,4 +1,4 @@
-"""The user's own armature as a figure (issue 8): read its rest pose for the mapping layer's
+"""The user's own armature as a figure: read its rest pose for the mapping layer's
 retargeting, build the sport's equipment tied to it, and keep what it was before.
 
 Reads ``bone.matrix_local``, parents and ``use_local_location`` into a

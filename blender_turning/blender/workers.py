@@ -1,4 +1,4 @@
-"""Worker processes started from inside Blender (issue 11), for Follow Path on several figures
+"""Worker processes started from inside Blender, for Follow Path on several figures
 (:mod:`.crowd_job`).
 
 The workers are started with ``spawn``, never ``fork``: a forked copy of Blender would carry its

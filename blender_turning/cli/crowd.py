@@ -1,7 +1,7 @@
-"""``crowd``: many figures in one shot from a crowd scene file (README, "Crowds").
+"""``crowd``: many figures in one shot from a crowd scene file (docs/crowds.md).
 
-Writes ``DIR/<figure>.csv`` per figure (DESIGN.md columns, ``t`` on the crowd's clock) and
-``DIR/summary.json``.  Parametric figures run as batches here; path figures are planned one task
+Writes ``DIR/<figure>.csv`` per figure (the trajectory columns of docs/ARCHITECTURE.md Section 3,
+``t`` on the crowd's clock) and ``DIR/summary.json``.  Parametric figures run as batches here; path figures are planned one task
 each (those in the crowd's ``priority``: one task per independent group) on ``--workers K``
 local processes or a Dask scheduler (``--scheduler ADDRESS``).  A figure
 that falls or finds no feasible plan is written up to there, listed in the summary, and makes
@@ -25,7 +25,7 @@ def register(sub):
     p = sub.add_parser("crowd", help="many figures: formations, batches, parallel planning",
                        description="Simulate and plan every figure of a crowd scene file; one "
                                    "trajectory CSV per figure plus summary.json.")
-    p.add_argument("scene", help="crowd scene JSON file (see README, 'Crowds')")
+    p.add_argument("scene", help="crowd scene JSON file (see docs/crowds.md)")
     p.add_argument("--out", required=True, help="folder for the CSVs and summary.json")
     engine = p.add_mutually_exclusive_group()
     engine.add_argument("--workers", type=int, default=1,

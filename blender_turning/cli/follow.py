@@ -25,7 +25,7 @@ def register(sub):
                        description="Plan a figure's run along the path of a scene file, around its "
                                    "obstacles, with the receding-horizon branch-and-bound search "
                                    "of Section 6.")
-    p.add_argument("scene", help="scene JSON file (see README, 'Path following')")
+    p.add_argument("scene", help="scene JSON file (see docs/cli.md, 'Scene files')")
     p.add_argument("--stages", type=int, help="N, stages planned ahead (scene default)")
     p.add_argument("--choices", type=int, help="q, values of dC_f/dt tried per stage")
     p.add_argument("--stage-time", type=float, help="t_stage, s")

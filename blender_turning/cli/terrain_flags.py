@@ -1,4 +1,4 @@
-"""The terrain flags of ``simulate`` (issue 10): an inclined plane, friction, drag, target speed.
+"""The terrain flags of ``simulate``: an inclined plane, friction, drag, target speed.
 
 ``--slope-deg S --downhill-deg D`` is the plane (``D`` the direction of steepest descent, deg
 CCW from +x); ``--friction MU --drag-area CDA --air-density RHO`` what slows the figure;

@@ -12,7 +12,7 @@ the same inputs, with the same run-out, time limit, start state and end test.
   foot is within one horizon's reach of the path (what the planner can see).
 - Start: the path's first point, heading along its first non-degenerate tangent
   (:meth:`.path.HermitePath.start_direction`), upright, at rest in lean.
-- Terrain (issue 10): given a ``ground`` (:mod:`.terrain`), the problem is a
+- Terrain: given a ``ground`` (:mod:`.terrain`), the problem is a
   :class:`.planner.terrain_problem.TerrainProblem` with the speed a state (start: the body's
   ``V_cm``, the sixth entry of the start state) and the time limit counts at the start speed.
 """

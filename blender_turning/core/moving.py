@@ -1,9 +1,9 @@
-"""Figures as moving obstacles for one another (issue 11): the bodies of figures already
+"""Figures as moving obstacles for one another: the bodies of figures already
 planned, and the planner's time-aware check of a figure's track against them.
 
 **The body.**  At time ``t`` a figure occupies the segment from its foot to the ground point
 under its centre of mass: the CM sits ``l sin theta_v`` to the left of the foot across the
-heading (Fig. 2; ``theta_v > 0`` leans left, DESIGN.md Section 1), the same point as
+heading (Fig. 2; ``theta_v > 0`` leans left, docs/ARCHITECTURE.md Section 4), the same point as
 :meth:`.planner.Problem.body_point`.  :class:`MovingBodies` holds those segments for figures
 already planned, sampled every ``dt`` at the times ``m dt`` (whole ``m``) of one clock, each end
 moving in a straight line from one sample to the next: the planner treats its own foot and

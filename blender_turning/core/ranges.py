@@ -128,13 +128,13 @@ RANGES: dict[str, Range] = {
     "radius": Range(0.0, 1e4, "m", "an obstacle's radius", lo_open=True),
     "clearance": Range(0.0, 100.0, "m", "the distance the track keeps from obstacles"),
     "body_clearance": Range(0.0, 100.0, "m", "the distance a crowd's figure keeps from the "
-                            "bodies (foot to CM) of figures planned before it (issue 11)"),
+                            "bodies (foot to CM) of figures planned before it"),
     "crowd_priority": Range(-10000, 10000, "", "a figure's place in the planning order of "
-                            "Blender's Follow Path on several figures: lower plans first "
-                            "(issue 11)", integer=True),
+                            "Blender's Follow Path on several figures: lower plans first",
+                            integer=True),
     "run_out": Range(0.0, 1e4, "m", "the straight added after the path's end"),
     "samples_per_segment": Range(1, 1000, "", "path samples per spline segment", integer=True),
-    # -- scenes: terrain (issue 10, docs/TERRAIN.md) ----------------------------------------------
+    # -- scenes: terrain (docs/TERRAIN.md) ----------------------------------------------
     "slope": Range(0.0, 60 * _DEG, "rad", "flat to steeper than any skiable or rideable slope "
                    "(an extreme couloir is ~55 deg)"),
     "friction": Range(0.0, 1.0, "", "snow friction or rolling resistance mu (0.005 to 0.1 for "

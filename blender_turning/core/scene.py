@@ -1,7 +1,7 @@
 """Path-following scenes (Section 6, Fig. 11) as JSON files: load, validate, run.
 
 A scene holds the path, the obstacles, the start state, the figure preset and the planner settings
-(the format is documented in README.md, "Path following").  Every problem with a file is one
+(the format is documented in docs/cli.md, "Scene files").  Every problem with a file is one
 ``ValueError`` naming the file and the field, with the ranges of :mod:`.ranges`:
 ``slalom.json: obstacles[2].radius = -1 is outside the allowed range (0, 10000] m``.
 Lengths are metres, times seconds, angles degrees (``*_deg``) at this edge and radians inside.
@@ -212,7 +212,7 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
     cf0 = sf.number("C_f", replace(RANGES["C_f0"], lo=-c_max, hi=c_max), 0.0)
     state0 = start_state(path, pos, heading, lean, rate)
     ground = resistance = None
-    if top.has("terrain"):      # the ground (issue 10); the speed becomes a state
+    if top.has("terrain"):      # the ground; the speed becomes a state
         ground, resistance = read_terrain(top.table("terrain"), fig.name)
         if top.has("speed"):
             top.fail("speed", "is computed along the way on terrain; give start.speed instead")

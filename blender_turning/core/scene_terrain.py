@@ -1,4 +1,4 @@
-"""A scene's ``terrain`` (issue 10; the format is in README.md, "Path following"): the ground the
+"""A scene's ``terrain`` (the format is in docs/cli.md, "Scene files"): the ground the
 path is drawn on and what slows the figure there.
 
 - ``{"type": "plane", "slope_deg": 18, "downhill_deg": -90, "origin": [0, 0], "z0": 0}``: an

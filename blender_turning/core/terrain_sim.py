@@ -177,7 +177,7 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
 
 
 def _trajectory(body, ground, rec, dt, info) -> Trajectory:
-    """The DESIGN.md columns (and ``z``, ``V_cm``) from the per-sample rows."""
+    """The trajectory columns (docs/ARCHITECTURE.md Section 3) from the per-sample rows."""
     n = len(rec)
     x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel = rec.T
     fr = surface_frame(ground, x, y, d, body.g)

@@ -26,7 +26,7 @@ from .phase import phase
 COLUMNS = ("t", "x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f", "F_leg", "phi",
            "V_f", "s", "z", "V_cm")
 LEGACY_COLUMNS = COLUMNS[:-2]
-"""The columns before terrain (issue 10): still read, as flat ground (``z = 0``)."""
+"""The columns without ``z`` and ``V_cm``: still read, as flat ground (``z = 0``)."""
 
 
 @dataclass(frozen=True, eq=False)

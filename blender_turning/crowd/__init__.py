@@ -1,4 +1,4 @@
-"""Crowds (issue 11): many figures in one shot, as data; formations that generate them from a
+"""Crowds: many figures in one shot, as data; formations that generate them from a
 seed; a runner that batches the parametric figures and fans path planning out per figure to
 local processes or a Dask cluster.  numpy and the standard library only (Dask is optional)."""
 from .formations import follow_leader, offset_path, peloton, point_at_distance, synchronized

@@ -1,4 +1,4 @@
-"""Formations: crowds generated from a template figure and a seed (issue 11).
+"""Formations: crowds generated from a template figure and a seed.
 
 - :func:`follow_leader`: ``count`` figures on the leader's track, each ``gap`` seconds (or metres)
   further behind, with a lateral offset and small random differences of body and timing.

@@ -13,7 +13,7 @@ them from a template and a seed, the reader (:mod:`.reader`) from a crowd scene 
 Every figure has its own clock: it starts at ``time_offset`` seconds of the crowd's clock, and
 its trajectory is reported on the crowd's clock (``t = time_offset + own t``).
 
-Priority planning (issue 11): the figures a crowd's ``priority`` names plan in that order, each
+Priority planning: the figures a crowd's ``priority`` names plan in that order, each
 path figure around the bodies of those before it (:mod:`..core.moving`), keeping ``clearance``.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Priority planning (issue 11): the path figures a crowd's ``priority`` names plan in that
+"""Priority planning: the path figures a crowd's ``priority`` names plan in that
 order, each around the bodies of those before it (moving obstacles: :mod:`..core.moving`), and
 groups of figures that cannot see each other plan in parallel.
 

@@ -1,9 +1,9 @@
-"""Crowd scene files (JSON; the format is in README.md, "Crowds"): read, validate, build.
+"""Crowd scene files (JSON; the format is in docs/crowds.md): read, validate, build.
 
 Every problem is one ``ValueError`` (:class:`~..core.validate.FieldError`) naming the file and
 the field, read by the core's one validator with the core's ranges where the field is the
 core's (``ski_school.json: figures[1].turns.period = -2 is outside the allowed range [0.3, 20]
-s``).  A path figure's ``follow`` object is a path-following scene (README, "Path following"),
+s``).  A path figure's ``follow`` object is a path-following scene (docs/cli.md, "Scene files"),
 read by the core's scene reader; its errors name the crowd file and ``figures[i].follow``.
 """
 from __future__ import annotations

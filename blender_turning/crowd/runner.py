@@ -10,7 +10,7 @@ or on any ``concurrent.futures``-style executor the caller passes.  Nothing rand
 here and every figure's result depends only on its own data, so the trajectories are the same
 bit for bit whatever the engine and the number of workers (tests hold them to ``==``).
 
-With a ``priority`` (issue 11) the path figures it names are planned after the rest, one task
+With a ``priority`` the path figures it names are planned after the rest, one task
 per group of figures that can see each other, each figure around the bodies of those before it
 (:mod:`.priority`: the groups give the same result as planning them one after another).
 """

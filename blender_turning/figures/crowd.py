@@ -1,4 +1,4 @@
-"""Crowd pictures (issue 11): a ski school behind its instructor, a peloton through a bend,
+"""Crowd pictures: a ski school behind its instructor, a peloton through a bend,
 from the shipped crowd scenes (``scenes/crowds/``)."""
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The body of a posed built-in figure: its centre of mass and roll inertia from segment data
-(issue 8: the telemark skier's own body).  numpy only.
+(the telemark skier's own body).  numpy only.
 
 Segment masses, centres of mass and radii of gyration are Dempster's cadaver data as tabulated by
 D. A. Winter, *Biomechanics and Motor Control of Human Movement*, 4th ed. (Wiley 2009), Table

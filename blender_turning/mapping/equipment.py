@@ -1,4 +1,4 @@
-"""The sport's equipment on the user's rig (issue 8): where each piece sits at the rig's rest,
+"""The sport's equipment on the user's rig: where each piece sits at the rig's rest,
 rigid with one of its joints exactly as on the built-in figure, so that in motion it lands where
 the built-in's equipment is.  numpy only; the Blender side makes the objects and constraints."""
 from __future__ import annotations

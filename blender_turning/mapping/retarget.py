@@ -1,4 +1,4 @@
-"""Retargeting (issue 8): the built-in figure's motion on the user's own rig.  numpy only.
+"""Retargeting: the built-in figure's motion on the user's own rig.  numpy only.
 
 The built-in figure's mapping (Section 7) gives a :class:`~.base.PoseTrack` for its own rig
 (``rigs/<sport>.json``).  :func:`retarget` carries it onto a :class:`~.user_rig.UserRig` (the

@@ -1,4 +1,4 @@
-"""A snowboarder's stance (issue 8): Section 7's built-in rider stands regular (left foot
+"""A snowboarder's stance: Section 7's built-in rider stands regular (left foot
 forward); a goofy rider (right foot forward) is its mirror image across the line of travel, .L
 and .R swapped, riding the mirrored run.  numpy only."""
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The user's armature at rest (read by the Blender side) and how it is measured against the
-built-in figure (issue 8): its facing, its size and where it stands.  numpy only."""
+built-in figure: its facing, its size and where it stands.  numpy only."""
 from __future__ import annotations
 
 import math

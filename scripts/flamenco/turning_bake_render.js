@@ -6,7 +6,7 @@
 // its output path relative to itself (//frames/frame_), so the frames land next to it.
 //
 // Install: copy this file into the `scripts` folder next to the flamenco-manager executable and
-// restart the Manager (see README.md, "Render farms").  Modelled on Flamenco's built-in
+// restart the Manager (see docs/render-farms.md).  Modelled on Flamenco's built-in
 // simple_blender_render.js; the paths are as the Workers see them (shared storage).
 
 const JOB_TYPE = {

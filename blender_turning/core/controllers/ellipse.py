@@ -24,7 +24,7 @@ apex (``phi = 90, 270 deg``, where the correction passes through zero with ``cos
 axes.  The paper's geometric law (Fig. 7, :mod:`.ellipse_paper`) switches between two families
 of controlling ellipses whose ``omega0'^2 = omega_v^2 / (theta_max^2 - theta_v^2)`` is 0/0 at
 the apex; tiny state errors there flip it between branches, and C_f and F_leg twitch twice per
-turn (issue 7).
+turn.
 
 Inside the ellipse the correction is a negative damping ``K omega0 (1 - r) omega_v`` (``x / r``
 would be a direction undefined at ``r = 0``, and its large gain near the origin asked for faster
@@ -163,7 +163,7 @@ class PhaseEllipse(Controller):
                 self._memo = {}                 # the ellipses made feasible by the old table
         return body
 
-    # -- the feasible ellipse (items 3, 3b of issue 7) -----------------------------------------
+    # -- the feasible ellipse -------------------------------------------------------------------
     def feasible_lean(self, omega0: float, theta_max: float) -> float:
         """The lean followed for a commanded ``(omega0, theta_max)``: at most the largest the
         body's bounds allow at that period (:mod:`.feasible`), and with directional control at

@@ -29,7 +29,7 @@ disc around the origin gets a fixed push, and every demand is clipped to ``|alph
 
 Even so its demand jumps between the two families' formulas near each apex, where the Fig. 7a
 ellipse's ``omega0'^2 = omega_v^2 / (theta_max^2 - theta_v^2)`` is 0/0: C_f and F_leg twitch
-twice per turn (issue 7; measured in BENCHMARKS.md).
+twice per turn (measured in BENCHMARKS.md).
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The turns a body can do: the nearest feasible ellipse (issue 7, items 3 and 3b).
+"""The turns a body can do: the nearest feasible ellipse.
 
 Section 5.1 notes that the bounds on ``C_f`` and ``dC_f/dt`` "usually lengthen the time required
 to reach the desired phase ellipse".  When the commanded ellipse itself needs more than the bounds

@@ -28,15 +28,13 @@ import math
 
 import numpy as np
 
-#: Batches of at most this many nodes run on Python floats (measured: BENCHMARKS.md, issue 11).
+#: Batches of at most this many nodes run on Python floats (measured: BENCHMARKS.md).
 SCALAR_COLUMNS = 24
 
 
 def applies(problem) -> bool:
     """Does the fused stage compute exactly what ``Problem._rhs`` does for ``problem``?"""
-    from .problem import Problem
-    return (type(problem)._rhs is Problem._rhs and problem.speed.is_constant
-            and not problem._physical_binds)
+    return problem.flat_rhs and problem.speed.is_constant and not problem._physical_binds
 
 
 def curvatures(C0, u, h, steps, cmax, rate, t_stage):

@@ -12,7 +12,7 @@ obstacle (Section 6 checks the foot; the body sways up to ``l sin(theta_bound)``
 it, 0.86 m for the skier at 30 deg, enough to pass over a gate panel the foot clears).  Adding a
 clip only removes branches, so every lower bound on the cost of a branch stays admissible.
 
-Figures planned before this one (a crowd's priority planning, issue 11) are moving obstacles:
+Figures planned before this one (a crowd's priority planning) are moving obstacles:
 :attr:`Problem.movers`, a :class:`..moving.MovingBodies` on this figure's clock, checked on the
 same steps with each step's time (:meth:`..moving.MovingBodies.collides`); a node's time is
 part of its identity, so every reuse across searches (proof, warm start: ``proof.py``) sees the
@@ -101,6 +101,11 @@ class Problem:
         self._pairs = False                       # built on first use (spacing.py)
         #: The stage's RK4 fused on flat ground at a constant speed (flat_stage.py).
         self._fused = flat_stage.applies(self)
+
+    @property
+    def flat_rhs(self) -> bool:
+        """Is this problem's right-hand side :meth:`_rhs` itself (flat ground), not a subclass's?"""
+        return type(self)._rhs is Problem._rhs
 
     def fall_table(self):
         """The :class:`.fall_table.FallTable` of this problem, or ``None`` where it does not
@@ -267,7 +272,7 @@ class Problem:
     def body_point(self, state) -> np.ndarray:
         """The ground point under the centre of mass, shape ``(2, ...)`` for ``state`` of shape
         ``(>= 4, ...)``: the foot plus ``l sin(theta_v)`` across the direction of travel, to the
-        left for a lean to the left (DESIGN.md Section 1), i.e.
+        left for a lean to the left (docs/ARCHITECTURE.md Section 4), i.e.
         ``foot + l sin(theta_v) (-sin theta_dir, cos theta_dir)``."""
         off = self.body.l * np.sin(state[THETA_V])
         th = state[THETA_DIR]

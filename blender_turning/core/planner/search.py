@@ -324,7 +324,7 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         # batches only from the previous plan's bound; else a quarter, and until a first complete
         # plan, batches growing with the search.  A long search takes batches of up to a quarter
         # of the nodes it has expanded (at most 4 whole ones): the overshoot is then small
-        # against the search, and numpy's cost per call is spread over more nodes (issue 11).
+        # against the search, and numpy's cost per call is spread over more nodes.
         limit = max(st.batch if hot else max(1, st.batch // 4),
                     min(4 * st.batch, expanded // 4))
         if ub == np.inf:

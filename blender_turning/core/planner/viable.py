@@ -1,7 +1,7 @@
 """Which plans the search may return (``search.py``, "The problem solved"): nodes the fall table
 proves doomed before ``viable_stages`` stages after the horizon, and last nodes that are dead
 ends (each of their q children collides or falls within one more stage); and the paper's problem,
-for when no plan avoids both (issue 7, item 5)."""
+for when no plan avoids both."""
 from __future__ import annotations
 
 from dataclasses import replace

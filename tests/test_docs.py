@@ -1,0 +1,102 @@
+"""The user documents hold together: every relative link and anchor in README.md and docs/*.md
+resolves, the README stays a front door, no page speaks of issue numbers, and every code block
+says where it runs (tests/test_doc_examples.py runs them)."""
+import re
+
+import pytest
+
+from doc_blocks import ROOT, all_blocks, commands, pages, prose
+
+LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
+ISSUE = re.compile(r"\bissues? [0-9]+\b|\(issue [0-9]+", re.IGNORECASE)
+README_MAX_LINES = 260
+NOTES = {"run", "file", "slow", "not-run", ""}
+
+
+def anchor(heading: str) -> str:
+    """GitHub's anchor of a heading: lower case, punctuation dropped, spaces to hyphens."""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower())
+    return text.replace(" ", "-")
+
+
+def anchors(page) -> set:
+    seen, out = {}, set()
+    for ln in prose(page).split("\n"):
+        m = re.match(r"^#{1,6}\s+(.*?)\s*#*\s*$", ln)
+        if m:
+            a = anchor(m.group(1))
+            n = seen.get(a, 0)
+            seen[a] = n + 1
+            out.add(a if n == 0 else f"{a}-{n}")
+    return out
+
+
+def links():
+    for page in pages():
+        for ln_no, ln in enumerate(prose(page).split("\n"), 1):
+            for target in LINK.findall(ln):
+                if not re.match(r"^[a-z]+:", target):       # http:, https:, mailto:
+                    yield page, target
+
+
+@pytest.mark.parametrize("heading, expected", [
+    ("8. Follow Path on a Ground mesh (Blender)", "8-follow-path-on-a-ground-mesh-blender"),
+    ("Crowds on the command line: `crowd`", "crowds-on-the-command-line-crowd"),
+    ("The animator's guide", "the-animators-guide"),
+])
+def test_anchor_is_githubs(heading, expected):
+    assert anchor(heading) == expected
+
+
+def test_the_pages_are_there():
+    names = {p.name for p in pages()}
+    assert {"README.md", "getting-started.md", "animator-guide.md", "own-rigs.md", "TERRAIN.md",
+            "crowds.md", "cli.md", "render-farms.md", "python-api.md", "physics.md"} <= names
+
+
+def test_every_relative_link_and_anchor_resolves():
+    bad, n = [], 0
+    for page, target in links():
+        n += 1
+        path, _, frag = target.partition("#")
+        dest = (page.parent / path).resolve() if path else page
+        if not dest.exists():
+            bad.append(f"{page.relative_to(ROOT)}: {target}: no such file")
+        elif frag and dest.suffix == ".md" and frag not in anchors(dest):
+            bad.append(f"{page.relative_to(ROOT)}: {target}: no heading with that anchor")
+    assert n > 50, n                        # the walk sees the links
+    assert not bad, "\n".join(bad)
+
+
+def test_a_broken_link_is_seen(tmp_path):
+    page = tmp_path / "p.md"
+    page.write_text("# Top\n\nSee [here](#top) and [there](#nowhere).\n")
+    assert anchors(page) == {"top"}
+
+
+def test_the_readme_is_a_front_door():
+    n = len((ROOT / "README.md").read_text(encoding="utf-8").split("\n"))
+    assert n <= README_MAX_LINES, n
+
+
+def test_no_issue_numbers_in_the_documents():
+    bad = [f"{p.relative_to(ROOT)}:{i}: {ln.strip()}"
+           for p in pages() for i, ln in enumerate(p.read_text(encoding="utf-8").split("\n"), 1)
+           if ISSUE.search(ln)]
+    assert not bad, "\n".join(bad)
+
+
+def test_every_block_says_where_it_runs():
+    """A ``bash`` block without a note runs only ``python -m blender_turning`` commands; a block
+    that does not run says why."""
+    bad = []
+    for b in all_blocks():
+        if b.note not in NOTES or (b.note in ("not-run", "slow", "file", "run") and not b.arg):
+            bad.append(f"{b.where}: note {b.note!r} {b.arg!r}")
+        elif b.lang == "bash" and b.note in ("", "slow"):
+            bad += [f"{b.where}: {c!r} is not a python -m blender_turning command: mark the "
+                    "block <!-- not-run: why -->" for c in commands(b)
+                    if not c.startswith("python -m blender_turning ")]
+        elif b.note == "run" and b.arg not in ("blender", "scene", "crowd"):
+            bad.append(f"{b.where}: run where? {b.arg!r}")
+    assert not bad, "\n".join(bad)
