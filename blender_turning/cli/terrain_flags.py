@@ -78,8 +78,8 @@ def terrain_options(args, sport: str) -> dict:
                                          else args.slope_deg, 0.0, 60.0))
         down = math.radians(check_range("--downhill-deg", -90.0 if args.downhill_deg is None
                                         else args.downhill_deg, -3600.0, 3600.0))
-        base = RESISTANCE.get(sport, Resistance()) if slope > 0.0 else Resistance(mu=0.0,
-                                                                                  CdA=0.0)
+        base = (RESISTANCE.get(sport, Resistance()) if slope > 0.0
+                else Resistance(mu=0.0, CdA=0.0))
         if slope > 0.0:
             out["ground"] = Plane(slope, down)
         if slope > 0.0 or given:

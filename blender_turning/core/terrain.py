@@ -176,11 +176,11 @@ class HeightField:
         """Cell ``(i, j)``'s biquintic as polynomial coefficients in ``u^a v^b``: the weights
         of the 4 x 4 stencil ``P`` are ``w(u) = M (1, u, .., u^5)`` (:data:`_HERMITE_POWERS`), so
         ``h = w(v)^T P w(u) = (1, v, ..)^T (M^T P M) (1, u, ..)`` (``P`` taken about its corner
-        ``P[1, 1]``, added back to ``A[0][0]``: the weights sum to 1).  Returned as one tuple: the 36
-        coefficients ``A[b][a]`` (row-major), then those of ``dh/du`` (30, ``(a + 1)
-        A[b][a + 1]``) and of ``d2h/du2`` (24), so the float evaluation needs no multiplication
-        by constants.  Computed once per cell a figure visits (all cells of a 0.25 m mesh would
-        be 180 MB)."""
+        ``P[1, 1]``, added back to ``A[0][0]``: the weights sum to 1).  Returned as one tuple:
+        the 36 coefficients ``A[b][a]`` (row-major), then those of ``dh/du`` (30, ``(a + 1)
+        A[b][a + 1]``) and of ``d2h/du2`` (24), so the float evaluation multiplies by no
+        constants in ``u``.  Computed once per cell a figure visits (all cells of a 0.25 m mesh
+        would be 180 MB)."""
         P = self._store(j + 1, i + 1)[j + 1:j + 5, i + 1:i + 5]
         base = P[1, 1]                           # the corner height apart, as in derivatives
         A = _HERMITE_POWERS.T @ (P - base) @ _HERMITE_POWERS
@@ -196,9 +196,10 @@ def _float_derivatives(field: HeightField, height: bool = True):
     """``field.derivatives_one(x, y)``: :meth:`HeightField.derivatives` on Python floats (one
     figure, :mod:`.terrain_one_figure`): the same biquintic as a polynomial in the cell,
     ``h = sum_ab A[b][a] u^a v^b`` (:meth:`HeightField._cell`), evaluated by Horner's rule: ~100
-    multiply-adds, no numpy (BENCHMARKS.md, "Terrain": ~2 us a point, against ~15 us for the
-    4 x 4 stencil sliced out of the grid and weighted on floats).  A closure over the grid's
-    constants (an attribute lookup on the field costs more than a multiply-add).
+    multiply-adds, no numpy (about twice a bicubic's arithmetic, and a fraction of the cost of
+    the 4 x 4 stencil sliced out of the grid and weighted on floats: BENCHMARKS.md, "Terrain:
+    the height field").  A closure over the grid's constants (an attribute lookup on the field
+    costs more than a multiply-add).
     ``height=False``: ``field.slopes_one``, the five derivatives without ``h`` (what the
     stepper needs; 30 multiply-adds fewer)."""
     x_lo, x_hi, y_lo, y_hi = field.extent
