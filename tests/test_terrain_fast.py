@@ -36,8 +36,8 @@ def _points(ground, rng, n):
     return xs.tolist(), ys.tolist()
 
 
-def test_cell_polynomials_are_the_bicubic_spline():
-    """``derivatives_one`` (per-cell coefficients, Horner) against the Catmull-Rom weights of the
+def test_cell_polynomials_are_the_spline():
+    """``derivatives_one`` (per-cell coefficients, Horner) against the biquintic's weights of the
     array path: h and its first and second derivatives, on a rough random grid, at cell corners
     and edges."""
     rng = np.random.default_rng(5)

@@ -10,7 +10,7 @@ from ..core.schedule import Schedule
 from ..core.simulate import DEFAULT_DT
 from ..core.validate import check
 from .common import Outputs, check_steps, require_matplotlib
-from .terrain_flags import add_terrain_flags, terrain_options
+from .terrain_flags import add_terrain_flags, start_point, terrain_options
 
 # flag -> BodyParams field; the ranges are the core's table (core/ranges.py), named by the flag.
 BODY_FLAGS = {"mass": "m", "com_height": "l", "inertia": "I_v", "speed": "V_cm", "gravity": "g"}
@@ -107,8 +107,9 @@ def run(args) -> int:
     outputs.reserve("--plot", args.plot)
     # Start so that the slalom is centred on the heading (with the lean and rate asked for);
     # a straight run starts on the heading.
-    state0 = ((0.0, 0.0, heading(0.0)) if straight else
-              slalom_start(fig.body, w0, tm0, heading(0.0))[:3]) + (theta0, omega_v0)
+    x0, y0 = start_point(args, terrain.get("ground"))
+    state0 = ((x0, y0, heading(0.0)) if straight else
+              slalom_start(fig.body, w0, tm0, heading(0.0), x0, y0)[:3]) + (theta0, omega_v0)
     traj = simulate(fig, ctl, duration, dt, state0, meta={"controller": args.controller},
                     **terrain)
     if args.fps:

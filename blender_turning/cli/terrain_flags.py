@@ -1,7 +1,11 @@
-"""The terrain flags of ``simulate``: an inclined plane, friction, drag, target speed.
+"""The terrain flags of ``simulate``: a ground (a plane or a file), friction, drag, target speed.
 
 ``--slope-deg S --downhill-deg D`` is the plane (``D`` the direction of steepest descent, deg
-CCW from +x); ``--friction MU --drag-area CDA --air-density RHO`` what slows the figure;
+CCW from +x); ``--ground FILE`` any ground from a file instead (docs/TERRAIN.md, "The ground
+from a file"): a scene's ``terrain`` table as JSON (:mod:`..core.scene_terrain`; a whole scene
+file gives its ``terrain``) or a ``.npy`` height grid with ``--ground-cell`` and
+``--ground-origin``; ``--start X Y`` where the foot starts.
+``--friction MU --drag-area CDA --air-density RHO`` what slows the figure;
 ``--target-speed V`` brakes by turning across the hill (docs/TERRAIN.md Section 6).  With none
 of them the run is today's flat one.  On a slope (``S > 0``) a resistance flag that is not given
 takes the sport's default (``core.terrain_dynamics.RESISTANCE``, sources there): a skier on a
@@ -10,12 +14,16 @@ defaults are none, so today's runs are unchanged.
 """
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 from ..core.params import check_range
+from ..core.scene_terrain import read_terrain
 from ..core.terrain import Plane
 from ..core.terrain_dynamics import RESISTANCE, Resistance
+from ..core.validate import FieldError, Fields, check, read_text
 
 # flag -> (Resistance field, allowed range)
 RESISTANCE_FLAGS = {"friction": ("mu", 0.0, 1.0), "drag_area": ("CdA", 0.0, 10.0),
@@ -35,6 +43,15 @@ def add_terrain_flags(p) -> None:
                    help="drag area C_d A, m^2 (0-10; default on a slope: the sport's)")
     g.add_argument("--air-density", type=float,
                    help="air density, kg/m^3 (0-2; default on a slope: the sport's)")
+    g.add_argument("--ground", metavar="FILE",
+                   help="the ground from a file instead of a plane: a scene's terrain table as "
+                        ".json, or a .npy grid of heights (with --ground-cell)")
+    g.add_argument("--ground-cell", type=float, metavar="M",
+                   help="grid spacing of a .npy --ground, m")
+    g.add_argument("--ground-origin", type=float, nargs=2, metavar=("X", "Y"),
+                   help="position of a .npy --ground's first height [0][0], m (default 0 0)")
+    g.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"),
+                   help="where the foot starts, m (default 0 0)")
     g.add_argument("--target-speed", type=float,
                    help="m/s: turn across the hill when faster (phase-ellipse controller)")
 
@@ -42,20 +59,89 @@ def add_terrain_flags(p) -> None:
 def terrain_options(args, sport: str) -> dict:
     """``simulate``'s ``ground``, ``resistance`` and ``target_speed`` from the flags (an empty
     dict: today's flat run)."""
-    slope = math.radians(check_range("--slope-deg", 0.0 if args.slope_deg is None
-                                     else args.slope_deg, 0.0, 60.0))
-    down = math.radians(check_range("--downhill-deg", -90.0 if args.downhill_deg is None
-                                    else args.downhill_deg, -3600.0, 3600.0))
     given = {field: check_range(f"--{flag.replace('_', '-')}", getattr(args, flag), lo, hi)
              for flag, (field, lo, hi) in RESISTANCE_FLAGS.items()
              if getattr(args, flag) is not None}
-    base = RESISTANCE.get(sport, Resistance()) if slope > 0.0 else Resistance(mu=0.0, CdA=0.0)
     out = {}
-    if slope > 0.0:
-        out["ground"] = Plane(slope, down)
-    if slope > 0.0 or given:
+    if args.ground is not None:
+        for flag in ("slope_deg", "downhill_deg"):
+            if getattr(args, flag) is not None:
+                raise ValueError(f"--ground replaces --{flag.replace('_', '-')}; give one or "
+                                 "the other")
+        out["ground"], base = read_ground(args, sport)
         out["resistance"] = replace(base, **given)
+    else:
+        for flag in ("ground_cell", "ground_origin"):
+            if getattr(args, flag) is not None:
+                raise ValueError(f"--{flag.replace('_', '-')} needs --ground (a .npy grid)")
+        slope = math.radians(check_range("--slope-deg", 0.0 if args.slope_deg is None
+                                         else args.slope_deg, 0.0, 60.0))
+        down = math.radians(check_range("--downhill-deg", -90.0 if args.downhill_deg is None
+                                        else args.downhill_deg, -3600.0, 3600.0))
+        base = (RESISTANCE.get(sport, Resistance()) if slope > 0.0
+                else Resistance(mu=0.0, CdA=0.0))
+        if slope > 0.0:
+            out["ground"] = Plane(slope, down)
+        if slope > 0.0 or given:
+            out["resistance"] = replace(base, **given)
     if args.target_speed is not None:
         out["target_speed"] = check_range("--target-speed", args.target_speed, 0.0, 100.0,
                                           lo_open=True)
     return out
+
+
+def start_point(args, ground) -> tuple:
+    """``--start X Y`` (default the origin), checked to lie on a height field."""
+    x, y = (0.0, 0.0) if args.start is None else (check("--start X", args.start[0], "coordinate"),
+                                                  check("--start Y", args.start[1], "coordinate"))
+    contains = getattr(ground, "contains", None)
+    if contains is not None and not contains(x, y):
+        x_lo, x_hi, y_lo, y_hi = ground.extent
+        raise ValueError(f"--start ({x:g}, {y:g}) m lies off the --ground terrain, which covers "
+                         f"x in [{x_lo:g}, {x_hi:g}] and y in [{y_lo:g}, {y_hi:g}] m")
+    return x, y
+
+
+def read_ground(args, sport: str):
+    """``(ground, resistance)`` of ``--ground FILE``: a ``.json`` file holding a ``terrain``
+    table (or a scene with one), read as a scene's (:func:`..core.scene_terrain.read_terrain`:
+    the same fields, ranges and messages; a ``file`` is relative to the JSON file), or a
+    ``.npy`` grid of heights at ``--ground-cell`` spacing from ``--ground-origin``.  Every
+    problem is a one-line ``ValueError`` naming ``--ground`` (or the flag at fault)."""
+    path = Path(args.ground)
+    kind = path.suffix.lower()
+    if kind == ".npy":
+        if args.ground_cell is None:
+            raise ValueError(f"--ground {args.ground} is a .npy grid: give its spacing with "
+                             "--ground-cell M")
+        cell = check("--ground-cell", args.ground_cell, "cell")
+        x0, y0 = (0.0, 0.0) if args.ground_origin is None else (
+            check("--ground-origin X", args.ground_origin[0], "coordinate"),
+            check("--ground-origin Y", args.ground_origin[1], "coordinate"))
+        doc = {"type": "height_field", "file": str(path.resolve()), "cell": cell,
+               "origin": [x0, y0]}
+        tf = Fields(doc, args.ground)
+    elif kind == ".json":
+        for flag in ("ground_cell", "ground_origin"):
+            if getattr(args, flag) is not None:
+                raise ValueError(f"--{flag.replace('_', '-')} is for a .npy --ground; the JSON "
+                                 f"terrain {args.ground} gives its own cell and origin")
+        try:
+            doc = json.loads(read_text(path, "--ground file"))
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"--ground file {args.ground!r} is not valid JSON ({exc})") from None
+        except RecursionError:
+            raise ValueError(f"--ground file {args.ground!r} is nested too deeply") from None
+        if not isinstance(doc, dict):
+            raise ValueError(f"--ground file {args.ground!r} holds a JSON "
+                             f"{type(doc).__name__}, not a terrain table")
+        tf = Fields(doc, args.ground)               # a terrain.file is relative to it
+    else:
+        raise ValueError(f"--ground {args.ground!r} is neither a .json terrain table nor a .npy "
+                         "height grid")
+    try:
+        if "terrain" in tf.doc and "type" not in tf.doc:        # a whole scene file
+            tf = tf.table("terrain")
+        return read_terrain(tf, sport)
+    except FieldError as exc:
+        raise ValueError(f"--ground {exc}") from None

@@ -7,8 +7,9 @@ point; two kinds are shipped:
 - :class:`Plane`: slope ``sigma`` and downhill direction ``D`` (steepest descent, CCW from +x);
   ``Plane(0, 0)`` is the paper's flat ground;
 - :class:`HeightField`: heights on a regular grid (a terrain scanned from a Blender mesh, a .npy
-  file), interpolated by a bicubic Catmull-Rom spline so that the normal is continuous (C1) and
-  the normal curvature is finite everywhere.
+  file), interpolated by a biquintic Hermite spline whose curvature is continuous (C2), so the
+  right-hand side of the turning model (which holds the curvature through ``kappa_n``) is
+  continuous too and a run converges as the step shrinks (docs/TERRAIN.md Section 1).
 
 :func:`surface_frame` gives, at the foot ``(x, y)`` moving with horizontal heading
 ``theta_dir``, the Darboux frame of the foot path (tangent ``t``, left ``b = n x t``, normal
@@ -80,12 +81,18 @@ FLAT = Plane()
 
 
 class HeightField:
-    """Heights ``heights[j, i]`` at ``(x0 + i cell, y0 + j cell)``, bicubic Catmull-Rom between.
+    """Heights ``heights[j, i]`` at ``(x0 + i cell, y0 + j cell)``, biquintic Hermite between.
 
-    Catmull-Rom's tangents are central differences, exact for quadratics, so a plane or a
-    quadratic bowl sampled on the grid comes back exactly (away from the border, where the grid is
-    extended linearly; a plane comes back exactly everywhere).  The surface is C1: its normal is
-    continuous, its curvature jumps at cell borders by the third differences of the data.
+    Each grid point carries the height, the first and second differences of its neighbours
+    (central, as estimates of ``h_x, h_y, h_xx, h_yy`` and of the cross derivatives up to
+    ``h_xxyy``), and each cell is the tensor-product quintic Hermite patch through the values and
+    derivatives at its four corners (docs/TERRAIN.md Section 1).  Neighbouring cells share the
+    corner data, so the surface and its first and second derivatives are continuous (C2) across
+    every cell edge; a cell depends on the 4 x 4 grid points around it, as a Catmull-Rom
+    bicubic's would.  Central differences are exact for quadratics, so a plane or a quadratic
+    bowl sampled on the grid comes back exactly (away from the border, where the grid is
+    extended linearly; a plane comes back exactly everywhere).  The spline interpolates: it
+    passes through every grid point.
     """
 
     def __init__(self, heights, x0: float, y0: float, cell: float):
@@ -107,7 +114,7 @@ class HeightField:
                                 h, np.take(h, [n - 1], axis) + last,
                                 np.take(h, [n - 1], axis) + 2 * last], axis)
         self._h = h
-        self._coef = {}                    # cell index -> its bicubic's coefficients (_cell)
+        self._coef = {}                    # cell index -> its biquintic's coefficients (_cell)
         self.derivatives_one = _float_derivatives(self)
         self.slopes_one = _float_derivatives(self, height=False)
 
@@ -147,39 +154,54 @@ class HeightField:
         fy = (y - self.y0) / self.cell
         i = np.minimum(np.floor(fx).astype(int), self.nx - 2)
         j = np.minimum(np.floor(fy).astype(int), self.ny - 2)
-        wx, dwx, ddwx = _catmull_rom(fx - i)
-        wy, dwy, ddwy = _catmull_rom(fy - j)
+        wx, dwx, ddwx = _weights(fx - i)
+        wy, dwy, ddwy = _weights(fy - j)
         # Stencil rows j-1..j+2 and columns i-1..i+2 of the data: +2 for the padding.
         rows = (j + 1)[..., None] + np.arange(4)
         cols = (i + 1)[..., None] + np.arange(4)
         patch = self._store(j + 1, i + 1)[rows[..., :, None], cols[..., None, :]]  # (.., 4, 4)
+        # About the cell's corner height (the weights sum to 1, their derivatives to 0): the
+        # derivatives come from the relief, not from the altitude (less round-off).
+        base = patch[..., 1, 1]
+        patch = patch - base[..., None, None]
 
         def ev(a, b):
             return np.einsum("...j,...ji,...i->...", a, patch, b)
 
         c = self.cell
-        return (ev(wy, wx), ev(wy, dwx) / c, ev(dwy, wx) / c,
+        return (base + ev(wy, wx), ev(wy, dwx) / c, ev(dwy, wx) / c,
                 ev(wy, ddwx) / (c * c), ev(dwy, dwx) / (c * c), ev(ddwy, wx) / (c * c))
 
     def _cell(self, i: int, j: int):
-        """The 16 coefficients ``A[b][a]`` (row-major) of cell ``(i, j)``'s bicubic in
-        ``u^a v^b``: the Catmull-Rom weights are ``w(u) = M (1, u, u^2, u^3)``, so
-        ``h = w(v)^T P w(u) = (1, v, ..)^T (M^T P M) (1, u, ..)`` with ``P`` the 4 x 4 stencil.
-        Computed once per cell a figure visits (all cells of a 0.25 m mesh would be 80 MB)."""
+        """Cell ``(i, j)``'s biquintic as polynomial coefficients in ``u^a v^b``: the weights
+        of the 4 x 4 stencil ``P`` are ``w(u) = M (1, u, .., u^5)`` (:data:`_HERMITE_POWERS`), so
+        ``h = w(v)^T P w(u) = (1, v, ..)^T (M^T P M) (1, u, ..)`` (``P`` taken about its corner
+        ``P[1, 1]``, added back to ``A[0][0]``: the weights sum to 1).  Returned as one tuple:
+        the 36 coefficients ``A[b][a]`` (row-major), then those of ``dh/du`` (30, ``(a + 1)
+        A[b][a + 1]``) and of ``d2h/du2`` (24), so the float evaluation multiplies by no
+        constants in ``u``.  Computed once per cell a figure visits (all cells of a 0.25 m mesh
+        would be 180 MB)."""
         P = self._store(j + 1, i + 1)[j + 1:j + 5, i + 1:i + 5]
-        A = tuple((_CR_POWERS.T @ P @ _CR_POWERS).ravel().tolist())
+        base = P[1, 1]                           # the corner height apart, as in derivatives
+        A = _HERMITE_POWERS.T @ (P - base) @ _HERMITE_POWERS
+        A[0, 0] += base
+        Au = A[:, 1:] * _POW[1:]
+        Auu = Au[:, 1:] * _POW[1:-1]
+        A = tuple(np.concatenate([A.ravel(), Au.ravel(), Auu.ravel()]).tolist())
         self._coef[j * self.nx + i] = A
         return A
 
 
 def _float_derivatives(field: HeightField, height: bool = True):
     """``field.derivatives_one(x, y)``: :meth:`HeightField.derivatives` on Python floats (one
-    figure, :mod:`.terrain_one_figure`): the same bicubic as a polynomial in the cell,
-    ``h = sum_ab A[b][a] u^a v^b`` (:meth:`HeightField._cell`), evaluated by Horner's rule: ~60
-    multiply-adds, no numpy (~1 us a point against ~15 us for the 4 x 4 stencil sliced out of
-    the grid and weighted on floats).  A closure over the grid's constants (an attribute lookup
-    on the field costs more than a multiply-add).  ``height=False``: ``field.slopes_one``, the
-    five derivatives without ``h`` (what the stepper needs; 12 multiply-adds fewer)."""
+    figure, :mod:`.terrain_one_figure`): the same biquintic as a polynomial in the cell,
+    ``h = sum_ab A[b][a] u^a v^b`` (:meth:`HeightField._cell`), evaluated by Horner's rule: ~100
+    multiply-adds, no numpy (about twice a bicubic's arithmetic, and a fraction of the cost of
+    the 4 x 4 stencil sliced out of the grid and weighted on floats: BENCHMARKS.md, "Terrain:
+    the height field").  A closure over the grid's constants (an attribute lookup on the field
+    costs more than a multiply-add).
+    ``height=False``: ``field.slopes_one``, the five derivatives without ``h`` (what the
+    stepper needs; 30 multiply-adds fewer)."""
     x_lo, x_hi, y_lo, y_hi = field.extent
     x0, y0, c = field.x0, field.y0, field.cell
     cc = c * c
@@ -201,29 +223,41 @@ def _float_derivatives(field: HeightField, height: bool = True):
         A = coef(j * nx + i)
         if A is None:
             A = cell(i, j)
-        a00, a01, a02, a03, a10, a11, a12, a13, a20, a21, a22, a23, a30, a31, a32, a33 = A
+        (a00, a01, a02, a03, a04, a05, a10, a11, a12, a13, a14, a15,
+         a20, a21, a22, a23, a24, a25, a30, a31, a32, a33, a34, a35,
+         a40, a41, a42, a43, a44, a45, a50, a51, a52, a53, a54, a55,
+         p00, p01, p02, p03, p04, p10, p11, p12, p13, p14, p20, p21, p22, p23, p24,
+         p30, p31, p32, p33, p34, p40, p41, p42, p43, p44, p50, p51, p52, p53, p54,
+         q00, q01, q02, q03, q10, q11, q12, q13, q20, q21, q22, q23,
+         q30, q31, q32, q33, q40, q41, q42, q43, q50, q51, q52, q53) = A
         u, v = fx - i, fy - j
-        # Each power of v: its polynomial in u (r), d/du (d) and d2/du2 (e).
-        r1 = a10 + u * (a11 + u * (a12 + u * a13))
-        r2 = a20 + u * (a21 + u * (a22 + u * a23))
-        r3 = a30 + u * (a31 + u * (a32 + u * a33))
-        d0 = a01 + u * (2.0 * a02 + 3.0 * u * a03)
-        d1 = a11 + u * (2.0 * a12 + 3.0 * u * a13)
-        d2 = a21 + u * (2.0 * a22 + 3.0 * u * a23)
-        d3 = a31 + u * (2.0 * a32 + 3.0 * u * a33)
-        e0 = 2.0 * a02 + 6.0 * u * a03
-        e1 = 2.0 * a12 + 6.0 * u * a13
-        e2 = 2.0 * a22 + 6.0 * u * a23
-        e3 = 2.0 * a32 + 6.0 * u * a33
-        hx = (d0 + v * (d1 + v * (d2 + v * d3))) / c
-        hy = (r1 + v * (2.0 * r2 + 3.0 * v * r3)) / c
-        hxx = (e0 + v * (e1 + v * (e2 + v * e3))) / cc
-        hxy = (d1 + v * (2.0 * d2 + 3.0 * v * d3)) / cc
-        hyy = (2.0 * r2 + 6.0 * v * r3) / cc
+        # Each power v^b: its polynomial in u (r), d/du (d) and d2/du2 (e).
+        r1 = a10 + u * (a11 + u * (a12 + u * (a13 + u * (a14 + u * a15))))
+        r2 = a20 + u * (a21 + u * (a22 + u * (a23 + u * (a24 + u * a25))))
+        r3 = a30 + u * (a31 + u * (a32 + u * (a33 + u * (a34 + u * a35))))
+        r4 = a40 + u * (a41 + u * (a42 + u * (a43 + u * (a44 + u * a45))))
+        r5 = a50 + u * (a51 + u * (a52 + u * (a53 + u * (a54 + u * a55))))
+        d0 = p00 + u * (p01 + u * (p02 + u * (p03 + u * p04)))
+        d1 = p10 + u * (p11 + u * (p12 + u * (p13 + u * p14)))
+        d2 = p20 + u * (p21 + u * (p22 + u * (p23 + u * p24)))
+        d3 = p30 + u * (p31 + u * (p32 + u * (p33 + u * p34)))
+        d4 = p40 + u * (p41 + u * (p42 + u * (p43 + u * p44)))
+        d5 = p50 + u * (p51 + u * (p52 + u * (p53 + u * p54)))
+        e0 = q00 + u * (q01 + u * (q02 + u * q03))
+        e1 = q10 + u * (q11 + u * (q12 + u * q13))
+        e2 = q20 + u * (q21 + u * (q22 + u * q23))
+        e3 = q30 + u * (q31 + u * (q32 + u * q33))
+        e4 = q40 + u * (q41 + u * (q42 + u * q43))
+        e5 = q50 + u * (q51 + u * (q52 + u * q53))
+        hx = (d0 + v * (d1 + v * (d2 + v * (d3 + v * (d4 + v * d5))))) / c
+        hy = (r1 + v * (2.0 * r2 + v * (3.0 * r3 + v * (4.0 * r4 + v * 5.0 * r5)))) / c
+        hxx = (e0 + v * (e1 + v * (e2 + v * (e3 + v * (e4 + v * e5))))) / cc
+        hxy = (d1 + v * (2.0 * d2 + v * (3.0 * d3 + v * (4.0 * d4 + v * 5.0 * d5)))) / cc
+        hyy = (2.0 * r2 + v * (6.0 * r3 + v * (12.0 * r4 + v * 20.0 * r5))) / cc
         if not height:
             return hx, hy, hxx, hxy, hyy
-        r0 = a00 + u * (a01 + u * (a02 + u * a03))
-        return r0 + v * (r1 + v * (r2 + v * r3)), hx, hy, hxx, hxy, hyy
+        r0 = a00 + u * (a01 + u * (a02 + u * (a03 + u * (a04 + u * a05))))
+        return r0 + v * (r1 + v * (r2 + v * (r3 + v * (r4 + v * r5)))), hx, hy, hxx, hxy, hyy
 
     return derivatives_one
 
@@ -316,19 +350,27 @@ def _extension(idx, n):
     return a, b, k
 
 
-#: Catmull-Rom weights of the 4 stencil points as polynomials: ``w_k(u) = sum_a M[k, a] u^a``
-#: (the rows of :func:`_catmull_rom`).
-_CR_POWERS = 0.5 * np.array([[0.0, -1.0, 2.0, -1.0], [2.0, 0.0, -5.0, 3.0],
-                             [0.0, 1.0, 4.0, -3.0], [0.0, 0.0, -1.0, 1.0]])
+#: The biquintic's weights of the 4 stencil points ``h[-1], h[0], h[1], h[2]`` of a cell as
+#: polynomials: ``w_k(u) = sum_a M[k, a] u^a``.  The quintic Hermite basis on [0, 1] through the
+#: value, slope and second derivative at both ends, each taken from the stencil by central
+#: differences (``h'(0) = (h[1] - h[-1]) / 2``, ``h''(0) = h[1] - 2 h[0] + h[-1]``, the same at
+#: 1): docs/TERRAIN.md Section 1.  The weights sum to 1 (a constant comes back) and reproduce
+#: ``u`` and ``u^2`` (central differences are exact for quadratics).
+_HERMITE_POWERS = 0.5 * np.array([[0.0, -1.0, 1.0, 3.0, -5.0, 2.0],
+                                  [2.0, 0.0, -2.0, -9.0, 15.0, -6.0],
+                                  [0.0, 1.0, 1.0, 9.0, -15.0, 6.0],
+                                  [0.0, 0.0, 0.0, -3.0, 5.0, -2.0]])
+_POW = np.arange(6.0)
 
 
-def _catmull_rom(u):
-    """Catmull-Rom weights of the 4 stencil points at ``u`` in [0, 1] and their u-derivatives."""
-    u2, u3 = u * u, u * u * u
-    w = np.stack([-u + 2 * u2 - u3, 2 - 5 * u2 + 3 * u3, u + 4 * u2 - 3 * u3, -u2 + u3], -1)
-    dw = np.stack([-1 + 4 * u - 3 * u2, -10 * u + 9 * u2, 1 + 8 * u - 9 * u2, -2 * u + 3 * u2], -1)
-    ddw = np.stack([4 - 6 * u, -10 + 18 * u, 8 - 18 * u, -2 + 6 * u], -1)
-    return 0.5 * w, 0.5 * dw, 0.5 * ddw
+def _weights(u):
+    """The weights of the 4 stencil points at ``u`` in [0, 1] and their u-derivatives."""
+    u = np.asarray(u, dtype=float)[..., None]
+    powers = u ** _POW                                     # (..., 6): 1, u, .., u^5
+    dpowers = _POW * u ** np.maximum(_POW - 1.0, 0.0)
+    ddpowers = _POW * (_POW - 1.0) * u ** np.maximum(_POW - 2.0, 0.0)
+    M = _HERMITE_POWERS.T
+    return powers @ M, dpowers @ M, ddpowers @ M
 
 
 class SurfaceFrame(NamedTuple):
