@@ -75,7 +75,7 @@ def terrain(repeat):
     """The ``--terrain`` table."""
     from blender_turning.core import simulate, slalom_start
     from blender_turning.core.terrain import FLAT, Plane
-    from blender_turning.core.terrain_dynamics import RESISTANCE
+    from blender_turning.core.model import RESISTANCE
     from blender_turning.core.terrain_gen import ski_slope
     from blender_turning.core.terrain_sim import NO_RESISTANCE, simulate_terrain
 

@@ -14,7 +14,7 @@ from blender_turning.core.planner import PlannerSettings, Problem, SpeedProfile,
 from blender_turning.core.planner.fall_table import FallTable
 from blender_turning.core.planner.terrain_problem import TerrainProblem
 from blender_turning.core.terrain import Plane
-from blender_turning.core.terrain_dynamics import Resistance
+from blender_turning.core.model import Resistance
 
 FIELDS = ("state", "C_f", "s", "cost", "d_last", "collided", "fell")
 

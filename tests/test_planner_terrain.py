@@ -19,8 +19,8 @@ from blender_turning.core.planner import (PlannerSettings, Problem, SpeedProfile
 from blender_turning.core.planner.terrain_problem import TerrainProblem, steepest_sine
 from blender_turning.core.scene import load_scene
 from blender_turning.core.terrain import HeightField, Plane, surface_frame
-from blender_turning.core.terrain_dynamics import (RESISTANCE, Resistance, plumb_lean,
-                                                   terrain_rk4_step)
+from blender_turning.core import model
+from blender_turning.core.model import RESISTANCE, Resistance, plumb_lean
 
 ROOT = Path(__file__).resolve().parents[1]
 SKIER = RESISTANCE["skier"]
@@ -68,8 +68,8 @@ def test_stage_matches_terrain_rk4():
             cf = float(r.record["C_f"][k][j])
             assert cf == pytest.approx(np.clip(C0[j] + u[j] * tau, prev - 0.3 * st.dt,
                                                prev + 0.3 * st.dt), abs=1e-15)
-            x = terrain_rk4_step(p.body, p.limits, p.resistance, p.ground, x, tau, st.dt,
-                                 lambda t, s, j=j: C0[j] + u[j] * t, cf)
+            x = model.rk4_step(p.body, p.limits, p.ground, x, tau, st.dt,
+                                 lambda t, s, j=j: C0[j] + u[j] * t, cf, resistance=p.resistance)
             prev = cf
         np.testing.assert_allclose(r.state[:, j], x, rtol=0, atol=1e-12)
     assert not r.fell.any() and np.all(r.state[5] != 8.0)          # the speed is a state
@@ -226,14 +226,16 @@ def test_slope_slalom_scene():
     assert r.reached_end and tr.meta["ground"].startswith("plane (slope 18")
     np.testing.assert_allclose(tr.z, -math.tan(math.radians(18)) * tr.x, atol=1e-9)
     assert tr.V_cm[0] == 8.0 and tr.V_cm[-1] > 20.0
-    # The speed obeys dV/dt = g_t - mu N / m - k V^2 along the run (docs/TERRAIN.md): the rows'
-    # rates, integrated by the trapezoid rule, give the rows' speeds (to the rule's O(dt^2);
-    # leaving out the drag or the friction moves the end speed by 13 or 6 m/s).
+    # The speed obeys dV/dt = g_t - (mu N / m) V_f / V - k V^2 + l omega V_f C_f cos th along
+    # the run (docs/TERRAIN.md Section 4): the rows' rates, integrated by the trapezoid rule,
+    # give the rows' speeds (to the rule's O(dt^2); leaving out the drag or the friction moves
+    # the end speed by 13 or 6 m/s).
     b, res = sc.figure.body, sc.resistance
     fr = surface_frame(sc.ground, tr.x, tr.y, tr.theta_dir, b.g)
     s, c = np.sin(tr.theta_v), np.cos(tr.theta_v)
     N_m = fr.g_normal - b.l * (tr.alpha_v * s + tr.omega_v ** 2 * c)
-    rate = fr.g_along - res.mu * N_m - res.drag_k(b.m) * tr.V_cm ** 2
+    rate = (fr.g_along - res.mu * N_m * tr.V_f / tr.V_cm - res.drag_k(b.m) * tr.V_cm ** 2
+            + b.l * tr.omega_v * c * tr.V_f * tr.C_f)
     V = tr.V_cm[0] + np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1])
                                                        * np.diff(tr.t))])
     np.testing.assert_allclose(V, tr.V_cm, rtol=0, atol=5e-3)      # measured: 2.6e-3

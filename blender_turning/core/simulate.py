@@ -148,7 +148,7 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
     ``speed``: ``V_cm`` over time (see :func:`run`).
 
     On terrain (docs/TERRAIN.md): ``ground`` (a :class:`.terrain.Plane` or
-    :class:`.terrain.HeightField`), ``resistance`` (:class:`.terrain_dynamics.Resistance`) and
+    :class:`.terrain.HeightField`), ``resistance`` (:class:`.model.Resistance`) and
     ``target_speed`` (m/s or :class:`.terrain_sim.TargetSpeed`) send the run to
     :func:`.terrain_sim.simulate_terrain`, where the speed is a state (``state0`` may carry
     ``V_cm`` as a sixth entry).  Flat ground without friction, drag or a target speed stays here:

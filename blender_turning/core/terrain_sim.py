@@ -1,8 +1,8 @@
 """Simulation on terrain: the loop of Fig. 4 with the ground and speed as a state.
 
 :func:`simulate_terrain` steps one figure on a surface (:mod:`.terrain`) with friction and drag
-(:class:`.terrain_dynamics.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
-``C_f`` bounded at every stage as on flat ground, as :func:`.terrain_dynamics.terrain_rk4_step`).
+(:class:`.model.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
+``C_f`` bounded at every stage as on flat ground, as :func:`.model.rk4_step`).
 Each step the controller is re-targeted to the current speed
 (:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from the local plumb lean
 (:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1) on terrain
@@ -26,13 +26,12 @@ from .params import Figure, check_range
 from .phase import phase
 from .schedule import Schedule
 from .terrain import FLAT, HeightField, OffTerrain, Plane, surface_frame
-from .terrain_dynamics import Resistance, terrain_leg_force
+from . import model
+from .model import NO_RESISTANCE, Resistance
 from .terrain_one_figure import TerrainStage
 from .trajectory import Trajectory, body_meta, resistance_meta
 
 __all__ = ["TargetSpeed", "simulate_terrain", "describe_ground", "MIN_SPEED", "NO_RESISTANCE"]
-
-NO_RESISTANCE = Resistance(mu=0.0, CdA=0.0)
 
 MIN_SPEED = 0.5
 """m/s: below it the run stops (:class:`.errors.Stopped`).  The turning model is a body carried
@@ -118,7 +117,7 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
     """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean from
     the controller's equilibrium lean)``.  Classical RK4 on Python floats, written out
     (:mod:`.terrain_one_figure` for the stages), ``C_f`` bounded at every stage relative to the
-    curvature at the step's start, as :func:`.terrain_dynamics.terrain_rk4_step` does.
+    curvature at the step's start, as :func:`.model.rk4_step` does.
     Returns ``(rows, None | "fell" | "stopped" | "left")``."""
     controller.begin_run(limits)
     rhs = TerrainStage(body, limits, resistance, ground, controller)
@@ -184,7 +183,7 @@ def _trajectory(body, ground, rec, dt, info) -> Trajectory:
     ds = 0.5 * (V_f[1:] + V_f[:-1]) * dt                 # along the surface (the foot's speed)
     cols = {"t": np.arange(n) * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
             "omega_v": om, "alpha_v": alpha, "C_f": cf, "V_f": V_f, "z": fr.z, "V_cm": V,
-            "F_leg": terrain_leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
+            "F_leg": model.leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
             "phi": phase(rel, om, tm, w),
             "s": np.concatenate([[0.0], np.cumsum(ds)])}
     return Trajectory.from_columns(cols, info)

@@ -1,8 +1,8 @@
 """The planning problem on terrain (issue 10): Section 6's search with the figure on a surface
-``z = h(x, y)`` (:mod:`..terrain`) and its speed a state (:mod:`..terrain_dynamics`).
+``z = h(x, y)`` (:mod:`..terrain`) and its speed a state (:mod:`..model`).
 
-The node state grows a sixth row, ``V_cm`` (:data:`..terrain_dynamics.TERRAIN_STATE`); a stage
-is simulated for all nodes at once with :func:`..terrain_dynamics.terrain_steer`'s rates under
+The node state grows a sixth row, ``V_cm`` (:data:`..model.STATE`); a stage
+is simulated for all nodes at once with :func:`..model.rhs`'s rates under
 the stage's law ``C_f = C0 + u tau``, bounded exactly as on flat ground (the RK4 of
 :meth:`.problem.Problem.simulate_stage`, whose arithmetic this shares).  The path's distance
 ``d_i`` and the distance travelled ``s`` stay horizontal (x, y), as on flat ground.
@@ -49,7 +49,8 @@ from ..obstacles import Obstacles
 from ..params import Figure
 from ..path import PathDistance
 from ..terrain import HeightField, Plane, surface_frame
-from ..terrain_dynamics import V_CM, Resistance, terrain_leg_force, terrain_steer
+from .. import model
+from ..model import V_CM, Resistance
 from ..terrain_sim import MIN_SPEED, describe_ground
 from ..trajectory import resistance_meta
 from .problem import Problem, _LEAN_MARGIN
@@ -88,6 +89,7 @@ class TerrainProblem(Problem):
         super().__init__(figure, distance, obstacles, settings, SpeedProfile.constant(V0))
         self.ground = ground
         self.resistance = resistance
+        self.held = model.speed_held(ground, resistance)
         self.V0 = V0
         self._sin_max = steepest_sine(ground)
         lean = min(settings.theta_bound + _LEAN_MARGIN, math.pi / 2)
@@ -133,7 +135,7 @@ class TerrainProblem(Problem):
         return None
 
     def _rhs(self, x, V, tau, C0, u, anchor, rate_step, out, bad=None):
-        """:func:`..terrain_dynamics.terrain_steer` under ``C_f = C0 + u tau`` into ``out``
+        """:func:`..model.rhs` under ``C_f = C0 + u tau`` into ``out``
         (shape (6, m)); marks in ``bad`` the columns off the grid, stopped or run away."""
         px, py = x[X], x[Y]
         off = None
@@ -143,9 +145,8 @@ class TerrainProblem(Problem):
             if off.any():
                 px, py = np.clip(px, x_lo, x_hi), np.clip(py, y_lo, y_hi)
         state = (px, py, x[2], x[THETA_V], x[4], x[V_CM])
-        d, cf, alpha, V_f, _, _ = terrain_steer(self.body, self.limits, self.resistance,
-                                                self.ground, C0 + u * tau, state, anchor,
-                                                rate_step)
+        d, cf, alpha, V_f, _, _ = model.rhs(self.body, self.limits, self.ground, C0 + u * tau,
+                                            state, anchor, rate_step, self.resistance, self.held)
         for row, v in enumerate(d):
             out[row] = v
         if bad is not None:
@@ -158,14 +159,14 @@ class TerrainProblem(Problem):
         return cf, alpha, V_f
 
     def end_rates(self, x, cf, t, s):
-        _, _, a, v, _, _ = terrain_steer(self.body, self.limits, self.resistance, self.ground,
-                                         np.array([cf]), tuple(x[:, 0:1]), None, 0.0)
+        _, _, a, v, _, _ = model.rhs(self.body, self.limits, self.ground, np.array([cf]),
+                                     tuple(x[:, 0:1]), None, 0.0, self.resistance, self.held)
         return a, v
 
     def columns(self, S, A, C, V) -> dict:
         """``z`` (the ground under the foot), ``V_cm`` (the state) and ``F_leg`` on terrain."""
         fr = surface_frame(self.ground, S[X], S[Y], S[2], self.body.g)
-        F = terrain_leg_force(self.body, S[THETA_V], S[4], A, C, S[V_CM], V, fr)[0]
+        F = model.leg_force(self.body, S[THETA_V], S[4], A, C, S[V_CM], V, fr)[0]
         return {"z": np.asarray(fr.z, float), "V_cm": S[V_CM], "F_leg": F}
 
     def meta(self) -> dict:
