@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from blender_turning.core import PhaseEllipse, preset, slalom_start
+from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.controllers import Straight
 from blender_turning.core.controllers.feasible import feasible_turns
 from blender_turning.core.dynamics import PHYSICAL_MARGIN
@@ -18,7 +18,6 @@ from blender_turning.core import model
 from blender_turning.core.model import RESISTANCE, plumb_lean
 from blender_turning.core.terrain_gen import ski_slope
 from blender_turning.core.terrain_one_figure import TerrainStage
-from blender_turning.core.terrain_sim import simulate_terrain
 
 SKIER = preset("skier")
 BODY = SKIER.body
@@ -161,7 +160,7 @@ def test_fused_run_is_the_array_loop(case):
         course = None if case == "no course" else heading      # no course: the plumb lean
         make = lambda: PhaseEllipse(BODY, W, TM, heading=course)         # noqa: E731
         s0 = (*slalom_start(BODY, W, TM, heading, x, y), BODY.V_cm)
-    fast = simulate_terrain(SKIER, make(), (n - 1) * dt, dt, s0, ground, res)
+    fast = simulate(SKIER, make(), (n - 1) * dt, dt, s0, ground=ground, resistance=res)
     ref = _array_loop(SKIER, make(), ground, res, s0, n, dt)
     cols = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm", "alpha_v", "C_f", "V_f")
     tol = 5e-11
@@ -192,7 +191,7 @@ def test_a_controller_with_its_own_equilibrium_lean():
     def make():
         return _LeanAboutHalfThePlumb(BODY, W, TM, heading=fall + 0.5)
 
-    fast = simulate_terrain(SKIER, make(), (n - 1) * dt, dt, s0, slope, res)
+    fast = simulate(SKIER, make(), (n - 1) * dt, dt, s0, ground=slope, resistance=res)
     ref = _array_loop(SKIER, make(), slope, res, s0, n, dt)
     np.testing.assert_allclose(fast.theta_v, ref[:, 3], rtol=0, atol=1e-12)   # measured 1e-14
     np.testing.assert_allclose(fast.x, ref[:, 0], rtol=0, atol=1e-11)
@@ -221,7 +220,7 @@ def test_a_step_that_ends_off_the_grid_is_left_terrain():
 
     def run(field):
         ctl = PhaseEllipse(BODY, W, TM, heading=heading)
-        return simulate_terrain(SKIER, ctl, 20.0, dt, slalom_start(BODY, W, TM, heading), field)
+        return simulate(SKIER, ctl, 20.0, dt, slalom_start(BODY, W, TM, heading), ground=field)
 
     rec = _Recorder(HeightField(np.zeros((41, 400)), -10.0, -20.0, 1.0))
     run(rec)

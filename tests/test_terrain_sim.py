@@ -12,7 +12,8 @@ from blender_turning.core.errors import FellOver, LeftTerrain, Stopped
 from blender_turning.core.terrain import FLAT, HeightField, Plane, surface_frame
 from blender_turning.core.model import RESISTANCE, Resistance, plumb_lean
 from blender_turning.core.terrain_gen import ski_slope
-from blender_turning.core.terrain_sim import NO_RESISTANCE, TargetSpeed, simulate_terrain
+from blender_turning.core.braking import TargetSpeed
+from blender_turning.core.model import NO_RESISTANCE
 
 SKIER = preset("skier")
 BODY = SKIER.body

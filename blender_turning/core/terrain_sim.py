@@ -1,6 +1,7 @@
-"""Simulation on terrain: the loop of Fig. 4 with the ground and speed as a state.
+"""The loop of Fig. 4 with the speed a state: one figure on any ground, behind
+:func:`.simulate.simulate`.
 
-:func:`simulate_terrain` steps one figure on a surface (:mod:`.terrain`) with friction and drag
+:func:`simulate_free` steps one figure on a surface (:mod:`.terrain`) with friction and drag
 (:class:`.model.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
 ``C_f`` bounded at every stage as on flat ground, as :func:`.model.rk4_step`).
 Each step the controller is re-targeted to the current speed
@@ -9,8 +10,8 @@ Each step the controller is re-targeted to the current speed
 (:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes by turning
 across the hill (docs/TERRAIN.md Section 6).
 
-:func:`.simulate.simulate` sends a run here when it is given a ground that is not flat, friction
-or drag, or a target speed; flat ground without them stays on today's path.
+:func:`.simulate.simulate` sends a run here unless the speed is held
+(:func:`.model.speed_held`: flat ground with nothing slowing the figure, the paper's model).
 """
 from __future__ import annotations
 
@@ -31,7 +32,7 @@ from .model import NO_RESISTANCE, Resistance
 from .terrain_one_figure import TerrainStage
 from .trajectory import Trajectory, body_meta, resistance_meta
 
-__all__ = ["TargetSpeed", "simulate_terrain", "describe_ground", "MIN_SPEED", "NO_RESISTANCE"]
+__all__ = ["simulate_free", "describe_ground", "MIN_SPEED"]
 
 MIN_SPEED = 0.5
 """m/s: below it the run stops (:class:`.errors.Stopped`).  The turning model is a body carried
@@ -53,10 +54,10 @@ def describe_ground(ground) -> str:
     return type(ground).__name__
 
 
-def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt: float,
-                     state0=None, ground=FLAT, resistance: Resistance = NO_RESISTANCE,
-                     C_f0=None, meta: dict | None = None,
-                     target_speed: TargetSpeed | float | None = None) -> Trajectory:
+def simulate_free(figure: Figure, controller: Controller, duration: float, dt: float,
+                  state0=None, ground=FLAT, resistance: Resistance = NO_RESISTANCE,
+                  C_f0=None, meta: dict | None = None,
+                  target_speed: TargetSpeed | float | None = None) -> Trajectory:
     """Simulate one figure on ``ground`` with ``resistance``; returns a :class:`Trajectory`
     whose ``z`` is the ground under the foot and ``V_cm`` the speed (a state).
 
