@@ -37,7 +37,7 @@ PKG = "blender_turning"
 # -- which tests guard which module --------------------------------------------------------------
 T = "tests/"
 DYNAMICS = [T + "test_mutation_guards_core.py", T + "test_dynamics.py", T + "test_one_figure.py",
-            T + "test_controllers.py"]
+            T + "test_model_kernels.py", T + "test_controllers.py"]
 SIMULATE = [T + "test_mutation_guards_core.py", T + "test_one_figure.py", T + "test_controllers.py",
             T + "test_trajectory.py"]
 PARAMS = [T + "test_dynamics.py", T + "test_mutation_guards_core.py", T + "test_cli_simulate.py"]
@@ -45,12 +45,14 @@ OBSTACLES = [T + "test_obstacles.py", T + "test_mutation_guards_planner.py"]
 TRAJ = [T + "test_mutation_guards_core.py", T + "test_trajectory.py", T + "test_cli_simulate.py"]
 PLANNER = [T + "test_mutation_guards_planner.py", T + "test_planner_search.py",
            T + "test_planner_fall_table.py"]
-FUSED = [T + "test_planner_flat_stage.py"]
+FUSED = [T + "test_model_kernels.py", T + "test_planner_flat_stage.py"]
 MAPPING = [T + "test_mutation_guards_mapping.py", T + "test_mapping_skier.py",
            T + "test_mapping.py", T + "test_mapping_snowboarder.py",
            T + "test_mapping_telemark.py", T + "test_mapping_cyclist.py"]
 TERRAIN = [T + "test_terrain.py", T + "test_terrain_symbolic.py", T + "test_terrain_sim.py",
-           T + "test_terrain_fast.py", T + "test_terrain_lazy.py"]
+           T + "test_terrain_fast.py", T + "test_terrain_lazy.py", T + "test_model_kernels.py"]
+MODEL = [T + "test_model_kernels.py", T + "test_energy.py", T + "test_speed_is_physics.py",
+         T + "test_terrain.py", T + "test_terrain_symbolic.py"]
 MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
@@ -178,23 +180,66 @@ MUTANTS = [
       "w.writerow([repr(float(v)) for v in row])", "w.writerow([f'{v:.6g}' for v in row])", TRAJ),
     M("resample_heading_rate_C_f", "core/trajectory.py",
       '"theta_dir": V_f * C_f,', '"theta_dir": C_f,', TRAJ),
-    # -- terrain (docs/TERRAIN.md) -------------------------------------------------------------
+    # -- the model on any ground (core/model.py; docs/TERRAIN.md) -----------------------------
     M("terrain_lateral_gravity_sign", "core/model.py",
-      "(fr.g_lateral - V * V_f * cf) * c", "(-fr.g_lateral - V * V_f * cf) * c", TERRAIN),
+      "(fr.g_lateral - V * V_f * cf) * c", "(-fr.g_lateral - V * V_f * cf) * c", MODEL),
     M("terrain_no_normal_acceleration", "core/model.py",
-      "G_n = fr.g_normal + V_f * V_f * fr.kappa_n", "G_n = fr.g_normal", TERRAIN),
+      "G_n = fr.g_normal + V_f * V_f * fr.kappa_n", "G_n = fr.g_normal", MODEL),
     M("terrain_normal_force_static", "core/model.py",
-      "N = body.m * (G_n - body.l * (alpha * s + om * om * c))", "N = body.m * G_n", TERRAIN),
+      "N = body.m * (G_n - body.l * (alpha * s + om * om * c))", "N = body.m * G_n", MODEL),
     M("terrain_friction_flat_load", "core/model.py",
-      "resistance.mu * N / body.m", "resistance.mu * body.g", TERRAIN),
+      "resistance.mu * N / body.m", "resistance.mu * body.g", MODEL),
     M("terrain_heading_rate_flat", "core/model.py",
-      "turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)", "turn = V_f * cf",
-      TERRAIN),
+      "turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)", "turn = V_f * cf", MODEL),
+    M("model_heading_rate_no_curved_ground_term", "core/model.py",
+      "turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)",
+      "turn = V_f * (cf * fr.turn_gain)", MODEL),
+    M("model_heading_rate_no_turn_gain", "core/model.py",
+      "turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)",
+      "turn = V_f * (cf + fr.kappa_n * fr.bend_gain)", MODEL),
     M("terrain_drag_double", "core/model.py",
-      "return self.rho * self.CdA / (2.0 * m)", "return self.rho * self.CdA / m", TERRAIN),
+      "return self.rho * self.CdA / (2.0 * m)", "return self.rho * self.CdA / m", MODEL),
     M("terrain_inverse_no_lateral", "core/model.py",
       "k = G_n * s + frame.g_lateral * c - alpha_v * body.J", "k = G_n * s - alpha_v * body.J",
-      TERRAIN),
+      MODEL),
+    M("model_inverse_no_curvature", "core/model.py",
+      "    G_n = frame.g_normal + V * V * frame.kappa_n\n    k =",
+      "    G_n = frame.g_normal\n    k =", MODEL),
+    M("model_eq21_sign", "core/model.py",
+      "ratio = 1.0 / (1.0 - cf * body.l * s)", "ratio = 1.0 / (1.0 + cf * body.l * s)", MODEL),
+    M("model_alpha_gravity_flat", "core/model.py",
+      "alpha = (G_n * s + (fr.g_lateral", "alpha = (body.g * s + (fr.g_lateral", MODEL),
+    M("model_alpha_no_centripetal", "core/model.py",
+      "(fr.g_lateral - V * V_f * cf) * c", "(fr.g_lateral) * c", MODEL),
+    M("model_position_at_body_speed", "core/model.py",
+      "deriv = (V_f * tx, V_f * ty,", "deriv = (V * tx, V * ty,", MODEL),
+    M("model_lean_rate_sign", "core/model.py",
+      "deriv = (V_f * tx, V_f * ty, turn, om, alpha, dV)",
+      "deriv = (V_f * tx, V_f * ty, turn, -om, alpha, dV)", MODEL),
+    M("model_speed_no_gravity", "core/model.py",
+      "dV = (fr.g_along - resistance.mu", "dV = (0.0 - resistance.mu", MODEL),
+    M("model_speed_gravity_at_foot_speed", "core/model.py",
+      "dV = (fr.g_along - resistance.mu", "dV = (fr.g_along * ratio - resistance.mu", MODEL),
+    M("model_friction_at_body_speed", "core/model.py",
+      "resistance.mu * N / body.m * ratio", "resistance.mu * N / body.m", MODEL),
+    M("model_no_lean_share", "core/model.py",
+      "+ body.l * om * c * V_f * cf)", ")", MODEL),
+    M("model_held_ignored", "core/model.py", "    if held:\n", "    if False:\n", MODEL),
+    M("model_speed_held_on_any_ground", "core/model.py",
+      'return bool(getattr(ground, "flat", False)) and resistance.free',
+      "return resistance.free", MODEL + [T + "test_terrain_sim.py"]),
+    M("model_plumb_lean_sign", "core/model.py",
+      "return math.atan2(-frame.g_lateral, frame.g_normal)",
+      "return math.atan2(frame.g_lateral, frame.g_normal)", MODEL + [T + "test_terrain_sim.py"]),
+    M("model_leg_force_lateral_sign", "core/model.py",
+      "(V * V_f * C_f - frame.g_lateral) * s", "(V * V_f * C_f + frame.g_lateral) * s", MODEL),
+    M("model_leg_force_no_omega2", "core/model.py",
+      "                      - body.l * omega_v * omega_v)", "                      )", MODEL),
+    M("model_rk4_to_euler", "core/model.py",
+      "return state + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)", "return state + dt * k1", MODEL),
+    M("speed_checked_against_user_range", "core/params.py",
+      'body.__dict__["V_cm"] = float(V_cm)', 'body.__dict__["V_cm"] = check("V_cm", V_cm, "V_cm")',
+      [T + "test_speed_is_physics.py"]),
     M("terrain_kappa_one_inv_t", "core/terrain.py",
       "* inv_n * inv_t * inv_t", "* inv_n * inv_t", TERRAIN),
     M("terrain_normal_gravity_flat", "core/terrain.py",
@@ -211,6 +256,10 @@ MUTANTS = [
       "G_n = g_n + V_f * V_f * kappa", "G_n = g_n", TERRAIN),
     M("fused_normal_force_static", "core/terrain_one_figure.py",
       "N_m = G_n - l * (alpha * sn + om * om * cs)", "N_m = G_n", TERRAIN),
+    M("fused_friction_at_body_speed", "core/terrain_one_figure.py",
+      "mu * N_m * ratio", "mu * N_m", TERRAIN),
+    M("fused_no_lean_share", "core/terrain_one_figure.py",
+      " + l * om * cs * V_f * cf", "", TERRAIN),
     M("fused_heading_rate_no_bend", "core/terrain_one_figure.py",
       "(cf * (w * w) + kappa * across * w)", "(cf * (w * w))", TERRAIN),
     M("fused_inverse_no_curvature", "core/terrain_one_figure.py",

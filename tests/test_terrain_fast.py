@@ -1,7 +1,7 @@
-"""The fused float stepper on terrain (core/terrain_one_figure.py) is the array path
-(core/model.py) to round-off: the height field on floats, one RK4 stage, and whole
-runs against the loop that stepped through ``terrain_rk4_step`` (issue 10, "the bake stays
-fast")."""
+"""The float stepper on any ground (core/terrain_one_figure.py, behind ``simulate``): the height
+field on floats, whole runs against the reference model's loop (``model.rhs`` and
+``model.rk4_step``, core/model.py) to round-off, and the controller's part in it (one stage
+against the model: tests/test_model_kernels.py)."""
 import math
 
 import numpy as np
@@ -10,9 +10,7 @@ import pytest
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.controllers import Straight
 from blender_turning.core.controllers.feasible import feasible_turns
-from blender_turning.core.dynamics import PHYSICAL_MARGIN
 from blender_turning.core.errors import LeftTerrain
-from blender_turning.core.params import Limits
 from blender_turning.core.terrain import HeightField, Plane, surface_frame
 from blender_turning.core import model
 from blender_turning.core.model import RESISTANCE, plumb_lean
@@ -51,65 +49,6 @@ def test_cell_polynomials_are_the_bicubic_spline():
 def test_off_the_grid_raises_on_floats_too():
     with pytest.raises(ValueError, match="off the terrain"):
         ROUGH.derivatives_one(-5.01, 3.0)
-
-
-class _Sharp(Straight):
-    """A controller with a terrain law of its own demanding up to 4 1/m (either side)."""
-
-    def terrain_cf_law(self, ground):
-        return lambda t, st: 4.0 * math.sin(7.0 * st[0])
-
-
-def _stage_vs_steer(ground, controller, rng, anchor_spread, limits=SKIER.limits):
-    """Each output against the array path, to 1e-12 of its scale: ``V_f`` for the foot's
-    velocity, ``1 + V_f (|C_f| + |kappa_n|)`` for the heading rate, 1 for the lean rate and
-    ``C_f``, and for the accelerations the largest term of Eq. (2) on terrain,
-    ``g + V_f^2 |kappa_n| + V V_f |C_f|`` (``V_f`` reaches 10 V on the physical bound).
-    Returns how many stages were on the physical bound."""
-    rhs = TerrainStage(BODY, limits, RESISTANCE["skier"], ground, controller)
-    law = controller.terrain_cf_law(ground)
-    x_lo, x_hi, y_lo, y_hi = getattr(ground, "extent", (-50, 50, -50, 50))
-    hits = 0                                    # stages on the physical branch's bound
-    for _ in range(300):
-        st = (float(rng.uniform(x_lo + 1, x_hi - 1)), float(rng.uniform(y_lo + 1, y_hi - 1)),
-              float(rng.uniform(-4, 4)), float(rng.uniform(-0.6, 0.6)),
-              float(rng.uniform(-1.5, 1.5)), float(rng.uniform(2.0, 25.0)))
-        anchor, tau = float(rng.normal(0.0, anchor_spread)), 0.01
-        fr = surface_frame(ground, *st[:3], BODY.g)
-        got = rhs.stage(0.3, *st, anchor, tau)
-        d, cf, alpha, V_f, _, _ = model.rhs(BODY, limits, ground,
-                                                np.atleast_1d(law(0.3, list(st))),
-                                                np.array(st)[:, None], np.array([anchor]), tau, resistance=RESISTANCE["skier"])
-        ref = [*(float(v[0]) for v in d), float(alpha[0]), float(V_f[0]), float(cf[0])]
-        V_f, cf = got[7], got[8]
-        G = BODY.g + V_f * V_f * abs(fr.kappa_n) + st[5] * V_f * abs(cf)
-        turn = 1.0 + V_f * (abs(cf) + abs(fr.kappa_n))
-        scale = [V_f, V_f, turn, 1, G, G, G, V_f, 1]
-        np.testing.assert_allclose(np.array(got) / scale, np.array(ref) / scale, rtol=0,
-                                   atol=1e-12)
-        hits += abs(cf * BODY.l * math.sin(st[3])) > PHYSICAL_MARGIN - 1e-12
-    return hits
-
-
-@pytest.mark.parametrize("ground", [ski_slope(length=120.0, width=120.0, cell=2.0),
-                                    Plane(math.radians(25), 0.7, 1.0, -2.0, 3.0)],
-                         ids=["mogul slope", "plane"])
-def test_one_stage_is_terrain_steer(ground):
-    """One float stage = ``terrain_steer`` on a batch of one under the controller's terrain law
-    (about the plumb lean along the course, or the plumb lean without one), with the rate bound
-    active (anchors spread about the demand) and not, and with only the physical branch's
-    bound."""
-    rng = np.random.default_rng(8)
-    ctl = PhaseEllipse(BODY, W, TM, heading=-math.pi / 2)
-    ctl.begin_run(SKIER.limits)
-    _stage_vs_steer(ground, ctl, rng, 0.05)
-    free = PhaseEllipse(BODY, W, TM)                # no heading: about the plumb lean
-    free.begin_run(SKIER.limits)
-    _stage_vs_steer(ground, free, rng, 0.05)
-    _stage_vs_steer(ground, Straight(BODY), rng, 0.05)
-    # No size or rate bound: sharp demands meet the physical branch's bound (Section 3).
-    hit = _stage_vs_steer(ground, _Sharp(BODY), rng, 0.05, Limits())
-    assert hit > 30
 
 
 def _array_loop(figure, controller, ground, res, st, n, dt):

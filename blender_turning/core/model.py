@@ -47,8 +47,8 @@ from .validate import check
 from .xp import Numpy, Scalar, backend
 
 __all__ = ["STATE", "V_CM", "Flat", "Plane", "HeightField", "LazyHeightField", "FLAT",
-           "Resistance", "RESISTANCE", "NO_RESISTANCE", "speed_held", "plumb_lean", "plumb_lean_along",
-           "rhs", "inverse_cf", "leg_force", "rk4_step"]
+           "Resistance", "RESISTANCE", "NO_RESISTANCE", "speed_held", "plumb_lean",
+           "plumb_lean_along", "rhs", "inverse_cf", "leg_force", "rk4_step"]
 
 STATE = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
 V_CM = 5
