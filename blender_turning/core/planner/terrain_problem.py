@@ -14,15 +14,16 @@ Exactness.  Every lower bound of the flat search assumes a known speed profile; 
 - The Lipschitz bound (``Problem.sample_bounds``: a sample ``x`` from the path makes the next at
   least ``x - b``) needs the most the foot moves in one sample, ``b = v_max sample_dt``.  The
   speed changes by ``dV/dt = g_t - mu N V_f / (m V) - k V^2 + l omega V_f C_f cos th``
-  (docs/TERRAIN.md), and ``g_t = -g t_z <= g sin sigma_max`` (``|t_z| = |p| / sqrt(1 + p^2)`` with the slope along the heading ``|p| <=
-  tan sigma_max``), while friction (for ``N >= 0``) and drag only slow; so within the ``T`` seconds
-  a search simulates (the horizon and one stage for the dead-end test) ``V_cm <= V_root + g
-  sin sigma_max T``, and ``|V_f| <= V_cm / (1 - slip)`` (Eq. 21, as on flat ground).  Rather than
-  rest exactness on ``N >= 0`` (the model does not hold off the ground), that speed is made a rule
-  of the problem, like the lean bound: a branch whose foot speed passes it at any RK4 stage is a
-  *run-away* and is clipped (it does not happen on the shipped scenes: it would need the figure to
-  gain speed faster than free fall along the steepest slope).  Then ``b`` bounds every surviving
-  branch by construction, and the bound is admissible.
+  (docs/TERRAIN.md Sections 3-4), with ``g_t = -g t_z <= g sin sigma_max`` (``|t_z| = |p| /
+  sqrt(1 + p^2)`` with the slope along the heading ``|p| <= tan sigma_max``); friction (for
+  ``N >= 0``) and drag only slow, and the lean's share only trades the lean's energy back and
+  forth; so within the ``T`` seconds a search simulates (the horizon and one stage for the
+  dead-end test) the speed stays near ``V_root + g sin sigma_max T``, and ``|V_f| <= V_cm /
+  (1 - slip)`` (Eq. 21, as on flat ground).  Rather than rest exactness on ``N >= 0`` and on the
+  lean's share (the model does not hold off the ground; a figure can pump), that speed is made a
+  rule of the problem, like the lean bound: a branch whose foot speed passes it at any RK4 stage
+  is a *run-away* and is clipped (it does not happen on the shipped scenes).  Then ``b`` bounds
+  every surviving branch by construction, and the bound is admissible.
 - The receding horizon reuses a search's proof in the next one (``proof.py``), whose root is
   faster or slower, so its speed limit higher or lower.  A lower limit only clips more (the old
   bounds stay lower bounds, an infeasible subtree stays infeasible); a higher one could free a
