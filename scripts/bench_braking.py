@@ -12,7 +12,7 @@ from bench_common import best
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.errors import TurningError
 from blender_turning.core.terrain import Plane
-from blender_turning.core.terrain_dynamics import RESISTANCE
+from blender_turning.core.model import RESISTANCE
 
 
 def run(target):

@@ -75,9 +75,10 @@ def terrain(repeat):
     """The ``--terrain`` table."""
     from blender_turning.core import simulate, slalom_start
     from blender_turning.core.terrain import FLAT, Plane
-    from blender_turning.core.terrain_dynamics import RESISTANCE
+    from blender_turning.core.model import RESISTANCE
     from blender_turning.core.terrain_gen import ski_slope
-    from blender_turning.core.terrain_sim import NO_RESISTANCE, simulate_terrain
+    from blender_turning.core.model import NO_RESISTANCE
+    from blender_turning.core.terrain_sim import simulate_free
 
     fig = preset("skier")
     w, tm = 2 * math.pi / 2.0, math.radians(23)
@@ -94,11 +95,11 @@ def terrain(repeat):
 
     def terrain_flat():
         s0 = slalom_start(fig.body, w, tm, fall)
-        return simulate_terrain(fig, PhaseEllipse(fig.body, w, tm, heading=fall), 60.0,
-                                DEFAULT_DT, s0, FLAT, NO_RESISTANCE)
+        return simulate_free(fig, PhaseEllipse(fig.body, w, tm, heading=fall), 60.0,
+                             DEFAULT_DT, s0, FLAT, NO_RESISTANCE)
 
     cases = [("flat ground, `simulate` (today's path): baseline", case()),
-             ("flat ground through the terrain loop", terrain_flat),
+             ("flat ground, the speed free (the any-ground loop)", terrain_flat),
              ("18 deg plane, fall line, skier's friction and drag", case(
                  ground=Plane(math.radians(18), fall), resistance=res)),
              ("mogul slope (height field 201 x 801, 2 m), fall line", case(ground=slope,

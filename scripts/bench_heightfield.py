@@ -31,7 +31,7 @@ import numpy as np
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core import terrain as current
-from blender_turning.core.terrain_dynamics import RESISTANCE
+from blender_turning.core.model import RESISTANCE
 from blender_turning.core.terrain_gen import ski_slope
 from bench_common import best  # noqa: E402  (scripts/)
 

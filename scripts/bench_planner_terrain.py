@@ -17,6 +17,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from blender_turning.core.planner import Problem  # noqa: E402
 from blender_turning.core.scene import load_scene  # noqa: E402
 
 SCENES = ("slalom", "slope_slalom")
@@ -49,13 +50,12 @@ def main() -> None:
 
 def stage_costs(repeat: int, m: int = 640) -> None:
     """One stage for ``m`` nodes (a batch of 128 nodes' 5 children): flat, plane, height field."""
-    from blender_turning.core.planner.terrain_problem import TerrainProblem
     from blender_turning.core.terrain_gen import ski_slope
     flat = load_scene(ROOT / "scenes" / "slalom.json").problem()
     sc = load_scene(ROOT / "scenes" / "slope_slalom.json")
     plane = sc.problem()
-    hf = TerrainProblem(sc.figure, plane.distance, plane.obstacles, sc.settings,
-                        ski_slope(length=400.0, width=400.0, cell=2.0), sc.resistance)
+    hf = Problem(sc.figure, plane.distance, plane.obstacles, sc.settings,
+                 ground=ski_slope(length=400.0, width=400.0, cell=2.0), resistance=sc.resistance)
     rng = np.random.default_rng(1)
     x = np.zeros((6, m))
     x[0], x[1] = rng.uniform(0, 150, m), rng.uniform(-5, 5, m)

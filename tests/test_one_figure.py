@@ -1,50 +1,20 @@
-"""The one-figure fast path (core/one_figure.py and the controllers' float laws) against the
-array formulas it must equal.  Both evaluate the same expressions in the same order, so they agree
-to round-off; 1e-12 relative leaves room for libm differences between numpy and math."""
+"""The one-figure fast path's controller laws and heading table on floats (core/one_figure.py,
+the controllers' float laws) against the array formulas they must equal (the right-hand side
+itself against the model: tests/test_model_kernels.py).  Both evaluate the same expressions in
+the same order, so they agree to round-off; 1e-12 relative leaves room for libm differences
+between numpy and math."""
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from blender_turning.core import preset
 from blender_turning.core.controllers.ellipse import LAWS
-from blender_turning.core.dynamics import steer
 from blender_turning.core.heading_table import heading_table
-from blender_turning.core.one_figure import rhs, scalar_inverse_cf
+from blender_turning.core.one_figure import scalar_inverse_cf
 from blender_turning.core.dynamics import inverse_cf
 
 TWO_PI = 2 * math.pi
-
-
-@pytest.mark.parametrize("name,C_f_max", [("skier", None), ("cyclist", 2.0)])
-def test_fused_right_hand_side_equals_steer(name, C_f_max):
-    """Every bound in play: demands beyond C_f_max, infinite (unreachable) demands, leans where
-    the physical branch binds (a cyclist with a 0.5 m turning radius: C_f_max l > 0.9), and rate
-    bounds with and without an anchor."""
-    fig = preset(name)
-    if C_f_max is not None:
-        fig = replace(fig, limits=replace(fig.limits, C_f_max=C_f_max))
-    rng = np.random.default_rng(3)
-    n = 600
-    states = np.stack([rng.uniform(-5, 5, n), rng.uniform(-5, 5, n), rng.uniform(-4, 4, n),
-                       rng.uniform(-1.2, 1.2, n), rng.uniform(-3, 3, n)])
-    cmax = fig.limits.C_f_max
-    demand = rng.uniform(-3 * cmax, 3 * cmax, n)
-    demand[::17] = np.inf
-    demand[1::17] = -np.inf
-    anchor = rng.uniform(-cmax, cmax, n)
-    tau = rng.choice([0.0, 0.01, 0.02], n)
-    for with_anchor in (True, False):
-        want_d, want_cf, want_a, want_v = steer(fig.body, fig.limits, demand, states,
-                                                anchor if with_anchor else None, tau)
-        for j in range(n):
-            stage = rhs(fig.body, fig.limits, lambda t, s, c=float(demand[j]): c)
-            got = stage(0.0, *states[:, j].tolist(), float(anchor[j]) if with_anchor else None,
-                        float(tau[j]))
-            want = [float(np.asarray(d)[j]) if np.ndim(d) else float(d) for d in want_d] + [
-                float(want_cf[j]), float(want_a[j]), float(want_v[j])]
-            np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
 
 
 def test_float_inverse_equals_eq_1():

@@ -12,9 +12,8 @@ from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, SpeedProfile, flat_stage
 from blender_turning.core.planner.fall_table import FallTable
-from blender_turning.core.planner.terrain_problem import TerrainProblem
 from blender_turning.core.terrain import Plane
-from blender_turning.core.terrain_dynamics import Resistance
+from blender_turning.core.model import Resistance
 
 FIELDS = ("state", "C_f", "s", "cost", "d_last", "collided", "fell")
 
@@ -72,8 +71,8 @@ def test_fused_stage_applies_only_where_it_is_exact():
     binds = Problem(replace(binds.figure, limits=replace(binds.limits, C_f_max=1.0)),
                     binds.distance, binds.obstacles, binds.settings)
     assert binds._physical_binds and not binds._fused
-    slope = TerrainProblem(flat.figure, flat.distance, flat.obstacles, flat.settings,
-                           Plane(0.1), Resistance(mu=0.0, CdA=0.0))
+    slope = Problem(flat.figure, flat.distance, flat.obstacles, flat.settings, ground=Plane(0.1),
+                    resistance=Resistance(mu=0.0, CdA=0.0))
     assert not slope._fused
 
 

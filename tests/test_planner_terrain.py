@@ -16,11 +16,11 @@ from blender_turning.core.params import preset
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import (PlannerSettings, Problem, SpeedProfile,
                                           branch_and_bound, exhaustive)
-from blender_turning.core.planner.terrain_problem import TerrainProblem, steepest_sine
+from blender_turning.core.planner.terrain_problem import steepest_sine
 from blender_turning.core.scene import load_scene
 from blender_turning.core.terrain import HeightField, Plane, surface_frame
-from blender_turning.core.terrain_dynamics import (RESISTANCE, Resistance, plumb_lean,
-                                                   terrain_rk4_step)
+from blender_turning.core import model
+from blender_turning.core.model import RESISTANCE, Resistance, plumb_lean
 
 ROOT = Path(__file__).resolve().parents[1]
 SKIER = RESISTANCE["skier"]
@@ -43,7 +43,7 @@ def _problem(ground, resistance=SKIER, N=4, q=4, obstacles=True, **kw):
     obs = Obstacles(np.array([[[12.0, 0.5], [12.0, -10.0]]]), np.array([[20.0, 1.5, 0.4]]),
                     [], 0.3) if obstacles else Obstacles()
     st = PlannerSettings(n_stages=N, q=q, theta_bound=math.radians(40), **kw)
-    return TerrainProblem(fig, PathDistance(path, 12), obs, st, ground, resistance)
+    return Problem(fig, PathDistance(path, 12), obs, st, ground=ground, resistance=resistance)
 
 
 def _root(V=8.0, heading=0.0, ground=None, y=0.0):
@@ -68,29 +68,31 @@ def test_stage_matches_terrain_rk4():
             cf = float(r.record["C_f"][k][j])
             assert cf == pytest.approx(np.clip(C0[j] + u[j] * tau, prev - 0.3 * st.dt,
                                                prev + 0.3 * st.dt), abs=1e-15)
-            x = terrain_rk4_step(p.body, p.limits, p.resistance, p.ground, x, tau, st.dt,
-                                 lambda t, s, j=j: C0[j] + u[j] * t, cf)
+            x = model.rk4_step(p.body, p.limits, p.ground, x, tau, st.dt,
+                                 lambda t, s, j=j: C0[j] + u[j] * t, cf, resistance=p.resistance)
             prev = cf
         np.testing.assert_allclose(r.state[:, j], x, rtol=0, atol=1e-12)
     assert not r.fell.any() and np.all(r.state[5] != 8.0)          # the speed is a state
 
 
 def test_flat_terrain_is_the_flat_problem():
-    """A level plane without friction or drag: the speed stays put and every stage is the flat
-    problem's (to 1e-12); the search returns the flat search's plan."""
+    """A level plane without friction or drag is the paper's ground: the one Problem holds the
+    speed there (5 rows, the fused flat stage), every stage is the flat problem's bit for bit
+    and the search returns the flat search's plan; with friction the speed is a state."""
     T = _problem(Plane(0.0, 0.0), Resistance(mu=0.0, CdA=0.0))
     F = Problem(T.figure, T.distance, T.obstacles, T.settings, SpeedProfile.constant(8.0))
+    assert not T.free and T._fused and T.meta() == {}
     x = np.array([[0.0], [0.0], [0.1], [0.05], [-0.2]])
     for u in (-0.3, 0.1):
-        a = T.simulate_stage(np.vstack([x, [[8.0]]]), np.array([0.01]), np.array([u]),
-                             np.zeros(1), np.zeros(1))
+        a = T.simulate_stage(x, np.array([0.01]), np.array([u]), np.zeros(1), np.zeros(1))
         b = F.simulate_stage(x, np.array([0.01]), np.array([u]), np.zeros(1), np.zeros(1))
-        np.testing.assert_allclose(a.state[:5], b.state, rtol=0, atol=1e-12)
-        assert a.state[5, 0] == pytest.approx(8.0, abs=1e-12)
-        assert a.cost[0] == pytest.approx(b.cost[0], abs=1e-12)
-    pt = branch_and_bound(T, _root(), 0.0)
+        np.testing.assert_array_equal(a.state, b.state)
+        assert a.cost[0] == b.cost[0]
+    pt = branch_and_bound(T, _root()[:5], 0.0)
     pf = branch_and_bound(F, _root()[:5], 0.0)
-    assert pt.choices == pf.choices and pt.f_opt == pytest.approx(pf.f_opt, rel=1e-12)
+    assert pt.choices == pf.choices and pt.f_opt == pf.f_opt
+    slowed = _problem(Plane(0.0, 0.0), RESISTANCE["skier"])
+    assert slowed.free and slowed.meta()["ground"] == "flat"
 
 
 GROUNDS = {"plane": Plane(math.radians(18), 0.0), "traverse": Plane(math.radians(25), -1.2),
@@ -226,14 +228,16 @@ def test_slope_slalom_scene():
     assert r.reached_end and tr.meta["ground"].startswith("plane (slope 18")
     np.testing.assert_allclose(tr.z, -math.tan(math.radians(18)) * tr.x, atol=1e-9)
     assert tr.V_cm[0] == 8.0 and tr.V_cm[-1] > 20.0
-    # The speed obeys dV/dt = g_t - mu N / m - k V^2 along the run (docs/TERRAIN.md): the rows'
-    # rates, integrated by the trapezoid rule, give the rows' speeds (to the rule's O(dt^2);
-    # leaving out the drag or the friction moves the end speed by 13 or 6 m/s).
+    # The speed obeys dV/dt = g_t - (mu N / m) V_f / V - k V^2 + l omega V_f C_f cos th along
+    # the run (docs/TERRAIN.md Section 4): the rows' rates, integrated by the trapezoid rule,
+    # give the rows' speeds (to the rule's O(dt^2); leaving out the drag or the friction moves
+    # the end speed by 13 or 6 m/s).
     b, res = sc.figure.body, sc.resistance
     fr = surface_frame(sc.ground, tr.x, tr.y, tr.theta_dir, b.g)
     s, c = np.sin(tr.theta_v), np.cos(tr.theta_v)
     N_m = fr.g_normal - b.l * (tr.alpha_v * s + tr.omega_v ** 2 * c)
-    rate = fr.g_along - res.mu * N_m - res.drag_k(b.m) * tr.V_cm ** 2
+    rate = (fr.g_along - res.mu * N_m * tr.V_f / tr.V_cm - res.drag_k(b.m) * tr.V_cm ** 2
+            + b.l * tr.omega_v * c * tr.V_f * tr.C_f)
     V = tr.V_cm[0] + np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1])
                                                        * np.diff(tr.t))])
     np.testing.assert_allclose(V, tr.V_cm, rtol=0, atol=5e-3)      # measured: 2.6e-3
@@ -250,7 +254,7 @@ def test_follow_setup_terrain_start_state():
                         resistance=SKIER)
     res = setup.run(start_state(path), duration=0.6)
     assert res.trajectory.V_cm[0] == 8.0 and res.trajectory.V_cm[-1] > 8.0
-    assert isinstance(setup.problem(), TerrainProblem)
+    assert setup.problem().free
 
 
 def test_runaways_counted_and_proof_dropped(monkeypatch):

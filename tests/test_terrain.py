@@ -10,24 +10,23 @@ from blender_turning.core.controllers.open_loop import open_loop_alpha
 from blender_turning.core.dynamics import inverse_cf, leg_force, rk4_step, steer
 from blender_turning.core.params import Limits
 from blender_turning.core.terrain import FLAT, HeightField, Plane, surface_frame
-from blender_turning.core.terrain_dynamics import (RESISTANCE, Resistance, terrain_inverse_cf,
-                                                   terrain_leg_force, terrain_rk4_step,
-                                                   terrain_steer)
+from blender_turning.core import model
+from blender_turning.core.model import RESISTANCE, Resistance
 
 SKIER = preset("skier")
 FREE = Limits(theta_fall=math.radians(80))       # no C_f bounds: the closed forms assume none
 NONE = Resistance()
 
 
-def _run(ground, res, state0, law, duration, dt, body=SKIER.body, limits=FREE):
-    """RK4 on the terrain state as ``core.simulate`` steps: the curvature at the start of each
+def _run(ground, res, state0, law, duration, dt, body=SKIER.body, limits=FREE, held=False):
+    """RK4 on the model's state as ``core.simulate`` steps: the curvature at the start of each
     step is bounded against the previous step's and anchors the step's stages."""
     states = [np.asarray(state0, float)]
     anchor = None
     for i in range(int(round(duration / dt))):
         st, t = states[-1], i * dt
-        anchor = terrain_steer(body, limits, res, ground, law(t, st), st, anchor, dt)[1]
-        states.append(terrain_rk4_step(body, limits, res, ground, st, t, dt, law, anchor))
+        anchor = model.rhs(body, limits, ground, law(t, st), st, anchor, dt, res, held)[1]
+        states.append(model.rk4_step(body, limits, ground, st, t, dt, law, anchor, res, held))
     return np.array(states)
 
 
@@ -88,12 +87,13 @@ def test_flat_ground_without_resistance_is_the_papers_model():
     cf = rng.uniform(-0.15, 0.15, n)
     lim = SKIER.limits
     old, cf0, a0, vf0 = steer(SKIER.body, lim, cf, state, cf * 0.9, 0.02)
-    new, cf1, a1, vf1, _, _ = terrain_steer(SKIER.body, lim, NONE, FLAT, cf,
-                                            (*state, np.full(n, SKIER.body.V_cm)), cf * 0.9, 0.02)
+    new, cf1, a1, vf1, _, _ = model.rhs(SKIER.body, lim, FLAT, cf,
+                                        (*state, np.full(n, SKIER.body.V_cm)), cf * 0.9, 0.02,
+                                        held=True)
     np.testing.assert_array_equal(cf1, cf0)
     for u, v in zip(new[:5], old):
         np.testing.assert_allclose(u, v, rtol=1e-14, atol=1e-14)
-    np.testing.assert_array_equal(new[5], 0.0)          # no slope, no friction, no drag
+    np.testing.assert_array_equal(new[5], 0.0)          # the paper's held speed
     # A whole 20 s slalom (the open-loop 2 s / 23 deg turn of Section 4): same to 1e-12.
     w, th_max = math.pi, math.radians(23)
     law = lambda t, s: inverse_cf(SKIER.body, s[3], open_loop_alpha(w * t, th_max, w))  # noqa
@@ -103,7 +103,8 @@ def test_flat_ground_without_resistance_is_the_papers_model():
         t = i * 0.02
         anchor = steer(SKIER.body, lim, law(t, s_old), s_old, anchor, 0.02)[1]
         s_old = rk4_step(SKIER.body, lim, s_old, t, 0.02, law, anchor)
-    s_new = _run(FLAT, NONE, [0, 0, 0, 0, 0, SKIER.body.V_cm], law, 20.0, 0.02, limits=lim)[-1]
+    s_new = _run(FLAT, NONE, [0, 0, 0, 0, 0, SKIER.body.V_cm], law, 20.0, 0.02, limits=lim,
+                 held=True)[-1]
     assert abs(s_old[3]) > 0.3                     # a real slalom, not a straight run
     np.testing.assert_allclose(s_new[:5], s_old, rtol=0, atol=1e-12)
     assert s_new[5] == SKIER.body.V_cm
@@ -176,8 +177,8 @@ def test_lean_energy_balance_on_a_turning_run():
     dt = 0.002
     traj = _run(plane, res, [0, 0, 0.2, 0.1, 0, 8.0], law, 6.0, dt)
     t = np.arange(len(traj)) * dt
-    (_, _, _, om, alpha, _), cf, _, V_f, _, fr = terrain_steer(
-        body, FREE, res, plane, np.array([law(tt, None) for tt in t]), traj.T)
+    (_, _, _, om, alpha, _), cf, _, V_f, _, fr = model.rhs(
+        body, FREE, plane, np.array([law(tt, None) for tt in t]), traj.T, resistance=res)
     th, V = traj[:, 3], traj[:, 5]
     I_foot = body.I_v + body.m * body.l ** 2
     E = 0.5 * I_foot * om ** 2 + body.m * body.l * fr.g_normal * np.cos(th)
@@ -196,14 +197,14 @@ def test_normal_force_is_the_leg_forces_normal_part():
              rng.uniform(-0.7, 0.7, n), rng.uniform(-2, 2, n), rng.uniform(2, 15, n))
     cf = rng.uniform(-0.15, 0.15, n)
     body = SKIER.body
-    _, cf, alpha, V_f, N, fr = terrain_steer(body, FREE, NONE, bowl, cf, state)
+    _, cf, alpha, V_f, N, fr = model.rhs(body, FREE, bowl, cf, state)
     th, om, V = state[3], state[4], state[5]
-    _, along = terrain_leg_force(body, th, om, alpha, cf, V, V_f, fr)
+    _, along = model.leg_force(body, th, om, alpha, cf, V, V_f, fr)
     np.testing.assert_allclose(N, along * np.cos(th) + body.I_v * alpha / body.l * np.sin(th),
                                rtol=1e-12, atol=1e-9)
     flat = surface_frame(FLAT, state[0], state[1], state[2], body.g)
     V_f0 = V / (1 - cf * body.l * np.sin(th))
-    F, along = terrain_leg_force(body, th, om, alpha, cf, V, V_f0, flat)
+    F, along = model.leg_force(body, th, om, alpha, cf, V, V_f0, flat)
     F0, along0 = leg_force(body, th, om, alpha, cf, V_cm=V)
     np.testing.assert_allclose(F, F0, rtol=1e-13)
     np.testing.assert_allclose(along, along0, rtol=1e-13, atol=1e-9)
@@ -248,10 +249,10 @@ def test_inverse_is_the_forward_law_inverted():
     th, d, V = rng.uniform(-0.7, 0.7, n), rng.uniform(-3, 3, n), rng.uniform(2, 20, n)
     alpha = rng.uniform(-3, 3, n)
     fr = surface_frame(plane, 0.0, 0.0, d, 9.81)
-    cf = terrain_inverse_cf(SKIER.body, fr, th, alpha, V)
+    cf = model.inverse_cf(SKIER.body, fr, th, alpha, V)
     ok = np.isfinite(cf) & (1 - cf * SKIER.body.l * np.sin(th) > 0.1)
     assert ok.sum() > 80
-    _, _, a2, _, _, _ = terrain_steer(SKIER.body, FREE, NONE, plane, cf[ok],
+    _, _, a2, _, _, _ = model.rhs(SKIER.body, FREE, plane, cf[ok],
                                       (0 * V[ok], 0 * V[ok], d[ok], th[ok], 0 * V[ok], V[ok]))
     np.testing.assert_allclose(a2, alpha[ok], atol=1e-10)
 

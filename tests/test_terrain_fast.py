@@ -1,24 +1,21 @@
-"""The fused float stepper on terrain (core/terrain_one_figure.py) is the array path
-(core/terrain_dynamics.py) to round-off: the height field on floats, one RK4 stage, and whole
-runs against the loop that stepped through ``terrain_rk4_step`` ("the bake stays
-fast")."""
+"""The float stepper on any ground (core/terrain_one_figure.py, behind ``simulate``): the height
+field on floats, whole runs against the reference model's loop (``model.rhs`` and
+``model.rk4_step``, core/model.py) to round-off, and the controller's part in it (one stage
+against the model: tests/test_model_kernels.py)."""
 import math
 
 import numpy as np
 import pytest
 
-from blender_turning.core import PhaseEllipse, preset, slalom_start
+from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.controllers import Straight
 from blender_turning.core.controllers.feasible import feasible_turns
-from blender_turning.core.dynamics import PHYSICAL_MARGIN
 from blender_turning.core.errors import LeftTerrain
-from blender_turning.core.params import Limits
 from blender_turning.core.terrain import HeightField, Plane, surface_frame
-from blender_turning.core.terrain_dynamics import (RESISTANCE, plumb_lean, terrain_rk4_step,
-                                                   terrain_steer)
+from blender_turning.core import model
+from blender_turning.core.model import RESISTANCE, plumb_lean
 from blender_turning.core.terrain_gen import ski_slope
 from blender_turning.core.terrain_one_figure import TerrainStage
-from blender_turning.core.terrain_sim import simulate_terrain
 
 SKIER = preset("skier")
 BODY = SKIER.body
@@ -54,65 +51,6 @@ def test_off_the_grid_raises_on_floats_too():
         ROUGH.derivatives_one(-5.01, 3.0)
 
 
-class _Sharp(Straight):
-    """A controller with a terrain law of its own demanding up to 4 1/m (either side)."""
-
-    def terrain_cf_law(self, ground):
-        return lambda t, st: 4.0 * math.sin(7.0 * st[0])
-
-
-def _stage_vs_steer(ground, controller, rng, anchor_spread, limits=SKIER.limits):
-    """Each output against the array path, to 1e-12 of its scale: ``V_f`` for the foot's
-    velocity, ``1 + V_f (|C_f| + |kappa_n|)`` for the heading rate, 1 for the lean rate and
-    ``C_f``, and for the accelerations the largest term of Eq. (2) on terrain,
-    ``g + V_f^2 |kappa_n| + V V_f |C_f|`` (``V_f`` reaches 10 V on the physical bound).
-    Returns how many stages were on the physical bound."""
-    rhs = TerrainStage(BODY, limits, RESISTANCE["skier"], ground, controller)
-    law = controller.terrain_cf_law(ground)
-    x_lo, x_hi, y_lo, y_hi = getattr(ground, "extent", (-50, 50, -50, 50))
-    hits = 0                                    # stages on the physical branch's bound
-    for _ in range(300):
-        st = (float(rng.uniform(x_lo + 1, x_hi - 1)), float(rng.uniform(y_lo + 1, y_hi - 1)),
-              float(rng.uniform(-4, 4)), float(rng.uniform(-0.6, 0.6)),
-              float(rng.uniform(-1.5, 1.5)), float(rng.uniform(2.0, 25.0)))
-        anchor, tau = float(rng.normal(0.0, anchor_spread)), 0.01
-        fr = surface_frame(ground, *st[:3], BODY.g)
-        got = rhs.stage(0.3, *st, anchor, tau)
-        d, cf, alpha, V_f, _, _ = terrain_steer(BODY, limits, RESISTANCE["skier"], ground,
-                                                np.atleast_1d(law(0.3, list(st))),
-                                                np.array(st)[:, None], np.array([anchor]), tau)
-        ref = [*(float(v[0]) for v in d), float(alpha[0]), float(V_f[0]), float(cf[0])]
-        V_f, cf = got[7], got[8]
-        G = BODY.g + V_f * V_f * abs(fr.kappa_n) + st[5] * V_f * abs(cf)
-        turn = 1.0 + V_f * (abs(cf) + abs(fr.kappa_n))
-        scale = [V_f, V_f, turn, 1, G, G, G, V_f, 1]
-        np.testing.assert_allclose(np.array(got) / scale, np.array(ref) / scale, rtol=0,
-                                   atol=1e-12)
-        hits += abs(cf * BODY.l * math.sin(st[3])) > PHYSICAL_MARGIN - 1e-12
-    return hits
-
-
-@pytest.mark.parametrize("ground", [ski_slope(length=120.0, width=120.0, cell=2.0),
-                                    Plane(math.radians(25), 0.7, 1.0, -2.0, 3.0)],
-                         ids=["mogul slope", "plane"])
-def test_one_stage_is_terrain_steer(ground):
-    """One float stage = ``terrain_steer`` on a batch of one under the controller's terrain law
-    (about the plumb lean along the course, or the plumb lean without one), with the rate bound
-    active (anchors spread about the demand) and not, and with only the physical branch's
-    bound."""
-    rng = np.random.default_rng(8)
-    ctl = PhaseEllipse(BODY, W, TM, heading=-math.pi / 2)
-    ctl.begin_run(SKIER.limits)
-    _stage_vs_steer(ground, ctl, rng, 0.05)
-    free = PhaseEllipse(BODY, W, TM)                # no heading: about the plumb lean
-    free.begin_run(SKIER.limits)
-    _stage_vs_steer(ground, free, rng, 0.05)
-    _stage_vs_steer(ground, Straight(BODY), rng, 0.05)
-    # No size or rate bound: sharp demands meet the physical branch's bound (Section 3).
-    hit = _stage_vs_steer(ground, _Sharp(BODY), rng, 0.05, Limits())
-    assert hit > 30
-
-
 def _array_loop(figure, controller, ground, res, st, n, dt):
     """The terrain loop through the array path: the controller's own ``relative_state`` and
     ``terrain_cf_law``, and the state as a batch of one (shape (6, 1)) through
@@ -132,11 +70,11 @@ def _array_loop(figure, controller, ground, res, st, n, dt):
             controller.follow_speed(V_now)
         rel = controller.relative_state(ground, st[:, 0], t)
         controller.begin_step(t, rel)
-        _, cf, alpha, V_f, _, _ = terrain_steer(body, limits, res, ground, law1(t, st), st,
-                                                anchor, dt)
+        _, cf, alpha, V_f, _, _ = model.rhs(body, limits, ground, law1(t, st), st,
+                                                anchor, dt, resistance=res)
         rows.append((*st[:, 0], alpha[0], cf[0], V_f[0], rel[3]))
         anchor = cf
-        st = terrain_rk4_step(body, limits, res, ground, st, t, dt, law1, anchor)
+        st = model.rk4_step(body, limits, ground, st, t, dt, law1, anchor, resistance=res)
     return np.array(rows)
 
 
@@ -145,8 +83,8 @@ def test_fused_run_is_the_array_loop(case):
     """12 s of a slalom down the mogul field (speed changing every step, the feasible tables
     following it), the same without a course (the lean about the plumb lean), a traverse
     slalom on a plane, and a straight run: every column of every sample agrees with the array
-    loop to 1e-11 of its size (measured: 3e-12 at most, round-off carried by the controller's
-    feedback over 600 steps; 5e-11 without a course, measured 2.7e-11)."""
+    loop to 5e-11 of its size (measured: 1.1e-11 on the mogul slope, 7e-12 without a course,
+    2e-14 on the plane: round-off carried by the controller's feedback over 600 steps)."""
     slope = ski_slope(length=400.0, width=200.0, cell=2.0)
     fall = -math.pi / 2
     if case in ("mogul slope", "no course"):
@@ -161,13 +99,10 @@ def test_fused_run_is_the_array_loop(case):
         course = None if case == "no course" else heading      # no course: the plumb lean
         make = lambda: PhaseEllipse(BODY, W, TM, heading=course)         # noqa: E731
         s0 = (*slalom_start(BODY, W, TM, heading, x, y), BODY.V_cm)
-    fast = simulate_terrain(SKIER, make(), (n - 1) * dt, dt, s0, ground, res)
+    fast = simulate(SKIER, make(), (n - 1) * dt, dt, s0, ground=ground, resistance=res)
     ref = _array_loop(SKIER, make(), ground, res, s0, n, dt)
     cols = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm", "alpha_v", "C_f", "V_f")
-    # Without a course the lean is held about the plumb lean across the heading, which turns
-    # with the figure: the feedback carries more round-off (measured 2.7e-11 in alpha_v, the
-    # same before the stepper's frame was written through the slope along the heading).
-    tol = 5e-11 if case == "no course" else 1e-11
+    tol = 5e-11
     assert len(fast) == n
     for k, name in enumerate(cols):
         want = ref[:, k]
@@ -195,7 +130,7 @@ def test_a_controller_with_its_own_equilibrium_lean():
     def make():
         return _LeanAboutHalfThePlumb(BODY, W, TM, heading=fall + 0.5)
 
-    fast = simulate_terrain(SKIER, make(), (n - 1) * dt, dt, s0, slope, res)
+    fast = simulate(SKIER, make(), (n - 1) * dt, dt, s0, ground=slope, resistance=res)
     ref = _array_loop(SKIER, make(), slope, res, s0, n, dt)
     np.testing.assert_allclose(fast.theta_v, ref[:, 3], rtol=0, atol=1e-12)   # measured 1e-14
     np.testing.assert_allclose(fast.x, ref[:, 0], rtol=0, atol=1e-11)
@@ -224,7 +159,7 @@ def test_a_step_that_ends_off_the_grid_is_left_terrain():
 
     def run(field):
         ctl = PhaseEllipse(BODY, W, TM, heading=heading)
-        return simulate_terrain(SKIER, ctl, 20.0, dt, slalom_start(BODY, W, TM, heading), field)
+        return simulate(SKIER, ctl, 20.0, dt, slalom_start(BODY, W, TM, heading), ground=field)
 
     rec = _Recorder(HeightField(np.zeros((41, 400)), -10.0, -20.0, 1.0))
     run(rec)

@@ -10,9 +10,10 @@ from blender_turning.core import PhaseEllipse, Trajectory, preset, simulate, sla
 from blender_turning.core.controllers import Straight
 from blender_turning.core.errors import FellOver, LeftTerrain, Stopped
 from blender_turning.core.terrain import FLAT, HeightField, Plane, surface_frame
-from blender_turning.core.terrain_dynamics import RESISTANCE, Resistance, plumb_lean
+from blender_turning.core.model import RESISTANCE, Resistance, plumb_lean
 from blender_turning.core.terrain_gen import ski_slope
-from blender_turning.core.terrain_sim import NO_RESISTANCE, TargetSpeed, simulate_terrain
+from blender_turning.core.braking import TargetSpeed
+from blender_turning.core.model import NO_RESISTANCE
 
 SKIER = preset("skier")
 BODY = SKIER.body
@@ -31,17 +32,10 @@ def test_flat_ground_without_resistance_is_todays_path_bit_for_bit():
     same = simulate(SKIER, ctl, 20.0, 0.02, s0, ground=FLAT, resistance=NO_RESISTANCE)
     np.testing.assert_array_equal(same.data, today.data)
     assert np.all(today.z == 0.0) and np.all(today.V_cm == BODY.V_cm)
-    # The terrain loop itself on zero slope: today's trajectory to round-off.
+    # With friction the speed is free on zero slope too (docs/TERRAIN.md Section 4).
     ctl, _ = _slalom()
-    terrain = simulate_terrain(SKIER, ctl, 20.0, 0.02, s0, FLAT, NO_RESISTANCE)
-    assert np.abs(today.theta_v).max() > 0.3                 # a real slalom
-    for name in STATE:
-        np.testing.assert_allclose(getattr(terrain, name), getattr(today, name), rtol=0,
-                                   atol=1e-12 * max(1.0, np.abs(getattr(today, name)).max()),
-                                   err_msg=name)
-    np.testing.assert_allclose(terrain.s, today.s, rtol=1e-13, atol=1e-12)
-    assert np.all(terrain.z == 0.0) and np.all(terrain.V_cm == BODY.V_cm)
-    assert terrain.meta["ground"] == "flat"
+    slowed = simulate(SKIER, ctl, 2.0, 0.02, s0, ground=FLAT, resistance=RESISTANCE["skier"])
+    assert slowed.V_cm[-1] < BODY.V_cm - 0.5 and slowed.meta["ground"] == "flat"
 
 
 def test_straight_run_down_the_fall_line_through_simulate():

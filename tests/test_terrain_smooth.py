@@ -11,7 +11,7 @@ import pytest
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.params import Limits
 from blender_turning.core.terrain import HeightField
-from blender_turning.core.terrain_dynamics import RESISTANCE, terrain_steer
+from blender_turning.core.model import RESISTANCE, rhs as model_rhs
 
 ROUGH = HeightField(np.random.default_rng(11).normal(0.0, 0.4, (9, 12)), -3.0, 1.0, 0.7)
 
@@ -128,7 +128,7 @@ def test_a_run_on_a_height_field_converges_as_the_step_shrinks(fine):
 
 def test_the_fine_run_is_the_adaptive_solution_of_the_model(fine):
     """The same 40 s by scipy's DOP853 at rtol = atol = 1e-10 from the model's right-hand side
-    (:func:`terrain_steer` under the controller's terrain law, the reference the fused stepper
+    (:func:`..core.model.rhs` under the controller's terrain law, the reference the fused stepper
     is held to): the dt = 0.00125 s run's lean is within 0.005 deg of it at every 0.02 s.
     Measured: 1.8e-4 deg (the dt = 0.02 s run: 0.024 deg); the reference itself moves 4.9e-4
     deg from rtol 1e-9 to 1e-10, so the bound is 10 times what the reference can resolve and
@@ -144,8 +144,8 @@ def test_the_fine_run_is_the_adaptive_solution_of_the_model(fine):
     def rhs(t, y):
         st = y.tolist()
         ctl.follow_speed(st[5])               # as the loop does (the law does not use it here)
-        return terrain_steer(SMOOTH.body, SMOOTH.limits, res, ROLLING, float(law(t, st)),
-                             st)[0]
+        return model_rhs(SMOOTH.body, SMOOTH.limits, ROLLING, float(law(t, st)),
+                         st, resistance=res)[0]
 
     t_eval = np.arange(2001) * 0.02
     sol = solve_ivp(rhs, (0.0, 40.0), np.array(START), method="DOP853", t_eval=t_eval,

@@ -12,8 +12,8 @@ Ground mesh (``turning.ground``).
   refused, naming where.
 - Obstacles stay the xy footprints of their objects (``scene_adapters.obstacle_footprints``);
   the Ground mesh itself is never one (it is the figure's own, ``follow_scene.own_objects``).
-- The planner runs :class:`..core.planner.terrain_problem.TerrainProblem`: the speed is a
-  state, starting at the Speed setting at the scene's first frame, with the figure's Slope
+- The planner runs :class:`..core.planner.Problem` on the ground
+  (:mod:`..core.planner.terrain_problem`): the speed is a state, starting at the Speed setting at the scene's first frame, with the figure's Slope
   Friction, Drag Area and Air Density (``turning.terrain``).  *Target Speed* is not used: it
   steers Bake Turns' turns across the hill, while on a path the drawn line sets where the figure
   goes, and so its speed.
@@ -130,7 +130,7 @@ def plan_inputs(context, fig, figure, depsgraph) -> tuple:
 def edge_note(exc, ground: MeshGround | None, reach: float) -> str:
     """For a plan that failed within one horizon's reach of the ground's edge: `` (ground
     'Slope' ends 12.0 m from there; ...)``; otherwise ``''``.  Branches that leave the ground
-    are clipped (``TerrainProblem``), so near its edge every branch may be."""
+    are clipped (``core/planner/terrain_problem.py``), so near its edge every branch may be."""
     if ground is None or not isinstance(exc, PlanInfeasible):
         return ""
     x, y = exc.position

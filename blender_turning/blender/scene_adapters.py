@@ -11,7 +11,7 @@ import numpy as np
 
 from ..core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
 from ..core.params import PRESETS
-from ..core.terrain_dynamics import RESISTANCE, Resistance
+from ..core.model import RESISTANCE, Resistance
 from . import bake, compat
 from .foot_track import OWNER as FOOT_TRACK_OWNER
 from .props import BODY_FIELDS, LIMIT_FIELDS

@@ -1,6 +1,7 @@
 """The physics and control core: numpy and the standard library only (no bpy, no mathutils)."""
 from .controllers import CONTROLLERS, OpenLoop, PhaseEllipse, Straight
-from .errors import FellOver, TurningError
+from .errors import FellOver, RunEnded, TurningError
+from .model import RESISTANCE, Flat, HeightField, Plane, Resistance
 from .params import PRESETS, BodyParams, Figure, Limits, preset
 from .schedule import Schedule, TurnSchedule, read_schedule_csv
 from .simulate import DEFAULT_DT, run, simulate, slalom_start
@@ -8,6 +9,6 @@ from .braking import TargetSpeed
 from .trajectory import COLUMNS, Trajectory
 
 __all__ = ["CONTROLLERS", "OpenLoop", "PhaseEllipse", "Straight", "TargetSpeed", "FellOver",
-           "TurningError", "PRESETS", "BodyParams", "Figure", "Limits", "preset", "Schedule", "TurnSchedule",
+           "RunEnded", "TurningError", "Flat", "Plane", "HeightField", "Resistance", "RESISTANCE", "PRESETS", "BodyParams", "Figure", "Limits", "preset", "Schedule", "TurnSchedule",
            "read_schedule_csv", "DEFAULT_DT", "run", "simulate", "slalom_start", "COLUMNS",
            "Trajectory"]

@@ -1,6 +1,6 @@
 """Speed control by turning on terrain (docs/TERRAIN.md Section 6): skiers brake by
 turning across the hill.  :class:`TargetSpeed` is the setting, :class:`_Braking` the rule at run
-time: the heading schedule :func:`.terrain_sim.simulate_terrain` gives the phase-ellipse
+time: the heading schedule :func:`.terrain_sim.simulate_free` gives the phase-ellipse
 controller (``brake.update(t, state)`` once per step, ``brake(t)`` the commanded heading).
 
 The rule, from the speed equation (docs/TERRAIN.md Section 3)

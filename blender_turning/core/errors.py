@@ -6,16 +6,32 @@ class TurningError(Exception):
     """Base class of the core's domain errors."""
 
 
-class FellOver(TurningError):
-    """The lean exceeded the fall bound. Carries the time and the trajectory up to there."""
+class RunEnded(TurningError):
+    """A run that ended early as a physical event: the figure fell over, stopped or left the
+    terrain.  Carries the time ``t`` (s), the foot's ``position`` ``(x, y)`` (m, ``None`` when
+    no trajectory came with it), the ``reason`` (the message) and the ``trajectory`` up to
+    there."""
+
+    def __init__(self, t: float, what: str, detail: str = "", trajectory=None, position=None):
+        if position is None and trajectory is not None and len(trajectory.t):
+            position = (trajectory.x[-1], trajectory.y[-1])
+        self.position = None if position is None else (float(position[0]), float(position[1]))
+        where = "" if self.position is None else \
+            f" at ({self.position[0]:.1f}, {self.position[1]:.1f}) m"
+        self.reason = f"the figure {what} at t = {t:.2f} s{where}{detail}"
+        super().__init__(self.reason)
+        self.t = t
+        self.trajectory = trajectory
+
+
+class FellOver(RunEnded):
+    """The lean exceeded the fall bound."""
 
     def __init__(self, t: float, theta_v: float, trajectory=None, cause: str | None = None):
-        super().__init__(f"the figure fell over at t = {t:.2f} s (lean {theta_v * 57.29578:.1f} deg)"
-                         + (f"; {cause}" if cause else ""))
+        super().__init__(t, "fell over", f" (lean {theta_v * 57.29578:.1f} deg)"
+                         + (f"; {cause}" if cause else ""), trajectory)
         self.cause = cause
-        self.t = t
         self.theta_v = theta_v
-        self.trajectory = trajectory
 
 
 class PlanInfeasible(TurningError):
@@ -32,28 +48,22 @@ class PlanInfeasible(TurningError):
         self.stats = stats
 
 
-class Stopped(TurningError):
-    """On terrain (speed a state): the figure slowed below the speed the turning model needs
-    (friction and drag beat the slope).  Carries the time and the trajectory up to there."""
+class Stopped(RunEnded):
+    """With the speed a state: the figure slowed below the speed the turning model needs
+    (friction and drag beat the slope)."""
 
     def __init__(self, t: float, V_cm: float, trajectory=None):
-        super().__init__(f"the figure stopped at t = {t:.2f} s (speed {V_cm:.2f} m/s): the slope "
-                         "is too gentle for the friction and drag")
-        self.t = t
+        super().__init__(t, "stopped", f" (speed {V_cm:.2f} m/s): the slope is too gentle for "
+                         "the friction and drag", trajectory)
         self.V_cm = V_cm
-        self.trajectory = trajectory
 
 
-class LeftTerrain(TurningError):
-    """The figure ran off the edge of the terrain (a height field covers a finite area).
-    Carries the time, the last position on it and the trajectory up to there."""
+class LeftTerrain(RunEnded):
+    """The figure ran off the edge of the terrain (a height field covers a finite area);
+    ``position`` is the last position on it."""
 
     def __init__(self, t: float, position, trajectory=None):
-        x, y = float(position[0]), float(position[1])
-        super().__init__(f"the figure left the terrain at t = {t:.2f} s near ({x:.1f}, {y:.1f}) m")
-        self.t = t
-        self.position = (x, y)
-        self.trajectory = trajectory
+        super().__init__(t, "left the terrain", "", trajectory, position)
 
 
 class PathNotFinished(TurningError):

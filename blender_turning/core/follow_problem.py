@@ -12,8 +12,8 @@ the same inputs, with the same run-out, time limit, start state and end test.
   foot is within one horizon's reach of the path (what the planner can see).
 - Start: the path's first point, heading along its first non-degenerate tangent
   (:meth:`.path.HermitePath.start_direction`), upright, at rest in lean.
-- Terrain: given a ``ground`` (:mod:`.terrain`), the problem is a
-  :class:`.planner.terrain_problem.TerrainProblem` with the speed a state (start: the body's
+- Terrain: given a ``ground`` (:mod:`.terrain`), the problem is the
+  :class:`.planner.Problem` on it, with the speed a state where it is not held (start: the body's
   ``V_cm``, the sixth entry of the start state) and the time limit counts at the start speed.
 """
 from __future__ import annotations
@@ -67,7 +67,7 @@ class FollowSetup:
     """The terrain (:class:`.terrain.Plane`, :class:`.terrain.HeightField`); ``None``: flat
     ground at the speed profile, the paper's problem."""
     resistance: object = None
-    """Friction and drag on terrain (:class:`.terrain_dynamics.Resistance`; ``None``: none)."""
+    """Friction and drag on terrain (:class:`.model.Resistance`; ``None``: none)."""
 
     @property
     def speed_profile(self) -> SpeedProfile:
@@ -79,13 +79,9 @@ class FollowSetup:
         speed = self.speed_profile
         run_out = self.run_out
         if self.ground is not None:
-            from .planner.terrain_problem import TerrainProblem
-            from .terrain_dynamics import Resistance
-            res = self.resistance or Resistance(mu=0.0, CdA=0.0)
-
             def make(dist, obstacles):
-                return TerrainProblem(self.figure, dist, obstacles, self.settings, self.ground,
-                                      res)
+                return cls(self.figure, dist, obstacles, self.settings, ground=self.ground,
+                           resistance=self.resistance)
         else:
             def make(dist, obstacles):
                 return cls(self.figure, dist, obstacles, self.settings, speed)

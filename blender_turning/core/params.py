@@ -42,14 +42,17 @@ class BodyParams:
                              f"outside the allowed range {RANGES['J']}")
 
     def at_speed(self, V_cm: float) -> "BodyParams":
-        """This body moving at ``V_cm`` (m/s): ``replace(self, V_cm=V_cm)`` checking only the
-        new speed (the other fields, and ``J``, were checked when this body was made).  On
-        terrain the speed is a state and the controller follows it every step
+        """This body moving at ``V_cm`` (m/s), a speed the model reached: ``replace(self,
+        V_cm=V_cm)`` without the table of ranges (which bounds what a user gives, not what the
+        physics makes: docs/TERRAIN.md Section 3); only a positive finite speed is a speed.
+        On terrain the speed is a state and the controller follows it every step
         (:meth:`.controllers.base.Controller.follow_speed`), where ``replace``'s full check
         cost ~4 us a step."""
+        if not 0.0 < V_cm < math.inf:
+            raise ValueError(f"V_cm = {V_cm!r} m/s is not a positive finite speed")
         body = object.__new__(type(self))
         body.__dict__.update(self.__dict__)
-        body.__dict__["V_cm"] = check("V_cm", V_cm, "V_cm")
+        body.__dict__["V_cm"] = float(V_cm)
         return body
 
     @cached_property

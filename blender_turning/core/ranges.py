@@ -138,7 +138,7 @@ RANGES: dict[str, Range] = {
     "slope": Range(0.0, 60 * _DEG, "rad", "flat to steeper than any skiable or rideable slope "
                    "(an extreme couloir is ~55 deg)"),
     "friction": Range(0.0, 1.0, "", "snow friction or rolling resistance mu (0.005 to 0.1 for "
-                      "the sports, core.terrain_dynamics.RESISTANCE)"),
+                      "the sports, core.model.RESISTANCE)"),
     "drag_area": Range(0.0, 10.0, "m^2", "C_d A, 0.3-0.6 m^2 for a rider or skier"),
     "air_density": Range(0.0, 2.0, "kg/m^3", "vacuum to well above sea level's 1.225"),
     "cell": Range(0.0, 1e4, "m", "a height field's grid spacing", lo_open=True),
@@ -161,7 +161,7 @@ RANGES: dict[str, Range] = {
     "object_height": Range(0.01, 1000.0, "m", "an obstacle object's height"),
     "plan_curvature_rate": Range(0.0, 100.0, "1/(m s)", "the planner's dC_f/dt (0: the sport "
                                  "preset's); as dC_f_max"),
-    # -- terrain (docs/TERRAIN.md Section 3; as core.terrain_dynamics.Resistance checks them) ----
+    # -- terrain (docs/TERRAIN.md Section 3; as core.model.Resistance checks them) ----
     "mu": Range(0.0, 1.0, "", "snow or rolling friction coefficient: waxed ski 0.02-0.1, tyre "
                 "0.003-0.006; 1 is rubber on dry rock"),
     "CdA": Range(0.0, 10.0, "m^2", "drag area: a tucked skier 0.15, an upright rider 0.6; 10 m^2 "

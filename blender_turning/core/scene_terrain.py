@@ -9,7 +9,7 @@ path is drawn on and what slows the figure there.
   ``"file": "ground.npy"`` instead of ``heights``, a 2-D numpy array, the path relative to the
   scene file;
 - either may give ``friction``, ``drag_area``, ``air_density``; those not given are the sport's
-  (:data:`.terrain_dynamics.RESISTANCE`, sources there).
+  (:data:`.model.RESISTANCE`, sources there).
 
 Every problem is a ``FieldError`` naming the file and the field (ranges: :mod:`.ranges`).
 """
@@ -23,7 +23,7 @@ import numpy as np
 
 from .ranges import RANGES
 from .terrain import HeightField, Plane
-from .terrain_dynamics import RESISTANCE, Resistance
+from .model import RESISTANCE, Resistance
 from .validate import Fields, check
 
 __all__ = ["read_terrain"]

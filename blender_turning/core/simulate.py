@@ -22,7 +22,8 @@ from .params import BodyParams, Figure, Limits, check_range
 from .phase import phase
 from .schedule import Schedule
 from .terrain import FLAT
-from .terrain_sim import NO_RESISTANCE, simulate_terrain
+from .model import NO_RESISTANCE, Resistance, speed_held
+from .terrain_sim import simulate_free
 from .trajectory import COLUMNS, Trajectory, body_meta
 
 DEFAULT_DT = 0.02
@@ -142,32 +143,32 @@ def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: flo
 
 
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
-             state0=None, C_f0=None, meta: dict | None = None, speed=None, ground=None,
-             resistance=None, target_speed=None) -> Trajectory:
-    """Simulate one figure; raise :class:`FellOver` (with the trajectory so far) if it falls.
-    ``speed``: ``V_cm`` over time (see :func:`run`).
+             state0=None, C_f0=None, meta: dict | None = None, speed=None, ground=FLAT,
+             resistance: Resistance | None = None, target_speed=None) -> Trajectory:
+    """Simulate one figure on ``ground`` (:mod:`.model`: ``Flat()``, the default, a
+    :class:`.terrain.Plane` or a :class:`.terrain.HeightField`); raise a
+    :class:`.errors.RunEnded` (:class:`.errors.FellOver`, :class:`.errors.Stopped`,
+    :class:`.errors.LeftTerrain`, with the trajectory so far) if the run ends early.
 
-    On terrain (docs/TERRAIN.md): ``ground`` (a :class:`.terrain.Plane` or
-    :class:`.terrain.HeightField`), ``resistance`` (:class:`.terrain_dynamics.Resistance`) and
-    ``target_speed`` (m/s or :class:`.terrain_sim.TargetSpeed`) send the run to
-    :func:`.terrain_sim.simulate_terrain`, where the speed is a state (``state0`` may carry
-    ``V_cm`` as a sixth entry).  Flat ground without friction, drag or a target speed stays here:
-    today's model, bit for bit."""
-    if ground is not None or resistance is not None or target_speed is not None:
-        flat = ground is None or getattr(ground, "flat", False)
-        free = resistance is None or (resistance.mu == 0.0 and resistance.CdA == 0.0)
-        if not (flat and free and target_speed is None):
-            if speed is not None:
-                raise ValueError("speed is a state on terrain (it follows the slope): give a "
-                                 "speed schedule or a ground, not both")
-            return simulate_terrain(figure, controller, duration, dt, state0,
-                                    FLAT if ground is None else ground,
-                                    NO_RESISTANCE if resistance is None else resistance,
-                                    C_f0, meta, target_speed)
-        if ground is not None and ground.z0 != 0.0:          # flat ground at a height
-            traj = simulate(figure, controller, duration, dt, state0, C_f0, meta)
-            return Trajectory.from_columns({**traj.columns(), "z": traj.z + ground.z0},
-                                           traj.meta)
+    The speed: on flat ground with nothing slowing the figure (``resistance`` ``None`` or free,
+    no ``target_speed``) the paper's implicit forward force holds it (:func:`.model.speed_held`)
+    at ``figure.body.V_cm`` or along ``speed`` (``V_cm`` over time, see :func:`run`): the paper's
+    model, bit for bit.  Anywhere else it is a state that balances energy (docs/TERRAIN.md
+    Sections 3-4; ``state0`` may carry ``V_cm`` as a sixth entry), slowed by ``resistance``
+    (:class:`.model.Resistance`) and braked to ``target_speed`` (m/s or
+    :class:`.braking.TargetSpeed`) by turning across the hill.  The trajectory's ``z`` is the
+    ground under the foot."""
+    ground = FLAT if ground is None else ground
+    res = NO_RESISTANCE if resistance is None else resistance
+    if target_speed is not None or not speed_held(ground, res):
+        if speed is not None:
+            raise ValueError("speed is a state on terrain (it follows the slope): give a "
+                             "speed schedule or a ground, not both")
+        return simulate_free(figure, controller, duration, dt, state0, ground, res, C_f0, meta,
+                             target_speed)
+    if ground.z0 != 0.0:                                  # flat ground at a height
+        traj = simulate(figure, controller, duration, dt, state0, C_f0, meta, speed)
+        return Trajectory.from_columns({**traj.columns(), "z": traj.z + ground.z0}, traj.meta)
     if state0 is not None and len(state0) == 6:          # a terrain state on flat ground
         figure = replace(figure, body=replace(figure.body, V_cm=float(state0[5])))
         state0 = tuple(state0)[:5]

@@ -1,6 +1,6 @@
 """One figure on terrain on Python floats: the right-hand side of the terrain loop fused.
 
-:func:`.terrain_dynamics.terrain_steer` and :func:`.terrain_dynamics.terrain_rk4_step` serve
+:func:`.model.rhs` and :func:`.model.rk4_step` serve
 arrays (the planner's batch, a trajectory's columns); stepping one figure through them costs
 numpy's per-call dispatch at every operation, ~10x the flat fused path (:mod:`.one_figure`).
 Here one RK4 stage is one function on floats with the body's constants bound as locals, as
@@ -18,17 +18,17 @@ Here one RK4 stage is one function on floats with the body's constants bound as 
   to round-off, ~25 fewer operations a stage);
 - the controller's lean law about the local plumb lean
   (:meth:`.controllers.base.Controller.equilibrium_lean`,
-  :func:`.terrain_dynamics.plumb_lean_along`: ``atan((h_y cos H - h_x sin H) / sqrt(1 + q^2))``,
+  :func:`.model.plumb_lean_along`: ``atan((h_y cos H - h_x sin H) / sqrt(1 + q^2))``,
   ``q = h_x cos H + h_y sin H`` along the course ``H``, read once when it is constant) and
   Eq. (1) on terrain
-  (:func:`.terrain_dynamics.terrain_inverse_cf`), docs/TERRAIN.md Section 6;
+  (:func:`.model.inverse_cf`), docs/TERRAIN.md Section 6;
 - Section 3's bounds on ``C_f`` (:func:`.dynamics.bound_cf`);
 - Eq. (21), Eq. (2) on terrain, the normal force and the speed equation
-  (:func:`.terrain_dynamics.terrain_steer`, docs/TERRAIN.md Sections 2-3).
+  (:func:`.model.rhs`, docs/TERRAIN.md Sections 2-3).
 
 A controller with a terrain law or an equilibrium lean of its own (:class:`.controllers.Straight`)
 is asked through its methods instead.  ``tests/test_terrain_fast.py`` holds this stage to
-:func:`.terrain_dynamics.terrain_steer` on numpy arrays to 1e-12 and whole runs to the array
+:func:`.model.rhs` on numpy arrays to 1e-12 and whole runs to the array
 loop.
 """
 from __future__ import annotations
@@ -39,7 +39,7 @@ from .controllers.base import Controller
 from .dynamics import PHYSICAL_MARGIN
 from .params import BodyParams, Limits
 from .terrain import surface_frame
-from .terrain_dynamics import Resistance
+from .model import Resistance
 
 __all__ = ["TerrainStage"]
 
@@ -164,13 +164,17 @@ class TerrainStage:
                 cf = anchor - step if cf < anchor - step else \
                     anchor + step if cf > anchor + step else cf
             # Eq. (21), Eq. (2) on terrain, the normal force and the speed (Sections 2-3).
-            V_f = V / (1.0 - cf * ls)
+            ratio = 1.0 / (1.0 - cf * ls)
+            V_f = V * ratio
             G_n = g_n + V_f * V_f * kappa
             alpha = (G_n * sn + (g_b - V * V_f * cf) * cs) / J
             # N / m, and theta_dir' = V_f (C_f turn_gain + kappa_n bend_gain) (module doc).
             N_m = G_n - l * (alpha * sn + om * om * cs)
             turn = V_f * nz * (cf * (w * w) + kappa * across * w)
             u = V_f / w
-            return (u * c, u * s, turn, om, alpha, -g * tz - mu * N_m - kd * VV, alpha, V_f, cf)
+            # The speed: gravity on the body, friction at the foot, drag, the lean's share
+            # (docs/TERRAIN.md Section 4).
+            dV = -g * tz - mu * N_m * ratio - kd * VV + l * om * cs * V_f * cf
+            return (u * c, u * s, turn, om, alpha, dV, alpha, V_f, cf)
 
         return stage, lean

@@ -1,16 +1,17 @@
-"""Simulation on terrain: the loop of Fig. 4 with the ground and speed as a state.
+"""The loop of Fig. 4 with the speed a state: one figure on any ground, behind
+:func:`.simulate.simulate`.
 
-:func:`simulate_terrain` steps one figure on a surface (:mod:`.terrain`) with friction and drag
-(:class:`.terrain_dynamics.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
-``C_f`` bounded at every stage as on flat ground, as :func:`.terrain_dynamics.terrain_rk4_step`).
+:func:`simulate_free` steps one figure on a surface (:mod:`.terrain`) with friction and drag
+(:class:`.model.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
+``C_f`` bounded at every stage as on flat ground, as :func:`.model.rk4_step`).
 Each step the controller is re-targeted to the current speed
 (:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from the local plumb lean
 (:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1) on terrain
 (:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes by turning
 across the hill (docs/TERRAIN.md Section 6).
 
-:func:`.simulate.simulate` sends a run here when it is given a ground that is not flat, friction
-or drag, or a target speed; flat ground without them stays on today's path.
+:func:`.simulate.simulate` sends a run here unless the speed is held
+(:func:`.model.speed_held`: flat ground with nothing slowing the figure, the paper's model).
 """
 from __future__ import annotations
 
@@ -26,13 +27,12 @@ from .params import Figure, check_range
 from .phase import phase
 from .schedule import Schedule
 from .terrain import FLAT, HeightField, OffTerrain, Plane, surface_frame
-from .terrain_dynamics import Resistance, terrain_leg_force
+from . import model
+from .model import NO_RESISTANCE, Resistance
 from .terrain_one_figure import TerrainStage
 from .trajectory import Trajectory, body_meta, resistance_meta
 
-__all__ = ["TargetSpeed", "simulate_terrain", "describe_ground", "MIN_SPEED", "NO_RESISTANCE"]
-
-NO_RESISTANCE = Resistance(mu=0.0, CdA=0.0)
+__all__ = ["simulate_free", "describe_ground", "MIN_SPEED"]
 
 MIN_SPEED = 0.5
 """m/s: below it the run stops (:class:`.errors.Stopped`).  The turning model is a body carried
@@ -54,10 +54,10 @@ def describe_ground(ground) -> str:
     return type(ground).__name__
 
 
-def simulate_terrain(figure: Figure, controller: Controller, duration: float, dt: float,
-                     state0=None, ground=FLAT, resistance: Resistance = NO_RESISTANCE,
-                     C_f0=None, meta: dict | None = None,
-                     target_speed: TargetSpeed | float | None = None) -> Trajectory:
+def simulate_free(figure: Figure, controller: Controller, duration: float, dt: float,
+                  state0=None, ground=FLAT, resistance: Resistance = NO_RESISTANCE,
+                  C_f0=None, meta: dict | None = None,
+                  target_speed: TargetSpeed | float | None = None) -> Trajectory:
     """Simulate one figure on ``ground`` with ``resistance``; returns a :class:`Trajectory`
     whose ``z`` is the ground under the foot and ``V_cm`` the speed (a state).
 
@@ -118,7 +118,7 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
     """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean from
     the controller's equilibrium lean)``.  Classical RK4 on Python floats, written out
     (:mod:`.terrain_one_figure` for the stages), ``C_f`` bounded at every stage relative to the
-    curvature at the step's start, as :func:`.terrain_dynamics.terrain_rk4_step` does.
+    curvature at the step's start, as :func:`.model.rk4_step` does.
     Returns ``(rows, None | "fell" | "stopped" | "left")``."""
     controller.begin_run(limits)
     rhs = TerrainStage(body, limits, resistance, ground, controller)
@@ -184,7 +184,7 @@ def _trajectory(body, ground, rec, dt, info) -> Trajectory:
     ds = 0.5 * (V_f[1:] + V_f[:-1]) * dt                 # along the surface (the foot's speed)
     cols = {"t": np.arange(n) * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
             "omega_v": om, "alpha_v": alpha, "C_f": cf, "V_f": V_f, "z": fr.z, "V_cm": V,
-            "F_leg": terrain_leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
+            "F_leg": model.leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
             "phi": phase(rel, om, tm, w),
             "s": np.concatenate([[0.0], np.cumsum(ds)])}
     return Trajectory.from_columns(cols, info)

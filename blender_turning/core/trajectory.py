@@ -109,7 +109,7 @@ class Trajectory:
         ``ground`` it ran on, :mod:`.terrain`, unless flat; or a trajectory without meta, e.g.
         read from a CSV, given ``ground=`` and ``resistance=``) the state is ``(x, y, theta_dir, theta_v, omega_v,
         V_cm)`` and all six, and ``s``, are Hermite-interpolated with the terrain model's
-        derivatives at the samples (:func:`.terrain_dynamics.terrain_steer` under the recorded
+        derivatives at the samples (:func:`.model.rhs` under the recorded
         ``C_f``; the friction and drag recorded in ``meta``).  ``z`` is the ground's height at
         the interpolated ``(x, y)``; ``alpha_v``, ``V_f``, ``F_leg`` come from the terrain
         model at the row's state; ``phi`` (the controller's phase, about its equilibrium lean,
@@ -217,7 +217,7 @@ def body_from_meta(meta: dict) -> BodyParams | None:
 
 
 def resistance_meta(resistance) -> dict:
-    """The ``meta`` entries that record a :class:`.terrain_dynamics.Resistance`."""
+    """The ``meta`` entries that record a :class:`.model.Resistance`."""
     return {f"resistance.{f.name}": float(getattr(resistance, f.name))
             for f in fields(resistance)}
 
@@ -225,22 +225,23 @@ def resistance_meta(resistance) -> dict:
 def _terrain_rows(body, ground, res, meta, t, c, tn, i, u) -> dict:
     """:meth:`Trajectory.resample` on terrain: the rows at times ``tn`` (step ``i``, fraction
     ``u``); ``res`` the resistance (``None``: the one recorded in ``meta``, else none)."""
-    from .terrain_dynamics import Resistance, terrain_leg_force, terrain_steer
+    from . import model
+    from .model import Resistance
     if res is None:
         res = Resistance(**{k: float(meta[f"resistance.{k}"]) for k in ("mu", "CdA", "rho")
                             if f"resistance.{k}" in meta})
     free = Limits()                         # the recorded C_f is already bounded
     state = tuple(c[k] for k in ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm"))
-    deriv, _, _, V_f, _, _ = terrain_steer(body, free, res, ground, c["C_f"], state)
+    deriv, _, _, V_f, _, _ = model.rhs(body, free, ground, c["C_f"], state, resistance=res)
     names = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
     out = {"t": tn, **{k: _hermite(t, c[k], dy, i, u) for k, dy in zip(names, deriv)},
            "s": _hermite(t, c["s"], V_f, i, u)}
     cf = out["C_f"] = (1.0 - u) * c["C_f"][i] + u * c["C_f"][i + 1]
     st = tuple(out[k] for k in names)
-    _, _, alpha, V_f, _, fr = terrain_steer(body, free, res, ground, cf, st)
+    _, _, alpha, V_f, _, fr = model.rhs(body, free, ground, cf, st, resistance=res)
     out["alpha_v"], out["V_f"], out["z"] = alpha, V_f, fr.z
     th, om, V = out["theta_v"], out["omega_v"], out["V_cm"]
-    out["F_leg"] = terrain_leg_force(body, th, om, alpha, cf, V, V_f, fr)[0]
+    out["F_leg"] = model.leg_force(body, th, om, alpha, cf, V, V_f, fr)[0]
     # The controller's phase is about its equilibrium lean, which the trajectory does not
     # record: interpolated along the step (the shorter way round), exact at the samples.
     dphi = np.mod(c["phi"][i + 1] - c["phi"][i] + np.pi, 2 * np.pi) - np.pi

@@ -15,7 +15,8 @@ from ..dynamics import THETA_V, inverse_cf
 from ..one_figure import scalar_inverse_cf
 from ..params import BodyParams
 from ..terrain import surface_frame
-from ..terrain_dynamics import plumb_lean, plumb_lean_along, terrain_inverse_cf
+from .. import model
+from ..model import plumb_lean, plumb_lean_along
 
 
 class Controller:
@@ -77,7 +78,7 @@ class Controller:
                 st = [float(v) for v in st]
             fr = surface_frame(ground, st[0], st[1], st[2], g)
             rel = (st[0], st[1], st[2], float(st[3] - self.equilibrium_lean(fr, t)), st[4])
-            return terrain_inverse_cf(self.body, fr, st[3], self.desired_alpha(t, rel), st[5])
+            return model.inverse_cf(self.body, fr, st[3], self.desired_alpha(t, rel), st[5])
 
         return law
 

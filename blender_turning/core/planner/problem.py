@@ -26,10 +26,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..dynamics import PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, leg_force, steer
+from ..model import V_CM, speed_held
+from ..terrain import FLAT
 from ..obstacles import Obstacles
 from ..params import Figure
 from ..path import PathDistance
-from . import flat_stage
+from . import flat_stage, terrain_problem as free_speed
 from .settings import PlannerSettings, SpeedProfile
 
 __all__ = ["Problem", "StageResult"]
@@ -55,14 +57,33 @@ class StageResult:
 
 class Problem:
     """Everything a search needs, as plain arrays (the Blender side builds one from a curve and
-    objects).  ``distance`` is a :class:`PathDistance`, ``obstacles`` an :class:`Obstacles`."""
+    objects).  ``distance`` is a :class:`PathDistance`, ``obstacles`` an :class:`Obstacles`.
+
+    On any ``ground`` (:mod:`..model`; flat by default) with ``resistance``: where the speed is
+    held (:func:`..model.speed_held`, the paper's case) nodes have the 5 rows of
+    :data:`..dynamics.STATE` and the speed follows ``speed``; otherwise (:attr:`free`) the speed
+    is a sixth row starting at ``V0`` (default the body's) and the search clips what
+    :mod:`.terrain_problem` says."""
 
     #: Other figures' bodies as moving obstacles (:class:`..moving.MovingBodies`), or ``None``
     #: (set with :func:`..moving.around`).
     movers = None
 
     def __init__(self, figure: Figure, distance: PathDistance, obstacles: Obstacles,
-                 settings: PlannerSettings, speed: SpeedProfile | None = None):
+                 settings: PlannerSettings, speed: SpeedProfile | None = None, ground=FLAT,
+                 resistance=None, V0: float | None = None):
+        from ..model import NO_RESISTANCE
+        self.ground = FLAT if ground is None else ground
+        self.resistance = NO_RESISTANCE if resistance is None else resistance
+        #: The speed is a state (a sixth row), not held.
+        self.free = not speed_held(self.ground, self.resistance)
+        if self.free:
+            if speed is not None and not speed.is_constant:
+                raise ValueError("the speed is a state on this ground (it follows the slope): "
+                                 "give a speed profile or a ground, not both")
+            V0 = figure.body.V_cm if V0 is None else float(V0)
+            speed = SpeedProfile.constant(V0)
+            self.V0 = V0
         self.figure = figure
         self.body = figure.body
         self.limits = figure.limits
@@ -100,7 +121,9 @@ class Problem:
         self._reach = False                       # built on first use (reach.py)
         self._pairs = False                       # built on first use (spacing.py)
         #: The stage's RK4 fused on flat ground at a constant speed (flat_stage.py).
-        self._fused = flat_stage.applies(self)
+        self._fused = not self.free and flat_stage.applies(self)
+        if self.free:
+            free_speed.setup(self, lean)
 
     @property
     def flat_rhs(self) -> bool:
@@ -131,16 +154,27 @@ class Problem:
         self.fall_table()                       # built once, shared by the local copies
         p = type(self).__new__(type(self))
         p.__dict__.update(self.__dict__)
+        if self.free:
+            if state is not None:
+                p.v_max = free_speed.speed_limit(self, float(state[V_CM]))
+            p._runaways = np.zeros(1, np.int64)
+            r = p.reach()
         p.distance = self.distance.near(center, r)
         # One stage more for the dead-end test (search.py), and the body's ground point.
-        far = r + self.v_max * self.settings.t_stage * 1.001 + self.body.l
+        far = r + p.v_max * self.settings.t_stage * 1.001 + self.body.l
         p.obstacles = self.obstacles.near(center, far)
         if self.movers is not None:
             st = self.settings
             p.movers = self.movers.near(center, far, t, None if t is None else
                                         t + (st.n_stages + 1) * st.t_stage * 1.001 + st.dt)
-        p._pairs = False                        # its own path samples
+        p._pairs = False if not self.free else None     # its own path samples
         return p
+
+    @property
+    def runaways(self) -> int:
+        """Branches this search clipped as run-aways (free speed only; :mod:`.terrain_problem`):
+        the receding horizon hands no proof on from a search that clipped any."""
+        return int(self._runaways[0]) if self.free else 0
 
     def lower_bound(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Admissible bound on the cost still to come after nodes at ``depth`` whose last sample
@@ -286,7 +320,9 @@ class Problem:
     def _rhs(self, x, V, tau, C0, u, anchor, rate_step, out, bad=None):
         """:func:`..dynamics.steer` under the stage's law ``C_f = C0 + u tau`` (Section 6.1),
         written into ``out`` (shape (5, m)).  Returns ``(C_f, alpha_v, V_f)``.  ``bad``: columns
-        the problem clips besides a fall (none on flat ground; on terrain: ``TerrainProblem``)."""
+        the problem clips besides a fall (none at a held speed; free: :mod:`.terrain_problem`)."""
+        if self.free:
+            return free_speed.rhs(self, x, tau, C0, u, anchor, rate_step, out, bad)
         d, cf, alpha, V_f = steer(self.body, self.limits, C0 + u * tau, x, anchor, rate_step, V)
         for row, v in enumerate(d):
             out[row] = v
@@ -380,6 +416,8 @@ class Problem:
 
     def end_rates(self, x, cf, t, s):
         """``(alpha_v, V_f)`` of the state ``x`` (shape ``(5, 1)``) at curvature ``cf``."""
+        if self.free:
+            return free_speed.end_rates(self, x, cf)
         V = self._speed_at(np.array([t]), np.array([s]))
         _, _, a, v = steer(self.body, self.limits, np.array([cf]), x, None, 0.0, V)
         return a, v
@@ -387,9 +425,11 @@ class Problem:
     def columns(self, S, A, C, V) -> dict:
         """Trajectory columns beyond the state: ``F_leg`` (Appendix A) and ``V_cm``, recovered
         from ``V_f`` by Eq. (21) so that a varying speed profile is honoured (``z``: flat, 0)."""
+        if self.free:
+            return free_speed.columns(self, S, A, C, V)
         v_cm = V * (1.0 - C * self.body.l * np.sin(S[3]))
         return {"V_cm": v_cm, "F_leg": leg_force(self.body, S[3], S[4], A, C, v_cm)[0]}
 
     def meta(self) -> dict:
         """What the trajectory's meta records of the problem beyond the body (flat: nothing)."""
-        return {}
+        return free_speed.meta(self) if self.free else {}

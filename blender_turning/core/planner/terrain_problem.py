@@ -1,8 +1,10 @@
-"""The planning problem on terrain (issue 10): Section 6's search with the figure on a surface
-``z = h(x, y)`` (:mod:`..terrain`) and its speed a state (:mod:`..terrain_dynamics`).
+"""The planning :class:`.problem.Problem` where the speed is a state (any ground but flat with
+nothing slowing the figure; :func:`..model.speed_held`): Section 6's search with the figure on a
+surface ``z = h(x, y)`` (:mod:`..terrain`).  :class:`.problem.Problem` calls the functions here
+when its ``free`` is set.
 
-The node state grows a sixth row, ``V_cm`` (:data:`..terrain_dynamics.TERRAIN_STATE`); a stage
-is simulated for all nodes at once with :func:`..terrain_dynamics.terrain_steer`'s rates under
+The node state grows a sixth row, ``V_cm`` (:data:`..model.STATE`); a stage
+is simulated for all nodes at once with :func:`..model.rhs`'s rates under
 the stage's law ``C_f = C0 + u tau``, bounded exactly as on flat ground (the RK4 of
 :meth:`.problem.Problem.simulate_stage`, whose arithmetic this shares).  The path's distance
 ``d_i`` and the distance travelled ``s`` stay horizontal (x, y), as on flat ground.
@@ -11,16 +13,17 @@ Exactness.  Every lower bound of the flat search assumes a known speed profile; 
 
 - The Lipschitz bound (``Problem.sample_bounds``: a sample ``x`` from the path makes the next at
   least ``x - b``) needs the most the foot moves in one sample, ``b = v_max sample_dt``.  The
-  speed changes by ``dV/dt = g_t - mu N / m - k V^2`` (docs/TERRAIN.md), and ``g_t = -g t_z <=
-  g sin sigma_max`` (``|t_z| = |p| / sqrt(1 + p^2)`` with the slope along the heading ``|p| <=
-  tan sigma_max``), while friction (for ``N >= 0``) and drag only slow; so within the ``T`` seconds
-  a search simulates (the horizon and one stage for the dead-end test) ``V_cm <= V_root + g
-  sin sigma_max T``, and ``|V_f| <= V_cm / (1 - slip)`` (Eq. 21, as on flat ground).  Rather than
-  rest exactness on ``N >= 0`` (the model does not hold off the ground), that speed is made a rule
-  of the problem, like the lean bound: a branch whose foot speed passes it at any RK4 stage is a
-  *run-away* and is clipped (it does not happen on the shipped scenes: it would need the figure to
-  gain speed faster than free fall along the steepest slope).  Then ``b`` bounds every surviving
-  branch by construction, and the bound is admissible.
+  speed changes by ``dV/dt = g_t - mu N V_f / (m V) - k V^2 + l omega V_f C_f cos th``
+  (docs/TERRAIN.md Sections 3-4), with ``g_t = -g t_z <= g sin sigma_max`` (``|t_z| = |p| /
+  sqrt(1 + p^2)`` with the slope along the heading ``|p| <= tan sigma_max``); friction (for
+  ``N >= 0``) and drag only slow, and the lean's share only trades the lean's energy back and
+  forth; so within the ``T`` seconds a search simulates (the horizon and one stage for the
+  dead-end test) the speed stays near ``V_root + g sin sigma_max T``, and ``|V_f| <= V_cm /
+  (1 - slip)`` (Eq. 21, as on flat ground).  Rather than rest exactness on ``N >= 0`` and on the
+  lean's share (the model does not hold off the ground; a figure can pump), that speed is made a
+  rule of the problem, like the lean bound: a branch whose foot speed passes it at any RK4 stage
+  is a *run-away* and is clipped (it does not happen on the shipped scenes).  Then ``b`` bounds
+  every surviving branch by construction, and the bound is admissible.
 - The receding horizon reuses a search's proof in the next one (``proof.py``), whose root is
   faster or slower, so its speed limit higher or lower.  A lower limit only clips more (the old
   bounds stay lower bounds, an infeasible subtree stays infeasible); a higher one could free a
@@ -44,18 +47,14 @@ import math
 
 import numpy as np
 
+from .. import model
 from ..dynamics import PHYSICAL_MARGIN, THETA_V, X, Y
-from ..obstacles import Obstacles
-from ..params import Figure
-from ..path import PathDistance
+from ..model import V_CM
 from ..terrain import HeightField, Plane, surface_frame
-from ..terrain_dynamics import V_CM, Resistance, terrain_leg_force, terrain_steer
 from ..terrain_sim import MIN_SPEED, describe_ground
 from ..trajectory import resistance_meta
-from .problem import Problem, _LEAN_MARGIN
-from .settings import PlannerSettings, SpeedProfile
 
-__all__ = ["TerrainProblem", "steepest_sine"]
+__all__ = ["steepest_sine"]
 
 
 def steepest_sine(ground) -> float:
@@ -77,96 +76,67 @@ def steepest_sine(ground) -> float:
     return 1.0                      # |t_z| <= 1 always
 
 
-class TerrainProblem(Problem):
-    """:class:`.problem.Problem` on ``ground`` with ``resistance``; nodes have 6 rows, the sixth
-    the speed ``V_cm`` (the start speed ``V0``, default the body's)."""
+def setup(p, lean: float) -> None:
+    """The free-speed parts of :class:`.problem.Problem`'s state (``p.V0`` set): the bounds that
+    assume a constant speed off (module doc), the run-away speed limit, the grid's extent."""
+    p._sin_max = steepest_sine(p.ground)
+    p._slip = min(PHYSICAL_MARGIN, p.limits.C_f_max * p.body.l * math.sin(lean))
+    p._lookahead = None                    # the arc bound assumes a constant speed
+    p._fall_table = None                   # flat lean dynamics at one speed
+    p._reach = None                        # a constant speed
+    p._pairs = None                        # a least speed
+    p.v_max = speed_limit(p, p.V0)
+    # Branches clipped as run-aways, shared by the copies of one search (paper_problem's).
+    p._runaways = np.zeros(1, np.int64)
+    p._grid = p.ground.extent if isinstance(p.ground, HeightField) else None
 
-    def __init__(self, figure: Figure, distance: PathDistance, obstacles: Obstacles,
-                 settings: PlannerSettings, ground, resistance: Resistance,
-                 V0: float | None = None):
-        V0 = figure.body.V_cm if V0 is None else float(V0)
-        super().__init__(figure, distance, obstacles, settings, SpeedProfile.constant(V0))
-        self.ground = ground
-        self.resistance = resistance
-        self.V0 = V0
-        self._sin_max = steepest_sine(ground)
-        lean = min(settings.theta_bound + _LEAN_MARGIN, math.pi / 2)
-        self._slip = min(PHYSICAL_MARGIN, self.limits.C_f_max * self.body.l * math.sin(lean))
-        self._lookahead = None                    # the arc bound assumes a constant speed
-        self._fall_table = None                   # flat lean dynamics at one speed
-        self._reach = None                        # a constant speed
-        self._pairs = None                        # a least speed
-        self.v_max = self.speed_limit(V0)
-        # Branches clipped as run-aways, shared by the copies of one search (paper_problem's).
-        self._runaways = np.zeros(1, np.int64)
-        self._grid = ground.extent if isinstance(ground, HeightField) else None
 
-    def speed_limit(self, V_root: float) -> float:
-        """The largest foot speed of a search from a root at speed ``V_root``: ``(V_root + g
-        sin sigma_max T) / (1 - slip)``, ``T`` the horizon and one stage more (module doc)."""
-        st = self.settings
-        T = st.horizon + st.t_stage + st.dt
-        return (V_root + self.body.g * self._sin_max * T) / (1.0 - self._slip) * (1 + 1e-9)
+def speed_limit(p, V_root: float) -> float:
+    """The largest foot speed of a search from a root at speed ``V_root``: ``(V_root + g
+    sin sigma_max T) / (1 - slip)``, ``T`` the horizon and one stage more (module doc)."""
+    st = p.settings
+    T = st.horizon + st.t_stage + st.dt
+    return (V_root + p.body.g * p._sin_max * T) / (1.0 - p._slip) * (1 + 1e-9)
 
-    def local(self, center, state=None, t=None) -> "TerrainProblem":
-        """:meth:`Problem.local`, with the foot speed limit of a search from ``state``."""
-        p = type(self).__new__(type(self))
-        p.__dict__.update(self.__dict__)
-        if state is not None:
-            p.v_max = self.speed_limit(float(state[V_CM]))
-        p._runaways = np.zeros(1, np.int64)
-        return Problem.local(p, center, t=t)
 
-    @property
-    def runaways(self) -> int:
-        """Branches this search clipped as run-aways: the receding horizon hands no proof on
-        from a search that clipped any (module doc)."""
-        return int(self._runaways[0])
+def rhs(p, x, tau, C0, u, anchor, rate_step, out, bad=None):
+    """:func:`..model.rhs` under ``C_f = C0 + u tau`` into ``out`` (shape (6, m)); marks in
+    ``bad`` the columns off the grid, stopped or run away."""
+    px, py = x[X], x[Y]
+    off = None
+    if p._grid is not None:
+        x_lo, x_hi, y_lo, y_hi = p._grid
+        off = ~((px >= x_lo) & (px <= x_hi) & (py >= y_lo) & (py <= y_hi))
+        if off.any():
+            px, py = np.clip(px, x_lo, x_hi), np.clip(py, y_lo, y_hi)
+    state = (px, py, x[2], x[THETA_V], x[4], x[V_CM])
+    d, cf, alpha, V_f, _, _ = model.rhs(p.body, p.limits, p.ground, C0 + u * tau, state, anchor,
+                                        rate_step, p.resistance)
+    for row, v in enumerate(d):
+        out[row] = v
+    if bad is not None:
+        runaway = ~(np.abs(V_f) <= p.v_max)
+        if runaway.any():
+            p._runaways[0] += int(np.count_nonzero(runaway & ~bad))
+        bad |= runaway | ~(x[V_CM] >= MIN_SPEED)
+        if off is not None:
+            bad |= off
+    return cf, alpha, V_f
 
-    def fall_table(self):
-        return None
 
-    def reach_bound(self):
-        return None
+def end_rates(p, x, cf):
+    """``(alpha_v, V_f)`` of the state ``x`` (shape ``(6, 1)``) at curvature ``cf``."""
+    _, _, a, v, _, _ = model.rhs(p.body, p.limits, p.ground, np.array([cf]), tuple(x[:, 0:1]),
+                                 None, 0.0, p.resistance)
+    return a, v
 
-    def pair_floors(self, state, K):
-        return None
 
-    def _rhs(self, x, V, tau, C0, u, anchor, rate_step, out, bad=None):
-        """:func:`..terrain_dynamics.terrain_steer` under ``C_f = C0 + u tau`` into ``out``
-        (shape (6, m)); marks in ``bad`` the columns off the grid, stopped or run away."""
-        px, py = x[X], x[Y]
-        off = None
-        if self._grid is not None:
-            x_lo, x_hi, y_lo, y_hi = self._grid
-            off = ~((px >= x_lo) & (px <= x_hi) & (py >= y_lo) & (py <= y_hi))
-            if off.any():
-                px, py = np.clip(px, x_lo, x_hi), np.clip(py, y_lo, y_hi)
-        state = (px, py, x[2], x[THETA_V], x[4], x[V_CM])
-        d, cf, alpha, V_f, _, _ = terrain_steer(self.body, self.limits, self.resistance,
-                                                self.ground, C0 + u * tau, state, anchor,
-                                                rate_step)
-        for row, v in enumerate(d):
-            out[row] = v
-        if bad is not None:
-            runaway = ~(np.abs(V_f) <= self.v_max)
-            if runaway.any():
-                self._runaways[0] += int(np.count_nonzero(runaway & ~bad))
-            bad |= runaway | ~(x[V_CM] >= MIN_SPEED)
-            if off is not None:
-                bad |= off
-        return cf, alpha, V_f
+def columns(p, S, A, C, V) -> dict:
+    """``z`` (the ground under the foot), ``V_cm`` (the state) and ``F_leg`` on the ground."""
+    fr = surface_frame(p.ground, S[X], S[Y], S[2], p.body.g)
+    F = model.leg_force(p.body, S[THETA_V], S[4], A, C, S[V_CM], V, fr)[0]
+    return {"z": np.asarray(fr.z, float), "V_cm": S[V_CM], "F_leg": F}
 
-    def end_rates(self, x, cf, t, s):
-        _, _, a, v, _, _ = terrain_steer(self.body, self.limits, self.resistance, self.ground,
-                                         np.array([cf]), tuple(x[:, 0:1]), None, 0.0)
-        return a, v
 
-    def columns(self, S, A, C, V) -> dict:
-        """``z`` (the ground under the foot), ``V_cm`` (the state) and ``F_leg`` on terrain."""
-        fr = surface_frame(self.ground, S[X], S[Y], S[2], self.body.g)
-        F = terrain_leg_force(self.body, S[THETA_V], S[4], A, C, S[V_CM], V, fr)[0]
-        return {"z": np.asarray(fr.z, float), "V_cm": S[V_CM], "F_leg": F}
-
-    def meta(self) -> dict:
-        return {"ground": describe_ground(self.ground), **resistance_meta(self.resistance)}
+def meta(p) -> dict:
+    return {"ground": describe_ground(p.ground), **resistance_meta(p.resistance)}
