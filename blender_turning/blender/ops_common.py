@@ -7,7 +7,8 @@ from functools import lru_cache
 
 from ..core.errors import TurningError
 from ..mapping.rig_spec import load_rig
-from .props import SPORTS, figure_settings
+from .props import figure_settings
+from .registry_items import sport_label
 from .rig_builder import RIG_TAG
 
 
@@ -77,10 +78,6 @@ def poll_figure(cls, context) -> bool:
                              "NLA editor)")
         return False
     return True
-
-
-def sport_label(sport: str) -> str:
-    return next((label for key, label, _ in SPORTS if key == sport.upper()), sport.title())
 
 
 @lru_cache(maxsize=None)
