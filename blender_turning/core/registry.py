@@ -53,7 +53,7 @@ class Registry(Mapping):
             other = next((r.name for r in self._records.values()
                           if r.name != name and getattr(r, attr) == v), None)
             if other is not None:
-                raise ValueError(f"{self.kind} {name!r}: {attr} = {v!r} is {other!r}'s")
+                raise ValueError(f"{self.kind} {name!r}: {attr} = {v!r} is taken by {other!r}")
         self._records[name] = record
         self.version += 1
         return record

@@ -21,7 +21,7 @@ from ..core.sports import Retarget, Sport, register_sport
 from ..core.terrain_dynamics import Resistance
 from . import bones as B
 from .base import Mapping
-from .common import add_local_rotation, carried, ik_limb, lean
+from .common import add_local_rotation, carried, ik_limb, lean, tyre_radius
 from .snow import carry_vec
 
 SIDES = (("L", -1.0), ("R", 1.0))
@@ -47,14 +47,6 @@ class CyclistOptions:
         if self.wheelbase is not None:
             check_range("wheelbase", self.wheelbase, 0.2, 5.0)
         check_range("steer_max", self.steer_max, 0.0, math.pi / 2, lo_open=True, hi_open=True)
-
-
-def tyre_radius(spec) -> float:
-    """The largest cylinder radius on ``wheel.R`` (the tyre)."""
-    radii = [m.size[0] for m in spec.meshes_of(B.WHEEL_R) if m.shape == "cylinder"]
-    if not radii:
-        raise ValueError(f"bone {B.WHEEL_R!r} has no cylinder mesh (the tyre)")
-    return float(max(radii))
 
 
 def steer_angle(C_f, theta_v, wheelbase: float, steer_max: float, caster: float = 0.0):
