@@ -56,6 +56,7 @@ BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
 FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
 REGISTRY = [T + "test_registry.py", T + "test_crowd.py"]
+BLENDER_REGISTRY = [T + "test_blender_registry.py"]
 
 
 @dataclass(frozen=True)
@@ -352,6 +353,11 @@ MUTANTS = [
       'fig = preset(f.string("preset", choices=tuple(PRESETS)))',
       'fig = preset(f.string("preset", choices=("skier", "snowboarder", "telemark", "cyclist")))',
       REGISTRY, "registry"),
+    M("enum_items_never_rebuilt", "blender/registry_items.py",
+      "key = (kind, registry.version)", "key = (kind, 0)", BLENDER_REGISTRY, "bake"),
+    M("sport_enum_static", "blender/props.py",
+      "items=sport_items, default=0, options=_STATIC,",
+      "items=sport_items(), default=0, options=_STATIC,", BLENDER_REGISTRY, "bake"),
     # -- bake (Blender; the bpy wheel) ---------------------------------------------------------
     M("nan_track_baked", "blender/bake.py",
       "if not all(np.all(np.isfinite(a)) for a in arrays):", "if False:", BAKE, "bake"),
