@@ -40,7 +40,7 @@ if str(ROOT) not in sys.path:                      # inside a Blender binary: fi
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-job-"))
 
 from blender_turning.core.files import temp_beside  # noqa: E402
-from blender_turning.core.registry import SPORTS  # noqa: E402
+from blender_turning.core.registry import SPORTS, import_extension  # noqa: E402
 from blender_turning.core.ranges import RANGES, Range  # noqa: E402
 from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
 
@@ -658,12 +658,18 @@ def parse_args(argv):
     p.add_argument("--device", help="CPU or GPU: Cycles' render device (default CPU); GPU fails "
                    "where Cycles finds none")
     p.add_argument("--name", help="the job's name: <output>/<name>.blend (overrides job.name)")
+    p.add_argument("--register", action="append", default=[], metavar="MODULE",
+                   help="import a module (a .py file or a module name) that registers your own "
+                        "sports or formations (docs/registry.md) before the config is read; "
+                        "repeatable")
     return p.parse_args(argv)
 
 
 def main(argv=None) -> int:
     args = parse_args(sys.argv if argv is None else argv)
     try:
+        for spec in args.register:
+            import_extension(spec)
         cfg = load_config(args.config, args)
     except ValueError as exc:                     # ConfigError, FieldError: names the key
         print(f"render_job: error: {exc}", file=sys.stderr, flush=True)

@@ -254,3 +254,34 @@ def test_a_sport_from_outside_is_two_files_and_edits_none(tmp_path):
     finally:
         fx.unregister_all()
     assert {p: p.stat().st_mtime_ns for p in _ADDON} == before
+
+
+# -- from the command line and the render job: --register ---------------------------------------
+
+def test_register_brings_the_users_sport_to_the_command_line_and_the_job(tmp_path):
+    """In a fresh interpreter, ``--register FILE`` imports the user's module before the command
+    is parsed (its choices are the registry's) and before the job's config is read."""
+    import subprocess
+    import sys
+    from cli_helpers import one_line_error
+    module, _ = fx.write_sport(tmp_path)
+    env = {**__import__("os").environ, "PYTHONPATH": str(ROOT)}
+    out = tmp_path / "t.csv"
+    r = subprocess.run([sys.executable, "-m", "blender_turning", "--register", str(module),
+                        "simulate", "--preset", fx.SPORT, "--duration", "1", "--out", str(out)],
+                       capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert out.read_text().startswith("t,x,y,theta_dir,theta_v")
+    r = subprocess.run([sys.executable, "-m", "blender_turning", "simulate", "--preset",
+                        fx.SPORT], capture_output=True, text=True, env=env, timeout=120)
+    one_line_error(r, "--preset", "'skibike'")                  # not registered without it
+    r = subprocess.run([sys.executable, "-m", "blender_turning", "--register",
+                        str(tmp_path / "none.py"), "simulate"], capture_output=True, text=True,
+                       env=env, timeout=120)
+    one_line_error(r, "--register", "none.py", "no such file")
+    cfg = tmp_path / "job.toml"
+    cfg.write_text(f'[[figures]]\nsport = "{fx.SPORT}"\nlean_deg = 56\n')   # its fall: 55 deg
+    r = subprocess.run([sys.executable, str(ROOT / "scripts" / "render_job.py"), "--register",
+                        str(module), "--config", str(cfg), "--output", str(tmp_path / "o")],
+                       capture_output=True, text=True, env=env, timeout=120)
+    one_line_error(r, "figures[0].lean_deg = 56", "skibike's fall angle (55 deg)")

@@ -13,10 +13,14 @@ sports.  Standard library only.
 """
 from __future__ import annotations
 
+import importlib
+import importlib.util
 import re
+import sys
 from collections.abc import Mapping
+from pathlib import Path
 
-__all__ = ["Registry", "RegistryView", "SPORTS"]
+__all__ = ["Registry", "RegistryView", "SPORTS", "import_extension"]
 
 _NAME = re.compile(r"^[a-z][a-z0-9_-]*$")
 
@@ -117,3 +121,32 @@ class RegistryView(Mapping):
 #: The sports (:class:`.sports.Sport`), registered by their modules (``mapping/<sport>.py``);
 #: ``number`` is the value a Blender file stores for the sport's enum item.
 SPORTS = Registry("sport", unique=("number",))
+
+
+def import_extension(spec: str, flag: str = "--register"):
+    """Import the user's module that registers records: ``spec`` a ``.py`` file or a module name
+    on ``sys.path`` (the command line's and the render job's ``--register``).  Importing twice
+    runs it once.  ``ValueError`` naming ``flag`` when it cannot be imported."""
+    path = Path(spec)
+    try:
+        if spec.endswith(".py"):
+            name = f"turning_extension_{path.stem}"
+            if name in sys.modules:
+                return sys.modules[name]
+            if not path.is_file():
+                raise ValueError(f"{flag} = {spec!r}: no such file")
+            module_spec = importlib.util.spec_from_file_location(name, path)
+            module = importlib.util.module_from_spec(module_spec)
+            sys.modules[name] = module
+            try:
+                module_spec.loader.exec_module(module)
+            except BaseException:
+                del sys.modules[name]
+                raise
+            return module
+        return importlib.import_module(spec)
+    except ValueError as exc:
+        raise ValueError(str(exc) if str(exc).startswith(flag) else
+                         f"{flag} = {spec!r}: {exc}") from None
+    except (ImportError, SyntaxError, OSError) as exc:
+        raise ValueError(f"{flag} = {spec!r} cannot be imported ({exc})") from None
