@@ -2,8 +2,8 @@
 in the Add menu (Shift+A > Turning Figure > Add Crowd) and the Crowd panel.
 
 The formation is the core's, by its record (:data:`..crowd.registry.FORMATIONS`: follow the
-leader, synchronised, peloton, and any registered later), computed before anything is made, so bad input is reported and the scene stays as it
-was.  The figures are linked duplicates of the template (:mod:`.crowd_scene`) in a new "Crowd"
+leader, synchronised, peloton, and any registered later), computed before anything is made, so
+bad input is reported and the scene stays as it was.  The figures are linked duplicates of the template (:mod:`.crowd_scene`) in a new "Crowd"
 collection, selected, so Bake Turns (or Follow Path) then does the whole crowd.
 """
 from __future__ import annotations

@@ -9,7 +9,7 @@ from bpy.props import EnumProperty
 
 from . import rig_builder
 from ..core.registry import SPORTS
-from .registry_items import sport_items
+from .registry_items import sport_items, sport_label
 from .scene_adapters import settings_from_preset
 
 
@@ -42,7 +42,7 @@ class TURNING_OT_add_figure(bpy.types.Operator):
         # Facing: the cursor's rotation about Z turns the figure's +Y (its rest facing).
         yaw = cursor.rotation_euler.to_matrix().to_euler("XYZ").z
         collection = context.collection or context.scene.collection
-        name = self.sport.title()
+        name = sport_label(self.sport)
         try:
             obj = rig_builder.build_figure(context, spec, name, cursor.location.copy(), collection)
         except ValueError as exc:
