@@ -28,6 +28,7 @@ import numpy as np  # noqa: E402
 
 from blender_turning.blender import bake, compat, rig_builder  # noqa: E402
 from blender_turning import blender as addon  # noqa: E402
+from blender_turning.core.registry import SPORTS  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange, settings_from_preset  # noqa: E402
 
@@ -78,7 +79,7 @@ def main(argv=None) -> int:
     argv = sys.argv if argv is None else argv
     argv = argv[argv.index("--") + 1:] if "--" in argv else argv[1:]
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--sports", default="skier,snowboarder,telemark,cyclist")
+    p.add_argument("--sports", default=",".join(SPORTS))      # every registered sport
     p.add_argument("--seconds", type=float, default=60.0)
     p.add_argument("--fps", type=int, default=24)
     p.add_argument("--repeat", type=int, default=3, help="foreach_set bakes timed (best kept)")

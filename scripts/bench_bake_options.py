@@ -24,13 +24,14 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
+from blender_turning.core.registry import SPORTS as REGISTERED  # noqa: E402
 from blender_turning.core import PhaseEllipse, Schedule, preset, simulate  # noqa: E402
 from blender_turning.blender.figure_bake import apply_bake  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
 from bench_common import best  # noqa: E402  (scripts/)
 
-SPORTS = ("SKIER", "SNOWBOARDER", "TELEMARK", "CYCLIST")
+SPORTS = tuple(s.key for s in REGISTERED.values())        # every registered sport
 
 
 def add(sport, x):

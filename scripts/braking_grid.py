@@ -15,6 +15,7 @@ import numpy as np
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.errors import TurningError
+from blender_turning.core.registry import SPORTS
 from blender_turning.core.terrain import Plane
 from blender_turning.core.model import RESISTANCE
 from blender_turning.core.terrain_gen import ski_slope
@@ -55,7 +56,7 @@ def one(args):
 
 
 def grid(quick):
-    sports = ("skier", "snowboarder", "telemark", "cyclist")
+    sports = tuple(SPORTS)                    # every registered sport
     slopes = (6, 12, 18, 25) if not quick else (12, 18)
     targets = (8.0, 12.0) if not quick else (10.0,)
     for sport in sports:

@@ -64,6 +64,8 @@ HEADING = [T + "test_mutation_guards_modules.py", T + "test_controllers.py",
            T + "test_feasible_turns.py"]
 RECEDING = [T + "test_mutation_guards_modules.py", T + "test_planner_search.py"]
 RETARGET = [T + "test_retarget.py"]
+REGISTRY = [T + "test_registry.py", T + "test_crowd.py"]
+BLENDER_REGISTRY = [T + "test_blender_registry.py"]
 
 
 @dataclass(frozen=True)
@@ -458,6 +460,31 @@ MUTANTS = [
     M("steer_no_lean", "mapping/cyclist.py",
       "return np.clip(np.arctan2(k * np.cos(theta_v),", "return np.clip(np.arctan2(k,",
       MAPPING, "mapping"),
+    # -- the registries (docs/registry.md) ------------------------------------------------------
+    M("rig_ignores_the_records_file", "mapping/rig_spec.py",
+      "return _load_rig_file(str(SPORTS[name].rig_path(RIGS_DIR)))",
+      'return _load_rig_file(str(RIGS_DIR / f"{name}.json"))', REGISTRY, "registry"),
+    M("view_ignores_its_filter", "core/registry.py",
+      "return (n for n, r in self._registry.items() if self._where(r))",
+      "return iter(self._registry)", REGISTRY, "registry"),
+    M("unregister_keeps_the_record", "core/registry.py",
+      "        del self._records[name]\n", "", REGISTRY, "registry"),
+    M("numbers_may_repeat", "core/registry.py",
+      "if r.name != name and getattr(r, attr) == v), None)",
+      "if False), None)", REGISTRY, "registry"),
+    M("formation_reads_any_key", "crowd/reader.py",
+      "    f.only(record.file_keys)\n", "", REGISTRY, "registry"),
+    M("formation_refusal_unlabelled", "crowd/formations.py",
+      "        raise FormationRefused(str(exc)) from None", "        raise", REGISTRY, "registry"),
+    M("scene_preset_fixed_list", "core/scene.py",
+      'fig = preset(f.string("preset", choices=tuple(PRESETS)))',
+      'fig = preset(f.string("preset", choices=("skier", "snowboarder", "telemark", "cyclist")))',
+      REGISTRY, "registry"),
+    M("enum_items_never_rebuilt", "blender/registry_items.py",
+      "key = (kind, registry.version)", "key = (kind, 0)", BLENDER_REGISTRY, "bake"),
+    M("sport_enum_static", "blender/props.py",
+      "items=sport_items, default=0, options=_STATIC,",
+      "items=sport_items(), default=0, options=_STATIC,", BLENDER_REGISTRY, "bake"),
     # -- bake (Blender; the bpy wheel) ---------------------------------------------------------
     M("nan_track_baked", "blender/bake.py",
       "if not all(np.all(np.isfinite(a)) for a in arrays):", "if False:", BAKE, "bake"),
@@ -536,7 +563,7 @@ def run_tests(python, tree, tests, timeout):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--only", nargs="+", metavar="NAME", help="run only these mutants")
-    ap.add_argument("--group", choices=("core", "mapping", "bake"), action="append",
+    ap.add_argument("--group", choices=("core", "mapping", "registry", "bake"), action="append",
                     help="run only these groups (repeatable; default all)")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
     ap.add_argument("--python", default=sys.executable, help="interpreter for pytest")

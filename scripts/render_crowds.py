@@ -24,12 +24,18 @@ from dataclasses import replace
 import numpy as np
 
 from blender_turning.core.params import preset
-from blender_turning.crowd import CrowdFigure, Turns, follow_leader
-from blender_turning.core.ranges import CROWD_RANGES
+from blender_turning.crowd import CrowdFigure, Turns
+from blender_turning.crowd.formations import FORMATIONS
+from blender_turning.crowd.registry import FormationRefused
 from render_terrain import follow_target, key_locations, tracking_camera
 
-KNOWN = {"name", "formation", "leader", "count", "gap_s", "gap_m", "lateral_m", "seed",
-         "body_jitter", "timing_jitter_s", "period_jitter", "shot"}
+#: A crowd's own keys; its formation's keys are the formation record's (crowd/registry.py).
+KNOWN = {"name", "formation", "leader", "count", "shot"}
+
+
+def _led_formations() -> tuple:
+    """The registered formations made from a leader (the job's crowds have one)."""
+    return tuple(n for n, r in FORMATIONS.items() if r.template == "leader")
 
 
 def read_crowds(top, figures: list, paths, obstacles, terrains, read_figure) -> list:
@@ -38,36 +44,27 @@ def read_crowds(top, figures: list, paths, obstacles, terrains, read_figure) -> 
     ``[{"name", "members", "shot"}]``.  ``read_figure`` reads and checks the leader's table as
     a ``[[figures]]`` one."""
     crowds = []
-    for c in top.tables("crowds", KNOWN):
+    known = KNOWN.union(*(FORMATIONS[n].keys for n in _led_formations()))
+    for c in top.tables("crowds", known):
         name = c.string("name", f"Crowd {len(crowds) + 1}")
         if not name.strip() or any(ch in name for ch in "/\\\0") or name.startswith("."):
             c.fail("name", f"= {name!r} is not a plain name (it names the shot's folder)")
         if any(name == k["name"] for k in crowds):
             c.fail("name", f"= {name!r} is the name of an earlier crowd")
-        c.string("formation", "follow_leader", choices=("follow_leader",))
+        kind = c.string("formation", "follow_leader", choices=_led_formations())
+        record = FORMATIONS[kind]
+        c.only(KNOWN | record.keys)
         lead = read_figure(c.table("leader", required=True), figures, paths, obstacles,
                            terrains)
         if lead["control"] != "turns":
             c.fail("leader.control", f"= {lead['control']!r}: a crowd's leader turns on the "
                                      "parametric controller ('turns')")
-        count = c.number("count", "job_crowd_count")
-        if c.has("gap_s") == c.has("gap_m"):
-            c.fail("gap_m", "or gap_s: exactly one is needed")
-        by = "time" if c.has("gap_s") else "distance"
-        gap = c.number("gap_s" if by == "time" else "gap_m", CROWD_RANGES["gap_s" if by == "time"
-                                                                         else "gap_m"])
-        lateral = c.numbers("lateral_m", CROWD_RANGES["lateral_m"]) \
-            if isinstance(c.value("lateral_m", 0.0), list) \
-            else c.number("lateral_m", CROWD_RANGES["lateral_m"], 0.0)
+        c.number("count", "job_crowd_count")            # a job bakes every member: fewer
         leader = _leader(lead)
         try:
-            followers = follow_leader(
-                leader, count, gap, by, lateral, c.number("seed", CROWD_RANGES["seed"], 0),
-                c.number("body_jitter", CROWD_RANGES["jitter"], 0.0),
-                c.number("timing_jitter_s", CROWD_RANGES["timing_jitter_s"], 0.0),
-                c.number("period_jitter", CROWD_RANGES["jitter"], 0.0), f"{name} ")
-        except ValueError as exc:                 # e.g. a timing jitter over half the gap
-            c.fail("formation", f"follow_leader: {exc}")
+            followers = record.read(c, leader, 0, f"{name} ")
+        except FormationRefused as exc:           # e.g. a timing jitter over half the gap
+            c.fail("formation", f"{kind}: {exc}")
         members = [dict(lead, crowd=name)]
         for f in followers:
             if any(f.name == g["name"] for g in figures + members):

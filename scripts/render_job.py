@@ -40,7 +40,7 @@ if str(ROOT) not in sys.path:                      # inside a Blender binary: fi
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-job-"))
 
 from blender_turning.core.files import temp_beside  # noqa: E402
-from blender_turning.core.params import PRESETS  # noqa: E402
+from blender_turning.core.registry import SPORTS, import_extension  # noqa: E402
 from blender_turning.core.ranges import RANGES, Range  # noqa: E402
 from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
 
@@ -51,7 +51,6 @@ import render_terrain  # noqa: E402
 ENGINES = ("WORKBENCH", "EEVEE", "CYCLES")
 DEVICES = ("CPU", "GPU")
 GPU_BACKENDS = ("OPTIX", "CUDA", "HIP", "ONEAPI", "METAL")     # Cycles' compute_device_type
-SPORTS = ("skier", "snowboarder", "telemark", "cyclist")
 
 
 class ConfigError(ValueError):
@@ -177,7 +176,7 @@ def read_figure(f, earlier, paths, obstacles, terrains) -> dict:
     if sport not in SPORTS:
         f.fail("sport", f"= {sport!r} is not one of {', '.join(SPORTS)}")
     fig = {"sport": sport, "control": f.string("control", "turns", choices=("turns", "path")),
-           "name": f.string("name", sport.title()),
+           "name": f.string("name", SPORTS[sport].label),
            "start": tuple(float(v) for v in f.xy("start", [0.0, 0.0])),
            "direction_deg": f.number("direction_deg", heading, 90.0),
            "period": f.number("period", "period", 2.0),
@@ -194,7 +193,7 @@ def read_figure(f, earlier, paths, obstacles, terrains) -> dict:
            "body": None, "crowd": None}
     if fig["ground"] is not None and fig["ground"] not in terrains:
         f.fail("ground", f"= {fig['ground']!r} is not a [terrain.<name>] of the config")
-    fall = math.degrees(PRESETS[sport].limits.theta_fall)
+    fall = math.degrees(SPORTS[sport].figure.limits.theta_fall)
     if fig["lean_deg"] >= fall:
         f.fail("lean_deg", f"= {fig['lean_deg']:g} is not below the {sport}'s fall angle "
                            f"({fall:g} deg)")
@@ -659,12 +658,18 @@ def parse_args(argv):
     p.add_argument("--device", help="CPU or GPU: Cycles' render device (default CPU); GPU fails "
                    "where Cycles finds none")
     p.add_argument("--name", help="the job's name: <output>/<name>.blend (overrides job.name)")
+    p.add_argument("--register", action="append", default=[], metavar="MODULE",
+                   help="import a module (a .py file or a module name) that registers your own "
+                        "sports or formations (docs/registry.md) before the config is read; "
+                        "repeatable")
     return p.parse_args(argv)
 
 
 def main(argv=None) -> int:
     args = parse_args(sys.argv if argv is None else argv)
     try:
+        for spec in args.register:
+            import_extension(spec)
         cfg = load_config(args.config, args)
     except ValueError as exc:                     # ConfigError, FieldError: names the key
         print(f"render_job: error: {exc}", file=sys.stderr, flush=True)

@@ -88,14 +88,13 @@ def test_add_figure_at_cursor_from_preset(scene, sport):
     assert body.type == "MESH" and body.modifiers[0].object == obj
 
 
-def test_shipped_presets_are_the_core_presets(scene):
-    obj = add("SKIER")
-    paths = bpy.utils.preset_paths(presets.PRESET_SUBDIR)
-    assert paths, "preset path not registered"
+def test_sport_presets_are_the_sport_records(scene):
+    """Each sport's preset (the Sport Presets menu's entry) sets its record's numbers back."""
     for sport, fig in PRESETS.items():
-        path = os.path.join(paths[0], f"{sport}.py")
-        bpy.ops.script.execute_preset(filepath=path, menu_idname="TURNING_MT_figure_presets")
+        obj = add(sport.upper())
         s = obj.turning
+        s.mass, s.inertia, s.curvature_rate_max, s.plan_curvature_rate = 99.0, 3.0, 4.0, 0.9
+        assert bpy.ops.turning.apply_figure_preset(sport=sport.upper()) == {"FINISHED"}
         assert s.sport == sport.upper()
         assert (s.mass, s.com_height, s.inertia, s.speed) == pytest.approx(
             (fig.body.m, fig.body.l, fig.body.I_v, fig.body.V_cm), rel=1e-6)

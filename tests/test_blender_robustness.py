@@ -83,19 +83,29 @@ def test_lost_bone_after_bake_clear_still_works(scene):
     assert "foot.L" in before[("bones", obj.data.name)]
 
 
-def preset_file(sport):
-    return os.path.join(bpy.utils.preset_paths(presets.PRESET_SUBDIR)[0], f"{sport}.py")
-
-
 def test_preset_of_another_sport_is_refused(scene):
+    """A sport's own preset and a user's saved preset of another sport are both refused on a
+    figure whose rig is not of that sport; the figure's own sport's preset applies."""
+    cyclist = add("CYCLIST")
+    cyclist.turning.mass = 91.0
+    assert bpy.ops.turning.figure_preset_add(name="Heavy Cyclist") == {"FINISHED"}
+    saved = next(os.path.join(p, name) for p in bpy.utils.preset_paths(presets.PRESET_SUBDIR)
+                 for name in os.listdir(p) if name.lower() == "heavy_cyclist.py")
     obj = add("SKIER")
     obj.turning.mass = 81.0
     before = snapshot()
     with pytest.raises(RuntimeError, match="Skier rig.*Add Figure > Cyclist"):
-        bpy.ops.turning.apply_figure_preset(filepath=preset_file("cyclist"))
+        bpy.ops.turning.apply_figure_preset(sport="CYCLIST")
+    with pytest.raises(RuntimeError, match="Skier rig.*Add Figure > Cyclist"):
+        bpy.ops.turning.apply_figure_preset(filepath=saved)
     assert_unchanged(before)
-    assert bpy.ops.turning.apply_figure_preset(filepath=preset_file("skier")) == {"FINISHED"}
+    assert bpy.ops.turning.apply_figure_preset(sport="SKIER") == {"FINISHED"}
     assert obj.turning.mass == pytest.approx(75.0)
+    bpy.context.view_layer.objects.active = cyclist
+    cyclist.turning.mass = 70.0
+    assert bpy.ops.turning.apply_figure_preset(filepath=saved) == {"FINISHED"}
+    assert cyclist.turning.mass == pytest.approx(91.0)
+    os.remove(saved)
     assert presets.TURNING_MT_figure_presets.preset_operator == "turning.apply_figure_preset"
 
 

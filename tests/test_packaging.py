@@ -65,14 +65,13 @@ STRAYS = ("foo.blend", "foo.blend1", ".DS_Store", "blender_turning/notes.txt",
 
 
 def addon_files(root: Path) -> set:
-    """What the add-on needs: its modules (not the command line), the rigs, the sport presets."""
+    """What the add-on needs: its modules (not the command line) and the rigs (the sports'
+    presets are their records, docs/registry.md)."""
     mods = {p.relative_to(root).as_posix() for p in (root / "blender_turning").rglob("*.py")
             if "__pycache__" not in p.parts}
     mods = {m for m in mods if not m.startswith(CLI_ONLY)}
     return (mods | {"__init__.py"}
-            | {p.relative_to(root).as_posix() for p in (root / "rigs").rglob("*.json")}
-            | {f"presets/turning_figure/{p.name}"
-               for p in (root / "presets" / "turning_figure").glob("*.py")})
+            | {p.relative_to(root).as_posix() for p in (root / "rigs").rglob("*.json")})
 
 
 def manifest():

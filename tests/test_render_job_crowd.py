@@ -97,7 +97,7 @@ def test_the_demo_has_a_ski_school_of_eight_with_a_shot(tmp_path):
     ("count = 0", "", ["crowds[0].count = 0", "[1, 200]"]),
     ("", 'control = "path"\npath = "p"',
      ["crowds[0].leader.path = 'p' is not a [paths.<name>]"]),
-    ("gap_s = 1.0", "", ["crowds[0].gap_m", "exactly one"]),
+    ("gap_s = 1.0", "", ["crowds[0].gap_s or gap_m", "exactly one"]),
     ("lateral_x = 2", "", ["crowds[0]", "lateral_x"]),
     ("body_jitter = 0.5", "", ["crowds[0].body_jitter = 0.5", "[0, 0.3]"]),
     ('formation = "peloton"', "", ["crowds[0].formation = 'peloton'"]),

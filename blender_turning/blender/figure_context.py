@@ -3,11 +3,11 @@ that a figure's rig can carry its sport's bake (run before anything is written).
 from __future__ import annotations
 
 import traceback
-from functools import lru_cache
 
 from ..core.errors import TurningError
 from ..mapping.rig_spec import load_rig
-from .props import SPORTS, figure_settings
+from .props import figure_settings
+from .registry_items import sport_label
 from .rig_builder import RIG_TAG
 
 
@@ -79,13 +79,9 @@ def poll_figure(cls, context) -> bool:
     return True
 
 
-def sport_label(sport: str) -> str:
-    return next((label for key, label, _ in SPORTS if key == sport.upper()), sport.title())
-
-
-@lru_cache(maxsize=None)
 def rig_bones(sport: str) -> tuple:
-    """The bones the ``sport``'s mapping keys (every bone of its rig spec)."""
+    """The bones the ``sport``'s mapping keys (every bone of its rig spec; the loader caches the
+    spec by its file)."""
     return load_rig(sport.lower()).bone_names
 
 

@@ -1,9 +1,9 @@
 """``turning.add_crowd``: a formation of figures from the active one as template; also
 in the Add menu (Shift+A > Turning Figure > Add Crowd) and the Crowd panel.
 
-The formation is the core's (:mod:`..crowd.formations`: follow the leader, synchronised,
-peloton), computed before anything is made, so bad input is reported and the scene stays as it
-was.  The figures are linked duplicates of the template (:mod:`.crowd_scene`) in a new "Crowd"
+The formation is the core's, by its record (:data:`..crowd.registry.FORMATIONS`: follow the
+leader, synchronised, peloton, and any registered later), computed before anything is made, so
+bad input is reported and the scene stays as it was.  The figures are linked duplicates of the template (:mod:`.crowd_scene`) in a new "Crowd"
 collection, selected, so Bake Turns (or Follow Path) then does the whole crowd.
 """
 from __future__ import annotations
@@ -16,22 +16,12 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 from ..core.errors import TurningError
 from ..core.validate import check
-from ..crowd import follow_leader, peloton, synchronized
+from ..crowd.formations import FORMATIONS
 from ..core.ranges import CROWD_RANGES
 from . import crowd_scene
 from .figure_context import context_figure, poll_figure, report_error
+from .registry_items import formation_items
 
-FORMATIONS = (
-    ("FOLLOW_LEADER", "Follow the Leader",
-     "Figures on the template's track, each a time or distance further behind (a ski school "
-     "behind its instructor); the template leads"),
-    ("SYNCHRONIZED", "Synchronized",
-     "A pair or a line turning together, in phase or in antiphase (the figure-8s of Fig. 10); "
-     "the template's turns"),
-    ("PELOTON", "Peloton",
-     "Riders in rows on the template's path curve, all starting at once (a cyclist following "
-     "a road)"),
-)
 GAP_BY = (("TIME", "Time", "Each follower starts Gap seconds after the one before"),
           ("DISTANCE", "Distance", "Each follower starts Gap metres (at the leader's speed) "
                                    "behind the one before"))
@@ -51,7 +41,9 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
     bl_label = "Add Crowd"
     bl_options = {"REGISTER", "UNDO"}
 
-    formation: EnumProperty(name="Formation", items=FORMATIONS, default="FOLLOW_LEADER")
+    # The registered formations (crowd/registry.py), listed when drawn; default 0: follow the
+    # leader.
+    formation: EnumProperty(name="Formation", items=formation_items, default=0)
     count: IntProperty(name="Count", default=4, min=1, max=int(CROWD_RANGES["count"].hi),
                        soft_max=50, description="How many figures the formation adds")
     gap_by: EnumProperty(name="Gap By", items=GAP_BY, default="TIME")
@@ -106,18 +98,8 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
         layout.use_property_split = True
         layout.prop(self, "formation")
         layout.prop(self, "count")
-        if self.formation == "FOLLOW_LEADER":
-            layout.prop(self, "gap_by")
-            layout.prop(self, "gap_time" if self.gap_by == "TIME" else "gap_distance")
-            layout.prop(self, "lateral")
-            layout.prop(self, "alternate")
-            names = ("seed", "body_jitter", "timing_jitter", "period_jitter")
-        elif self.formation == "SYNCHRONIZED":
-            names = ("spacing", "antiphase", "sync_gap")
-        else:
-            layout.prop(self, "gap_distance")
-            names = ("abreast", "row_spacing", "seed", "body_jitter")
-        for name in names:
+        record = FORMATIONS.get(self.formation.lower())
+        for name in record.fields(self) if record is not None else ():
             layout.prop(self, name)
 
     def _values(self) -> types.SimpleNamespace:
@@ -141,35 +123,21 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
     @staticmethod
     def members(context, template, v) -> tuple:
         """``(template's member, the formation's members)``, the core's (nothing is made), for
-        the settings ``v`` (:meth:`_values`)."""
-        if v.formation == "SYNCHRONIZED":
-            lead = crowd_scene.template_member(context, template, path=False)
-            return lead, synchronized(lead, v.count, v.spacing, v.antiphase, "m",
-                                      v.sync_gap)
-        if v.formation == "PELOTON":
-            if template.turning.path is None:
-                raise ValueError("Peloton: the template has no path curve: set its Path "
-                                 "(Follow Path > Path) to the road")
-            lead = crowd_scene.template_member(context, template, path=True)
-            return lead, peloton(lead, v.count, v.gap_distance, v.abreast,
-                                 v.row_spacing, v.seed, v.body_jitter, "m")
-        lead = crowd_scene.template_member(context, template,
-                                           path=template.turning.path is not None)
-        by_time = v.gap_by == "TIME"
-        lateral = [-v.lateral, v.lateral] if v.alternate else v.lateral
-        return lead, follow_leader(lead, v.count, v.gap_time if by_time
-                                   else v.gap_distance, "time" if by_time else "distance",
-                                   lateral, v.seed, v.body_jitter, v.timing_jitter,
-                                   v.period_jitter, "m")
+        the settings ``v`` (:meth:`_values`), by the formation's record."""
+        record = FORMATIONS.lookup(v.formation.lower())
+        if record.template == "path" and template.turning.path is None:
+            raise ValueError(f"{record.label}: the template has no path curve: set its Path "
+                             "(Follow Path > Path) to the road")
+        path = {"turns": False, "path": True}.get(record.template,
+                                                 template.turning.path is not None)
+        lead = crowd_scene.template_member(context, template, path=path)
+        return lead, tuple(record.build(lead, v, "m"))
 
     @staticmethod
     def _path_object(template, lead, member, k, collection, v):
         """The member's path curve: the template's when it is the same path, else a new one."""
         path = member.controller.scene.path
-        s_along = 0.0
-        if v.formation == "PELOTON":             # rows from the back, as the core places them
-            rows = -(-v.count // v.abreast)
-            s_along = (rows - 1 - (k - 1) // v.abreast) * v.gap_distance
+        s_along = FORMATIONS.lookup(v.formation.lower()).start_along(k, v)
         if path is lead.controller.scene.path and s_along == 0.0:
             return template.turning.path
         return crowd_scene.curve_object(crowd_scene.path_from(path, s_along),
@@ -186,7 +154,7 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
         coll = crowd_scene.new_crowd_collection(context)
         figs = []
         try:
-            if self.formation == "FOLLOW_LEADER":
+            if FORMATIONS.lookup(v.formation.lower()).template == "leader":
                 coll.objects.link(template)          # the leader is one of the crowd
                 figs.append(template)
             for k, member in enumerate(members, start=1):
@@ -204,7 +172,7 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
             fig.select_set(True)
         context.view_layer.objects.active = figs[0]
         self.report({"INFO"}, f"Add Crowd: {len(figs)} figures in {coll.name!r} "
-                              f"({self.formation.replace('_', ' ').lower()}); Bake Turns or "
+                              f"({FORMATIONS[v.formation.lower()].label.lower()}); Bake Turns or "
                               "Follow Path now does them all")
         return {"FINISHED"}
 

@@ -8,7 +8,8 @@ import bpy
 from bpy.props import EnumProperty
 
 from . import rig_builder
-from .props import SPORTS
+from ..core.registry import SPORTS
+from .registry_items import sport_items, sport_label
 from .scene_adapters import settings_from_preset
 
 
@@ -19,7 +20,7 @@ class TURNING_OT_add_figure(bpy.types.Operator):
     bl_label = "Add Figure"
     bl_options = {"REGISTER", "UNDO"}
 
-    sport: EnumProperty(name="Sport", items=SPORTS, default="SKIER")
+    sport: EnumProperty(name="Sport", items=sport_items, default=0)
 
     @classmethod
     def poll(cls, context):
@@ -41,7 +42,7 @@ class TURNING_OT_add_figure(bpy.types.Operator):
         # Facing: the cursor's rotation about Z turns the figure's +Y (its rest facing).
         yaw = cursor.rotation_euler.to_matrix().to_euler("XYZ").z
         collection = context.collection or context.scene.collection
-        name = self.sport.title()
+        name = sport_label(self.sport)
         try:
             obj = rig_builder.build_figure(context, spec, name, cursor.location.copy(), collection)
         except ValueError as exc:
@@ -63,14 +64,15 @@ class TURNING_OT_add_figure(bpy.types.Operator):
 
 
 class VIEW3D_MT_turning_figure_add(bpy.types.Menu):
-    """Shift+A > Turning Figure: one entry per sport."""
+    """Shift+A > Turning Figure: one entry per registered sport."""
 
     bl_idname = "VIEW3D_MT_turning_figure_add"
     bl_label = "Turning Figure"
 
     def draw(self, context):
-        for ident, name, description in SPORTS:
-            self.layout.operator(TURNING_OT_add_figure.bl_idname, text=name).sport = ident
+        for sport in SPORTS.values():
+            self.layout.operator(TURNING_OT_add_figure.bl_idname, text=sport.label,
+                                 icon=sport.icon).sport = sport.key
 
 
 def draw_add_menu(self, context):

@@ -9,16 +9,13 @@ from bpy.props import EnumProperty
 
 from ..core.params import PRESETS
 from ..core.errors import TurningError
-from ..mapping.retarget import ATTACH
 from ..mapping.stance import STANCES as RIG_STANCES
 from ..mapping.user_rig import fit_rig
 from . import bake, foot_track
 from . import retarget_adapter as ra
-from .props import SPORTS
+from .registry_items import retargeted_sport_items
 from .props_rig import BONE_MAPS, STANCES
 from .scene_adapters import settings_from_preset
-
-_RETARGETED = tuple(s for s in SPORTS if s[0].lower() in ATTACH)
 
 
 def _active_armature(cls, context):
@@ -40,7 +37,7 @@ class TURNING_OT_make_figure(bpy.types.Operator):
     bl_label = "Make Figure"
     bl_options = {"REGISTER", "UNDO"}
 
-    sport: EnumProperty(name="Sport", items=_RETARGETED, default="SKIER")
+    sport: EnumProperty(name="Sport", items=retargeted_sport_items, default=0)
     bone_map: EnumProperty(name="Bone Map", items=BONE_MAPS, default="AUTO",
                            description="Which bone of your rig plays each of our joints")
     stance: EnumProperty(name="Stance", items=STANCES, default="REGULAR",

@@ -12,6 +12,7 @@ import bpy
 
 from . import bake
 from .figure_context import context_figure, selected_figures
+from .registry_items import sport_label
 
 ROOT_PANEL = "VIEW3D_PT_turning"
 RIG_PANEL = "VIEW3D_PT_turning_rig"
@@ -36,7 +37,7 @@ class VIEW3D_PT_turning(TurningPanel, bpy.types.Panel):
             layout.label(text="Select a figure, or add one", icon="INFO")
             return
         row = layout.row(align=True)
-        row.menu("TURNING_MT_figure_presets", text=fig.turning.sport.title())
+        row.menu("TURNING_MT_figure_presets", text=sport_label(fig.turning.sport))
         row.operator("turning.figure_preset_add", text="", icon="ADD")
         row.operator("turning.figure_preset_add", text="", icon="REMOVE").remove_active = True
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import bpy
 
+from ..mapping.stance import STANCES
 from . import retarget_adapter as ra
 from .panel import RIG_PANEL, TurningPanel
 
@@ -58,7 +59,7 @@ class VIEW3D_PT_turning_your_rig(TurningPanel, bpy.types.Panel):
             return
         col = layout.column()
         col.label(text=f"Bone map: {rig.bone_map.title()}", icon="BONE_DATA")
-        if ra.mirrored(obj) or obj.turning.sport == "SNOWBOARDER":
+        if ra.mirrored(obj) or obj.turning.sport.lower() in STANCES:
             col.label(text=f"Stance: {rig.stance.title()}")
         if rig.equipment is not None:
             col.label(text=f"Equipment: {rig.equipment.name}", icon="OUTLINER_COLLECTION")
@@ -66,8 +67,8 @@ class VIEW3D_PT_turning_your_rig(TurningPanel, bpy.types.Panel):
 
 
 class VIEW3D_PT_turning_stance(TurningPanel, bpy.types.Panel):
-    """The built-in snowboarder's stance (a figure made from your rig shows it under Your
-    Rig)."""
+    """The stance of a built-in figure of a sport ridden either way round (the snowboarder; a
+    figure made from your rig shows it under Your Rig)."""
 
     bl_label = "Stance"
     bl_parent_id = RIG_PANEL
@@ -76,7 +77,7 @@ class VIEW3D_PT_turning_stance(TurningPanel, bpy.types.Panel):
     def poll(cls, context):
         obj = context.active_object
         return (ra.is_figure(obj) and not ra.is_user_rig(obj)
-                and obj.turning.sport == "SNOWBOARDER")
+                and obj.turning.sport.lower() in STANCES)
 
     def draw(self, context):
         self.layout.use_property_split = True

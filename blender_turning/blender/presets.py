@@ -1,9 +1,10 @@
-"""Sport presets through Blender's preset system.
+"""Sport presets: one per registered sport, from its record (core/sports.py), and the user's own
+through Blender's preset system.
 
-The four sports ship as preset scripts in ``presets/turning_figure/`` at the extension root
-(registered with ``bpy.utils.register_preset_path``); users save their own next to Blender's
-other presets with the "+" button.  The shipped files hold the core's ``PRESETS`` numbers (a test
-checks they agree).
+The Sport Presets menu lists every registered sport first (its record's body, limits and
+planner rate: nothing is stored in a file, so a sport registered by a script is there too), then
+the presets users save with the "+" button (preset scripts in their ``presets/turning_figure/``,
+next to Blender's other presets).
 """
 from __future__ import annotations
 
@@ -14,11 +15,10 @@ import bpy
 from bl_operators.presets import AddPresetBase
 from bpy.props import StringProperty
 
-from .figure_context import sport_label
+from ..core.registry import SPORTS
+from .registry_items import sport_label
 from .rig_builder import RIG_TAG
 
-#: The folder that holds ``presets/<PRESET_SUBDIR>`` (the extension root).
-PRESET_ROOT = str(Path(__file__).resolve().parents[2])
 PRESET_SUBDIR = "turning_figure"
 PRESET_VALUES = ["settings.sport", "settings.mass", "settings.com_height", "settings.inertia",
                  "settings.speed", "settings.curvature_max", "settings.curvature_rate_max",
@@ -34,6 +34,16 @@ def _poll_figure_object(cls, context) -> bool:
 
 
 _SPORT_LINE = re.compile(r"""^settings\.sport\s*=\s*['"](\w+)['"]""", re.MULTILINE)
+
+
+def sport_preset_values(sport: str) -> dict:
+    """``PRESET_VALUES`` (without ``settings.``) of the sport's own preset, from its record."""
+    from .props import BODY_FIELDS, LIMIT_FIELDS
+    record = SPORTS.lookup(sport.lower())
+    values = {"sport": record.key, "plan_curvature_rate": record.plan_curvature_rate}
+    values.update({s: getattr(record.figure.body, f) for s, f in BODY_FIELDS.items()})
+    values.update({s: getattr(record.figure.limits, f) for s, f in LIMIT_FIELDS.items()})
+    return {v.split(".", 1)[1]: values[v.split(".", 1)[1]] for v in PRESET_VALUES}
 
 
 def preset_sport(filepath: str) -> str | None:
@@ -55,6 +65,8 @@ class TURNING_OT_apply_figure_preset(bpy.types.Operator):
     bl_options = {"REGISTER", "UNDO"}
 
     filepath: StringProperty(subtype="FILE_PATH", options={"SKIP_SAVE", "HIDDEN"})
+    sport: StringProperty(name="Sport", options={"SKIP_SAVE", "HIDDEN"},
+                          description="A registered sport's own preset (instead of a file)")
 
     @classmethod
     def poll(cls, context):
@@ -62,7 +74,15 @@ class TURNING_OT_apply_figure_preset(bpy.types.Operator):
 
     def execute(self, context):
         fig = context.object
-        sport = preset_sport(self.filepath)
+        if self.sport:
+            try:
+                values = sport_preset_values(self.sport)
+            except ValueError as exc:
+                self.report({"ERROR"}, f"Apply Figure Preset: {exc}")
+                return {"CANCELLED"}
+            sport = values["sport"]
+        else:
+            values, sport = None, preset_sport(self.filepath)
         rig = fig.get(RIG_TAG)
         rig = rig.upper() if isinstance(rig, str) else fig.turning.sport
         if sport is not None and sport != rig:
@@ -70,15 +90,30 @@ class TURNING_OT_apply_figure_preset(bpy.types.Operator):
                                    f"{sport_label(sport)} preset would not change its rig: add a "
                                    f"new figure with Add Figure > {sport_label(sport)}")
             return {"CANCELLED"}
-        return bpy.ops.script.execute_preset(filepath=self.filepath,
-                                             menu_idname=TURNING_MT_figure_presets.__name__)
+        if values is None:
+            return bpy.ops.script.execute_preset(filepath=self.filepath,
+                                                 menu_idname=TURNING_MT_figure_presets.__name__)
+        for name, value in values.items():
+            setattr(fig.turning, name, value)
+        return {"FINISHED"}
 
 
 class TURNING_MT_figure_presets(bpy.types.Menu):
+    """Every registered sport's preset, then the user's saved presets."""
+
     bl_label = "Sport Presets"
     preset_subdir = PRESET_SUBDIR
     preset_operator = TURNING_OT_apply_figure_preset.bl_idname
-    draw = bpy.types.Menu.draw_preset
+
+    def draw(self, context):
+        layout = self.layout
+        for record in SPORTS.values():
+            layout.operator(self.preset_operator, text=record.label,
+                            icon=record.icon).sport = record.key
+        if any(Path(p).is_dir() and any(Path(p).glob("*.py"))
+               for p in bpy.utils.preset_paths(PRESET_SUBDIR)):
+            layout.separator()
+            bpy.types.Menu.draw_preset(self, context)
 
 
 class TURNING_OT_figure_preset_add(AddPresetBase, bpy.types.Operator):
@@ -98,14 +133,4 @@ class TURNING_OT_figure_preset_add(AddPresetBase, bpy.types.Operator):
 
 classes = (TURNING_OT_apply_figure_preset, TURNING_MT_figure_presets,
            TURNING_OT_figure_preset_add)
-_register, _unregister = bpy.utils.register_classes_factory(classes)
-
-
-def register():
-    _register()
-    bpy.utils.register_preset_path(PRESET_ROOT)
-
-
-def unregister():
-    bpy.utils.unregister_preset_path(PRESET_ROOT)
-    _unregister()
+register, unregister = bpy.utils.register_classes_factory(classes)

@@ -17,13 +17,8 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorPro
 from ..core.ranges import RANGES
 from .props_crowd import TurningCrowdSettings
 from .props_rig import TurningRigSettings
+from .registry_items import sport_items
 
-SPORTS = (
-    ("SKIER", "Skier", "Alpine skier on slalom skis"),
-    ("SNOWBOARDER", "Snowboarder", "Carving snowboarder"),
-    ("TELEMARK", "Telemark", "Telemark skier"),
-    ("CYCLIST", "Cyclist", "Cyclist on a road bicycle"),
-)
 _STATIC = set()            # options: not animatable (the bake reads these once)
 
 
@@ -81,7 +76,8 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
 
     is_figure: BoolProperty(name="Is Figure", options=_STATIC,
                             description="This armature is a turning figure")
-    sport: EnumProperty(name="Sport", items=SPORTS, default="SKIER", options=_STATIC,
+    # The registered sports (core/sports.py), listed when drawn; default 0: the skier.
+    sport: EnumProperty(name="Sport", items=sport_items, default=0, options=_STATIC,
                         description="Which figure and mapping (Section 7) the bake uses")
     # -- body (Fig. 2) ----------------------------------------------------------------------
     mass: FloatProperty(name="Mass", default=75.0, **_range("m"), soft_min=20.0,

@@ -10,8 +10,9 @@ import bpy
 import numpy as np
 
 from ..core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
-from ..core.params import PRESETS
-from ..core.model import RESISTANCE, Resistance
+from ..core.registry import SPORTS
+from ..core.sports import sport as sport_record
+from ..core.model import Resistance
 from . import bake, compat
 from .foot_track import OWNER as FOOT_TRACK_OWNER
 from .props import BODY_FIELDS, LIMIT_FIELDS
@@ -106,19 +107,18 @@ def figure_from_settings(settings) -> Figure:
     return Figure(settings.sport.lower(), body, limits)
 
 
-#: Largest |dC_f/dt| the path planner tries per sport, 1/(m s).  Gentler than the figures' own
-#: limits: with the full rate every branch of the first searches from an upright start leans past
-#: the planner's 30 deg bound and the figure runs straight (measured on a 6 m slalom, 12 m gates:
-#: these rates follow it to within about 3 m).
-PLAN_CURVATURE_RATE = {"skier": 0.2, "snowboarder": 0.3, "telemark": 0.3, "cyclist": 0.5}
+#: Largest |dC_f/dt| the path planner tries per sport, 1/(m s): the sport records'
+#: ``plan_curvature_rate`` (core/sports.py), a live view of the sport registry.
+PLAN_CURVATURE_RATE = SPORTS.view("plan_curvature_rate")
 
 
 def settings_from_preset(settings, sport: str) -> None:
-    """Fill ``obj.turning`` from the core preset of ``sport`` ('SKIER', ...)."""
-    fig = PRESETS[sport.lower()]
-    settings.sport = sport.upper()
-    settings.plan_curvature_rate = PLAN_CURVATURE_RATE[sport.lower()]
-    res = RESISTANCE[sport.lower()]
+    """Fill ``obj.turning`` from the record of ``sport`` ('SKIER', ...): its preset, the
+    planner's rate and what slows it on a slope."""
+    record = sport_record(sport)
+    fig, res = record.figure, record.resistance
+    settings.sport = record.key
+    settings.plan_curvature_rate = record.plan_curvature_rate
     settings.terrain.friction, settings.terrain.drag_area = res.mu, res.CdA
     settings.terrain.air_density = res.rho
     for s, f in BODY_FIELDS.items():

@@ -12,6 +12,7 @@ import importlib
 import sys
 
 from ..core.errors import TurningError
+from ..core.registry import import_extension
 from .common import discard_pending
 
 COMMANDS = ("simulate", "figures", "follow", "crowd")
@@ -25,6 +26,10 @@ class _Parser(argparse.ArgumentParser):
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="python -m blender_turning",
                      description="Physically based turning (van de Panne, Fiume, Vranesic 1993).")
+    parser.add_argument("--register", action="append", default=[], metavar="MODULE",
+                        help="import a module (a .py file or a module name) that registers "
+                             "your own sports, formations or controllers (docs/registry.md) "
+                             "before the command; repeatable")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for name in COMMANDS:
         try:
@@ -37,7 +42,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _register_extensions(argv) -> None:
+    """Import the ``--register`` modules first: the command's choices (``--preset``,
+    ``--controller``) are the registries' when its parser is built."""
+    pre = argparse.ArgumentParser(add_help=False)
+    pre.add_argument("--register", action="append", default=[])
+    known, _ = pre.parse_known_args(argv)
+    for spec in known.register:
+        import_extension(spec)
+
+
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        _register_extensions(argv)
+    except ValueError as exc:
+        print(f"python -m blender_turning: error: {exc}", file=sys.stderr)
+        return 2
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

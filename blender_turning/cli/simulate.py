@@ -4,7 +4,6 @@ from __future__ import annotations
 import math
 
 from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, slalom_start
-from ..core.controllers import PhaseEllipse
 from ..core.ranges import RANGES
 from ..core.schedule import Schedule
 from ..core.simulate import DEFAULT_DT
@@ -27,7 +26,8 @@ def register(sub):
     p.add_argument("--inertia", type=float, help="roll inertia about the centre of mass, kg m^2")
     p.add_argument("--speed", type=float, help="forward speed V_cm, m/s")
     p.add_argument("--gravity", type=float, help="m/s^2")
-    p.add_argument("--controller", default="ellipse", choices=sorted(CONTROLLERS))
+    p.add_argument("--controller", default="ellipse", choices=sorted(CONTROLLERS),
+                   help="; ".join(f"{n}: {c.description}" for n, c in sorted(CONTROLLERS.items())))
     p.add_argument("--law", default="smooth", choices=("smooth", "paper"),
                    help="phase-ellipse law: smooth (default) or Section 5.1 as written")
     g = p.add_mutually_exclusive_group()
@@ -93,13 +93,11 @@ def run(args) -> int:
         omega0, theta_max = Schedule.constant(w), Schedule.constant(math.radians(lean))
         heading = Schedule.constant(math.radians(head))
 
-    if args.controller == "ellipse":
-        ctl = PhaseEllipse(fig.body, omega0, theta_max, heading, law=args.law, limits=fig.limits)
-    else:
-        ctl = CONTROLLERS[args.controller](fig.body, omega0, theta_max)
+    record = CONTROLLERS.lookup(args.controller)
+    ctl = record.make(fig, omega0, theta_max, heading, args.law)
     w0, tm0 = ctl.target(0.0)           # the ellipse followed (made feasible for the figure)
     theta0 = math.radians(_flag("theta0_deg", args.theta0_deg or 0.0, "theta_v0", deg=True))
-    straight = args.controller == "straight"
+    straight = record.start == "straight"
     omega_v0 = (w0 * tm0 * (not straight) if args.omega_v0_deg is None else
                 math.radians(_flag("omega_v0_deg", args.omega_v0_deg, "omega_v0", deg=True)))
     outputs = Outputs()                       # every output path checked before the work

@@ -8,7 +8,7 @@ file gives its ``terrain``) or a ``.npy`` height grid with ``--ground-cell`` and
 ``--friction MU --drag-area CDA --air-density RHO`` what slows the figure;
 ``--target-speed V`` brakes by turning across the hill (docs/TERRAIN.md Section 6).  With none
 of them the run is today's flat one.  On a slope (``S > 0``) a resistance flag that is not given
-takes the sport's default (``core.model.RESISTANCE``, sources there): a skier on a
+takes the sport's default (its record's ``resistance``, sources there): a skier on a
 slope slides on snow and through air unless told otherwise; on flat ground (``S = 0``) the
 defaults are none, so today's runs are unchanged.
 """

@@ -43,6 +43,7 @@ import numpy as np
 from .dynamics import bound_cf
 from .params import BodyParams, Limits
 from .terrain import FLAT, HeightField, LazyHeightField, Plane, surface_frame
+from .registry import SPORTS
 from .validate import check
 from .xp import Numpy, Scalar, backend
 
@@ -89,22 +90,9 @@ class Resistance:
 
 NO_RESISTANCE = Resistance(mu=0.0, CdA=0.0)
 
-RESISTANCE: dict[str, Resistance] = {
-    # Waxed skis on groomed snow: kinetic friction 0.02-0.1 (Colbeck 1992, "A review of the
-    # processes that control snow friction", CRREL Monograph 92-2); 0.05 for a ski carving
-    # at speed.  Drag area of an alpine skier turning in a giant-slalom stance 0.4-0.6 m^2
-    # (Meyer, Le Pelley & Borrani 2012, Med. Sci. Sports Exerc. 44(6)); air at ~2000 m, the
-    # ISA density there (1.007 kg/m^3).
-    "skier": Resistance(mu=0.05, CdA=0.5, rho=1.007),
-    # A snowboard's base slides like a ski's (Colbeck 1992); the rider stands sideways and
-    # higher: the top of Meyer et al.'s range.
-    "snowboarder": Resistance(mu=0.05, CdA=0.6, rho=1.007),
-    # Telemark: the skier's skis and air, a more upright lunge.
-    "telemark": Resistance(mu=0.05, CdA=0.55, rho=1.007),
-    # Road tyres on smooth asphalt: rolling resistance 0.003-0.006; a rider on the hoods
-    # 0.3-0.4 m^2 (Wilson & Papadopoulos 2004, "Bicycling Science", 3rd ed., Ch. 4-5); sea level.
-    "cyclist": Resistance(mu=0.005, CdA=0.36, rho=1.225),
-}
+#: Each sport's friction and drag, ``name -> Resistance``: a live view of the sport registry
+#: (:mod:`.sports`; each sport's record holds its values, with their sources).
+RESISTANCE = SPORTS.view("resistance")
 
 
 def speed_held(ground, resistance: Resistance) -> bool:

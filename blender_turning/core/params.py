@@ -1,4 +1,4 @@
-"""Body parameters, limits and the four sport presets (SI units, radians).
+"""Body parameters, limits and the sports' presets (SI units, radians).
 
 The physical model is the inverted pendulum of Section 3 (Fig. 2): a mass ``m`` at height ``l``
 above a steerable "foot", roll inertia ``I_v`` about the centre of mass (Eq. 13), moving forward
@@ -13,6 +13,7 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 from .ranges import RANGES
+from .registry import SPORTS
 from .validate import check, check_range
 
 __all__ = ["BodyParams", "Limits", "Figure", "PRESETS", "preset", "check_range"]
@@ -89,41 +90,9 @@ class Figure:
     doc: str = field(default="", compare=False)
 
 
-PRESETS: dict[str, Figure] = {
-    "skier": Figure(
-        "skier", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=10.0),
-        Limits(C_f_max=1 / 6, dC_f_max=0.67, theta_fall=math.radians(60)),
-        """Alpine skier on slalom skis.  75 kg adult; centre of mass ~1.0 m above the skis in an
-        athletic stance; roll inertia about the centre of mass of a 1.75 m adult ~12 kg m^2
-        (m (0.4 m)^2); 10 m/s, a brisk recreational slalom.  A slalom ski has a ~12 m sidecut
-        radius; edged and bent it carves ~R cos(edge angle), about 6 m at 60 deg, so
-        |C_f| <= 1/6 1/m.  Edge to edge takes ~0.5 s: |dC_f/dt| <= 2 (1/6) / 0.5 ~ 0.67."""),
-    "snowboarder": Figure(
-        "snowboarder", BodyParams(m=70.0, l=0.95, I_v=10.0, V_cm=8.0),
-        Limits(C_f_max=0.2, dC_f_max=0.8, theta_fall=math.radians(60)),
-        """Carving snowboarder.  70 kg, centre of mass 0.95 m, I_v 10 kg m^2; 8 m/s.  A board's
-        ~7-8 m sidecut carves down to ~5 m: |C_f| <= 0.2; heel-to-toe edge change in ~0.5 s:
-        |dC_f/dt| <= 0.8."""),
-    "telemark": Figure(
-        "telemark", BodyParams(m=75.0, l=0.925, I_v=9.4, V_cm=8.0),
-        Limits(C_f_max=0.125, dC_f_max=0.5, theta_fall=math.radians(55)),
-        """Telemark skier.  The same 75 kg adult (1.78 m) in the telemark lunge, which lowers
-        the hips and folds the legs under the body: centre of mass 0.925 m from the foot point
-        and roll inertia 9.4 kg m^2 about it, from Dempster's segment data (Winter,
-        Biomechanics and Motor Control of Human Movement, 4th ed. 2009, Table 4.1) on the
-        built-in telemark figure's own pose, averaged over a 2 s, 23 deg slalom
-        (scripts/telemark_body.py; the skier's pose gives 0.99 m, 11.1 kg m^2); a gentler
-        8 m/s.  The turn comes from the angle between the skis (Section 3), which the split
-        stance limits to about an 8 m radius: |C_f| <= 0.125; changing the lead ski is slower
-        than an edge change: 0.5."""),
-    "cyclist": Figure(
-        "cyclist", BodyParams(m=85.0, l=1.0, I_v=15.0, V_cm=6.0),
-        Limits(C_f_max=0.5, dC_f_max=2.0, theta_fall=math.radians(50)),
-        """Cyclist on a road bicycle.  Rider and bicycle 85 kg, centre of mass ~1.0 m, I_v 15 kg
-        m^2 (the bicycle adds roll inertia); 6 m/s.  A 1.0 m wheelbase with ~27 deg of usable
-        steer gives C_f = tan(27 deg) / 1.0 ~ 0.5; the bar goes lock to lock in ~0.5 s:
-        |dC_f/dt| <= 2.0.  A bicycle steers sharper and faster than a ski (Section 5.2)."""),
-}
+#: The sports' preset figures, ``name -> Figure``: a live view of the sport registry
+#: (:mod:`.sports`; each sport's record holds its body and limits, with their sources).
+PRESETS = SPORTS.view("figure")
 
 
 def preset(name: str, **body_overrides) -> Figure:

@@ -138,7 +138,7 @@ RANGES: dict[str, Range] = {
     "slope": Range(0.0, 60 * _DEG, "rad", "flat to steeper than any skiable or rideable slope "
                    "(an extreme couloir is ~55 deg)"),
     "friction": Range(0.0, 1.0, "", "snow friction or rolling resistance mu (0.005 to 0.1 for "
-                      "the sports, core.model.RESISTANCE)"),
+                      "the sports: each sport record's resistance)"),
     "drag_area": Range(0.0, 10.0, "m^2", "C_d A, 0.3-0.6 m^2 for a rider or skier"),
     "air_density": Range(0.0, 2.0, "kg/m^3", "vacuum to well above sea level's 1.225"),
     "cell": Range(0.0, 1e4, "m", "a height field's grid spacing", lo_open=True),

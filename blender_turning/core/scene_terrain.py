@@ -9,7 +9,7 @@ path is drawn on and what slows the figure there.
   ``"file": "ground.npy"`` instead of ``heights``, a 2-D numpy array, the path relative to the
   scene file;
 - either may give ``friction``, ``drag_area``, ``air_density``; those not given are the sport's
-  (:data:`.model.RESISTANCE`, sources there).
+  (each sport record's ``resistance``, sources there; :data:`.model.RESISTANCE`).
 
 Every problem is a ``FieldError`` naming the file and the field (ranges: :mod:`.ranges`).
 """

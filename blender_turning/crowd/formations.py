@@ -1,4 +1,5 @@
-"""Formations: crowds generated from a template figure and a seed.
+"""Formations: crowds generated from a template figure and a seed; each one's record (how a crowd
+file, a render job and Blender's Add Crowd read and make it, :mod:`.registry`) at the end.
 
 - :func:`follow_leader`: ``count`` figures on the leader's track, each ``gap`` seconds (or metres)
   further behind, with a lateral offset and small random differences of body and timing.
@@ -22,8 +23,10 @@ from ..core.ranges import CROWD_RANGES
 from ..core.validate import check
 from ..core.path import HermitePath
 from .model import CrowdFigure, FollowPath, Turns
+from .registry import FORMATIONS, Formation, FormationRefused, register_formation
 
-__all__ = ["follow_leader", "synchronized", "peloton", "offset_path", "point_at_distance"]
+__all__ = ["follow_leader", "synchronized", "peloton", "offset_path", "point_at_distance",
+           "FORMATIONS"]
 
 
 def _left(v) -> np.ndarray:
@@ -197,3 +200,96 @@ def peloton(template: CrowdFigure, count: int, gap: float, abreast: int = 2,
         out.append(_moved(template, f"{prefix}{k + 1}", fig, (col - 0.5 * (in_row - 1)) * spacing,
                           s_along=(rows - 1 - row) * gap))
     return tuple(out)
+
+
+# -- the built-in formations' records (docs/registry.md) -------------------------------------------
+
+def made(make, *args):
+    """``make(*args)``, a refusal (any ``ValueError``: a combination the formation refuses, a
+    value its own check refuses) raised as :class:`.registry.FormationRefused`, which the
+    readers report against the formation's table.  A record's ``read`` reads its keys first
+    (their errors name the key) and then calls ``made``."""
+    try:
+        return make(*args)
+    except ValueError as exc:
+        raise FormationRefused(str(exc)) from None
+
+
+def _read_follow_leader(f, leader, seed, name):
+    count = f.number("count", CROWD_RANGES["count"])
+    if f.has("gap_s") == f.has("gap_m"):
+        f.fail("gap_s", "or gap_m: exactly one is needed")
+    by = "time" if f.has("gap_s") else "distance"
+    lateral = f.numbers("lateral_m", CROWD_RANGES["lateral_m"]) \
+        if isinstance(f.value("lateral_m", 0.0), list) \
+        else f.number("lateral_m", CROWD_RANGES["lateral_m"], 0.0)
+    return made(
+        follow_leader, leader, count, f.number("gap_s" if by == "time" else "gap_m",
+                                CROWD_RANGES["gap_s" if by == "time" else "gap_m"]),
+        by, lateral, f.number("seed", CROWD_RANGES["seed"], seed),
+        f.number("body_jitter", CROWD_RANGES["jitter"], 0.0),
+        f.number("timing_jitter_s", CROWD_RANGES["timing_jitter_s"], 0.0),
+        f.number("period_jitter", CROWD_RANGES["jitter"], 0.0), name)
+
+
+def _build_follow_leader(lead, v, name):
+    by_time = v.gap_by == "TIME"
+    lateral = [-v.lateral, v.lateral] if v.alternate else v.lateral
+    return follow_leader(lead, v.count, v.gap_time if by_time else v.gap_distance,
+                         "time" if by_time else "distance", lateral, v.seed, v.body_jitter,
+                         v.timing_jitter, v.period_jitter, name)
+
+
+def _fields_follow_leader(v):
+    return ("gap_by", "gap_time" if v.gap_by == "TIME" else "gap_distance", "lateral",
+            "alternate", "seed", "body_jitter", "timing_jitter", "period_jitter")
+
+
+def _read_synchronized(f, template, seed, name):
+    return made(synchronized, template, f.number("count", CROWD_RANGES["count"], 2),
+                        f.number("spacing_m", CROWD_RANGES["spacing_m"], 0.0),
+                        f.boolean("antiphase", True), name,
+                        f.number("gap_s", CROWD_RANGES["sync_gap_s"], 0.0))
+
+
+def _read_peloton(f, template, seed, name):
+    return made(peloton, template, f.number("count", CROWD_RANGES["count"]),
+                   f.number("gap_m", CROWD_RANGES["gap_m"]),
+                   f.number("abreast", CROWD_RANGES["abreast"], 2),
+                   f.number("spacing_m", CROWD_RANGES["spacing_m"], 0.8),
+                   f.number("seed", CROWD_RANGES["seed"], seed),
+                   f.number("body_jitter", CROWD_RANGES["jitter"], 0.0), name)
+
+
+def _peloton_start(k, v):
+    """Rows from the back, as :func:`peloton` places them: member ``k``'s row's distance."""
+    rows = -(-v.count // v.abreast)
+    return (rows - 1 - (k - 1) // v.abreast) * v.gap_distance
+
+
+register_formation(Formation(
+    name="follow_leader", label="Follow the Leader", number=0, template="leader",
+    description="Figures on the template's track, each a time or distance further behind (a ski "
+                "school behind its instructor); the template leads",
+    keys={"count", "gap_s", "gap_m", "lateral_m", "body_jitter", "timing_jitter_s",
+          "period_jitter", "seed"},
+    read=_read_follow_leader, build=_build_follow_leader, fields=_fields_follow_leader))
+register_formation(Formation(
+    name="synchronized", label="Synchronized", number=1, template="turns",
+    description="A pair or a line turning together, in phase or in antiphase (the figure-8s of "
+                "Fig. 10); the template's turns",
+    keys={"count", "spacing_m", "antiphase", "gap_s"},
+    read=_read_synchronized,
+    build=lambda lead, v, name: synchronized(lead, v.count, v.spacing, v.antiphase, name,
+                                             v.sync_gap),
+    fields=lambda v: ("spacing", "antiphase", "sync_gap")))
+register_formation(Formation(
+    name="peloton", label="Peloton", number=2, template="path",
+    description="Riders in rows on the template's path curve, all starting at once (a cyclist "
+                "following a road)",
+    keys={"count", "gap_m", "abreast", "spacing_m", "body_jitter", "seed"},
+    read=_read_peloton,
+    build=lambda lead, v, name: peloton(lead, v.count, v.gap_distance, v.abreast,
+                                        v.row_spacing, v.seed, v.body_jitter, name),
+    fields=lambda v: ("gap_distance", "abreast", "row_spacing", "seed", "body_jitter"),
+    start_along=_peloton_start))

@@ -15,7 +15,8 @@ from pathlib import Path
 from ..core.ranges import CROWD_RANGES, RANGES
 from ..core.scene import read_figure, scene_from_dict
 from ..core.validate import FieldError, Fields, read_text
-from . import formations as formations_
+from .formations import FORMATIONS
+from .registry import FormationRefused
 from .model import BODY_CLEARANCE, FIRST_TURNS, Crowd, CrowdFigure, FollowPath, Turns
 
 __all__ = ["load_crowd", "crowd_from_dict"]
@@ -23,13 +24,6 @@ __all__ = ["load_crowd", "crowd_from_dict"]
 _TOP = {"name", "description", "seed", "duration", "dt", "figures", "formations", "priority",
         "clearance"}
 _FIGURE = {"name", "preset", "body", "limits", "turns", "follow", "start", "time_offset"}
-_FORMATIONS = {
-    "follow_leader": {"type", "leader", "count", "gap_s", "gap_m", "lateral_m", "body_jitter",
-                      "timing_jitter_s", "period_jitter", "name", "seed"},
-    "synchronized": {"type", "template", "count", "spacing_m", "antiphase", "gap_s", "name"},
-    "peloton": {"type", "template", "count", "gap_m", "abreast", "spacing_m", "body_jitter",
-                "name", "seed"},
-}
 
 
 def load_crowd(path) -> Crowd:
@@ -128,46 +122,20 @@ def _scene(f: Fields, base: Path):
 
 
 def _formation(f: Fields, figures: list, seed: int, base: Path) -> tuple:
-    kind = f.string("type", choices=tuple(_FORMATIONS))
-    f.only(_FORMATIONS[kind])
+    """A ``formations`` entry: its record (:data:`.registry.FORMATIONS`, by ``type``) reads its
+    keys and makes its members from the leader (a figure defined before it) or the template."""
+    kind = f.string("type", choices=tuple(FORMATIONS))
+    record = FORMATIONS[kind]
+    f.only(record.file_keys)
     name = f.string("name", None)
-    count = f.number("count", CROWD_RANGES["count"], None if kind == "peloton" or
-                     kind == "follow_leader" else 2)
-    if count is None:
-        f.fail("count", "is missing")
+    if record.template == "leader":
+        lead = f.string("leader")
+        member = next((m for m in figures if m.name == lead), None)
+        if member is None:
+            f.fail("leader", f"= {lead!r} names no figure defined before it")
+    else:
+        member = _figure(f.table("template", _FIGURE, required=True), base)
     try:
-        if kind == "follow_leader":
-            lead = f.string("leader")
-            leader = next((m for m in figures if m.name == lead), None)
-            if leader is None:
-                f.fail("leader", f"= {lead!r} names no figure defined before it")
-            if f.has("gap_s") == f.has("gap_m"):
-                f.fail("gap_s", "or gap_m: exactly one is needed")
-            by = "time" if f.has("gap_s") else "distance"
-            lateral = f.value("lateral_m", 0.0)
-            lateral = f.numbers("lateral_m", CROWD_RANGES["lateral_m"]) \
-                if isinstance(lateral, list) else f.number("lateral_m",
-                                                           CROWD_RANGES["lateral_m"], 0.0)
-            return formations_.follow_leader(
-                leader, count, f.number("gap_s" if by == "time" else "gap_m",
-                                        CROWD_RANGES["gap_s" if by == "time" else "gap_m"]),
-                by, lateral, f.number("seed", CROWD_RANGES["seed"], seed),
-                f.number("body_jitter", CROWD_RANGES["jitter"], 0.0),
-                f.number("timing_jitter_s", CROWD_RANGES["timing_jitter_s"], 0.0),
-                f.number("period_jitter", CROWD_RANGES["jitter"], 0.0), name)
-        template = _figure(f.table("template", _FIGURE, required=True), base)
-        if kind == "synchronized":
-            return formations_.synchronized(
-                template, count, f.number("spacing_m", CROWD_RANGES["spacing_m"], 0.0),
-                f.boolean("antiphase", True), name,
-                f.number("gap_s", CROWD_RANGES["sync_gap_s"], 0.0))
-        return formations_.peloton(
-            template, count, f.number("gap_m", CROWD_RANGES["gap_m"]),
-            f.number("abreast", CROWD_RANGES["abreast"], 2),
-            f.number("spacing_m", CROWD_RANGES["spacing_m"], 0.8),
-            f.number("seed", CROWD_RANGES["seed"], seed),
-            f.number("body_jitter", CROWD_RANGES["jitter"], 0.0), name)
-    except FieldError:
-        raise
-    except ValueError as exc:                 # a combination the formation refuses
+        return tuple(record.read(f, member, seed, name))
+    except FormationRefused as exc:           # a combination the formation refuses
         raise FieldError(f"{f.source}: {f.path}: {exc}") from None

@@ -1,25 +1,25 @@
 """Section 7: the physical state -> per-bone pose channels. numpy only, one module per sport.
 
 ``map_trajectory(sport, traj)`` turns a trajectory into a :class:`PoseTrack` for the sport's rig
-(``rigs/<sport>.json``); ``MAPPINGS`` is the registry, one :class:`Mapping` per sport.
+(``rigs/<sport>.json``).  Each sport's module registers its record (:mod:`..core.sports`: preset,
+mapping, rig, labels); the imports below are the built-in sports, in the order Blender lists them.
+``MAPPINGS`` is the registry's view ``sport -> Mapping``.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from ..core.registry import SPORTS
 from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
 from .bones import MissingBoneError
-from .cyclist import CyclistMapping, CyclistOptions
+# The built-in sports register in this order (skier, snowboarder, telemark, cyclist).
 from .skier import SkierMapping, SkierOptions
 from .snowboarder import SnowboarderMapping, SnowboarderOptions
 from .telemark import TelemarkMapping, TelemarkOptions
+from .cyclist import CyclistMapping, CyclistOptions
 
-MAPPINGS: dict[str, Mapping] = {
-    "skier": SkierMapping(),
-    "snowboarder": SnowboarderMapping(),
-    "telemark": TelemarkMapping(),
-    "cyclist": CyclistMapping(),
-}
+#: ``sport -> Mapping``, a live view of the sport registry.
+MAPPINGS = SPORTS.view("mapping")
 
 __all__ = ["STATE_PROPS", "BoneChannels", "Mapping", "PoseTrack", "MAPPINGS", "map_trajectory",
            "MissingBoneError",

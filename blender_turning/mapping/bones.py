@@ -6,6 +6,8 @@ and heading); ``lean`` pivots about the line of the foot (the travel line, the r
 """
 from __future__ import annotations
 
+from ..core.registry import SPORTS
+
 class MissingBoneError(KeyError, ValueError):
     """A bone a rig or a mapping needs is not there; the message names it.
 
@@ -50,13 +52,9 @@ BOARD = "board"
 FRAME, FORK, WHEEL_F, WHEEL_R, CRANK = "frame", "fork", "wheel.F", "wheel.R", "crank"
 PEDAL = ("pedal.L", "pedal.R")
 
-#: Bones each sport's rig must have (checked when a mapping starts).
-REQUIRED = {
-    "skier": (ROOT, LEAN) + HUMAN + SKI + POLE,
-    "telemark": (ROOT, LEAN) + HUMAN + SKI + POLE,
-    "snowboarder": (ROOT, LEAN) + HUMAN + (BOARD,),
-    "cyclist": (ROOT, LEAN) + HUMAN + (FRAME, FORK, WHEEL_F, WHEEL_R, CRANK) + PEDAL,
-}
+#: Bones each sport's rig must have (checked when a mapping starts): the sport records'
+#: ``bones``, a live view of the sport registry.
+REQUIRED = SPORTS.view("bones")
 
 
 def require(names, wanted, rig: str = "rig") -> None:

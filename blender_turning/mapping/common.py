@@ -166,3 +166,11 @@ def place_on_ground(b: PoseBuilder, spec, bone: str, rotation, anchor_rest, anch
     head[:, 2] = -cz.min(axis=1)
     b.set_pose(bone, rotation, head)
     return head
+
+
+def tyre_radius(spec, bone: str = B.WHEEL_R) -> float:
+    """The largest cylinder radius on the wheel ``bone`` of the rig ``spec`` (its tyre), m."""
+    radii = [m.size[0] for m in spec.meshes_of(bone) if m.shape == "cylinder"]
+    if not radii:
+        raise ValueError(f"bone {bone!r} has no cylinder mesh (the tyre)")
+    return float(max(radii))

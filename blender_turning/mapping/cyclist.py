@@ -16,10 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.params import check_range
+from ..core.params import BodyParams, Figure, Limits, check_range
+from ..core.sports import Retarget, Sport, register_sport
+from ..core.model import Resistance
 from . import bones as B
 from .base import Mapping
-from .common import add_local_rotation, carried, ik_limb, lean
+from .common import add_local_rotation, carried, ik_limb, lean, tyre_radius
 from .snow import carry_vec
 
 SIDES = (("L", -1.0), ("R", 1.0))
@@ -45,14 +47,6 @@ class CyclistOptions:
         if self.wheelbase is not None:
             check_range("wheelbase", self.wheelbase, 0.2, 5.0)
         check_range("steer_max", self.steer_max, 0.0, math.pi / 2, lo_open=True, hi_open=True)
-
-
-def tyre_radius(spec) -> float:
-    """The largest cylinder radius on ``wheel.R`` (the tyre)."""
-    radii = [m.size[0] for m in spec.meshes_of(B.WHEEL_R) if m.shape == "cylinder"]
-    if not radii:
-        raise ValueError(f"bone {B.WHEEL_R!r} has no cylinder mesh (the tyre)")
-    return float(max(radii))
 
 
 def steer_angle(C_f, theta_v, wheelbase: float, steer_max: float, caster: float = 0.0):
@@ -129,3 +123,32 @@ class CyclistMapping(Mapping):
             elbow_dir = carry_vec(b, B.FRAME, 0.5 * sx * right - 0.4 * fwd - 0.75 * up)
             ik_limb(b, B.side("upper_arm", side), B.side("forearm", side), wrist, elbow_dir)
             b.set_pose(hand, carried(b, hand, B.FORK)[:, :3, :3])
+
+
+#: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
+SPORT = register_sport(Sport(
+    name="cyclist", label="Cyclist", description="Cyclist on a road bicycle", number=3,
+    figure=Figure(
+        "cyclist", BodyParams(m=85.0, l=1.0, I_v=15.0, V_cm=6.0),
+        Limits(C_f_max=0.5, dC_f_max=2.0, theta_fall=math.radians(50)),
+        """Cyclist on a road bicycle.  Rider and bicycle 85 kg, centre of mass ~1.0 m, I_v 15 kg
+        m^2 (the bicycle adds roll inertia); 6 m/s.  A 1.0 m wheelbase with ~27 deg of usable
+        steer gives C_f = tan(27 deg) / 1.0 ~ 0.5; the bar goes lock to lock in ~0.5 s:
+        |dC_f/dt| <= 2.0.  A bicycle steers sharper and faster than a ski (Section 5.2)."""),
+    # Road tyres on smooth asphalt: rolling resistance 0.003-0.006; a rider on the hoods
+    # 0.3-0.4 m^2 (Wilson & Papadopoulos 2004, "Bicycling Science", 3rd ed., Ch. 4-5); sea level.
+    resistance=Resistance(mu=0.005, CdA=0.36, rho=1.225),
+    plan_curvature_rate=0.5,
+    mapping=CyclistMapping(),
+    bones=(B.ROOT, B.LEAN) + B.HUMAN + (B.FRAME, B.FORK, B.WHEEL_F, B.WHEEL_R, B.CRANK) + B.PEDAL,
+    # The rider sits on the frame (seated: the hips go where the built-in's go), steers the
+    # fork (the hands are carried by it) and pedals (the feet are carried by the pedals).  The
+    # crank turns to face the right pedal; the wheels roll with the distance travelled (no bone
+    # of the rider turns with them: a driver turns them) and the front wheel slides along the
+    # fork by turn_fork_slide, which keeps the steered and leaned tyre on the ground.
+    retarget=Retarget(attach={"frame": "spine", "wheel.R": "spine", "crank": "spine",
+                              "fork": "hand.L", "wheel.F": "hand.L", "pedal.L": "foot.L",
+                              "pedal.R": "foot.R"},
+                      tracks={"crank": "pedal.R"}, spin=("wheel.F", "wheel.R"),
+                      slide={"wheel.F": ("fork", "turn_fork_slide")}, seated=True),
+))

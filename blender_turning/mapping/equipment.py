@@ -9,7 +9,7 @@ import numpy as np
 
 from . import bones as B
 from .bone_map import BoneMap
-from .cyclist import tyre_radius
+from .common import tyre_radius
 from .retarget import ATTACH, SLIDE, SPIN, TRACKS, _rest_difference
 from .rig_spec import load_rig
 from .stance import builtin_skeleton
@@ -77,8 +77,8 @@ def equipment_rest(sport: str, rig: UserRig, bm: BoneMap, fit: RigFit | None = N
             v[1] = 0.0                                       # about its own Y axis
             i = 0 if abs(v[0]) >= abs(v[2]) else 2
             axis = ("" if v[i] > 0 else "NEGATIVE_") + "XYZ"[i]
-        spin = -1.0 / (fit.k * tyre_radius(load_rig(sport))) if piece in SPIN.get(sport, ()) \
-            else 0.0
+        spin = -1.0 / (fit.k * tyre_radius(load_rig(sport), piece)) \
+            if piece in SPIN.get(sport, ()) else 0.0
         slide = ()
         if piece in SLIDE.get(sport, {}):
             along, prop = SLIDE[sport][piece]

@@ -52,6 +52,7 @@ from .base import BoneChannels, PoseTrack
 from .bone_map import JOINT_PARENT, JOINTS, BoneMap
 from .common import rot_z
 from .kinematics import quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
+from ..core.registry import SPORTS
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
 from .surface import euler_xyz
 from .user_rig import RigFit, UserRig, fit_rig
@@ -59,36 +60,28 @@ from .user_rig import RigFit, UserRig, fit_rig
 __all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SLIDE", "SEATED",
            "ANCHOR"]
 
+# Each sport's retargeting data is its record's ``retarget`` (:class:`..core.sports.Retarget`);
+# these are live views of the sport registry, by sport.
+_HAS = (lambda s: s.retarget is not None)
 #: Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig.
-ATTACH = {
-    "skier": {"ski.L": "foot.L", "ski.R": "foot.R", "pole.L": "hand.L", "pole.R": "hand.R"},
-    # Regular stance: the left boot is the front one; the back boot is bound as exactly.
-    "snowboarder": {"board": "foot.L"},
-    # The trailing heel lifts off its ski: the skis go with the toes, flat on them.
-    "telemark": {"ski.L": "toe.L", "ski.R": "toe.R", "pole.L": "hand.L", "pole.R": "hand.R"},
-    # The rider sits on the frame, steers the fork (the hands are carried by it) and pedals (the
-    # feet are carried by the pedals).  The wheels do not spin on the user's rig: no bone of the
-    # rider turns with them.
-    "cyclist": {"frame": "spine", "wheel.R": "spine", "crank": "spine", "fork": "hand.L",
-                "wheel.F": "hand.L", "pedal.L": "foot.L", "pedal.R": "foot.R"},
-}
+ATTACH = SPORTS.view(lambda s: s.retarget.attach, _HAS)
 #: Equipment that turns about its own axle to face another piece (Blender: Damped Track): the
 #: crank follows the pedals round the crank circle.
-TRACKS = {"cyclist": {"crank": "pedal.R"}}
+TRACKS = SPORTS.view(lambda s: s.retarget.tracks, lambda s: _HAS(s) and s.retarget.tracks)
 #: Equipment that rolls with the distance travelled (about its own Y axis, the axle): no bone of
 #: the rider turns with it, so the bake keys the distance as ``turn_distance`` on the armature
 #: and a driver turns the piece (:attr:`.equipment.EquipmentPiece.spin`).
-SPIN = {"cyclist": ("wheel.F", "wheel.R")}
+SPIN = SPORTS.view(lambda s: s.retarget.spin, lambda s: _HAS(s) and s.retarget.spin)
 #: Equipment that slides along another piece's own Y axis, by the distance the bake keys as a
 #: state property (m, of the user's figure): the front wheel along the fork, which keeps the
 #: steered and leaned tyre on the ground (:mod:`.cyclist`); a driver moves the piece.
-SLIDE = {"cyclist": {"wheel.F": ("fork", "turn_fork_slide")}}
+SLIDE = SPORTS.view(lambda s: s.retarget.slide, lambda s: _HAS(s) and s.retarget.slide)
 #: Sports where the pelvis sits on the equipment (the saddle): it goes exactly where the
 #: built-in's goes, the knees bend as the pedals ask.
-SEATED = {"cyclist"}
+SEATED = SPORTS.view(lambda s: True, lambda s: _HAS(s) and s.retarget.seated)
 #: Where a foot meets its equipment, when not at the ankle: the leg's IK puts that joint's head
 #: exactly on the built-in's (the telemark's ball of the foot, which stays on the ski).
-ANCHOR = {"telemark": "toe"}
+ANCHOR = SPORTS.view(lambda s: s.retarget.anchor, lambda s: _HAS(s) and s.retarget.anchor)
 #: The next joint down a chain: a joint's rest "segment" runs from its head to this one's head.
 CHAIN_CHILD = {B.HIPS: (B.SPINE, B.SPINE_2, B.CHEST), B.SPINE: (B.SPINE_2, B.CHEST),
                B.SPINE_2: (B.CHEST,), B.CHEST: (B.NECK, B.HEAD), B.NECK: (B.NECK_2, B.HEAD),

@@ -1,4 +1,4 @@
-"""The four figures as data: ``rigs/<name>.json``, loaded and validated into frozen dataclasses.
+"""The figures as data: ``rigs/<name>.json``, loaded and validated into frozen dataclasses.
 
 File format (JSON; armature space, metres; the figure faces +Y with Z up and stands with its feet
 on z = 0 around the origin, the foot point of the physical model)::
@@ -44,6 +44,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core.ranges import RANGES, Range
+from ..core.registry import SPORTS
 from ..core.validate import FieldError, Fields, check, read_text
 from .bones import REQUIRED, MissingBoneError
 
@@ -54,7 +55,9 @@ __all__ = ["BoneSpec", "MeshSpec", "RigSpec", "RIGS_DIR", "RIG_NAMES", "MATERIAL
 # install (pyproject.toml maps one onto the other).
 _PACKAGE, _TOP = Path(__file__).resolve().parents[1], Path(__file__).resolve().parents[2]
 RIGS_DIR = _PACKAGE / "rigs" if (_PACKAGE / "rigs").is_dir() else _TOP / "rigs"
-RIG_NAMES = ("skier", "snowboarder", "telemark", "cyclist")
+#: The rigs there are: one per registered sport (its record's ``rig_file``, by default
+#: ``RIGS_DIR/<sport>.json``), a live view of the sport registry.
+RIG_NAMES = SPORTS.view("rig_file")
 MATERIALS = ("skin", "suit", "equipment", "metal", "rubber")
 SHAPES = {"box": 3, "cylinder": 2, "capsule": 2}
 
@@ -185,12 +188,17 @@ def parse_rig(doc: dict, source: str = "rig") -> RigSpec:
     return RigSpec(rig_name, sport, tuple(bones), tuple(meshes))
 
 
-@lru_cache(maxsize=None)
 def load_rig(name: str) -> RigSpec:
-    """The rig ``rigs/<name>.json`` (one of ``RIG_NAMES``), validated."""
+    """The rig of the sport ``name`` (one of ``RIG_NAMES``: ``rigs/<name>.json`` or its record's
+    ``rig_file``), validated."""
     if name not in RIG_NAMES:
         raise ValueError(f"rig = {name!r} is not one of {', '.join(RIG_NAMES)}")
-    path = RIGS_DIR / f"{name}.json"
+    return _load_rig_file(str(SPORTS[name].rig_path(RIGS_DIR)))
+
+
+@lru_cache(maxsize=None)
+def _load_rig_file(file: str) -> RigSpec:
+    path = Path(file)
     try:
         doc = json.loads(read_text(path, "rig file"))
     except (json.JSONDecodeError, RecursionError) as exc:

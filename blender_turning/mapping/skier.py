@@ -13,7 +13,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.params import check_range
+from ..core.params import BodyParams, Figure, Limits, check_range
+from ..core.sports import Retarget, Sport, register_sport
+from ..core.model import Resistance
 from . import bones as B
 from .base import Mapping
 from .common import (carried, ik_limb, leg_lengths, limb_frames, phase_window, place_on_ground,
@@ -292,3 +294,28 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> 
         # rises off the snow along that line) while it swings free.
         tip_at[r + 1:j] = place.to_local(np.broadcast_to(P, (j - r - 1, 3)), np.arange(r + 1, j))
     return _Plants(held, after, u, tip_at, grip_at)
+
+
+#: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
+SPORT = register_sport(Sport(
+    name="skier", label="Skier", description="Alpine skier on slalom skis", number=0,
+    figure=Figure(
+        "skier", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=10.0),
+        Limits(C_f_max=1 / 6, dC_f_max=0.67, theta_fall=math.radians(60)),
+        """Alpine skier on slalom skis.  75 kg adult; centre of mass ~1.0 m above the skis in an
+        athletic stance; roll inertia about the centre of mass of a 1.75 m adult ~12 kg m^2
+        (m (0.4 m)^2); 10 m/s, a brisk recreational slalom.  A slalom ski has a ~12 m sidecut
+        radius; edged and bent it carves ~R cos(edge angle), about 6 m at 60 deg, so
+        |C_f| <= 1/6 1/m.  Edge to edge takes ~0.5 s: |dC_f/dt| <= 2 (1/6) / 0.5 ~ 0.67."""),
+    # Waxed skis on groomed snow: kinetic friction 0.02-0.1 (Colbeck 1992, "A review of the
+    # processes that control snow friction", CRREL Monograph 92-2); 0.05 for a ski carving
+    # at speed.  Drag area of an alpine skier turning in a giant-slalom stance 0.4-0.6 m^2
+    # (Meyer, Le Pelley & Borrani 2012, Med. Sci. Sports Exerc. 44(6)); air at ~2000 m, the
+    # ISA density there (1.007 kg/m^3).
+    resistance=Resistance(mu=0.05, CdA=0.5, rho=1.007),
+    plan_curvature_rate=0.2,
+    mapping=SkierMapping(),
+    bones=(B.ROOT, B.LEAN) + B.HUMAN + B.SKI + B.POLE,
+    retarget=Retarget(attach={"ski.L": "foot.L", "ski.R": "foot.R", "pole.L": "hand.L",
+                              "pole.R": "hand.R"}),
+))

@@ -15,7 +15,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.params import check_range
+from ..core.params import BodyParams, Figure, Limits, check_range
+from ..core.sports import Retarget, Sport, register_sport
+from ..core.model import Resistance
 from . import bones as B
 from .base import Mapping
 from .common import add_local_rotation, carried, place_on_ground, rot_y
@@ -93,3 +95,24 @@ class SnowboarderMapping(Mapping):
             arm = B.side("upper_arm", s)
             add_local_rotation(b, arm, fwd, np.full(len(traj), -sx * o.arm_spread))
             add_local_rotation(b, arm, up, o.arm_gain * (ahead - twist))
+
+
+#: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
+SPORT = register_sport(Sport(
+    name="snowboarder", label="Snowboarder", description="Carving snowboarder", number=1,
+    figure=Figure(
+        "snowboarder", BodyParams(m=70.0, l=0.95, I_v=10.0, V_cm=8.0),
+        Limits(C_f_max=0.2, dC_f_max=0.8, theta_fall=math.radians(60)),
+        """Carving snowboarder.  70 kg, centre of mass 0.95 m, I_v 10 kg m^2; 8 m/s.  A board's
+        ~7-8 m sidecut carves down to ~5 m: |C_f| <= 0.2; heel-to-toe edge change in ~0.5 s:
+        |dC_f/dt| <= 0.8."""),
+    # A snowboard's base slides like a ski's (Colbeck 1992); the rider stands sideways and
+    # higher: the top of Meyer et al.'s range.
+    resistance=Resistance(mu=0.05, CdA=0.6, rho=1.007),
+    plan_curvature_rate=0.3,
+    mapping=SnowboarderMapping(),
+    bones=(B.ROOT, B.LEAN) + B.HUMAN + (B.BOARD,),
+    # Regular stance: the left boot is the front one; the back boot is bound as exactly.
+    retarget=Retarget(attach={"board": "foot.L"}),
+    stances=("regular", "goofy"),
+))

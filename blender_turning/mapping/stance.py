@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.registry import SPORTS
 from . import bones as B
 from .base import BoneChannels, PoseTrack
 from .kinematics import Skeleton, quat_continuous, quat_from_matrix, rigid_inverse
@@ -15,7 +16,7 @@ __all__ = ["STANCES", "mirrored_trajectory", "unmirror_props", "MirroredSkeleton
 
 #: Sports with a stance: the built-in rides ``regular`` (left foot forward); ``goofy`` is its
 #: mirror image (see :func:`mirrored_trajectory`).
-STANCES = {"snowboarder": ("regular", "goofy")}
+STANCES = SPORTS.view("stances", lambda s: s.stances)
 _S4 = np.diag([-1.0, 1.0, 1.0, 1.0])        # mirror across the travel line (x -> -x)
 
 

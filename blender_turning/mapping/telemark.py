@@ -16,7 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.params import check_range
+from ..core.params import BodyParams, Figure, Limits, check_range
+from ..core.sports import Retarget, Sport, register_sport
+from ..core.model import Resistance
 from . import bones as B
 from .common import carried, rotate_about
 from .skier import SkierMapping, SkierOptions
@@ -76,3 +78,30 @@ class TelemarkMapping(SkierMapping):
             b.set_pose(B.side("foot", s), R)
             toe = B.side("toe", s)
             b.set_pose(toe, carried(b, toe, B.side("ski", s))[:, :3, :3])
+
+
+#: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
+SPORT = register_sport(Sport(
+    name="telemark", label="Telemark", description="Telemark skier", number=2,
+    figure=Figure(
+        "telemark", BodyParams(m=75.0, l=0.925, I_v=9.4, V_cm=8.0),
+        Limits(C_f_max=0.125, dC_f_max=0.5, theta_fall=math.radians(55)),
+        """Telemark skier.  The same 75 kg adult (1.78 m) in the telemark lunge, which lowers
+        the hips and folds the legs under the body: centre of mass 0.925 m from the foot point
+        and roll inertia 9.4 kg m^2 about it, from Dempster's segment data (Winter,
+        Biomechanics and Motor Control of Human Movement, 4th ed. 2009, Table 4.1) on the
+        built-in telemark figure's own pose, averaged over a 2 s, 23 deg slalom
+        (scripts/telemark_body.py; the skier's pose gives 0.99 m, 11.1 kg m^2); a gentler
+        8 m/s.  The turn comes from the angle between the skis (Section 3), which the split
+        stance limits to about an 8 m radius: |C_f| <= 0.125; changing the lead ski is slower
+        than an edge change: 0.5."""),
+    # Telemark: the skier's skis and air, a more upright lunge.
+    resistance=Resistance(mu=0.05, CdA=0.55, rho=1.007),
+    plan_curvature_rate=0.3,
+    mapping=TelemarkMapping(),
+    bones=(B.ROOT, B.LEAN) + B.HUMAN + B.SKI + B.POLE,
+    # The trailing heel lifts off its ski: the skis go with the toes, flat on them, and the
+    # leg's IK puts the ball of each foot (the toe bone's head) on the built-in's.
+    retarget=Retarget(attach={"ski.L": "toe.L", "ski.R": "toe.R", "pole.L": "hand.L",
+                              "pole.R": "hand.R"}, anchor="toe"),
+))

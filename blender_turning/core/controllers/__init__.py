@@ -1,11 +1,11 @@
-"""Steering controllers, by the names the CLI and the add-on use."""
+"""Steering controllers, by the names the CLI and the add-on use: ``CONTROLLERS`` is the registry
+of their records (:mod:`.registry`), each registered at the end of its own module."""
 from .base import Controller
 from .ellipse import PhaseEllipse, ellipse_alpha
 from .feasible import FeasibleTurn
 from .open_loop import OpenLoop
+from .registry import CONTROLLERS, ControllerType, register_controller, unregister_controller
 from .straight import Straight
 
-CONTROLLERS = {"open-loop": OpenLoop, "ellipse": PhaseEllipse, "straight": Straight}
-
 __all__ = ["Controller", "OpenLoop", "PhaseEllipse", "ellipse_alpha", "FeasibleTurn", "Straight",
-           "CONTROLLERS"]
+           "CONTROLLERS", "ControllerType", "register_controller", "unregister_controller"]

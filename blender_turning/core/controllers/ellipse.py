@@ -58,6 +58,7 @@ from ..params import BodyParams, Limits
 from ..schedule import Schedule
 from ..xp import Scalar, backend
 from .base import Controller
+from .registry import ControllerType, register_controller
 from .ellipse_paper import paper_alpha, paper_alpha_one
 from .feasible import FeasibleTurn, feasible_turns
 
@@ -407,3 +408,11 @@ class PhaseEllipse(Controller):
         th = state[THETA_V]
         tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t), self._b(th))
         return self._alpha(th, state[OMEGA_V], tm, w, amax, self.origin_radius)
+
+
+register_controller(ControllerType(
+    name="ellipse", label="Phase Ellipse",
+    description="Sections 5.1-5.2: phase-ellipse control of the lean, with directional control "
+                "of the heading",
+    make=lambda fig, omega0, theta_max, heading, law: PhaseEllipse(
+        fig.body, omega0, theta_max, heading, law=law, limits=fig.limits)))

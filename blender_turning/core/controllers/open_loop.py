@@ -5,6 +5,7 @@ from ..params import BodyParams
 from ..phase import open_loop_alpha
 from ..schedule import Schedule
 from .base import Controller
+from .registry import ControllerType, register_controller
 
 
 class OpenLoop(Controller):
@@ -32,3 +33,9 @@ class OpenLoop(Controller):
 
     def target(self, t):
         return self.omega0(t), self.theta_max(t)
+
+
+register_controller(ControllerType(
+    name="open-loop", label="Open Loop",
+    description="Section 4: the lean follows theta_max sin(omega0 t), no feedback",
+    make=lambda fig, omega0, theta_max, heading, law: OpenLoop(fig.body, omega0, theta_max)))

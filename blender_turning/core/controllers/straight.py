@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from ..schedule import Schedule
 from .base import Controller
+from .registry import ControllerType, register_controller
 
 
 class Straight(Controller):
@@ -32,3 +33,10 @@ class Straight(Controller):
 
     def target(self, t):
         return self.omega0(t), self.theta_max(t)
+
+
+register_controller(ControllerType(
+    name="straight", label="Straight",
+    description="Holds the body at its equilibrium lean: a straight run (a tuck down the hill)",
+    make=lambda fig, omega0, theta_max, heading, law: Straight(fig.body, omega0, theta_max),
+    start="straight"))
