@@ -89,12 +89,14 @@ class Outputs:
             raise FieldError(f"{flag} = {str(path)!r} is not a regular file")
         if target.exists() and not os.access(target, os.W_OK):
             raise FieldError(f"{flag} = {str(path)!r} is read-only")
-        try:
-            hidden = temp_beside(target)
-        except OSError as exc:
-            raise FieldError(f"{flag} = {str(path)!r} cannot be written: {_why(exc)}") from None
-        self._files[flag] = (target, hidden)
-        self._resolved[real] = flag
+        with signals.deferred():          # the hidden file is made and recorded, or neither
+            try:
+                hidden = temp_beside(target)
+            except OSError as exc:
+                raise FieldError(f"{flag} = {str(path)!r} cannot be written: "
+                                 f"{_why(exc)}") from None
+            self._files[flag] = (target, hidden)
+            self._resolved[real] = flag
 
     def write(self, flag: str, fill, kind: str | None = None) -> None:
         """``fill(path)`` writes the output of ``flag`` (to the hidden file), which is then

@@ -14,6 +14,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from . import signals
+
 __all__ = ["new_file_mode", "temp_beside", "atomic_write_text", "verify_file", "WriteError",
            "OutputLock", "OutputLocked", "disk_reason"]
 
@@ -99,12 +101,13 @@ def temp_beside(path) -> Path:
     """Create an empty hidden file next to ``path`` (same folder, same suffix, so tools that go
     by the suffix still work) with :func:`new_file_mode`, and return its path."""
     path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".", prefix=".tmp-",
-                               suffix=path.suffix)
-    try:
-        os.fchmod(fd, new_file_mode())
-    finally:
-        os.close(fd)
+    with signals.deferred():          # made and handed back whole, or not at all
+        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".",
+                                   prefix=".tmp-", suffix=path.suffix)
+        try:
+            os.fchmod(fd, new_file_mode())
+        finally:
+            os.close(fd)
     return Path(tmp)
 
 
