@@ -61,7 +61,7 @@ def verify_file(path, kind: str | None = None) -> None:
             raise WriteError(f"the file came out empty{_why_suffix(path)}")
         with open(path, "rb") as fh:
             head = fh.read(16)
-            fh.seek(max(0, size - 16))
+            fh.seek(max(0, size - 64))
             tail = fh.read()
             if kind == "json":
                 fh.seek(0)
@@ -74,8 +74,21 @@ def verify_file(path, kind: str | None = None) -> None:
         raise WriteError(f"the PNG is incomplete ({size} bytes){_why_suffix(path)}")
     if kind == "blend" and not head.startswith(_BLEND_HEADS):
         raise WriteError(f"the .blend has no Blender header ({size} bytes){_why_suffix(path)}")
+    if kind == "blend" and not _blend_complete(head, tail):
+        raise WriteError(f"the .blend is incomplete ({size} bytes){_why_suffix(path)}")
     if kind == "csv" and not tail.endswith(b"\n"):
         raise WriteError(f"the CSV ends mid-line ({size} bytes){_why_suffix(path)}")
+
+
+def _blend_complete(head: bytes, tail: bytes) -> bool:
+    """A plain .blend ends with its ``ENDB`` block; a zstd one (Blender's compression) with the
+    seek table of zstd's seekable format, whose footer ends with ``0x8F92EAB1``; gzip (older
+    Blenders) is taken on its header."""
+    if head.startswith(b"BLENDER"):
+        return b"ENDB" in tail
+    if head.startswith(b"\x28\xb5\x2f\xfd"):
+        return tail.endswith(b"\xb1\xea\x92\x8f")
+    return True
 
 
 def _why_suffix(path) -> str:

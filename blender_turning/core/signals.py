@@ -18,7 +18,7 @@ import threading
 from contextlib import contextmanager
 
 __all__ = ["Interrupted", "stop_on_signals", "deferred", "check", "interrupted_line",
-           "ignore_in_worker", "stop_pool"]
+           "ignore_in_worker", "stop_pool", "checkpoint"]
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -82,6 +82,16 @@ def check() -> None:
     stopping is safe)."""
     signum, _state["held"] = _state["held"], None
     if signum is not None and not _state["depth"]:
+        for s in SIGNALS:
+            signal.signal(s, signal.SIG_IGN)
+        raise Interrupted(signum)
+
+
+def checkpoint() -> None:
+    """Inside :func:`deferred`: raise :class:`Interrupted` now for a signal held so far (the
+    caller is at a point where stopping is safe, e.g. between two frames of a render)."""
+    signum, _state["held"] = _state["held"], None
+    if signum is not None:
         for s in SIGNALS:
             signal.signal(s, signal.SIG_IGN)
         raise Interrupted(signum)
