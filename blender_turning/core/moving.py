@@ -277,9 +277,9 @@ def closest_approach(bodies: MovingBodies) -> dict:
     mid = 0.5 * (F + C)
     r = 0.5 * float(np.sqrt(((C - F) ** 2).sum(axis=1)).max())
     lo, span = mid.min(axis=0), float((mid.max(axis=0) - mid.min(axis=0)).max())
-    per_sample = len(jj) / max(1, len(np.unique(kk)))
-    # Cells about as wide as the spacing of the bodies, and wide enough to resolve anything.
-    h = max(4.0 * r, 1e-3, math.sqrt(max(span, 1e-3) ** 2 / per_sample))
+    # Cells about as wide as the bodies' spacing at one moment (a crowd on the move covers
+    # much more ground over the shot than at any sample), and wide enough to resolve anything.
+    h = max(4.0 * r, 1e-3, _spacing(kk, mid))
     found = []                                       # (body, other, sample, distance) winners
     todo = np.ones(n, bool)
     while todo.any():
@@ -304,7 +304,25 @@ def closest_approach(bodies: MovingBodies) -> dict:
     return out
 
 
-def _closest_in_cells(jj, kk, F, C, mid, lo, h, todo, chunk=1_000_000):
+def _spacing(kk, mid) -> float:
+    """The median over the samples of ``sqrt(area / bodies)``: ``area`` the box around the
+    bodies' midpoints at that sample."""
+    m = int(kk.max()) + 1
+    box = np.full((4, m), np.inf)
+    box[2:] = -np.inf
+    np.minimum.at(box[0], kk, mid[:, 0])
+    np.minimum.at(box[1], kk, mid[:, 1])
+    np.maximum.at(box[2], kk, mid[:, 0])
+    np.maximum.at(box[3], kk, mid[:, 1])
+    count = np.bincount(kk, minlength=m)
+    on = count > 1
+    if not on.any():
+        return 0.0
+    wide = np.maximum(box[2:, on] - box[:2, on], 1e-3)
+    return float(np.median(np.sqrt(wide[0] * wide[1] / count[on])))
+
+
+def _closest_in_cells(jj, kk, F, C, mid, lo, h, todo, chunk=500_000):
     """For the bodies ``todo``: the closest segment of another body at the same sample among
     those in the 3 x 3 cells (``h`` wide) around each of its segments; rows ``(body, other,
     sample, distance)``, one per body that has a candidate (ties: the other body first in
@@ -331,16 +349,17 @@ def _closest_in_cells(jj, kk, F, C, mid, lo, h, todo, chunk=1_000_000):
                 keep = jj[q] != jj[t]
                 q, t = q[keep], t[keep]
                 d = segment_distance(F[q], C[q], F[t], C[t])
-                rows.append(np.stack([jj[q], jj[t], kk[q], d], axis=1))
-    if not rows:
-        return np.zeros((0, 4))
-    allr = np.concatenate(rows)
-    if not len(allr):
-        return allr
-    pick = np.lexsort((allr[:, 2], allr[:, 1], allr[:, 3], allr[:, 0]))
-    allr = allr[pick]
-    first = np.unique(allr[:, 0], return_index=True)[1]
-    return allr[first]
+                rows.append(_winners(np.stack([jj[q], jj[t], kk[q], d], axis=1)))
+    return _winners(np.concatenate(rows)) if rows else np.zeros((0, 4))
+
+
+def _winners(rows):
+    """Of rows ``(body, other, sample, distance)``, each body's closest (ties: the other body
+    first in order, then the earliest sample)."""
+    if not len(rows):
+        return rows
+    rows = rows[np.lexsort((rows[:, 2], rows[:, 1], rows[:, 3], rows[:, 0]))]
+    return rows[np.unique(rows[:, 0], return_index=True)[1]]
 
 
 def _closest_brute(bodies: MovingBodies) -> dict:
