@@ -314,7 +314,25 @@ def load_config(path: Path, overrides) -> dict:
         cam.fail("follow", "= 'each' gives a shot to every [[figures]] entry and every crowd "
                            "with shot = true: there is none")
     cfg["paths"], cfg["obstacles"] = paths, obstacles
+    _check_object_names(cfg, src)
     return cfg
+
+
+def _check_object_names(cfg, src) -> None:
+    """Every figure's objects (the figure, ``<name> Body``) get exactly their names in the scene:
+    Blender renames an object whose name is taken (``.001``), and then the camera, the shots'
+    folders and a farm's scripts would look for the wrong one."""
+    taken = {n: "an object the job makes" for n in ("Camera", "Camera Target", "Sun", "Ground")}
+    taken.update((n, f"the terrain [terrain.{n}]") for n in cfg["terrain"])
+    taken.update((f"Path {n}", f"the curve of [paths.{n}]") for n in cfg["paths"])
+    for fig in cfg["figures"]:
+        who = (f"the crowd {fig['crowd']!r}'s member {fig['name']!r}" if fig["crowd"]
+               else f"the figure {fig['name']!r}")
+        for name in (fig["name"], f"{fig['name']} Body"):
+            if name in taken:
+                raise ConfigError(f"{src}: {who} would make an object named {name!r}, the name "
+                                  f"of {taken[name]}: rename one of them")
+            taken[name] = who + ("'s body" if name != fig["name"] else "")
 
 
 # -- scene ---------------------------------------------------------------------------------------
