@@ -264,6 +264,15 @@ def load_config(path: Path, overrides) -> dict:
         if cfg["render"]["device"] == "GPU" and engine != "CYCLES":
             raise ConfigError(f"--device = {overrides.device!r} is for Cycles; the engine is "
                               f"{engine} (give --engine CYCLES)")
+    last = 1 + int(round(cfg["seconds"] * cfg["fps"]))
+    if getattr(overrides, "farm_frames", None) is not None:
+        # A farm's job type cannot read the config: the bake checks the frames it will ask for.
+        try:
+            _frames(overrides.farm_frames, last)
+        except ValueError as exc:
+            raise ConfigError(f"{str(exc).replace('--frames', '--farm-frames', 1)} (the shot "
+                              f"has frames 1-{last}: {cfg['seconds']:g} s at {cfg['fps']} "
+                              "fps)") from None
     cfg["frames"] = None
     if getattr(overrides, "frames", None) is not None:
         if getattr(overrides, "no_render", False):
@@ -764,6 +773,8 @@ def parse_args(argv):
                    "bake once, then render chunks with plain `blender -b job.blend -s A -e B -a` "
                    "on any farm")
     p.add_argument("--frames", help="render only frames A-B of the job (a farm task's chunk)")
+    p.add_argument("--farm-frames", help="the frames A-B a farm will render from the baked "
+                   ".blend: refused (exit 2, before the bake) unless inside the job's frames")
     p.add_argument("--device", help="CPU or GPU: Cycles' render device (default CPU); GPU fails "
                    "where Cycles finds none")
     p.add_argument("--name", help="the job's name: <output>/<name>.blend (overrides job.name)")
