@@ -85,8 +85,12 @@ def test_crowd_stopped_by_a_signal_leaves_the_earlier_result(tmp_path, sig, code
     before = earlier_result(out)
     proc = start("crowd", scene, "--out", out, "--workers", workers)
     wait_for_hidden(out, proc)
-    time.sleep(0.3)
+    end = time.monotonic() + 30
+    while workers > 1 and len(children(proc.pid)) < workers and time.monotonic() < end:
+        time.sleep(0.02)
+    time.sleep(0.2)
     pool = children(proc.pid)
+    assert proc.poll() is None, "the crowd ended before the signal"
     if workers > 1:
         assert pool, "no worker process started"
     # SIGINT as a terminal sends it: to the whole process group (the workers too).
@@ -169,12 +173,13 @@ def test_a_stale_lock_of_a_killed_job_is_taken_over(tmp_path):
 
 def _crowd_with_quick_figures(tmp_path) -> Path:
     doc = json.loads(json.dumps(SLOW_CROWD))
+    doc["duration"] = 30                 # the batch: several seconds even on an idle machine
     doc["figures"] += [{"name": "board", "preset": "snowboarder",
                         "turns": {"period": 2, "lean_deg": 20}, "start": {"position": [0, 30]},
-                        "time_offset": 11.5},
+                        "time_offset": 29.5},
                        {"name": "bike", "preset": "cyclist",
                         "turns": {"period": 3, "lean_deg": 15}, "start": {"position": [0, 60]},
-                        "time_offset": 11.5}]
+                        "time_offset": 29.5}]
     scene = tmp_path / "mixed.json"
     scene.write_text(json.dumps(doc))
     return scene
@@ -182,8 +187,8 @@ def _crowd_with_quick_figures(tmp_path) -> Path:
 
 @pytest.mark.parametrize("keep_going", [False, True])
 def test_a_worker_killed_mid_crowd_is_reported_by_figure(tmp_path, keep_going):
-    """Three tasks on two workers: the 101-skier batch (about 6 s measured) and two single
-    figures that start 0.5 s before the end (0.3 s each).  A worker killed while the batch runs: the batch's figures
+    """Three tasks on two workers: the 101-skier batch (30 s of motion: 4 s on an idle machine,
+    measured) and two single figures that start 0.5 s before the end (0.3 s each).  A worker killed while the batch runs: the batch's figures
     are named; --keep-going writes the other two and lists the lost ones in the summary."""
     scene = _crowd_with_quick_figures(tmp_path)
     out = tmp_path / "out"
@@ -191,7 +196,10 @@ def test_a_worker_killed_mid_crowd_is_reported_by_figure(tmp_path, keep_going):
     proc = start("crowd", scene, "--out", out, "--workers", 2,
                  *(["--keep-going"] if keep_going else []))
     wait_for_hidden(out, proc)
-    time.sleep(2.5)                    # the two quick tasks are done, the batch is not
+    end = time.monotonic() + 60
+    while len(children(proc.pid)) < 2 and time.monotonic() < end and proc.poll() is None:
+        time.sleep(0.02)
+    time.sleep(1.5)                    # the two quick tasks are done, the batch is not
     pool = children(proc.pid)
     assert len(pool) >= 2, pool
     os.kill(pool[0], signal.SIGKILL)
