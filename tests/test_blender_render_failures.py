@@ -138,3 +138,16 @@ def test_a_second_job_on_the_same_output_is_refused_naming_the_first(tmp_path):
     line = one_line(err)
     assert "--output" in line and f"pid {first.pid} on " in line
     assert not lock.exists()
+
+
+def test_a_signal_during_the_bake_writes_nothing(tmp_path):
+    """SIGTERM as soon as the job starts building (before its .blend): exit 143, one line, and
+    the output folder it made for its lock is gone again."""
+    p = job("--config", SLALOM, *TINY, "--seconds", "4", "--output", tmp_path / "job")
+    line = p.stdout.readline()
+    assert line.startswith("render_job: job "), line
+    p.send_signal(signal.SIGTERM)
+    out, err = p.communicate(timeout=300)
+    assert p.returncode == 143, out[-2000:] + err
+    assert "interrupted (SIGTERM); nothing written" in one_line(err)
+    assert not (tmp_path / "job").exists()
