@@ -39,7 +39,9 @@ if str(ROOT) not in sys.path:                      # inside a Blender binary: fi
     sys.path.insert(0, str(ROOT))
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-job-"))
 
-from blender_turning.core.files import temp_beside  # noqa: E402
+from blender_turning.core import signals  # noqa: E402
+from blender_turning.core.files import (OutputLock, OutputLocked, WriteError,  # noqa: E402
+                                        disk_reason, temp_beside, verify_file)
 from blender_turning.core.registry import SPORTS, import_extension  # noqa: E402
 from blender_turning.core.ranges import RANGES, Range  # noqa: E402
 from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
@@ -261,6 +263,15 @@ def load_config(path: Path, overrides) -> dict:
         if cfg["render"]["device"] == "GPU" and engine != "CYCLES":
             raise ConfigError(f"--device = {overrides.device!r} is for Cycles; the engine is "
                               f"{engine} (give --engine CYCLES)")
+    last = 1 + int(round(cfg["seconds"] * cfg["fps"]))
+    if getattr(overrides, "farm_frames", None) is not None:
+        # A farm's job type cannot read the config: the bake checks the frames it will ask for.
+        try:
+            _frames(overrides.farm_frames, last)
+        except ValueError as exc:
+            raise ConfigError(f"{str(exc).replace('--frames', '--farm-frames', 1)} (the shot "
+                              f"has frames 1-{last}: {cfg['seconds']:g} s at {cfg['fps']} "
+                              "fps)") from None
     cfg["frames"] = None
     if getattr(overrides, "frames", None) is not None:
         if getattr(overrides, "no_render", False):
@@ -311,7 +322,25 @@ def load_config(path: Path, overrides) -> dict:
         cam.fail("follow", "= 'each' gives a shot to every [[figures]] entry and every crowd "
                            "with shot = true: there is none")
     cfg["paths"], cfg["obstacles"] = paths, obstacles
+    _check_object_names(cfg, src)
     return cfg
+
+
+def _check_object_names(cfg, src) -> None:
+    """Every figure's objects (the figure, ``<name> Body``) get exactly their names in the scene:
+    Blender renames an object whose name is taken (``.001``), and then the camera, the shots'
+    folders and a farm's scripts would look for the wrong one."""
+    taken = {n: "an object the job makes" for n in ("Camera", "Camera Target", "Sun", "Ground")}
+    taken.update((n, f"the terrain [terrain.{n}]") for n in cfg["terrain"])
+    taken.update((f"Path {n}", f"the curve of [paths.{n}]") for n in cfg["paths"])
+    for fig in cfg["figures"]:
+        who = (f"the crowd {fig['crowd']!r}'s member {fig['name']!r}" if fig["crowd"]
+               else f"the figure {fig['name']!r}")
+        for name in (fig["name"], f"{fig['name']} Body"):
+            if name in taken:
+                raise ConfigError(f"{src}: {who} would make an object named {name!r}, the name "
+                                  f"of {taken[name]}: rename one of them")
+            taken[name] = who + ("'s body" if name != fig["name"] else "")
 
 
 # -- scene ---------------------------------------------------------------------------------------
@@ -571,6 +600,7 @@ def _run(bpy, cfg, render):
     for fig in cfg["figures"]:
         obj = add_figure(bpy, fig, cfg, paths, groups, grounds)
         bake_figure(bpy, obj, fig, frame_end)
+        signals.checkpoint()                     # a signal during the bake stops here
         figures.append(obj)
         spec = cfg["terrain"].get(fig["ground"])
         if spec is not None and spec["surface"] == "snow" and fig["tracks"]:
@@ -595,35 +625,29 @@ def _run(bpy, cfg, render):
     out = cfg["output"]
     out.mkdir(parents=True, exist_ok=True)
     blend = out / f"{cfg['name']}.blend"
-    bpy.ops.wm.save_as_mainfile(filepath=str(blend), check_existing=False)
+    save_blend(bpy, blend)
+    KEPT.append(blend)
     log(f"saved {blend}")
+    signals.checkpoint()
     result = {"blend": blend, "frames": None}
     if not render:
         return result
     if cfg["frames"] is not None:               # one chunk; the .blend keeps the whole range
         scene.frame_start, scene.frame_end = cfg["frames"]
-    n = len(range(scene.frame_start, scene.frame_end + 1, scene.frame_step)) * max(1, len(cameras))
-    done = []
-
-    def progress(scene_, *_):
-        done.append(scene_.frame_current)
-        log(f"rendered frame {scene_.frame_current} ({len(done)}/{n})")
-
-    bpy.app.handlers.render_post.append(progress)
+    frames = list(range(scene.frame_start, scene.frame_end + 1, scene.frame_step))
+    shots = [(None, scene.camera)] if not cameras else cameras
     t = time.perf_counter()
-    try:
-        if not cameras:
-            bpy.ops.render.render(animation=True)
-        for name, cam in cameras:               # one shot per figure, each in its own folder
-            scene.camera = cam                  # (relative to the .blend, as setup_render's)
-            if cfg["render"]["format"] == "VIDEO":
-                scene.render.filepath = f"//{cfg['name']}_{name}.mp4"
-            else:
-                scene.render.filepath = f"//frames/{name}/frame_"
-            bpy.ops.render.render(animation=True)
-    finally:
-        bpy.app.handlers.render_post.remove(progress)
-    log(f"rendered {len(done)} frames with {cfg['render']['engine']} in "
+    count = [0, len(frames) * len(shots)]
+    for name, cam in shots:                     # one shot per figure, each in its own folder
+        scene.camera = cam
+        if cfg["render"]["format"] == "VIDEO":
+            render_video(bpy, out / (f"{cfg['name']}.mp4" if name is None
+                                     else f"{cfg['name']}_{name}.mp4"))
+            count[0] += len(frames)
+        else:
+            render_frames(bpy, out / "frames" if name is None else out / "frames" / name,
+                          frames, count)
+    log(f"rendered {count[0]} frames with {cfg['render']['engine']} in "
         f"{time.perf_counter() - t:.1f} s")
     result["frames"] = (out / f"{cfg['name']}.mp4" if cfg["render"]["format"] == "VIDEO"
                         else out / "frames")
@@ -631,9 +655,102 @@ def _run(bpy, cfg, render):
         shots = [sorted((out / "frames" / name).glob("frame_*.png")) for name, _ in cameras]
         middle = [s[len(s) // 2] for s in shots if s]
         if middle:
-            render_terrain.contact_sheet(bpy, middle, out / "shots.png")
-            log(f"shots: {out / 'shots.png'}")
+            sheet = out / "shots.png"
+            staged = _staged(sheet)
+            try:
+                render_terrain.contact_sheet(bpy, middle, staged)
+                _check_and_place(staged, sheet, "the contact sheet")
+            finally:
+                staged.unlink(missing_ok=True)
+            KEPT.append(sheet)
+            log(f"shots: {sheet}")
     return result
+
+
+# -- writing: every file to a hidden name, checked, then renamed (docs/failures.md) -------------
+
+KEPT: list = []                 # the files this job has put in place (said when it is stopped)
+
+
+def _staged(final: Path) -> Path:
+    """The hidden name ``final`` is written under first (same folder, same suffix)."""
+    return final.with_name(f".tmp-{os.getpid()}-{final.name}")
+
+
+def _check_and_place(staged: Path, final: Path, what: str) -> None:
+    try:
+        verify_file(staged, final.suffix.lstrip("."))
+    except WriteError as exc:
+        raise WriteError(f"{what} {str(final)!r} was not written: {exc}") from None
+    try:
+        os.replace(staged, final)
+    except OSError as exc:
+        raise WriteError(f"{what} {str(final)!r} was not written: {disk_reason(final, exc)}") \
+            from None
+
+
+def save_blend(bpy, blend: Path) -> None:
+    """Save the scene as ``blend``: to a hidden name, checked (Blender's header), renamed.  A
+    save that fails (a full disk, a file too large) leaves no .blend, old or partial, behind:
+    :class:`WriteError`."""
+    staged = _staged(blend)
+    try:
+        try:
+            # Blender writes ``<path>@`` and renames it itself; a failure can leave either.
+            bpy.ops.wm.save_as_mainfile(filepath=str(staged), check_existing=False)
+        except RuntimeError as exc:
+            why = str(exc).strip().splitlines()[-1] if str(exc).strip() else ""
+            raise WriteError(f"the .blend {str(blend)!r} was not written: "
+                             f"{disk_reason(blend) or why or 'Blender could not save it'}") \
+                from None
+        _check_and_place(staged, blend, "the .blend")
+    finally:
+        staged.unlink(missing_ok=True)
+        Path(f"{staged}@").unlink(missing_ok=True)
+
+
+def render_frames(bpy, folder: Path, frames, count) -> None:
+    """Render ``frames`` one by one, each to a hidden name, checked (a whole PNG) and renamed
+    to ``folder/frame_####.png``.  The first frame that does not come out whole stops the job
+    with :class:`WriteError` naming the frames not written and why (the ones before it are
+    kept)."""
+    scene = bpy.context.scene
+    folder.mkdir(parents=True, exist_ok=True)
+    for k, f in enumerate(frames):
+        final = folder / f"frame_{f:04d}.png"
+        staged = _staged(final)
+        scene.frame_set(f)
+        scene.render.filepath = str(staged)
+        try:
+            bpy.ops.render.render(write_still=True)
+            try:
+                _check_and_place(staged, final, "frame")
+            except WriteError as exc:
+                rest = frames[k:]
+                span = f"{rest[0]}" if len(rest) == 1 else f"{rest[0]}-{rest[-1]}"
+                why = str(exc).split(": ", 1)[-1]
+                raise WriteError(f"{len(rest)} of {len(frames)} frames not written to "
+                                 f"{str(folder)!r} (frames {span}; frame {f}: {why})") from None
+        finally:
+            staged.unlink(missing_ok=True)
+        KEPT.append(final)
+        count[0] += 1
+        log(f"rendered frame {f} ({count[0]}/{count[1]})")
+        signals.checkpoint()                   # a signal during the frame stops here
+
+
+def render_video(bpy, final: Path) -> None:
+    """Render the animation as one video to a hidden name, checked (not empty), renamed."""
+    scene = bpy.context.scene
+    staged = _staged(final)
+    scene.render.filepath = str(staged)
+    try:
+        bpy.ops.render.render(animation=True)
+        _check_and_place(staged, final, "the video")
+    finally:
+        staged.unlink(missing_ok=True)
+    KEPT.append(final)
+    signals.checkpoint()
 
 
 class _Parser(argparse.ArgumentParser):
@@ -655,6 +772,8 @@ def parse_args(argv):
                    "bake once, then render chunks with plain `blender -b job.blend -s A -e B -a` "
                    "on any farm")
     p.add_argument("--frames", help="render only frames A-B of the job (a farm task's chunk)")
+    p.add_argument("--farm-frames", help="the frames A-B a farm will render from the baked "
+                   ".blend: refused (exit 2, before the bake) unless inside the job's frames")
     p.add_argument("--device", help="CPU or GPU: Cycles' render device (default CPU); GPU fails "
                    "where Cycles finds none")
     p.add_argument("--name", help="the job's name: <output>/<name>.blend (overrides job.name)")
@@ -666,6 +785,32 @@ def parse_args(argv):
 
 
 def main(argv=None) -> int:
+    """Exit 0 when every file asked for was written and checked; 2 for a bad config or an
+    output another job holds; 1 for a failed bake or write (naming what was not written);
+    130 / 143 on SIGINT / SIGTERM (docs/failures.md)."""
+    with signals.stop_on_signals():
+        KEPT.clear()
+        made = []
+        try:
+            return _main(argv, made)
+        except signals.Interrupted as exc:
+            print(signals.interrupted_line("render_job", exc, KEPT), file=sys.stderr,
+                  flush=True)
+            return exc.code
+        finally:
+            _remove_if_empty(made)
+
+
+def _remove_if_empty(made) -> None:
+    """Remove the output folders this job created if it wrote nothing into them."""
+    for folder in reversed(made):
+        try:
+            folder.rmdir()
+        except OSError:
+            break
+
+
+def _main(argv, made) -> int:
     args = parse_args(sys.argv if argv is None else argv)
     try:
         for spec in args.register:
@@ -674,21 +819,46 @@ def main(argv=None) -> int:
     except ValueError as exc:                     # ConfigError, FieldError: names the key
         print(f"render_job: error: {exc}", file=sys.stderr, flush=True)
         return 2
+    out = cfg["output"]
+    missing = []
+    probe = out
+    while not probe.exists():
+        missing.append(probe)
+        probe = probe.parent
+    try:
+        out.mkdir(parents=True, exist_ok=True)     # to hold the lock; removed if left empty
+    except OSError as exc:
+        print(f"render_job: error: cannot create {str(out)!r}: {disk_reason(out, exc)}",
+              file=sys.stderr, flush=True)
+        return 1
+    made.extend(reversed(missing))
+    flag = "--output" if args.output is not None else f"{args.config}: job.output"
     log(f"job {cfg['name']!r}: {len(cfg['figures'])} figure(s), {cfg['seconds']:g} s at "
         f"{cfg['fps']} fps, {cfg['render']['engine']} {cfg['render']['resolution'][0]}x"
         f"{cfg['render']['resolution'][1]}")
     try:
-        res = run(cfg, render=not args.no_render)
+        with OutputLock(out, flag, f"render_job {cfg['name']}"), signals.deferred():
+            # Held signals: Blender prints, rather than passes on, an exception raised in the
+            # add-on's code it calls; the job stops at its checkpoints (after each figure's
+            # bake, each frame) instead.
+            res = run(cfg, render=not args.no_render)
+    except OutputLocked as exc:
+        print(f"render_job: error: {exc}", file=sys.stderr, flush=True)
+        return 2
     except ConfigError as exc:
         print(f"render_job: error: {exc}", file=sys.stderr, flush=True)
         return 2
+    except WriteError as exc:
+        kept = f"; kept {len(KEPT)} file(s) written before it" if KEPT else ""
+        print(f"render_job: error: {exc}{kept}", file=sys.stderr, flush=True)
+        return 1
     except RuntimeError as exc:                   # an operator's report (fell over, no plan)
         reason = str(exc).strip().splitlines()[0] if str(exc).strip() else "bake failed"
         print(f"render_job: error: {reason}", file=sys.stderr, flush=True)
         return 1
     except OSError as exc:                        # the disk filled up, the folder went away
-        print(f"render_job: error: cannot write to {str(cfg['output'])!r}: "
-              f"{exc.strerror or exc}", file=sys.stderr, flush=True)
+        print(f"render_job: error: cannot write to {str(out)!r}: "
+              f"{disk_reason(out, exc)}", file=sys.stderr, flush=True)
         return 1
     log(f"blend: {res['blend']}")
     if res["frames"] is not None:

@@ -134,6 +134,23 @@ def test_bad_formation_is_reported_and_nothing_changes(scene):
     assert snapshot() == before, diff(before, snapshot())
 
 
+@pytest.mark.parametrize("given, words", [
+    ({"count": 0}, r"count = 0 is outside the allowed range \[1, 10000\]"),
+    ({"count": -5}, r"count = -5 is outside the allowed range \[1, 10000\]"),
+    ({"count": 10001}, r"count = 10001 is outside"),
+    ({"gap_time": -1.0}, r"gap_time = -1.0 is outside"),
+    ({"abreast": 0, "formation": "PELOTON"}, r"abreast = 0 is outside"),
+])
+def test_counts_and_ranges_from_python_are_refused_not_clamped(scene, given, words):
+    """A script passes any number; Blender would clamp it to a hard limit in silence (count 0
+    became 1 follower): the operator refuses it by name, as the crowd file's reader does."""
+    add("SKIER")
+    before = snapshot()
+    with pytest.raises(RuntimeError, match=words):
+        bpy.ops.turning.add_crowd(**given)
+    assert snapshot() == before, diff(before, snapshot())
+
+
 # -- Bake Turns on a crowd ------------------------------------------------------------------------
 
 def core_pose_track(fig, frames):

@@ -36,7 +36,7 @@ def test_disk_full_while_writing_the_csv(tmp_path, monkeypatch, capsys):
 
     monkeypatch.setattr(Trajectory, "to_csv", half_then_full)
     assert main(["simulate", "--duration", "1", "--plot", str(tmp_path / "p.png"),
-                 "--out", str(tmp_path / "o.csv")]) == 2
+                 "--out", str(tmp_path / "o.csv")]) == 1          # a failed write: exit 1
     line = err_line(capsys)
     assert "--out" in line and "No space left on device" in line
     assert snapshot(tmp_path) == before and (tmp_path / "o.csv").read_text() == "old run"
@@ -65,7 +65,7 @@ def test_disk_full_inside_the_atomic_writer(tmp_path, monkeypatch, capsys):
         return Full(fh) if "w" in mode else fh
 
     monkeypatch.setattr(files, "open", full_open, raising=False)
-    assert main(["simulate", "--duration", "1", "--out", str(tmp_path / "o.csv")]) == 2
+    assert main(["simulate", "--duration", "1", "--out", str(tmp_path / "o.csv")]) == 1
     assert "--out" in err_line(capsys)
     assert snapshot(tmp_path) == {}
 
@@ -88,7 +88,7 @@ def test_a_failed_rename_puts_back_what_was_replaced(tmp_path, monkeypatch, caps
                      '"path": {"polyline": [[0, 0], [8, 0]]}, '
                      '"planner": {"stages": 3, "choices": 3}}')
     assert main(["follow", str(scene), "--out", str(tmp_path / "t.csv"), "--stats",
-                 str(tmp_path / "s.json")]) == 2
+                 str(tmp_path / "s.json")]) == 1
     line = err_line(capsys)
     assert "--stats" in line and "Input/output error" in line
     assert any(str(d).endswith("t.csv") for _, d in calls)     # t.csv had been put in place
@@ -107,15 +107,17 @@ def test_permission_error_on_the_folder_is_named_before_the_work(tmp_path, monke
     assert snapshot(tmp_path) == {}
 
 
-def test_an_interrupt_mid_run_leaves_nothing(tmp_path, monkeypatch):
-    """Ctrl-C in the middle of the simulation: cli.main removes the reserved hidden files."""
+def test_an_interrupt_mid_run_leaves_nothing(tmp_path, monkeypatch, capsys):
+    """Ctrl-C in the middle of the simulation: cli.main removes the reserved hidden files and
+    says so in one line, exit 130."""
     def interrupted(*a, **k):
         assert len(list(tmp_path.iterdir())) == 2         # the two reserved hidden files
         raise KeyboardInterrupt
 
     monkeypatch.setattr(sim, "simulate", interrupted)
-    with pytest.raises(KeyboardInterrupt):
-        main(["simulate", "--out", str(tmp_path / "o.csv"), "--plot", str(tmp_path / "p.png")])
+    assert main(["simulate", "--out", str(tmp_path / "o.csv"), "--plot",
+                 str(tmp_path / "p.png")]) == 130
+    assert "interrupted (SIGINT); nothing written" in err_line(capsys)
     assert snapshot(tmp_path) == {}
 
 

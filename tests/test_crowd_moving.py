@@ -102,3 +102,42 @@ def test_near_keeps_only_bodies_that_come_near_within_the_window():
     logged = MovingBodies.from_tracks([("passer", PASSER, 1.0)], clearance=0.5, log=log)
     logged.near((4.0, 2.0), 1.0, 8.0, 9.5)
     assert log == [(4.0, 2.0, 1.0, 8.0, 9.5)] and logged.seen_by(log).tolist() == [True]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_grid_closest_approach_is_the_all_pairs_one(seed):
+    """closest_approach's grid (near-linear) gives the all-pairs answers exactly: distances,
+    the other body and the time, ties included (rounded positions make many), on crowds from
+    packed to sparse, with bodies absent from some samples."""
+    from blender_turning.core.moving import _closest_brute
+    rng = np.random.default_rng(seed)
+    for _ in range(40):
+        n, S = int(rng.integers(1, 40)), int(rng.integers(1, 25))
+        scale = 10 ** rng.uniform(-1, 3)
+        foot = rng.uniform(-scale, scale, (n, S, 2))
+        if rng.random() < 0.3:
+            foot = np.round(foot)
+        # Segments up to about a spacing long, so that the grid's bound h - 2 r matters.
+        cm = foot + rng.uniform(-1, 1, (n, S, 2)) * scale / math.sqrt(n) * (rng.random() < 0.8)
+        gone = rng.random((n, S)) < 0.2
+        foot[gone] = cm[gone] = np.nan
+        b = MovingBodies(tuple(f"b{i}" for i in range(n)), 0.1, 3, foot, cm)
+        assert closest_approach(b) == _closest_brute(b)
+
+
+def test_a_closer_body_just_outside_the_cells_is_not_missed():
+    """A's nearest body B sits just outside the 3 x 3 cells around A (cells h = 1001 /
+    sqrt(104) = 98.16 m wide here: 104 bodies over 1001 m; the cells end at y = 196.3 m),
+    pointing at A: 96.5 m away; a body D inside them is 97 m away.  A candidate farther than
+    h - 2 r (96.16 m) proves nothing, so the answer must be B, found with wider cells."""
+    pts = [((0.0, 97.0), (0.0, 99.0)),              # A: mid (0, 98), at the top of its cell
+           ((0.0, 195.5), (0.0, 197.5)),            # B: mid y 196.5, past the cells' 196.3
+           ((97.0, 97.0), (97.0, 99.0)),            # D: inside the cells, 97 m from A
+           ((500.0, -1.0), (500.0, 1.0))]           # sets the grid's origin at y = 0
+    pts += [((1000.0 + 0.01 * i, 1000.0), (1000.0 + 0.01 * i, 1000.0)) for i in range(100)]
+    foot = np.array([[p[0]] for p in pts])
+    cm = np.array([[p[1]] for p in pts])
+    b = MovingBodies(tuple(["A", "B", "D", "far"] + [f"c{i}" for i in range(100)]), 0.1, 0,
+                     foot, cm)
+    d, other, _ = closest_approach(b)["A"]
+    assert other == "B" and d == pytest.approx(96.5)

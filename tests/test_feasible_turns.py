@@ -140,3 +140,13 @@ def test_low_speed_heading_table_is_finite_and_silent():
         w0, tm = ctl.target(0.0)
         tr = simulate(fig, ctl, 20.0, state0=slalom_start(fig.body, w0, tm))
     assert np.all(np.isfinite(tr.data))
+
+
+@pytest.mark.parametrize("name", sorted(PRESETS))
+def test_max_leans_is_max_lean_bit_for_bit(name):
+    """The array form a crowd's batch uses gives max_lean's numbers exactly (a batch and a lone
+    figure must agree to the bit), on the grid, between its nodes and off it."""
+    p = preset(name)
+    table = feasible_turns(p.body, p.limits)
+    w = np.exp(np.linspace(math.log(0.02), math.log(500.0), 1501))
+    np.testing.assert_array_equal(table.max_leans(w), [table.max_lean(v) for v in w])

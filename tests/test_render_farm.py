@@ -121,3 +121,24 @@ def test_bad_settings_are_refused_by_name(change, words):
 def test_the_job_type_declares_its_settings():
     keys = {s["key"] for s in compile_job(SETTINGS)["job_type"]["settings"]}
     assert set(SETTINGS) == keys
+
+
+def test_the_bake_refuses_farm_frames_outside_the_shot(tmp_path):
+    """The job type cannot read the config, so its bake task passes the farm's frames: a job of
+    frames 1-1,000,000 for a 241-frame shot (10 s at 24 fps) stops at the bake, one line naming
+    --farm-frames and the shot's frames, nothing built; inside the shot it bakes as before."""
+    r = job(tmp_path, "[job]\nseconds = 10\nfps = 24\n" + FIG, "--no-render", "--farm-frames",
+            "1-1000000")
+    one_line_error(r, "--farm-frames last = 1000000", "[1, 241]", "the shot has frames 1-241")
+    assert not (tmp_path / "out").exists()
+    rj = _render_job()
+    args = rj.parse_args(["render_job.py", "--config", str(ROOT / "scripts" / "configs" /
+                          "skier_slalom.toml"), "--no-render", "--farm-frames", "1-193"])
+    assert rj.load_config(args.config, args)["frames"] is None        # 8 s at 24 fps: 193
+
+
+def test_the_job_type_passes_its_frames_to_the_bake_and_caps_the_tasks():
+    bake = compile_job(dict(SETTINGS, frames="5..7"))["tasks"][0]["commands"][0]["parameters"]
+    assert bake["args"][-2:] == ["--farm-frames", "5-7"]
+    out = compile_job(dict(SETTINGS, frames="1-1000000", chunk_size=24))
+    assert "tasks" not in out and "41667 render tasks; at most 10000" in out["error"], out

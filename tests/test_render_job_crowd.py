@@ -137,3 +137,20 @@ def test_follower_names_may_not_clash_and_each_needs_a_shot(tmp_path):
                                                                      leader=""))
     assert math.isfinite(load(tmp_path, CROWD.format(extra="shot = false", leader=""))
                          ["figures"][1]["period"])
+
+
+@pytest.mark.parametrize("before, names", [
+    ('[[figures]]\nsport = "skier"\nname = "School 2 Body"\n', ["'School 2'", "'School 2 Body'"]),
+    ('[[figures]]\nsport = "skier"\nname = "Sun"\n', ["'Sun'", "an object the job makes"]),
+    ('[[figures]]\nsport = "skier"\nname = "mountain"\n', ["'mountain'", "[terrain.mountain]"]),
+])
+def test_a_member_or_figure_named_like_another_object_is_refused(tmp_path, before, names):
+    """Blender renames an object whose name is taken ('School 2 Body.001'): the job refuses the
+    config (exit 2) before anything is built, so no .blend is left."""
+    cfg = tmp_path / "job.toml"
+    cfg.write_text(before + CROWD.format(extra="", leader=""))
+    r = subprocess.run([sys.executable, str(JOB), "--config", str(cfg), "--no-render",
+                        "--output", str(tmp_path / "o")], capture_output=True, text=True,
+                       timeout=300, cwd=ROOT)
+    one_line_error(r, "would make an object named", *names, code=2)
+    assert not (tmp_path / "o").exists()

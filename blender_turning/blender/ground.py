@@ -6,9 +6,11 @@ the other way."""
 from __future__ import annotations
 
 import hashlib
+import math
 
 import numpy as np
 
+from ..core.ranges import RANGES
 from ..core.terrain import HeightField, LazyHeightField
 
 #: Most grid points a ground is sampled at (a 200 m x 200 m terrain at 0.25 m is 641,601).
@@ -165,21 +167,27 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     horizontal bounding box.  ``cell`` (m) defaults to a quarter of the median of each
     triangle's shortest side seen from above: the spline through the samples then rounds the
     mesh's creases by about a centimetre on a 1 m mogul mesh (measured: 1.2 cm at a quarter,
-    2 cm at half).  A grid mesh's samples are computed as a run visits them
+    2 cm at half), coarser where the ground's extent would need more than :data:`MAX_SAMPLES`
+    (:func:`_default_cell`).  A Ground not in the scene, part of a figure, animated, with a
+    vertex that is not finite or strays far from the rest, or reaching past 100 km from the
+    origin is refused, naming the object (and the vertex).  A grid mesh's samples are computed as a run visits them
     (:class:`..core.terrain.LazyHeightField`); any other mesh is rasterized whole.  Grid
     points the mesh does not cover take the height of the nearest covered point in their row
     (then column); raises ``ValueError`` naming the object when it has no faces."""
     if obj is None or obj.type != 'MESH':
         raise ValueError(f"ground {getattr(obj, 'name', obj)!r} is not a mesh object")
+    check_ground_object(obj, depsgraph)
     kept = _READ.get(obj.name)
     key, world, tris = _read_mesh(obj, depsgraph, cell, kept and kept[0])
     if world is None:
         return kept[1]
     if len(tris) == 0:
         raise ValueError(f"ground {obj.name!r} has no faces")
-    lo, hi = _column_min(world), -_column_min(-world)
+    used = np.unique(tris)                 # loose vertices are not ground
+    check_vertices(obj.name, world, used)
+    lo, hi = _column_min(world[used]), -_column_min(-world[used])
     if cell is None:
-        cell = 0.25 * _median_shortest_side(world, tris)
+        cell = _default_cell(world, tris, hi - lo)
     nx = int(np.floor((hi[0] - lo[0]) / cell)) + 1
     ny = int(np.floor((hi[1] - lo[1]) / cell)) + 1
     if nx < 2 or ny < 2:
@@ -188,6 +196,12 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
         raise ValueError(f"ground {obj.name!r} needs {nx * ny} samples at {cell:g} m; "
                          f"at most {MAX_SAMPLES}: use a coarser cell")
     x0, y0, cell = float(lo[0]), float(lo[1]), float(cell)
+    limit = RANGES["coordinate"]
+    for axis, v in (("x", x0), ("y", y0), ("x", float(hi[0])), ("y", float(hi[1]))):
+        if not limit.lo <= v <= limit.hi:
+            raise ValueError(f"ground {obj.name!r} reaches {axis} = {v:.6g} m, outside the "
+                             f"allowed range [{limit.lo:g}, {limit.hi:g}] m: move it (and the "
+                             "figures) nearer the origin")
     grid = _grid_mesh(world, tris)
     if grid is not None:
         # The lattice covers the grid: its samples are computed as the run visits them.
@@ -206,6 +220,84 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
         _READ.pop(next(iter(_READ)))
     _READ[obj.name] = (key, ground)
     return ground
+
+
+def check_ground_object(obj, depsgraph) -> None:
+    """Refuse, naming ``obj``, a Ground the figure cannot ride as read: not in the scene being
+    baked, a figure's own body, or animated (it is read at one frame only)."""
+    scene = depsgraph.scene
+    if scene.objects.get(obj.name) is not obj:
+        raise ValueError(f"ground {obj.name!r} is not in the scene {scene.name!r} (unlinked or "
+                         "in another scene): link it, or pick another Ground")
+    rig = obj
+    while rig is not None:
+        settings = getattr(rig, "turning", None)
+        if settings is not None and getattr(settings, "is_figure", False):
+            raise ValueError(f"ground {obj.name!r} is part of the figure {rig.name!r}, not "
+                             "ground: pick the terrain mesh")
+        rig = rig.parent
+    holder = obj
+    while holder is not None:
+        if _animated(holder) or (holder is obj and _animated(getattr(obj.data, "shape_keys",
+                                                                      None))):
+            what = "its mesh's shape keys" if holder is obj and not _animated(obj) else (
+                "it" if holder is obj else f"its parent {holder.name!r}")
+            raise ValueError(f"ground {obj.name!r} is animated ({what} has keyframes or "
+                             "drivers), but it is read at one frame only: apply or remove "
+                             "the animation")
+        holder = holder.parent
+
+
+def _animated(idblock) -> bool:
+    ad = getattr(idblock, "animation_data", None)
+    return ad is not None and (ad.action is not None or len(ad.drivers) > 0)
+
+
+#: A vertex this many times the spread of the others away from them is a stray one.
+STRAY_FACTOR = 1000.0
+
+
+def check_vertices(name: str, world, used) -> None:
+    """Refuse, naming the ground and the vertex (its index in the evaluated mesh), a face's
+    vertex that is not a finite position or lies far from all the others (the ground's box,
+    and so its samples, would reach out to it)."""
+    pts = world[used]
+    # Blender stores an infinite coordinate as float32's largest, 3.4e38.
+    bad = ~(np.abs(pts) < 1e37).all(axis=1)
+    if bad.any():
+        i = int(used[np.flatnonzero(bad)[0]])
+        raise ValueError(f"ground {name!r}: vertex {i} is at "
+                         f"({', '.join(f'{v:g}' for v in world[i])}), not a finite position "
+                         "(inf is kept as 3.4e+38): fix or delete it")
+    if len(pts) < 20:
+        return
+    q1, q99 = np.percentile(pts[:, :2], [1, 99], axis=0)
+    spread = max(float((q99 - q1).max()), 1e-3)
+    off = np.abs(pts[:, :2] - 0.5 * (q1 + q99)).max(axis=1)
+    far = np.flatnonzero(off > STRAY_FACTOR * spread)
+    if len(far):
+        i = int(used[far[np.argmax(off[far])]])
+        raise ValueError(f"ground {name!r}: vertex {i} at "
+                         f"({', '.join(f'{v:.4g}' for v in world[i])}) is {off.max():.3g} m from "
+                         f"the rest of the mesh (which spans {spread:.3g} m): a stray vertex? "
+                         "Delete it")
+
+
+def _default_cell(world, tris, size) -> float:
+    """A quarter of the median shortest side (the mesh's detail), made coarser where that
+    would take more than :data:`MAX_SAMPLES` samples over the ground's extent ``size``: a large,
+    fine mesh (a scanned slope of a million faces) is sampled as finely as the limit allows."""
+    cell = 0.25 * _median_shortest_side(world, tris)
+    w, h = float(size[0]), float(size[1])
+
+    def samples(c):
+        return (np.floor(w / c) + 1) * (np.floor(h / c) + 1)
+
+    if samples(cell) > MAX_SAMPLES:
+        cell = max(cell, math.sqrt(w * h / MAX_SAMPLES), max(w, h) / (MAX_SAMPLES - 1))
+        while samples(cell) > MAX_SAMPLES:
+            cell *= 1.001
+    return cell
 
 
 def _median_shortest_side(world, tris) -> float:

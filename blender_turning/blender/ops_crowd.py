@@ -27,10 +27,13 @@ GAP_BY = (("TIME", "Time", "Each follower starts Gap seconds after the one befor
                                    "behind the one before"))
 
 
-def _r(key: str) -> dict:
-    """``min``/``max`` of a property from the crowd file's table of ranges."""
+def _r(key: str, **ui) -> dict:
+    """The UI limits of a property from the crowd file's table of ranges (soft ones, so that a
+    value a script passes outside them reaches :meth:`TURNING_OT_add_crowd._values` and is
+    refused by name rather than clamped in silence); ``ui``: tighter soft limits for the
+    slider."""
     r = CROWD_RANGES[key]
-    return {"min": r.lo, "max": r.hi}
+    return {"soft_min": r.lo, "soft_max": r.hi, **ui}
 
 
 class TURNING_OT_add_crowd(bpy.types.Operator):
@@ -44,24 +47,24 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
     # The registered formations (crowd/registry.py), listed when drawn; default 0: follow the
     # leader.
     formation: EnumProperty(name="Formation", items=formation_items, default=0)
-    count: IntProperty(name="Count", default=4, min=1, max=int(CROWD_RANGES["count"].hi),
-                       soft_max=50, description="How many figures the formation adds")
+    count: IntProperty(name="Count", default=4, soft_min=1, soft_max=50,
+                       description="How many figures the formation adds")
     gap_by: EnumProperty(name="Gap By", items=GAP_BY, default="TIME")
-    gap_time: FloatProperty(name="Gap", default=1.5, **_r("gap_s"), soft_max=10.0,
+    gap_time: FloatProperty(name="Gap", default=1.5, **_r("gap_s", soft_max=10.0),
                             unit="TIME_ABSOLUTE",
                             description="Time between successive followers (s)")
-    gap_distance: FloatProperty(name="Gap", default=6.0, **_r("gap_m"), soft_max=50.0,
+    gap_distance: FloatProperty(name="Gap", default=6.0, **_r("gap_m", soft_max=50.0),
                                 unit="LENGTH",
                                 description="Distance between successive followers, or rows "
                                             "of a peloton (m)")
-    lateral: FloatProperty(name="Lateral Offset", default=0.0, **_r("lateral_m"),
-                           soft_min=-10.0, soft_max=10.0, unit="LENGTH",
+    lateral: FloatProperty(name="Lateral Offset", default=0.0, **_r("lateral_m", soft_min=-10.0, soft_max=10.0),
+                           unit="LENGTH",
                            description="How far to the left of the leader's track the "
                                        "followers go (m; negative: right)")
     alternate: BoolProperty(name="Alternate Sides", default=False,
                             description="Followers alternate right and left of the track by "
                                         "the Lateral Offset")
-    seed: IntProperty(name="Seed", default=0, min=0, max=2**31 - 1,
+    seed: IntProperty(name="Seed", default=0, soft_min=0, max=2**31 - 1,
                       description="Draws the small random differences; the same seed makes "
                                   "the same crowd")
     body_jitter: FloatProperty(name="Body Differences", default=0.0, **_r("jitter"),
@@ -69,24 +72,25 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
                                description="Mass, centre-of-mass height and roll inertia each "
                                            "up to this fraction larger or smaller")
     timing_jitter: FloatProperty(name="Timing Differences", default=0.0,
-                                 **_r("timing_jitter_s"), soft_max=1.0, unit="TIME_ABSOLUTE",
+                                 **_r("timing_jitter_s", soft_max=1.0), unit="TIME_ABSOLUTE",
                                  description="Start times up to this much earlier or later "
                                              "(s; at most half the gap)")
     period_jitter: FloatProperty(name="Period Differences", default=0.0, **_r("jitter"),
                                  subtype="FACTOR",
                                  description="Turn periods up to this fraction longer or "
                                              "shorter")
-    spacing: FloatProperty(name="Spacing", default=3.0, **_r("spacing_m"), soft_max=20.0,
+    spacing: FloatProperty(name="Spacing", default=3.0, **_r("spacing_m", soft_max=20.0),
                            unit="LENGTH", description="Distance between figures side by side")
     antiphase: BoolProperty(name="Antiphase", default=True,
                             description="Every other figure starts with the opposite turn")
-    sync_gap: FloatProperty(name="Start Gap", default=0.0, **_r("sync_gap_s"), soft_max=10.0,
+    sync_gap: FloatProperty(name="Start Gap", default=0.0, **_r("sync_gap_s", soft_max=10.0),
                             unit="TIME_ABSOLUTE",
                             description="Each figure starts this long after the one before")
-    abreast: IntProperty(name="Abreast", default=2, min=1, max=int(CROWD_RANGES["abreast"].hi),
+    abreast: IntProperty(name="Abreast", default=2, soft_min=1,
+                         soft_max=int(CROWD_RANGES["abreast"].hi),
                          description="Riders in a row")
-    row_spacing: FloatProperty(name="Row Spacing", default=0.8, **_r("spacing_m"),
-                               soft_max=3.0, unit="LENGTH",
+    row_spacing: FloatProperty(name="Row Spacing", default=0.8, **_r("spacing_m", soft_max=3.0),
+                               unit="LENGTH",
                                description="Distance between riders of a row")
 
     @classmethod

@@ -47,9 +47,31 @@ def is_user_rig(obj) -> bool:
     return is_figure(obj) and bool(obj.turning.rig.is_user_rig)
 
 
+#: Object constraints that set the object's location or rotation over its keys: the bake writes
+#: keys the constraint then overrides (the figure would not move, or not as baked).
+OVERRIDING_CONSTRAINTS = {"COPY_LOCATION", "COPY_ROTATION", "COPY_TRANSFORMS", "CHILD_OF",
+                          "TRANSFORM", "FOLLOW_PATH", "CLAMP_TO", "TRACK_TO", "DAMPED_TRACK",
+                          "LOCKED_TRACK", "PIVOT", "SHRINKWRAP", "FLOOR", "LIMIT_LOCATION",
+                          "LIMIT_ROTATION", "LIMIT_DISTANCE", "ARMATURE", "ACTION",
+                          "OBJECT_SOLVER", "FOLLOW_TRACK", "CAMERA_SOLVER"}
+
+
 def check_transform(obj) -> None:
     """The object's transform must be a turn about Z and a uniform scale (the bake keys its
-    location and its rotation about Z, and the ground is the armature's XY plane)."""
+    location and its rotation about Z, and the ground is the armature's XY plane); the rig
+    must be editable (not linked from a library) and free of object constraints that override
+    the keys the bake writes."""
+    for what, block in (("armature", obj), ("armature data", obj.data)):
+        lib = getattr(block, "library", None)
+        if lib is not None:
+            raise ValueError(f"{what} {block.name!r} is linked from the library "
+                             f"{lib.filepath!r}: the bake cannot key it; make it local "
+                             "(Object > Relations > Make Local) or a library override first")
+    for c in obj.constraints:
+        if c.type in OVERRIDING_CONSTRAINTS and not c.mute and c.influence > 0.0:
+            raise ValueError(f"armature {obj.name!r} has the constraint {c.name!r} ({c.type}), "
+                             "which overrides the location and rotation keys the bake writes "
+                             "(the figure would not move as baked): remove or mute it first")
     rx, ry = obj.rotation_euler[0], obj.rotation_euler[1]
     if obj.rotation_mode != "XYZ" or abs(rx) > 1e-6 or abs(ry) > 1e-6:
         m = obj.matrix_world.to_3x3().normalized()

@@ -2,8 +2,11 @@
 
 Each command is a module with ``register(subparsers)`` (adds its parser and sets
 ``func=run``) and ``run(args) -> int``; ``COMMANDS`` lists them in help order.  A domain error or a
-bad value (``ValueError``, ``TurningError``, ``OSError``) becomes one line on stderr and exit 2,
-and no output is left half-written (``common.Outputs``).
+bad value (``ValueError``, ``TurningError``, ``OSError``) becomes one line on stderr and exit 2; a
+failed write (``WriteError``: a full disk, an unreadable result) or a lost worker one line and
+exit 1; SIGINT or
+SIGTERM one line and exit 130 or 143 (:mod:`..core.signals`).  No output is left half-written and no
+hidden file is left behind (``common.Outputs``); docs/failures.md has the whole policy.
 """
 from __future__ import annotations
 
@@ -11,9 +14,11 @@ import argparse
 import importlib
 import sys
 
-from ..core.errors import TurningError
+from ..core.errors import TurningError, WorkerLost
+from ..core.files import OutputLocked, WriteError
+from ..core import signals
 from ..core.registry import import_extension
-from .common import discard_pending
+from .common import Outputs, discard_pending
 
 COMMANDS = ("simulate", "figures", "follow", "crowd")
 
@@ -54,17 +59,34 @@ def _register_extensions(argv) -> None:
 
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
-    try:
-        _register_extensions(argv)
-    except ValueError as exc:
-        print(f"python -m blender_turning: error: {exc}", file=sys.stderr)
-        return 2
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    try:
-        return int(args.func(args) or 0)
-    except (ValueError, TurningError, OSError) as exc:
-        print(f"{parser.prog} {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    finally:
-        discard_pending()          # outputs a failed command reserved but did not write
+    with signals.stop_on_signals():
+        try:
+            try:
+                _register_extensions(argv)
+            except ValueError as exc:
+                print(f"python -m blender_turning: error: {exc}", file=sys.stderr)
+                return 2
+            parser = build_parser()
+            args = parser.parse_args(argv)
+        except signals.Interrupted as exc:
+            print(signals.interrupted_line("python -m blender_turning", exc), file=sys.stderr)
+            return exc.code
+        prog = f"{parser.prog} {args.command}"
+        Outputs.kept.clear()
+        try:
+            try:
+                return int(args.func(args) or 0)
+            except KeyboardInterrupt:          # raised by hand, or before the handler was in
+                raise signals.Interrupted(signals.signal.SIGINT) from None
+        except signals.Interrupted as exc:
+            discard_pending()
+            print(signals.interrupted_line(prog, exc, Outputs.kept), file=sys.stderr)
+            return exc.code
+        except (WriteError, WorkerLost) as exc:
+            print(f"{prog}: error: {exc}", file=sys.stderr)
+            return 1
+        except (ValueError, TurningError, OSError, OutputLocked) as exc:
+            print(f"{prog}: error: {exc}", file=sys.stderr)
+            return 2
+        finally:
+            discard_pending()      # outputs a failed command reserved but did not write

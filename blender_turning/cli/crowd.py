@@ -5,7 +5,10 @@ Writes ``DIR/<figure>.csv`` per figure (the trajectory columns of docs/ARCHITECT
 each (those in the crowd's ``priority``: one task per independent group) on ``--workers K``
 local processes or a Dask scheduler (``--scheduler ADDRESS``).  A figure
 that falls or finds no feasible plan is written up to there, listed in the summary, and makes
-the command end with one line and exit 2.
+the command end with one line and exit 2.  A worker that dies ends the command with one line
+naming the figures it ran, nothing written, exit 1; with ``--keep-going`` the other figures are
+written and the lost ones listed in the summary (still exit 1).  ``--out`` is locked for the run
+(``DIR/.turning.lock``): a second crowd on the same folder is refused, naming the first.
 """
 from __future__ import annotations
 
@@ -13,9 +16,12 @@ import json
 import math
 from pathlib import Path
 
+from ..core.errors import WorkerLost
+from ..core.files import OutputLock
 from ..core.params import check_range
 from ..core.ranges import MAX_SAMPLES
 from ..crowd import load_crowd, run_crowd
+from ..crowd.runner import check_scheduler_address
 from ..core.moving import MovingBodies, closest_approach
 from .common import Outputs
 from .progress import Progress
@@ -33,23 +39,48 @@ def register(sub):
     engine.add_argument("--scheduler", help="address of a running Dask distributed scheduler "
                                             "(tcp://host:8786), needs the cluster extra")
     p.add_argument("--fps", type=float, help="write frames at this rate (default: the samples)")
+    p.add_argument("--keep-going", action="store_true",
+                   help="when a worker dies, write the other figures (and list the lost ones "
+                        "in summary.json) rather than nothing; the exit status is 1 either way")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
     check_range("--workers", args.workers, 1, 1024)
+    if args.scheduler is not None:
+        check_scheduler_address(args.scheduler)
     if args.fps is not None:
         check_range("--fps", args.fps, 0.0, 1000.0, lo_open=True)
     crowd = load_crowd(args.scene)
     if args.fps is not None and crowd.duration * args.fps > MAX_SAMPLES:
         raise ValueError(f"--fps {args.fps:g} x duration {crowd.duration:g} s is more than "
                          f"{MAX_SAMPLES:,} frames a figure")
+    if not args.out.strip():
+        raise ValueError(f"--out = {args.out!r} is not a folder path")
     out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out = {args.out!r} is a file, not a folder")
     made = not out.exists()
     if made and not out.parent.resolve().is_dir():
         raise ValueError(f"--out = {args.out!r}: the folder {str(out.parent.resolve())!r} "
                          f"does not exist")
-    out.mkdir(exist_ok=True)
+    try:
+        out.mkdir(exist_ok=True)
+    except OSError as exc:
+        raise ValueError(f"--out = {args.out!r} cannot be created: "
+                         f"{exc.strerror or exc}") from None
+    try:
+        with OutputLock(out, "--out", "crowd"):
+            return _run(args, crowd, out)
+    finally:
+        if made:
+            try:
+                out.rmdir()                   # only if nothing was written into it
+            except OSError:
+                pass
+
+
+def _run(args, crowd, out: Path) -> int:
     outputs = Outputs()                       # every file checked before the work
     try:
         for f in crowd.figures:
@@ -57,11 +88,13 @@ def run(args) -> int:
         outputs.reserve("--out summary.json", out / "summary.json")
         with Progress(len(crowd.figures), "figure", "crowd") as bar:
             result = run_crowd(crowd, workers=args.workers, scheduler=args.scheduler,
-                               progress=bar)
+                               progress=bar, keep_going=args.keep_going)
+    except WorkerLost as exc:
+        outputs.discard()
+        raise WorkerLost(f"{exc}; nothing written (--keep-going writes the other figures)",
+                         exc.figures) from None
     except BaseException:
         outputs.discard()
-        if made:
-            out.rmdir()
         raise
     tracks = [(f.name, r.trajectory, f.figure.body.l) for f, r in zip(crowd.figures,
                                                                     result.figures)]
@@ -93,6 +126,13 @@ def run(args) -> int:
     n_path = sum(f.is_path for f in crowd.figures)
     print(f"crowd: {crowd.name}, {len(crowd.figures)} figures ({n_path} following paths), "
           f"{result.wall_time:.2f} s -> {out}")
+    lost = [r.name for r in result.figures if r.status == "lost"]
+    if lost:
+        raise WorkerLost(f"a worker process died while it ran {len(lost)} figure"
+                         f"{'s' if len(lost) > 1 else ''} ({', '.join(lost[:5])}"
+                         f"{' ...' if len(lost) > 5 else ''}); the other "
+                         f"{len(crowd.figures) - len(lost)} written to {out} (see "
+                         f"{out / 'summary.json'})", lost)
     if result.failed:
         first = result.failed[0]
         raise ValueError(f"{len(result.failed)} of {len(crowd.figures)} figures failed (see "

@@ -1,12 +1,20 @@
-"""``figures``: regenerate the paper's figures as PNGs (needs matplotlib)."""
+"""``figures``: regenerate the paper's figures as PNGs (needs matplotlib).
+
+Each figure is drawn into a hidden folder inside ``--out``, checked (a whole PNG) and renamed
+into place when it is done, so an interrupted or failed run keeps the figures finished before
+it and leaves no partial PNG or hidden file.
+"""
 from __future__ import annotations
 
 import importlib
+import os
+import shutil
+import tempfile
 from pathlib import Path
 
 from ..figures import FIGURES
 from ..core.validate import FieldError
-from .common import require_matplotlib
+from .common import Outputs, require_matplotlib
 
 
 def register(sub):
@@ -28,8 +36,20 @@ def run(args) -> int:
     except OSError as exc:
         raise FieldError(f"--out = {args.out!r} cannot be created: "
                          f"{exc.strerror or exc}") from None
-    for stem in (args.only or FIGURES):
-        module, func = FIGURES[stem]
-        getattr(importlib.import_module(f"..figures.{module}", __package__), func)(out)
-        print(f"figures: wrote {out / (stem + '.png')}")
+    stems = list(args.only or FIGURES)
+    outputs = {}                              # one per figure: each kept when it is done
+    for stem in stems:
+        outputs[stem] = Outputs()
+        outputs[stem].reserve(f"--out {stem}.png", out / f"{stem}.png")
+    stage = Path(tempfile.mkdtemp(dir=out, prefix=".tmp-figures-"))
+    try:
+        for stem in stems:
+            module, func = FIGURES[stem]
+            getattr(importlib.import_module(f"..figures.{module}", __package__), func)(stage)
+            drawn = stage / f"{stem}.png"
+            outputs[stem].write(f"--out {stem}.png", lambda path: os.replace(drawn, path))
+            outputs[stem].commit()
+            print(f"figures: wrote {out / (stem + '.png')}")
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
     return 0

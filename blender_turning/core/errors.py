@@ -1,4 +1,5 @@
-"""Domain errors of the core. The CLI turns them into one line and exit code 2."""
+"""Domain errors of the core. The CLI turns them into one line and exit code 2 (a lost worker,
+:class:`WorkerLost`, which is not the input's fault: exit 1)."""
 from __future__ import annotations
 
 
@@ -78,3 +79,12 @@ class PathNotFinished(TurningError):
         self.progress = progress
         self.length = length
         self.trajectory = trajectory
+
+
+class WorkerLost(Exception):
+    """A worker process or cluster worker died while it ran figures (killed, out of memory):
+    ``figures`` names them.  Not a domain error: the same input may well run again."""
+
+    def __init__(self, message: str, figures=()):
+        super().__init__(message)
+        self.figures = tuple(figures)

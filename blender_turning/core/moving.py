@@ -257,7 +257,114 @@ def around(problem, bodies: MovingBodies | None):
 def closest_approach(bodies: MovingBodies) -> dict:
     """For each body: ``(distance m, the other body's name, t s)`` of its closest approach to
     any other body's foot-CM segment at the same sample; ``(inf, None, None)`` when it never
-    shares the shot."""
+    shares the shot.  Of equal distances the other body first in ``names``, then the earliest
+    sample, wins.
+
+    Near-linear in the samples: the segments of every sample are put in a grid of cells ``h``
+    wide by their midpoints, and a body's segments are compared with those of the same sample
+    in the 3 x 3 cells around.  A segment outside them has its midpoint ``h`` or more away, so
+    it is at least ``h - 2 r`` away (``r``: the longest half segment); a body whose closest
+    candidate is no farther than that has its answer.  The others are asked again with cells
+    four times as wide, until the cells span the whole shot (:func:`_closest_brute`, the
+    all-pairs rule, gives the same answers: a test holds them equal)."""
+    n = len(bodies.names)
+    out = {name: (math.inf, None, None) for name in bodies.names}
+    ok = ~(np.isnan(bodies.foot).any(axis=2) | np.isnan(bodies.cm).any(axis=2))
+    jj, kk = np.nonzero(ok)                          # the items: (body, sample) in the shot
+    if n < 2 or not len(jj):
+        return out
+    F, C = bodies.foot[jj, kk], bodies.cm[jj, kk]
+    mid = 0.5 * (F + C)
+    r = 0.5 * float(np.sqrt(((C - F) ** 2).sum(axis=1)).max())
+    lo, span = mid.min(axis=0), float((mid.max(axis=0) - mid.min(axis=0)).max())
+    # Cells about as wide as the bodies' spacing at one moment (a crowd on the move covers
+    # much more ground over the shot than at any sample), and wide enough to resolve anything.
+    h = max(4.0 * r, 1e-3, _spacing(kk, mid))
+    found = []                                       # (body, other, sample, distance) winners
+    todo = np.ones(n, bool)
+    while todo.any():
+        whole = h > 2.0 * span                       # one cell holds everything: exact
+        win = _closest_in_cells(jj, kk, F, C, mid, lo, h, todo)
+        bound = math.inf if whole else h - 2.0 * r
+        done = np.zeros(n, bool)
+        if len(win):
+            good = win[:, 3] <= bound
+            found.append(win[good])
+            done[win[good, 0].astype(int)] = True
+        todo &= ~done
+        if whole:
+            break
+        h *= 4.0
+    if not found:
+        return out
+    win = np.concatenate(found)
+    for j, i, k, d in win:
+        out[bodies.names[int(j)]] = (float(d), bodies.names[int(i)],
+                                     bodies.t0 + int(k) * bodies.dt)
+    return out
+
+
+def _spacing(kk, mid) -> float:
+    """The median over the samples of ``sqrt(area / bodies)``: ``area`` the box around the
+    bodies' midpoints at that sample."""
+    m = int(kk.max()) + 1
+    box = np.full((4, m), np.inf)
+    box[2:] = -np.inf
+    np.minimum.at(box[0], kk, mid[:, 0])
+    np.minimum.at(box[1], kk, mid[:, 1])
+    np.maximum.at(box[2], kk, mid[:, 0])
+    np.maximum.at(box[3], kk, mid[:, 1])
+    count = np.bincount(kk, minlength=m)
+    on = count > 1
+    if not on.any():
+        return 0.0
+    wide = np.maximum(box[2:, on] - box[:2, on], 1e-3)
+    return float(np.median(np.sqrt(wide[0] * wide[1] / count[on])))
+
+
+def _closest_in_cells(jj, kk, F, C, mid, lo, h, todo, chunk=500_000):
+    """For the bodies ``todo``: the closest segment of another body at the same sample among
+    those in the 3 x 3 cells (``h`` wide) around each of its segments; rows ``(body, other,
+    sample, distance)``, one per body that has a candidate (ties: the other body first in
+    order, then the earliest sample)."""
+    cx = np.floor((mid[:, 0] - lo[0]) / h).astype(np.int64) + 1
+    cy = np.floor((mid[:, 1] - lo[1]) / h).astype(np.int64) + 1
+    nx, ny = int(cx.max()) + 2, int(cy.max()) + 2
+    key = (kk.astype(np.int64) * nx + cx) * ny + cy
+    order = np.argsort(key, kind="stable")
+    skey = key[order]
+    queries = np.nonzero(todo[jj])[0]
+    rows = []
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            want = key[queries] + dx * ny + dy
+            a = np.searchsorted(skey, want, "left")
+            b = np.searchsorted(skey, want, "right")
+            count = b - a
+            q_all = np.repeat(queries, count)
+            starts = np.repeat(a - np.cumsum(count) + count, count)
+            t_all = order[starts + np.arange(len(q_all))] if len(q_all) else q_all
+            for s in range(0, len(q_all), chunk):
+                q, t = q_all[s:s + chunk], t_all[s:s + chunk]
+                keep = jj[q] != jj[t]
+                q, t = q[keep], t[keep]
+                d = segment_distance(F[q], C[q], F[t], C[t])
+                rows.append(_winners(np.stack([jj[q], jj[t], kk[q], d], axis=1)))
+    return _winners(np.concatenate(rows)) if rows else np.zeros((0, 4))
+
+
+def _winners(rows):
+    """Of rows ``(body, other, sample, distance)``, each body's closest (ties: the other body
+    first in order, then the earliest sample)."""
+    if not len(rows):
+        return rows
+    rows = rows[np.lexsort((rows[:, 2], rows[:, 1], rows[:, 3], rows[:, 0]))]
+    return rows[np.unique(rows[:, 0], return_index=True)[1]]
+
+
+def _closest_brute(bodies: MovingBodies) -> dict:
+    """:func:`closest_approach` by comparing every pair of bodies (quadratic: the reference its
+    test holds the grid to)."""
     n = len(bodies.names)
     out = {}
     for j in range(n):

@@ -10,7 +10,6 @@ row.  Writers write to a temporary file and rename it, so a failure leaves no pa
 from __future__ import annotations
 
 import csv
-import io
 import json
 import math
 from dataclasses import dataclass, field, fields
@@ -163,12 +162,11 @@ class Trajectory:
 
     # -- I/O -----------------------------------------------------------------------------------
     def to_csv(self, path) -> None:
-        buf = io.StringIO()
-        w = csv.writer(buf, lineterminator="\n")
-        w.writerow(COLUMNS)
-        for row in self.data.T:
-            w.writerow([repr(float(v)) for v in row])
-        atomic_write_text(path, buf.getvalue())
+        # The text csv.writer gives (names and float reprs need no quoting), a few times faster:
+        # a crowd writes thousands of these.
+        rows = [",".join(COLUMNS)]
+        rows += [",".join(map(repr, row)) for row in self.data.T.tolist()]
+        atomic_write_text(path, "\n".join(rows) + "\n")
 
     @classmethod
     def from_csv(cls, path, body: BodyParams | None = None) -> "Trajectory":

@@ -34,6 +34,9 @@ def load_crowd(path) -> Crowd:
         doc = json.loads(text)
     except json.JSONDecodeError as exc:
         raise FieldError(f"crowd file {str(path)!r} is not valid JSON ({exc})") from None
+    except RecursionError:
+        raise FieldError(f"crowd file {str(path)!r} is nested too deeply to be a crowd") \
+            from None
     return crowd_from_dict(doc, Path(path).parent, Path(path).name)
 
 
@@ -110,6 +113,8 @@ def _scene(f: Fields, base: Path):
             loaded = json.loads(read_text(base / ref, "scene file"))
         except (ValueError, OSError) as exc:
             follow.fail("scene", f"= {ref!r} cannot be read ({exc})")
+        except RecursionError:
+            follow.fail("scene", f"= {ref!r} is nested too deeply to be a scene")
         if not isinstance(loaded, dict):
             follow.fail("scene", f"= {ref!r} is not a JSON object")
         doc = {**loaded, **{k: {**loaded[k], **v} if isinstance(v, dict) and isinstance(

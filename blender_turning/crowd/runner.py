@@ -17,6 +17,7 @@ per group of figures that can see each other, each figure around the bodies of t
 from __future__ import annotations
 
 import math
+import re
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
@@ -24,23 +25,29 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..core import signals
 from ..core.controllers import PhaseEllipse
-from ..core.errors import PlanInfeasible, TurningError
+from ..core.errors import PlanInfeasible, TurningError, WorkerLost
 from ..core.simulate import run
 from ..core.trajectory import Trajectory, body_meta
 from . import priority as priority_
 from .model import Crowd, CrowdFigure
 
-__all__ = ["FigureResult", "CrowdResult", "run_crowd", "crowd_tasks", "run_task", "execute"]
+__all__ = ["FigureResult", "CrowdResult", "run_crowd", "crowd_tasks", "run_task", "execute",
+           "SCHEDULER_TIMEOUT", "check_scheduler_address"]
+
+#: Seconds to reach a Dask scheduler and hear it answer (docs/failures.md), then the address is
+#: given up with one error naming ``--scheduler``.
+SCHEDULER_TIMEOUT = 10.0
 
 
 @dataclass(frozen=True, eq=False)
 class FigureResult:
     """One figure's outcome.  ``trajectory`` is on the crowd's clock (``t`` starts at the
     figure's ``time_offset``) and ends at the fall or where planning failed; ``status`` is
-    ``"ok"``, ``"fell"``, ``"infeasible"`` (no feasible plan) or ``"failed"`` (another domain
+    ``"ok"``, ``"fell"``, ``"infeasible"`` (no feasible plan), ``"failed"`` (another domain
     error of the planner, e.g. the path not finished in time; ``message`` says when and
-    where).  ``cpu_time``:
+    where) or ``"lost"`` (the worker running it died; ``keep_going`` of :func:`run_crowd`).  ``cpu_time``:
     CPU seconds of the task that computed it (shared by a batch), ``plan`` the planner's totals
     (path figures).  ``region``: for a figure planned by priority, the regions its searches
     looked at for other figures' bodies, rows ``(x, y, radius, t_lo, t_hi)`` on its own clock
@@ -173,7 +180,7 @@ def _batch(dt: float, duration: float, figures: tuple) -> list:
 
 
 def run_crowd(crowd: Crowd, workers: int = 1, scheduler: str | None = None, executor=None,
-              progress=None) -> CrowdResult:
+              progress=None, keep_going: bool = False) -> CrowdResult:
     """Simulate and plan every figure of ``crowd``.
 
     ``workers``: local worker processes (1: this process); ``scheduler``: the address of a
@@ -182,7 +189,9 @@ def run_crowd(crowd: Crowd, workers: int = 1, scheduler: str | None = None, exec
     (e.g. ``Client.get_executor()``), used as given and not shut down.  At most one of
     ``workers > 1``, ``scheduler`` and ``executor``.  ``progress(done, total)`` is called with
     the number of figures done after each task.  Failures (a fall, no feasible plan) are
-    reported per figure in :attr:`CrowdResult.figures`, not raised."""
+    reported per figure in :attr:`CrowdResult.figures`, not raised.  A worker that dies
+    raises :class:`~..core.errors.WorkerLost` naming the figures it took with it, or with
+    ``keep_going`` marks them ``"lost"`` and goes on with the rest."""
     clock = time.perf_counter()
     tasks = crowd_tasks(crowd)
     total = len(crowd.figures)
@@ -195,17 +204,17 @@ def run_crowd(crowd: Crowd, workers: int = 1, scheduler: str | None = None, exec
             progress(len(by_name), total)
 
     with engine(workers, scheduler, executor) as ex:
-        _fan_out(ex, run_task, tasks, collect)
+        _fan_out(ex, run_task, tasks, collect, keep_going)
         named = [crowd[n] for n in crowd.priority if crowd[n].is_path]
         if named:
             bodies = tuple((n, by_name[n].trajectory, crowd[n].figure.body.l)
                            for n in crowd.priority if not crowd[n].is_path)
-            _by_priority(named, bodies, crowd.clearance, ex, collect)
+            _by_priority(named, bodies, crowd.clearance, ex, collect, keep_going)
     return CrowdResult(crowd, tuple(by_name[f.name] for f in crowd.figures),
                        time.perf_counter() - clock)
 
 
-def _by_priority(named, bodies, clearance, ex, collect) -> None:
+def _by_priority(named, bodies, clearance, ex, collect, keep_going=False) -> None:
     """Plan the path figures ``named`` (in priority order) around ``bodies`` and each other:
     groups in parallel, merged and planned again until none sees another (:mod:`.priority`)."""
     groups = priority_.initial_groups(named, clearance)
@@ -215,7 +224,7 @@ def _by_priority(named, bodies, clearance, ex, collect) -> None:
         def done(i, rs):
             final.update(zip(pending[i], rs))
             collect(i, rs)                          # progress: figures with a first result
-        _fan_out(ex, run_task, tasks, done)
+        _fan_out(ex, run_task, tasks, done, keep_going)
         merged = priority_.merge(groups, priority_.conflicts(named, groups, final, clearance))
         pending = [g for g in merged if g not in groups]
         groups = merged
@@ -253,29 +262,155 @@ def engine(workers: int = 1, scheduler: str | None = None, executor=None):
     elif executor is not None:
         yield executor
     elif workers > 1:
-        with ProcessPoolExecutor(max_workers=int(workers)) as pool:
+        # Workers leave Ctrl-C to this process, which ends them itself when it stops (an
+        # interrupt, an error) rather than waiting for their running tasks.
+        pool = ProcessPoolExecutor(max_workers=int(workers),
+                                   initializer=signals.ignore_in_worker)
+        try:
             yield pool
+        except BaseException:
+            signals.stop_pool(pool)
+            raise
+        pool.shutdown()
     else:
         yield None
 
 
-def _fan_out(executor, fn, tasks, collect) -> None:
+def _task_figures(task) -> tuple:
+    """The names of the figures a task of :func:`crowd_tasks` (or a priority group) runs."""
+    figs = (task[1],) if task[0] == "path" else task[3]
+    return tuple(f.name for f in figs)
+
+
+def _worker_died(exc: BaseException) -> bool:
+    """A process pool broken by a dead worker, or Dask's ``KilledWorker`` (a task whose workers
+    died three times); matched by name so that dask need not be imported."""
+    return any(c.__name__ in ("BrokenProcessPool", "BrokenExecutor", "KilledWorker")
+               for c in type(exc).__mro__)
+
+
+def _fan_out(executor, fn, tasks, collect, keep_going: bool = False) -> None:
     if executor is None:
         for i, task in enumerate(tasks):
             collect(i, fn(task))
         return
-    futures = {executor.submit(fn, task): i for i, task in enumerate(tasks)}
+    futures, lost = {}, {}
+    for i, task in enumerate(tasks):
+        try:
+            futures[executor.submit(fn, task)] = i
+        except Exception as exc:              # the pool broke before this task went out
+            if not _worker_died(exc):
+                raise
+            lost[i] = exc
     for fut in as_completed(futures):
-        collect(futures[fut], fut.result())
+        i = futures[fut]
+        try:
+            rs = fut.result()
+        except Exception as exc:
+            if not _worker_died(exc):
+                raise
+            lost[i] = exc
+            if not keep_going:
+                break
+            continue
+        collect(i, rs)
+    if not lost:
+        return
+    names = [n for i in sorted(lost) for n in _task_figures(tasks[i])]
+    why = next(iter(lost.values()))
+    msg = f"its worker process died ({type(why).__name__}: {str(why).splitlines()[0]})" \
+        if str(why).strip() else f"its worker process died ({type(why).__name__})"
+    if not keep_going:
+        raise WorkerLost(f"a worker process died while it ran {_listed(names)} "
+                         f"({type(why).__name__})", names)
+    for i in sorted(lost):
+        task = tasks[i]
+        figs = (task[1],) if task[0] == "path" else task[3]
+        collect(i, [FigureResult(f.name, None, "lost", msg) for f in figs])
+
+
+def _listed(names) -> str:
+    shown = ", ".join(names[:5])
+    return f"{shown} and {len(names) - 5} more" if len(names) > 5 else shown
+
+
+_ADDRESS = re.compile(r"^(?:(tcp|tls|ws|wss|ucx)://)?(\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9._-]+):"
+                      r"([0-9]{1,5})/?$")
+
+
+def check_scheduler_address(address) -> str:
+    """``address`` if it reads as a scheduler's (``[tcp://]HOST:PORT``, also ``tls``, ``ws``,
+    ``wss``, ``ucx``), else a ``ValueError`` naming ``--scheduler``."""
+    if not isinstance(address, str) or not address.strip():
+        raise ValueError(f"--scheduler = {address!r} is empty: give the scheduler's address, "
+                         "tcp://HOST:PORT")
+    m = _ADDRESS.match(address.strip())
+    if m is None or not 1 <= int(m.group(3)) <= 65535:
+        raise ValueError(f"--scheduler = {address!r} is not a scheduler address "
+                         "(tcp://HOST:PORT, port 1-65535)")
+    return address.strip() if m.group(1) else f"tcp://{address.strip()}"
+
+
+def _probe(address: str, target: str) -> None:
+    """A plain TCP connection first, so that a closed port or an unknown host is said at once
+    (Dask retries such an address until its timeout)."""
+    import socket
+    scheme, _, rest = target.partition("://")
+    if scheme not in ("tcp", "tls", "ws", "wss"):
+        return
+    host, _, port = rest.rstrip("/").rpartition(":")
+    try:
+        socket.create_connection((host.strip("[]"), int(port)),
+                                 timeout=SCHEDULER_TIMEOUT).close()
+    except OSError as exc:
+        why = exc.strerror or str(exc) or type(exc).__name__
+        if isinstance(exc, TimeoutError) or isinstance(exc, socket.timeout):
+            why = f"no answer within {SCHEDULER_TIMEOUT:g} s"
+        raise ValueError(f"--scheduler = {address!r}: tried {target}: cannot connect ({why})") \
+            from None
 
 
 def _dask_client(address: str):
+    """A Dask client of the scheduler at ``address``, or one ``ValueError`` naming
+    ``--scheduler`` within about :data:`SCHEDULER_TIMEOUT` s: a plain TCP connection first (a
+    closed port or an unknown host is said at once), then Dask's ``identity`` call under a
+    deadline (a peer that accepts and never answers, or answers in another protocol -- an HTTP
+    proxy's reply read as a Dask frame length asks for exabytes -- is given up on before any
+    client exists), then the client."""
+    target = check_scheduler_address(address)
     try:
+        import asyncio
+
         from dask.distributed import Client
+        from distributed.core import rpc
     except ImportError:
         raise ValueError("--scheduler needs dask.distributed "
                          "(pip install 'blender-turning[cluster]')") from None
+    _probe(address, target)
+
+    async def identity():
+        peer = rpc(target, timeout=SCHEDULER_TIMEOUT)
+        try:
+            return await peer.identity()
+        finally:
+            await peer.close_rpc()
+
+    tried = f"--scheduler = {address!r}: tried {target} for {SCHEDULER_TIMEOUT:g} s"
     try:
-        return Client(address, timeout=10)
+        ident = asyncio.run(asyncio.wait_for(identity(), SCHEDULER_TIMEOUT))
+    except (TimeoutError, asyncio.TimeoutError):
+        raise ValueError(f"{tried}: it accepted the connection but no Dask scheduler "
+                         "answered") from None
+    except OSError as exc:
+        raise ValueError(f"{tried}: cannot connect ({str(exc).splitlines()[0]})") from None
+    except Exception as exc:               # a reply that is not Dask's (MemoryError, ...)
+        raise ValueError(f"{tried}: the address answers, but not as a Dask scheduler "
+                         f"({type(exc).__name__})") from None
+    kind = ident.get("type") if isinstance(ident, dict) else None
+    if kind != "Scheduler":
+        raise ValueError(f"{tried}: the address answers as a Dask {kind or 'peer'}, not a "
+                         "scheduler")
+    try:
+        return Client(target, timeout=SCHEDULER_TIMEOUT, set_as_default=False)
     except (OSError, TimeoutError) as exc:
-        raise ValueError(f"--scheduler = {address!r}: cannot connect ({exc})") from None
+        raise ValueError(f"{tried}: cannot connect ({str(exc).splitlines()[0]})") from None

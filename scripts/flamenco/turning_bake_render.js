@@ -34,6 +34,8 @@ const JOB_TYPE = {
 };
 
 const GPU_BACKENDS = ["OPTIX", "CUDA", "HIP", "ONEAPI", "METAL"];
+// More render tasks than a shot of an hour at 60 fps in chunks of 24 is a mistyped range.
+const MAX_CHUNKS = 10000;
 
 function compileJob(job) {
     const settings = job.settings;
@@ -60,6 +62,13 @@ function checkSettings(settings) {
     if (!(settings.chunk_size >= 1)) {
         throw `chunk_size = ${settings.chunk_size} is not a whole number of frames >= 1`;
     }
+    const first = Number(m[1]), last = m[2] === undefined ? first : Number(m[2]);
+    const chunks = Math.ceil((last - first + 1) / settings.chunk_size);
+    if (chunks > MAX_CHUNKS) {
+        throw `frames = "${settings.frames}" in chunks of ${settings.chunk_size} is ${chunks} ` +
+              `render tasks; at most ${MAX_CHUNKS}: check the frames against the shot ` +
+              `(1 to 1 + seconds * fps) or raise chunk_size`;
+    }
     if (settings.device !== "CPU" && settings.device !== "GPU") {
         throw `device = "${settings.device}" is not one of CPU, GPU`;
     }
@@ -83,6 +92,9 @@ function authorBakeTask(settings) {
             "--output", settings.output_dir,
             "--name", settings.job_name,
             "--device", settings.device,
+            // The Manager cannot read the config: the bake refuses frames outside the shot,
+            // before baking, and no chunk runs.
+            "--farm-frames", `${settings.frames}`.replace("..", "-").replace(/\s/g, ""),
         ],
     }));
     return task;

@@ -175,7 +175,7 @@ class PhaseEllipse(Controller):
             return theta_max
         room = 1.0 if self.heading is None else HEADROOM
         if np.ndim(omega0) or np.ndim(theta_max):                 # per-figure ellipses
-            top = np.vectorize(self._feasible.max_lean, otypes=[float])(omega0)
+            top = self._feasible.max_leans(omega0)
             return np.minimum(theta_max, room * top)
         return min(theta_max, room * self._feasible.max_lean(omega0))
 
