@@ -86,6 +86,7 @@ def preset_file(sport):
     return os.path.join(bpy.utils.preset_paths(presets.PRESET_SUBDIR)[0], f"{sport}.py")
 
 
+@pytest.mark.installed
 def test_preset_of_another_sport_is_refused(scene):
     obj = add("SKIER")
     obj.turning.mass = 81.0
@@ -96,6 +97,26 @@ def test_preset_of_another_sport_is_refused(scene):
     assert bpy.ops.turning.apply_figure_preset(filepath=preset_file("skier")) == {"FINISHED"}
     assert obj.turning.mass == pytest.approx(75.0)
     assert presets.TURNING_MT_figure_presets.preset_operator == "turning.apply_figure_preset"
+
+
+@pytest.mark.installed
+def test_a_saved_preset_is_a_file_of_the_users_that_applies_back_and_removes(scene):
+    """The "+" button writes the figure's settings under the user's own presets (the
+    extension's folder is replaced by an update), the menu applies them, "-" removes them."""
+    obj = add("SKIER")
+    obj.turning.mass, obj.turning.speed = 81.0, 12.5
+    assert bpy.ops.turning.figure_preset_add(name="Heavy skier") == {"FINISHED"}
+    saved = os.path.join(bpy.utils.user_resource("SCRIPTS", path="presets"),
+                         presets.PRESET_SUBDIR, "Heavy_skier.py")
+    assert os.path.isfile(saved), os.listdir(os.path.dirname(saved))
+    assert presets.preset_sport(saved) == "SKIER"
+    assert not saved.startswith(presets.PRESET_ROOT)
+    obj.turning.mass, obj.turning.speed = 70.0, 10.0
+    assert bpy.ops.turning.apply_figure_preset(filepath=saved) == {"FINISHED"}
+    assert (obj.turning.mass, obj.turning.speed) == (pytest.approx(81.0), pytest.approx(12.5))
+    assert bpy.ops.turning.figure_preset_add(name="Heavy skier", remove_active=True) \
+        == {"FINISHED"}
+    assert not os.path.exists(saved)
 
 
 def test_sport_switched_from_script_is_refused_at_bake(scene):
