@@ -55,6 +55,7 @@ MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
 FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
+NOTES = [T + "test_blender_model_notes.py"]
 
 
 @dataclass(frozen=True)
@@ -366,6 +367,20 @@ MUTANTS = [
     M("follow_ground_path_anywhere", "blender/follow_ground.py",
       "off = np.flatnonzero(~over_mesh(ground, xy))", "off = np.flatnonzero(xy[:, 0] != xy[:, 0])",
       FOLLOW_GROUND, "bake"),
+    # -- what the model changed, said (the bake's lean, Follow Path's distance from the path) --
+    M("commanded_turn_unlimited", "core/controllers/ellipse.py",
+      "return self._turn(t, w, tm, self.feasible_lean(w, tm))", "return self._turn(t, w, tm, tm)",
+      [T + "test_feasible_turns.py"]),
+    M("deviation_nearest_not_farthest", "core/path.py",
+      "    k = int(np.argmax(d))", "    k = int(np.argmin(d))", [T + "test_path.py"]),
+    M("deviation_along_from_start", "core/path.py",
+      "float(arc[j]))", "float(arc[-1] - arc[j]))", [T + "test_path.py"]),
+    M("bake_lean_note_dropped", "blender/pipeline.py",
+      "        traj = with_turn(traj, controller)", "        pass", NOTES, "bake"),
+    M("follow_warns_never", "blender/model_notes.py",
+      "    if dev.distance > warn:", "    if False:", NOTES, "bake"),
+    M("follow_frame_not_offset", "blender/model_notes.py",
+      "frame = frame_start + round(dev.t * fps)", "frame = round(dev.t * fps)", NOTES, "bake"),
 ]
 
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",

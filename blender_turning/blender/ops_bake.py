@@ -16,6 +16,7 @@ from bpy.props import EnumProperty, IntProperty
 from ..core.errors import TurningError
 from ..mapping.base import BoneChannels, PoseTrack
 from . import bake, compat, foot_track, retarget_adapter
+from .model_notes import turn_note
 from .ops_common import (check_figure, context_figure, end_modal, poll_figure, report_error,
                          selected_figures)
 from .pipeline import figure_pose_track, ground_of
@@ -239,6 +240,10 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         every = "" if job.step == 1 else f", every {job.step} frames"
         what = ", ".join(f"{name} ({r.fcurves} F-curves x {r.frames} keys)" for name, r in written)
         self.report({"INFO"}, f"Baked {what} over frames {frames.start}-{frames.end}{every}")
+        for name, _, traj, _ in job.results:     # last: the status bar shows the last report
+            note = turn_note(traj)
+            if note:
+                self.report({"WARNING"}, f"Bake Turns: {name}: {note}")
         return {"FINISHED"}
 
     def execute(self, context):
