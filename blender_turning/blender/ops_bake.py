@@ -11,11 +11,12 @@ import math
 
 import bpy
 import numpy as np
-from bpy.props import EnumProperty, IntProperty
+from bpy.props import BoolProperty, EnumProperty, IntProperty
 
 from ..core.errors import TurningError
 from ..mapping.base import BoneChannels, PoseTrack
 from . import bake, compat, foot_track, retarget_adapter
+from . import export_ready as export_ready_mod
 from .model_notes import turn_note
 from .ops_common import (check_figure, context_figure, end_modal, poll_figure, report_error,
                          selected_figures)
@@ -94,9 +95,10 @@ def set_hermite_handles(fig, slopes: dict) -> None:
         fc.update()
 
 
-def apply_bake(fig, traj, track, step: int = 1):
+def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True):
     """Write a computed bake: F-curves (every ``step``-th frame, smooth in between), then the
-    foot track.  Returns the bake result."""
+    foot track; ``export_ready``: a user rig's equipment keyed too, for glTF and FBX
+    (:mod:`.export_ready`).  Returns the bake result."""
     if step > 1:
         bake.bake_pose_track(fig, track)            # every frame first: the slopes at the keys
         slopes = {k: (f, np.gradient(v, f, edge_order=2))
@@ -105,6 +107,10 @@ def apply_bake(fig, traj, track, step: int = 1):
     if step > 1:
         set_hermite_handles(fig, slopes)
     foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z)     # on the ground
+    if export_ready:
+        export_ready_mod.bake_equipment(fig, track.frames)
+    else:
+        export_ready_mod.clear_equipment(fig)
     return result
 
 
@@ -126,8 +132,10 @@ class BakeJob:
     """Bake figures (by name) over ``frames``: :meth:`compute_next` one at a time (nothing is
     written), then :meth:`write` all of them."""
 
-    def __init__(self, names, frames: FrameRange, step: int = 1):
+    def __init__(self, names, frames: FrameRange, step: int = 1, export_ready: bool = True,
+                 root_motion: bool = False):
         self.names, self.frames, self.step = list(names), frames, step
+        self.export_ready, self.root_motion = export_ready, root_motion
         self.results = []                     # (name, start or None, traj, track)
         self.grounds = {}                     # ground mesh name -> MeshGround
 
@@ -152,6 +160,8 @@ class BakeJob:
         height = None if start is None else float(fig.location[2])
         traj, track = figure_pose_track(fig, self.frames, start=start, height=height,
                                         ground=self._ground(fig))
+        if self.root_motion:
+            track = export_ready_mod.root_motion(fig, track)
         bake.check_track(fig, track)
         self.results.append((name, start, traj, track))
 
@@ -172,7 +182,7 @@ class BakeJob:
             if start is not None:                 # the height where the user put it stays
                 fig.turning.start = (start[0], start[1], float(fig.location[2]))
                 fig.turning.start_heading = start[2]
-            out.append((name, apply_bake(fig, traj, track, self.step)))
+            out.append((name, apply_bake(fig, traj, track, self.step, self.export_ready)))
         return out
 
 
@@ -195,6 +205,16 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
                       options={"SKIP_SAVE"},
                       description="Key every n-th frame (and the last); smooth (Bezier) in "
                                   "between.  1 keys every frame, exactly")
+    export_ready: BoolProperty(
+        name="Export-Ready Equipment", default=True,
+        description="A figure made from your own rig: key its skis, poles or bicycle on every "
+                    "baked frame too (their constraints and drivers off while baked), so glTF "
+                    "and FBX carry them. Off: they follow the rig live, and exporters drop them")
+    root_motion: BoolProperty(
+        name="Root Motion", default=False,
+        description="Key the travel on the rig's root bone (Rigify's or the built-in figures' "
+                    "'root') instead of the armature object, which then stays where the bake "
+                    "starts: for game engines that take a character's motion from its root")
 
     _job = None
     _timer = None
@@ -212,6 +232,8 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         col.prop(self, "frame_start")
         col.prop(self, "frame_end")
         layout.prop(self, "step")
+        layout.prop(self, "export_ready")
+        layout.prop(self, "root_motion")
 
     def _prepare(self, context):
         """The job for the selected figures, or ``None`` (reported)."""
@@ -224,7 +246,8 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         except ValueError as exc:
             self.report({"ERROR"}, f"Bake Turns: {exc}")
             return None
-        return BakeJob([f.name for f in selected_figures(context)], frames, self.step)
+        return BakeJob([f.name for f in selected_figures(context)], frames, self.step,
+                       self.export_ready, self.root_motion)
 
     def _finish(self, job):
         try:
@@ -324,6 +347,7 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
         figs = [f for f in selected_figures(context) if bake.figure_action(f) is not None]
         for fig in figs:
             recorded = bake.REST in fig       # the pose before the bake, put back exactly
+            export_ready_mod.clear_equipment(fig)
             bake.clear_bake(fig)
             foot_track.remove_foot_track(fig)
             if not recorded:                  # baked before the pose was recorded
