@@ -56,6 +56,7 @@ BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
 FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
 NOTES = [T + "test_blender_model_notes.py"]
+EXPORT = [T + "test_blender_export.py"]
 
 
 @dataclass(frozen=True)
@@ -381,6 +382,14 @@ MUTANTS = [
       "    if dev.distance > warn:", "    if False:", NOTES, "bake"),
     M("follow_frame_not_offset", "blender/model_notes.py",
       "frame = frame_start + round(dev.t * fps)", "frame = round(dev.t * fps)", NOTES, "bake"),
+    # -- the export-ready bake ---------------------------------------------------------------
+    M("gltf_keeps_other_bakes", "blender/export_gltf.py",
+      "    return owner is not None and owner != obj", "    return False", EXPORT, "bake"),
+    M("fbx_take_not_keyed", "blender/export_ready.py",
+      "    bake.write_channels(bag, [(path, 0,", "    0 and bake.write_channels(bag, [(path, 0,",
+      EXPORT, "bake"),
+    M("equipment_constraints_left_on", "blender/export_ready.py",
+      "        _switch(obj, on=False)", "        pass", EXPORT, "bake"),
 ]
 
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",

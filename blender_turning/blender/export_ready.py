@@ -29,8 +29,6 @@ from .retarget_adapter import is_user_rig, rig_settings
 #: ID property on an equipment object keyed by :func:`bake_equipment`: its rotation mode and
 #: transform (``matrix_basis``, row by row) before, given back by :func:`clear_equipment`.
 KEYED = "turning_export_keys"
-#: The F-curves written on each equipment object.
-CHANNELS = (("location", 3), ("rotation_quaternion", 4), ("scale", 3))
 
 
 def equipment(fig) -> list:
@@ -54,38 +52,53 @@ def _sample(scene, objs, frames) -> np.ndarray:
     return out
 
 
-def _channels(mats) -> dict:
-    """``{data_path: (n, k) values}`` of ``(n, 4, 4)`` rigid-and-scale transforms; the
-    quaternions kept on one side (q and -q are the same turn, interpolation goes the short way)."""
+def _channels(mats, mode: str) -> dict:
+    """``{data_path: (n, k) values}`` of ``(n, 4, 4)`` rigid-and-scale transforms, the rotation
+    in the object's own ``mode``: Euler angles unwrapped from frame to frame (a wheel's spin
+    keeps counting), quaternions kept on one side (q and -q are the same turn)."""
     loc = mats[:, :3, 3]
     scale = np.linalg.norm(mats[:, :3, :3], axis=1)                   # column lengths
-    rot = mats[:, :3, :3] / scale[:, None, :]
-    quats = np.array([np.array(Matrix(r.tolist()).to_quaternion()) for r in rot])
-    for i in range(1, len(quats)):
-        if np.dot(quats[i], quats[i - 1]) < 0.0:
-            quats[i] = -quats[i]
-    return {"location": loc, "rotation_quaternion": quats, "scale": scale}
+    rot = [Matrix((m[:3, :3] / s[None, :]).tolist()) for m, s in zip(mats, scale)]
+    if mode in ("QUATERNION", "AXIS_ANGLE"):
+        quats = np.array([np.array(r.to_quaternion()) for r in rot])
+        for i in range(1, len(quats)):
+            if np.dot(quats[i], quats[i - 1]) < 0.0:
+                quats[i] = -quats[i]
+        return {"location": loc, "rotation_quaternion": quats, "scale": scale}
+    eulers, prev = [], None
+    for r in rot:
+        prev = r.to_euler(mode) if prev is None else r.to_euler(mode, prev)
+        eulers.append(tuple(prev))
+    return {"location": loc, "rotation_euler": np.array(eulers), "scale": scale}
 
 
-#: Custom property each bake's action keys on its own object only (``"turning_take <name>"``):
-#: FBX exports, as a take of an object, every action all of whose F-curves resolve on it, and
-#: figures of a sport share their bones (equipment objects share location, rotation, scale).
-TAKE = "turning_take "
+#: An object's transforms that are not its basis, held at rest while it is keyed.
+_DELTAS = ("delta_location", "delta_rotation_euler", "delta_rotation_quaternion", "delta_scale")
+_REST = {"delta_location": (0.0, 0.0, 0.0), "delta_rotation_euler": (0.0, 0.0, 0.0),
+         "delta_rotation_quaternion": (1.0, 0.0, 0.0, 0.0), "delta_scale": (1.0, 1.0, 1.0)}
 
 
-def own_take(obj, action, bag, frames) -> None:
-    """Key ``obj``'s own take property in ``bag`` over ``frames`` (two keys, value 0), listed
-    among the bake's paths (``bake.BAKED_PATHS``) when ``action`` is a figure's bake."""
+#: Custom property each bake's action keys on its own object only (``"turn_take <name>"``,
+#: value 0): FBX exports, as a take of an object, every action all of whose F-curves resolve on
+#: it, and figures of a sport share their bones (equipment objects share location, rotation,
+#: scale).  On a figure it is one of the bake's state properties (Clear Bake removes those).
+TAKE = "turn_take "
+
+
+def with_take(fig, track):
+    """``track`` with the figure's own take property (see ``TAKE``)."""
+    from ..mapping.base import PoseTrack
+    props = {**track.props, TAKE + fig.name: np.zeros(len(track))}
+    return PoseTrack(track.frames, track.location, track.rotation, track.bones, props)
+
+
+def own_take(obj, bag, frames) -> None:
+    """Key an equipment object's own take property in ``bag`` on ``frames``."""
     prop = TAKE + obj.name
     obj[prop] = 0.0
     path = f'["{bpy.utils.escape_identifier(prop)}"]'
-    for fc in [fc for fc in bag.fcurves if fc.data_path == path]:
-        bag.fcurves.remove(fc)
-    if bake.BAKED_PATHS in action:
-        paths = set(action[bake.BAKED_PATHS].splitlines()) | {path}
-        action[bake.BAKED_PATHS] = "\n".join(sorted(paths))
-    bake.write_channels(bag, [(path, 0, "Turning", np.zeros(2))],
-                        np.array([frames[0], frames[-1]], float))
+    frames = np.asarray(frames, float)
+    bake.write_channels(bag, [(path, 0, "Turning", np.zeros(len(frames)))], frames)
 
 
 def drop_take(obj) -> None:
@@ -94,18 +107,13 @@ def drop_take(obj) -> None:
 
 
 def bake_equipment(fig, frames) -> int:
-    """Key the figure's own take (:func:`own_take`) and a user rig's equipment on ``frames``
-    (the figure's baked frames, ascending) from Blender's evaluation, then turn the equipment's
-    constraints and drivers off; returns the objects keyed.  The scene ends on the frame it
-    was on."""
-    action, strip = bake.find_bake(fig)
-    bag = (compat.channels(fig, action) if strip is None
-           else compat.channelbag(action, compat.strip_slot(strip)))
-    own_take(fig, action, bag, frames)
+    """Key a user rig's equipment on ``frames`` (the figure's baked frames, ascending) from
+    Blender's evaluation, then turn its constraints and drivers off (and its delta transforms to
+    rest).  Returns the objects keyed.  The scene ends on the frame it was on."""
+    clear_equipment(fig)                     # evaluate with the constraints on
     objs = equipment(fig)
     if not objs:
         return 0
-    clear_equipment(fig)                     # evaluate with the constraints on
     scene = bpy.context.scene
     current = scene.frame_current
     frames = np.asarray(frames, float)
@@ -115,18 +123,21 @@ def bake_equipment(fig, frames) -> int:
         scene.frame_set(current)
     for j, obj in enumerate(objs):
         before = {"mode": obj.rotation_mode,
-                  "basis": [float(v) for row in obj.matrix_basis for v in row]}
-        action = compat.assign_new_action(obj, obj.name)
-        action[bake.OWNER] = obj
-        action[MERGE_INTO] = bake.figure_action(fig).name        # one glTF animation
+                  "basis": [float(v) for row in obj.matrix_basis for v in row],
+                  **{d: list(getattr(obj, d)) for d in _DELTAS}}
+        keyed = compat.assign_new_action(obj, obj.name)
+        keyed[bake.OWNER] = obj
+        keyed[MERGE_INTO] = bake.figure_action(fig).name    # one glTF animation
         obj[KEYED] = before
-        obj.rotation_mode = "QUATERNION"
-        values = _channels(mats[:, j])
-        bag = compat.channels(obj)
-        bake.write_channels(bag, [(path, i, "Object Transforms", values[path][:, i])
-                                  for path, size in CHANNELS for i in range(size)], frames)
-        own_take(obj, action, bag, frames)
         _switch(obj, on=False)
+        for d in _DELTAS:
+            setattr(obj, d, _REST[d])
+        values = _channels(mats[:, j], obj.rotation_mode)
+        obj_bag = compat.channels(obj)
+        bake.write_channels(obj_bag, [(path, i, "Object Transforms", v[:, i])
+                                      for path, v in values.items() for i in range(v.shape[1])],
+                            frames)
+        own_take(obj, obj_bag, frames)
     scene.frame_set(current)
     return len(objs)
 
@@ -143,9 +154,7 @@ def _switch(obj, on: bool) -> None:
 
 def clear_equipment(fig) -> None:
     """Remove the keys :func:`bake_equipment` wrote and turn the constraints and drivers back
-    on: the equipment follows the rig again.  (The figure's take F-curve is one of its bake's
-    paths: a re-bake or Clear Bake removes it.)"""
-    drop_take(fig)
+    on: the equipment follows the rig again."""
     for obj in equipment(fig):
         if KEYED not in obj:
             continue
@@ -157,6 +166,8 @@ def clear_equipment(fig) -> None:
         before = obj[KEYED]
         obj.rotation_mode = before["mode"]
         obj.matrix_basis = Matrix(np.reshape(before["basis"], (4, 4)).tolist())
+        for d in _DELTAS:
+            setattr(obj, d, before[d])
         del obj[KEYED]
         drop_take(obj)
         _switch(obj, on=True)

@@ -99,6 +99,8 @@ def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True):
     """Write a computed bake: F-curves (every ``step``-th frame, smooth in between), then the
     foot track; ``export_ready``: a user rig's equipment keyed too, for glTF and FBX
     (:mod:`.export_ready`).  Returns the bake result."""
+    if export_ready:
+        track = export_ready_mod.with_take(fig, track)
     if step > 1:
         bake.bake_pose_track(fig, track)            # every frame first: the slopes at the keys
         slopes = {k: (f, np.gradient(v, f, edge_order=2))
