@@ -388,6 +388,8 @@ MUTANTS = [
     M("fbx_take_not_keyed", "blender/export_ready.py",
       "    bake.write_channels(bag, [(path, 0,", "    0 and bake.write_channels(bag, [(path, 0,",
       EXPORT, "bake"),
+    M("fbx_figure_take_dropped", "blender/ops_bake.py",
+      "        track = export_ready_mod.with_take(fig, track)", "        pass", EXPORT, "bake"),
     M("equipment_constraints_left_on", "blender/export_ready.py",
       "        _switch(obj, on=False)", "        pass", EXPORT, "bake"),
 ]
