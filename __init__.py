@@ -10,3 +10,11 @@ def register():
 def unregister():
     from .blender_turning import blender
     blender.unregister()
+
+
+def __getattr__(name):
+    # The glTF exporter looks for this on every enabled add-on's module (export_gltf.py).
+    if name == "glTF2ExportUserExtension":
+        from .blender_turning.blender.export_gltf import glTF2ExportUserExtension
+        return glTF2ExportUserExtension
+    raise AttributeError(name)

@@ -66,6 +66,8 @@ RECEDING = [T + "test_mutation_guards_modules.py", T + "test_planner_search.py"]
 RETARGET = [T + "test_retarget.py"]
 REGISTRY = [T + "test_registry.py", T + "test_crowd.py"]
 BLENDER_REGISTRY = [T + "test_blender_registry.py"]
+NOTES = [T + "test_blender_model_notes.py"]
+EXPORT = [T + "test_blender_export.py"]
 
 
 @dataclass(frozen=True)
@@ -186,7 +188,8 @@ MUTANTS = [
     M("csv_header_unchecked", "core/trajectory.py",
       "if header not in (COLUMNS, LEGACY_COLUMNS):", "if not header:", TRAJ),
     M("csv_low_precision", "core/trajectory.py",
-      "w.writerow([repr(float(v)) for v in row])", "w.writerow([f'{v:.6g}' for v in row])", TRAJ),
+      'rows += [",".join(map(repr, row)) for row in self.data.T.tolist()]',
+      'rows += [",".join(f"{v:.6g}" for v in row) for row in self.data.T.tolist()]', TRAJ),
     M("resample_heading_rate_C_f", "core/trajectory.py",
       '"theta_dir": V_f * C_f,', '"theta_dir": C_f,', TRAJ),
     # -- the model on any ground (core/model.py; docs/TERRAIN.md) -----------------------------
@@ -528,6 +531,30 @@ MUTANTS = [
     M("follow_ground_path_anywhere", "blender/follow_ground.py",
       "off = np.flatnonzero(~over_mesh(ground, xy))", "off = np.flatnonzero(xy[:, 0] != xy[:, 0])",
       FOLLOW_GROUND, "bake"),
+    # -- what the model changed, said (the bake's lean, Follow Path's distance from the path) --
+    M("commanded_turn_unlimited", "core/controllers/ellipse.py",
+      "return self._turn(t, w, tm, self.feasible_lean(w, tm))", "return self._turn(t, w, tm, tm)",
+      [T + "test_feasible_turns.py"]),
+    M("deviation_nearest_not_farthest", "core/path.py",
+      "    k = int(np.argmax(d))", "    k = int(np.argmin(d))", [T + "test_path.py"]),
+    M("deviation_along_from_start", "core/path.py",
+      "float(arc[j]))", "float(arc[-1] - arc[j]))", [T + "test_path.py"]),
+    M("bake_lean_note_dropped", "blender/pipeline.py",
+      "        traj = with_turn(traj, controller)", "        pass", NOTES, "bake"),
+    M("follow_warns_never", "blender/model_notes.py",
+      "    if dev.distance > warn:", "    if False:", NOTES, "bake"),
+    M("follow_frame_not_offset", "blender/model_notes.py",
+      "frame = frame_start + round(dev.t * fps)", "frame = round(dev.t * fps)", NOTES, "bake"),
+    # -- the export-ready bake ---------------------------------------------------------------
+    M("gltf_keeps_other_bakes", "blender/export_gltf.py",
+      "    return owner is not None and owner != obj", "    return False", EXPORT, "bake"),
+    M("fbx_take_not_keyed", "blender/export_ready.py",
+      "    bake.write_channels(bag, [(path, 0,", "    0 and bake.write_channels(bag, [(path, 0,",
+      EXPORT, "bake"),
+    M("fbx_figure_take_dropped", "blender/figure_bake.py",
+      "        track = export_ready_mod.with_take(fig, track)", "        pass", EXPORT, "bake"),
+    M("equipment_constraints_left_on", "blender/export_ready.py",
+      "        _switch(obj, on=False)", "        pass", EXPORT, "bake"),
 ]
 
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",

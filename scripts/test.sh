@@ -2,13 +2,23 @@
 # The whole test suite in the project's .venv (set up on first use), then the Blender tests again
 # on the oldest supported Blender (bpy 4.2 LTS) in .venv-bpy42, set up the same idempotent way.
 # Extra args go to pytest (the first run; the 4.2 run takes them when they name blender tests).
-# TURNING_SKIP_BPY42=1 skips the 4.2 run.
+# Without args each Blender version also runs the tests marked `installed` against the extension
+# built with the README's command and installed into a temporary user configuration
+# (tests/installed_addon.py).  TURNING_SKIP_BPY42=1 skips the 4.2 runs.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/env.sh"
 cd "$root"
 status=0
 "$root/.venv/bin/python" -m pytest "$@" || status=$?
+installed() {            # $1: the venv's python, $2 its bpy: the marked tests, installed extension
+  [ "$nargs" -eq 0 ] || return 0
+  echo "test.sh: the built and installed extension on $2" >&2
+  TURNING_INSTALLED=1 "$1" -m pytest -p no:cacheprovider -q -m installed \
+    "$root"/tests/test_blender_*.py || status=$?
+}
+nargs=$#
+installed "$root/.venv/bin/python" "bpy 5.0"
 [ "${TURNING_SKIP_BPY42:-0}" = 1 ] && exit "$status"
 
 # -- bpy 4.2 LTS (about 350 MB on first use) ------------------------------------------------------
@@ -34,4 +44,5 @@ for a in "$@"; do case "$a" in *test_blender_*) blender_args+=("$a");; esac; don
 [ "${#blender_args[@]}" -gt 0 ] || blender_args=("$root"/tests/test_blender_*.py)
 echo "test.sh: Blender tests on bpy 4.2 LTS" >&2
 "$venv/bin/python" -m pytest -p no:cacheprovider -m blender "${blender_args[@]}" || status=$?
+installed "$venv/bin/python" "bpy 4.2 LTS"
 exit "$status"

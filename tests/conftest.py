@@ -6,7 +6,12 @@ from dataclasses import replace
 import pytest
 from hypothesis import settings
 
-from blender_turning.core import Limits, preset
+import installed_addon
+
+if installed_addon.ACTIVE:                  # before anything imports blender_turning
+    installed_addon.install()
+
+from blender_turning.core import Limits, preset  # noqa: E402
 
 # Fixed seeds (CONTRIBUTING.md): Hypothesis draws the same examples on every run, so a test does
 # not pass one run and fail the next; no example database is written.  Tests that set their own
@@ -31,18 +36,41 @@ def registered():
     """The add-on registered in an empty factory scene, for one Blender test module (which sets
     ``BLENDER_USER_RESOURCES`` before it imports bpy; this fixture imports it only when used)."""
     import bpy
-    from blender_turning import blender as addon
     bpy.ops.wm.read_factory_settings(use_empty=True)
+    if installed_addon.ACTIVE:              # as Blender enables the installed extension
+        installed_addon.enable()
+        yield
+        installed_addon.disable()
+        return
+    from blender_turning import blender as addon
     addon.register()
     yield
     addon.unregister()
+
+
+def pytest_collection_modifyitems(config, items):
+    """Against the installed extension only the tests marked ``installed`` run."""
+    if installed_addon.ACTIVE:
+        keep = [it for it in items if it.get_closest_marker("installed")]
+        config.hook.pytest_deselected(items=[it for it in items if it not in keep])
+        items[:] = keep
 
 
 _EXIT_STATUS = []
 
 
 def pytest_sessionfinish(session, exitstatus):
+    if installed_addon.ACTIVE and not _narrowed(session.config) and exitstatus == 0:
+        missing = installed_addon.uncalled()     # every operator runs as installed
+        if missing or not installed_addon.REGISTERED:
+            print(f"\ninstalled: no test marked 'installed' calls {missing or 'any operator'}")
+            exitstatus = session.exitstatus = pytest.ExitCode.TESTS_FAILED
     _EXIT_STATUS.append(int(exitstatus))
+
+
+def _narrowed(config) -> bool:
+    """A run of chosen tests (``-k``, ``file::test``), not the whole installed job."""
+    return bool(config.getoption("keyword")) or any("::" in a for a in config.args)
 
 
 def pytest_unconfigure(config):

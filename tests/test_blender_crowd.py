@@ -216,6 +216,7 @@ def test_an_active_crowd_collection_is_baked_whole(scene):
             assert compat.channels(o) is not None and len(compat.channels(o).fcurves) > 0, o
 
 
+@pytest.mark.installed
 def test_a_users_rig_is_a_template(scene):
     rig = mixamo_skeleton()
     activate(rig)
@@ -282,6 +283,7 @@ def test_plans_in_the_workers_equal_each_figure_planned_alone(scene):
             np.testing.assert_array_equal(got[c], want, err_msg=c)
 
 
+@pytest.mark.installed
 def test_follow_path_bakes_every_selected_figure_as_alone(scene):
     figs = path_figures(2)
     assert bpy.ops.turning.follow_path() == {"FINISHED"}
@@ -322,6 +324,7 @@ def started_workers(job, timeout=60.0):
     return list(job._pool._processes.values())
 
 
+@pytest.mark.installed
 def test_esc_ends_the_workers_and_leaves_the_scene_unchanged(scene):
     figs = path_figures()
     before = snapshot()
@@ -385,13 +388,16 @@ def test_workers_do_not_run_the_script_blender_was_started_with(scene, tmp_path,
 @pytest.fixture
 def extension_package(monkeypatch):
     """This package imported as Blender imports an extension: ``bl_ext.<repository>.<id>``,
-    the first two names modules Blender makes (no file, a ``__path__``)."""
+    the first two names modules Blender makes as its junction modules do
+    (``_bpy_internal/extensions/junction_module.py``): a placeholder ``__file__`` such as
+    ``"[bl_ext]"``, no ``__path__`` on the first, the repository's folder on the second."""
     root = Path(blender_turning.__file__).resolve().parents[1]
     if not root.name.isidentifier():
         pytest.skip(f"the checkout's folder {root.name!r} is not a module name")
     ns = types.ModuleType("bl_ext_test")
-    ns.__path__ = []
+    ns.__file__ = "[bl_ext_test]"
     repo = types.ModuleType("bl_ext_test.repo")
+    repo.__file__ = "[bl_ext_test.repo]"
     repo.__path__ = [str(root.parent)]
     monkeypatch.setitem(sys.modules, "bl_ext_test", ns)
     monkeypatch.setitem(sys.modules, "bl_ext_test.repo", repo)
@@ -478,6 +484,7 @@ def test_a_figure_that_cannot_be_read_is_named_and_nothing_changes(scene):
     assert snapshot() == before, diff(before, snapshot())
 
 
+@pytest.mark.installed
 def test_the_crowd_panel_draws_the_settings_and_add_crowd(scene):
     from blender_turning.blender import panel_crowd
     from test_blender_operators import LayoutStub

@@ -96,3 +96,20 @@ def test_inner_package_imports_itself_only_relatively():
             bad += [f"{path.relative_to(ROOT)}: {n}" for n in names
                     if n.split(".")[0] == "blender_turning"]
     assert not bad, bad
+
+
+@pytest.mark.installed
+def test_the_installed_run_runs_the_installed_copy():
+    """Run with ``TURNING_INSTALLED=1`` (scripts/test.sh), ``blender_turning`` is the installed
+    extension's package, the object Blender loaded; otherwise the checkout."""
+    import blender_turning
+    from blender_turning.blender import workers
+    import installed_addon
+    here = Path(blender_turning.__file__).resolve()
+    if not installed_addon.ACTIVE:
+        assert ROOT in here.parents and workers.PACKAGE == "blender_turning"
+        return
+    assert ROOT not in here.parents, here
+    assert blender_turning is sys.modules[installed_addon.INNER]
+    assert workers.PACKAGE == installed_addon.INNER
+    assert Path(os.environ["BLENDER_USER_RESOURCES"]) in here.parents

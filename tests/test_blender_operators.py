@@ -75,6 +75,7 @@ def test_poll_without_bake_or_path(scene):
         bpy.ops.turning.bake_turns()
 
 
+@pytest.mark.installed
 @pytest.mark.parametrize("sport", ["SKIER", "SNOWBOARDER", "TELEMARK", "CYCLIST"])
 def test_add_figure_at_cursor_from_preset(scene, sport):
     obj = add(sport, at=(3, -2, 0))
@@ -139,6 +140,7 @@ def test_bake_turns_reads_back_equal_to_the_mapping(scene):
     assert len(obj.turning.foot_track.data.splines[0].points) == 72
 
 
+@pytest.mark.installed
 @needs_mapping
 def test_bake_twice_equals_once_and_clear_restores(scene):
     obj = add("SKIER")
@@ -214,6 +216,7 @@ def test_cancelled_follow_path_leaves_scene_unchanged(scene):
     assert snapshot() == before
 
 
+@pytest.mark.installed
 @needs_mapping
 @pytest.mark.parametrize("sport", ["SKIER", "TELEMARK"])
 def test_follow_path_bakes_and_fits_the_frame_range(scene, sport):
@@ -256,6 +259,7 @@ class LayoutStub:
         object.__setattr__(self, name, value)
 
 
+@pytest.mark.installed
 def test_panels_draw_every_setting(scene):
     from blender_turning.blender import panel
     obj = add("SKIER")
@@ -304,6 +308,7 @@ def test_esc_in_the_modal_follow_path_leaves_the_scene_unchanged(scene):
     assert snapshot() == before
 
 
+@pytest.mark.installed
 @needs_mapping
 def test_modal_follow_path_reports_progress_then_bakes(scene):
     obj = add("TELEMARK")

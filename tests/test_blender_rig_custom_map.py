@@ -23,6 +23,7 @@ def renamed(name):
     return obj
 
 
+@pytest.mark.installed
 def test_custom_map_edit_save_load_and_bake():
     obj = renamed("Bob")
     activate(obj)

@@ -17,6 +17,7 @@ from rig_fixtures import activate, mixamo_skeleton, state  # noqa: E402
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 
 
+@pytest.mark.installed
 def test_undo_make_figure_and_remove_figure():
     obj = mixamo_skeleton("Bob")
     activate(obj)

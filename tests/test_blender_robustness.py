@@ -83,6 +83,7 @@ def test_lost_bone_after_bake_clear_still_works(scene):
     assert "foot.L" in before[("bones", obj.data.name)]
 
 
+@pytest.mark.installed
 def test_preset_of_another_sport_is_refused(scene):
     """A sport's own preset and a user's saved preset of another sport are both refused on a
     figure whose rig is not of that sport; the figure's own sport's preset applies."""
@@ -107,6 +108,29 @@ def test_preset_of_another_sport_is_refused(scene):
     assert cyclist.turning.mass == pytest.approx(91.0)
     os.remove(saved)
     assert presets.TURNING_MT_figure_presets.preset_operator == "turning.apply_figure_preset"
+
+
+@pytest.mark.installed
+def test_a_saved_preset_is_a_file_of_the_users_that_applies_back_and_removes(scene):
+    """The "+" button writes the figure's settings under the user's own presets (the
+    extension's folder is replaced by an update), the menu applies them, "-" removes them."""
+    obj = add("SKIER")
+    obj.turning.mass, obj.turning.speed = 81.0, 12.5
+    folder = os.path.join(bpy.utils.user_resource("SCRIPTS", path="presets"),
+                          presets.PRESET_SUBDIR)
+    made = not os.path.isdir(folder)
+    assert bpy.ops.turning.figure_preset_add(name="Heavy skier") == {"FINISHED"}
+    saved = os.path.join(folder, "Heavy_skier.py")
+    assert os.path.isfile(saved), os.listdir(os.path.dirname(saved))
+    assert presets.preset_sport(saved) == "SKIER"
+    obj.turning.mass, obj.turning.speed = 70.0, 10.0
+    assert bpy.ops.turning.apply_figure_preset(filepath=saved) == {"FINISHED"}
+    assert (obj.turning.mass, obj.turning.speed) == (pytest.approx(81.0), pytest.approx(12.5))
+    assert bpy.ops.turning.figure_preset_add(name="Heavy skier", remove_active=True) \
+        == {"FINISHED"}
+    assert not os.path.exists(saved)
+    if made:                  # the user's folder as it was for the tests after this
+        os.rmdir(folder)
 
 
 def test_sport_switched_from_script_is_refused_at_bake(scene):

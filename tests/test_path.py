@@ -182,3 +182,26 @@ def test_progress_needs_the_foot_near_the_path():
     path = HermitePath.from_polyline([[0, 0], [50, 0]])
     _, out = progress_along(path, [[60.0, 500.0], [80.0, 500.0]], window=20.0)
     assert out[-1] == (0.0, False)
+
+
+def test_path_deviation_is_the_largest_distance_when_and_how_far_along():
+    """Round a quarter circle of radius 20 m (a Bezier's quarter-circle, within 0.03% of it) on a
+    track whose distance from it is 0.5 + 3 sin(pi s^2) over s in [0, 1]: at most 3.5 m, at
+    s = 1/sqrt(2), 22.2 m along the 31.4 m arc."""
+    from blender_turning.core.path import path_deviation
+    R, k = 20.0, 0.5522847498                          # the cubic Bezier's quarter circle
+    path = HermitePath.from_bezier(np.array([[R, 0], [R, k * R], [k * R, R], [0, R]]))
+    s = np.linspace(0.0, 1.0, 2001)
+    a = 0.5 * np.pi * s
+    r = R + 0.5 + 3.0 * np.sin(np.pi * s * s)          # outside the arc
+    dev = path_deviation(path, 10.0 * s, r * np.cos(a), r * np.sin(a))
+    # The Bezier strays 0.027% from the circle (5.4 mm at R = 20 m): the distance and its place
+    # carry that; the arc length to the nearest of 64 samples per segment is 0.25 m coarse.
+    assert dev.distance == pytest.approx(3.5, abs=6e-3)
+    peak = 2 ** -0.5
+    assert dev.t == pytest.approx(10.0 * peak, abs=0.01)
+    a = 0.5 * np.pi * peak
+    assert dev.xy == pytest.approx((23.5 * np.cos(a), 23.5 * np.sin(a)), abs=0.05)
+    assert dev.along == pytest.approx(a * R, abs=0.3)
+    with pytest.raises(ValueError, match="no samples"):
+        path_deviation(path, [], [], [])

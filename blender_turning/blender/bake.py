@@ -43,6 +43,11 @@ class BakeResult:
     """Keys per F-curve."""
 
 
+#: ID property on an equipment object's action: the name of its figure's action (the glTF
+#: animation its keys merge into; export_ready.py writes it, export_gltf.py reads it).
+MERGE_INTO = "turning_export_merge"
+
+
 def _channel_list(obj, track: PoseTrack):
     """``[(data_path, index, group, values (n,)), ...]`` for every channel of ``track``."""
     out = []

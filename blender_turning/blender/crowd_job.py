@@ -46,6 +46,7 @@ from . import bake
 from .figure_bake import apply_bake
 from .figure_context import check_figure, end_modal, report_error, selected_figures
 from .follow_scene import prepare
+from .model_notes import follow_note, warn_distance
 from .pipeline import map_track, on_ground, started, surface_normals
 from .scene_adapters import FrameRange
 from .workers import PumpedExecutor, worker_pool
@@ -117,10 +118,12 @@ class CrowdFollow:
         self.members = member_names(self.names)
         members = []
         self.grounds = []                       # each figure's Ground mesh as read (or None)
+        self.paths = []
         for i, fig in enumerate(figs):
             self.current = fig.name
             job = prepare(context, fig)
             self.grounds.append(getattr(job, "mesh_ground", None))
+            self.paths.append(job.path)         # the drawn path, for the report
             name = self.members[i]
             members.append(CrowdFigure(name, job.figure, FollowPath(figure_scene(name, job)),
                                        time_offset=float(fig.turning.crowd.time_offset)))
@@ -302,7 +305,8 @@ def prepare_crowd(op, context, figs):
 
 def complete_crowd(op, context, job) -> set:
     """Collect the plans, refuse them all if one figure found none (the first in planning
-    order is named, and the figures in its way), else bake them all."""
+    order is named, and the figures in its way), else bake them all and say how far each
+    strayed from its path (:func:`.model_notes.follow_note`)."""
     try:
         results = job.results()
     except Exception as exc:                       # a worker raised: a bug, or it was killed
@@ -320,8 +324,17 @@ def complete_crowd(op, context, job) -> set:
         return report_error(op, TITLE, job.current, exc)
     how = (f"each around the figures before it in the order {', '.join(job.crowd.priority)}"
            if job.crowd.priority else f"on {job.workers} worker processes")
+    notes = [(name, *follow_note(path, r.trajectory, frames.start, frames.fps,
+                                 warn_distance(op)))
+             for (name, r), path in zip(results, job.paths)]
+    for name, level, note in notes:
+        if level == "INFO":
+            op.report({level}, f"{TITLE}: {name}: {note}")
     op.report({"INFO"}, f"{TITLE}: baked {len(results)} figures over frames "
                         f"{frames.start}-{frames.end} (planned {how})")
+    for name, level, note in notes:             # last: the status bar shows the last report
+        if level != "INFO":
+            op.report({level}, f"{TITLE}: {name}: {note}")
     return {"FINISHED"}
 
 

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..mapping.base import BoneChannels, PoseTrack
 from . import bake, compat, foot_track, retarget_adapter
+from . import export_ready as export_ready_mod
 
 
 def every_nth(track: PoseTrack, step: int) -> PoseTrack:
@@ -65,9 +66,12 @@ def set_hermite_handles(fig, slopes: dict) -> None:
         fc.update()
 
 
-def apply_bake(fig, traj, track, step: int = 1):
+def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True):
     """Write a computed bake: F-curves (every ``step``-th frame, smooth in between), then the
-    foot track.  Returns the bake result."""
+    foot track; ``export_ready``: a user rig's equipment keyed too, for glTF and FBX
+    (:mod:`.export_ready`).  Returns the bake result."""
+    if export_ready:
+        track = export_ready_mod.with_take(fig, track)
     if step > 1:
         bake.bake_pose_track(fig, track)            # every frame first: the slopes at the keys
         slopes = {k: (f, np.gradient(v, f, edge_order=2))
@@ -76,6 +80,10 @@ def apply_bake(fig, traj, track, step: int = 1):
     if step > 1:
         set_hermite_handles(fig, slopes)
     foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z)     # on the ground
+    if export_ready:
+        export_ready_mod.bake_equipment(fig, track.frames)
+    else:
+        export_ready_mod.clear_equipment(fig)
     return result
 
 

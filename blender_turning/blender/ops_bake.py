@@ -8,10 +8,12 @@ modal (one figure per timer tick, a progress bar, Esc cancels between figures).
 from __future__ import annotations
 
 import bpy
-from bpy.props import EnumProperty, IntProperty
+from bpy.props import BoolProperty, EnumProperty, IntProperty
 
 from . import bake, foot_track
+from . import export_ready as export_ready_mod
 from .figure_bake import apply_bake, reset_pose
+from .model_notes import turn_note
 from .figure_context import check_figure, end_modal, poll_figure, report_error, selected_figures
 from .pipeline import figure_pose_track, ground_of
 from .scene_adapters import FrameRange, start_from_object
@@ -39,8 +41,10 @@ class BakeJob:
     """Bake figures (by name) over ``frames``: :meth:`compute_next` one at a time (nothing is
     written), then :meth:`write` all of them."""
 
-    def __init__(self, names, frames: FrameRange, step: int = 1):
+    def __init__(self, names, frames: FrameRange, step: int = 1, export_ready: bool = True,
+                 root_motion: bool = False):
         self.names, self.frames, self.step = list(names), frames, step
+        self.export_ready, self.root_motion = export_ready, root_motion
         self.results = []                     # (name, start or None, traj, track)
         self.grounds = {}                     # ground mesh name -> MeshGround
 
@@ -65,6 +69,8 @@ class BakeJob:
         height = None if start is None else float(fig.location[2])
         traj, track = figure_pose_track(fig, self.frames, start=start, height=height,
                                         ground=self._ground(fig))
+        if self.root_motion:
+            track = export_ready_mod.root_motion(fig, track)
         bake.check_track(fig, track)
         self.results.append((name, start, traj, track))
 
@@ -85,7 +91,7 @@ class BakeJob:
             if start is not None:                 # the height where the user put it stays
                 fig.turning.start = (start[0], start[1], float(fig.location[2]))
                 fig.turning.start_heading = start[2]
-            out.append((name, apply_bake(fig, traj, track, self.step)))
+            out.append((name, apply_bake(fig, traj, track, self.step, self.export_ready)))
         return out
 
 
@@ -108,6 +114,16 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
                       options={"SKIP_SAVE"},
                       description="Key every n-th frame (and the last); smooth (Bezier) in "
                                   "between.  1 keys every frame, exactly")
+    export_ready: BoolProperty(
+        name="Export-Ready Equipment", default=True,
+        description="A figure made from your own rig: key its skis, poles or bicycle on every "
+                    "baked frame too (their constraints and drivers off while baked), so glTF "
+                    "and FBX carry them. Off: they follow the rig live, and exporters drop them")
+    root_motion: BoolProperty(
+        name="Root Motion", default=False,
+        description="Key the travel on the rig's root bone (Rigify's or the built-in figures' "
+                    "'root') instead of the armature object, which then stays where the bake "
+                    "starts: for game engines that take a character's motion from its root")
 
     _job = None
     _timer = None
@@ -125,6 +141,8 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         col.prop(self, "frame_start")
         col.prop(self, "frame_end")
         layout.prop(self, "step")
+        layout.prop(self, "export_ready")
+        layout.prop(self, "root_motion")
 
     def _prepare(self, context):
         """The job for the selected figures, or ``None`` (reported)."""
@@ -137,7 +155,8 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         except ValueError as exc:
             self.report({"ERROR"}, f"Bake Turns: {exc}")
             return None
-        return BakeJob([f.name for f in selected_figures(context)], frames, self.step)
+        return BakeJob([f.name for f in selected_figures(context)], frames, self.step,
+                       self.export_ready, self.root_motion)
 
     def _finish(self, job):
         try:
@@ -153,6 +172,10 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         every = "" if job.step == 1 else f", every {job.step} frames"
         what = ", ".join(f"{name} ({r.fcurves} F-curves x {r.frames} keys)" for name, r in written)
         self.report({"INFO"}, f"Baked {what} over frames {frames.start}-{frames.end}{every}")
+        for name, _, traj, _ in job.results:     # last: the status bar shows the last report
+            note = turn_note(traj)
+            if note:
+                self.report({"WARNING"}, f"Bake Turns: {name}: {note}")
         return {"FINISHED"}
 
     def execute(self, context):
@@ -233,6 +256,7 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
         figs = [f for f in selected_figures(context) if bake.figure_action(f) is not None]
         for fig in figs:
             recorded = bake.REST in fig       # the pose before the bake, put back exactly
+            export_ready_mod.clear_equipment(fig)
             bake.clear_bake(fig)
             foot_track.remove_foot_track(fig)
             if not recorded:                  # baked before the pose was recorded

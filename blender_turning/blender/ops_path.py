@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 import bpy
+from bpy.props import FloatProperty
 
 from ..core.errors import PlanInfeasible
 from ..core.obstacles import Obstacles
@@ -14,6 +15,7 @@ from .figure_bake import apply_bake
 from .figure_context import check_figure, end_modal, poll_figure, report_error
 from .follow_job import Cancelled
 from .follow_scene import prepare
+from .model_notes import WARN_DISTANCE, follow_note, warn_distance
 from .pipeline import map_track, on_ground, surface_normals
 from .props import figure_settings
 from .scene_adapters import FrameRange
@@ -57,6 +59,11 @@ class TURNING_OT_follow_path(crowd_job.CrowdOptions, bpy.types.Operator):
     bl_label = "Follow Path"
     bl_options = {"REGISTER", "UNDO"}
 
+    warn_distance: FloatProperty(
+        name="Warn Beyond", default=WARN_DISTANCE, min=0.0, soft_max=20.0, unit="LENGTH",
+        description="Warn when the planned foot track strays farther than this from the drawn "
+                    "path (the report always gives the largest distance and where)")
+
     _job = None
     _crowd = None                       # several figures: a crowd_job.CrowdFollow
     _timer = None
@@ -91,8 +98,14 @@ class TURNING_OT_follow_path(crowd_job.CrowdOptions, bpy.types.Operator):
             frames = finish(context, fig, job, job.result)
         except Exception as exc:
             return report_error(self, "Follow Path", fig.name, exc)
+        level, note = follow_note(job.path, job.result.trajectory, frames.start, frames.fps,
+                                  warn_distance(self))
+        if level == "INFO":
+            self.report({level}, f"Follow Path: {fig.name}: {note}")
         self.report({"INFO"}, f"Follow Path: baked {fig.name} over frames "
                               f"{frames.start}-{frames.end}{follow_ground.target_speed_note(fig)}")
+        if level != "INFO":                   # last: the status bar shows the last report
+            self.report({level}, f"Follow Path: {fig.name}: {note}")
         return {"FINISHED"}
 
     def execute(self, context):

@@ -11,7 +11,7 @@ from ..core.params import PRESETS
 from ..core.errors import TurningError
 from ..mapping.stance import STANCES as RIG_STANCES
 from ..mapping.user_rig import fit_rig
-from . import bake, foot_track
+from . import bake, export_ready, foot_track
 from . import retarget_adapter as ra
 from .registry_items import retargeted_sport_items
 from .props_rig import BONE_MAPS, STANCES
@@ -124,6 +124,7 @@ class TURNING_OT_remove_figure(bpy.types.Operator):
 def remove_user_figure(obj) -> None:
     """Clear the bake and the foot track, remove the equipment, restore the rig and drop the
     figure settings."""
+    export_ready.clear_equipment(obj)
     bake.clear_bake(obj)
     foot_track.remove_foot_track(obj)
     ra.remove_equipment(obj)

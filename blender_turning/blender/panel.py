@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import bake
+from . import bake, model_notes
 from .figure_context import context_figure, selected_figures
 from .registry_items import sport_label
 
@@ -69,6 +69,9 @@ class VIEW3D_PT_turning_controller(FigurePanel, bpy.types.Panel):
 
     def draw(self, context):
         s, col = self.draw_props(context, ("period", "lean"))
+        turn = model_notes.panel_turn(context_figure(context), context.scene)
+        if turn is not None and turn.limited:      # what a bake will lean to, and why
+            col.label(text=model_notes.panel_text(turn), icon="ERROR")
         row = col.row(heading="Heading")
         row.prop(s, "use_heading", text="")
         sub = row.row()

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..core import DEFAULT_DT, simulate
 from ..core.terrain import surface_frame
+from .model_notes import with_turn
 from .scene_adapters import (FrameRange, SceneInputError, controller_from_settings,
                              figure_from_settings, resistance_from_settings, speed_schedule,
                              start_state)
@@ -122,6 +123,7 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
     if ground is None:
         traj = simulate(figure, controller, duration, state0=state0, meta={"figure": obj.name},
                         speed=speed)
+        traj = with_turn(traj, controller)             # the lean reached, when not the asked
         traj = resampled(on_crowd_clock(traj, offset), shown, origin=frames.start)
         z0 = float(s.start[2]) if height is None else float(height)
         return _with_z(traj, np.full(len(traj), z0))
@@ -133,7 +135,8 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
                     meta={"figure": obj.name, "ground_object": ground.name},
                     ground=ground.field, resistance=resistance_from_settings(s),
                     target_speed=target)
-    traj = resampled(on_crowd_clock(traj, offset), shown, ground.field, frames.start)
+    traj = resampled(on_crowd_clock(with_turn(traj, controller), offset), shown, ground.field,
+                     frames.start)
     return on_ground(traj, ground)
 
 

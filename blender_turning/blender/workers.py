@@ -18,6 +18,7 @@ tasks to a :class:`PumpedExecutor`, which hands them to the pool when the main t
 from __future__ import annotations
 
 import multiprocessing
+import os
 import sys
 import threading
 import types
@@ -43,14 +44,16 @@ for name, path in stubs:
 def _worker_stubs() -> list:
     """``[(name, __path__)]`` of the packages above this one that have no file of their own
     (Blender's ``bl_ext`` and ``bl_ext.<repository>``), for the workers to make before they
-    load a task; empty when the package is imported under its own name."""
+    load a task; empty when the package is imported under its own name.  Blender's junction
+    modules carry a placeholder ``__file__`` (``"[bl_ext]"``), not ``None``, and ``bl_ext`` has
+    no ``__path__``: what counts is whether a file is there for a worker's import to load."""
     parts = PACKAGE.split(".")
     out = []
     for i in range(1, len(parts)):
         module = sys.modules.get(".".join(parts[:i]))
-        if module is not None and getattr(module, "__file__", None) is None \
-                and hasattr(module, "__path__"):
-            out.append((".".join(parts[:i]), list(module.__path__)))
+        if module is not None and not os.path.isfile(getattr(module, "__file__", None) or ""):
+            # (Blender's ``bl_ext`` has no ``__path__``: its repositories are set on it.)
+            out.append((".".join(parts[:i]), list(getattr(module, "__path__", ()))))
     return out
 
 

@@ -16,12 +16,17 @@ distance to the nearest point of the spline itself.  Both are distances to a set
 can only move forward through the parts of the path the foot has actually passed near: the test
 of "the end of the path was reached" (not a half-plane through the end, which a switchback, a loop
 or a start far from the path satisfy at once).
+
+:func:`path_deviation` is where a finished run strayed farthest from the path it followed (the
+planner minimises the sum of ``d_i``, not its largest value: a cut bend is part of a good plan).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-__all__ = ["HermitePath", "PathDistance", "PathProgress"]
+__all__ = ["HermitePath", "PathDeviation", "PathDistance", "PathProgress", "path_deviation"]
 
 # Hermite basis in monomial form: S(u) = [1 u u^2 u^3] @ _H @ [P0, T0, P1, T1].
 _H = np.array([[1.0, 0.0, 0.0, 0.0],
@@ -312,3 +317,37 @@ class PathProgress:
         """Has the foot at ``xy`` with progress ``p`` reached the end of the path?"""
         crossed = float(np.dot(np.asarray(xy, float)[:2] - self.end, self.end_dir)) >= 0.0
         return bool(p >= self.length and crossed)
+
+
+@dataclass(frozen=True)
+class PathDeviation:
+    """Where a foot track is farthest from the path it followed (SI units)."""
+
+    distance: float
+    """The largest distance from the foot to the path (the spline itself), m."""
+    t: float
+    """When, s (the track's own time)."""
+    xy: tuple
+    """Where the foot was then, m."""
+    along: float
+    """Where along the path: the arc length to the path's point nearest the foot then, m."""
+
+
+#: Samples per segment of :func:`path_deviation`'s arc length (the exact distance needs no more).
+_DEVIATION_SAMPLES = 64
+
+
+def path_deviation(path: HermitePath, t, x, y) -> PathDeviation:
+    """The largest exact distance from the foot track ``(x, y)`` (at times ``t``) to ``path``,
+    when, where, and how far along the path (:class:`PathDeviation`)."""
+    P = np.column_stack([np.asarray(x, float), np.asarray(y, float)])
+    if len(P) == 0:
+        raise ValueError("path_deviation: the track has no samples")
+    dist = PathDistance(path, _DEVIATION_SAMPLES, exact=True)
+    d = dist(P)
+    k = int(np.argmax(d))
+    pts = dist.samples
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))])
+    j = int(dist.nearest_index(P[k:k + 1])[0])
+    return PathDeviation(float(d[k]), float(np.asarray(t, float)[k]),
+                         (float(P[k, 0]), float(P[k, 1])), float(arc[j]))

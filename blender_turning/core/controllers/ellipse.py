@@ -179,13 +179,24 @@ class PhaseEllipse(Controller):
             return np.minimum(theta_max, room * top)
         return min(theta_max, room * self._feasible.max_lean(omega0))
 
+    def commanded_turn(self, t: float = 0.0) -> FeasibleTurn:
+        """The turn followed for the ellipse commanded at ``t`` (one figure), before any run:
+        its lean made feasible (:meth:`feasible_lean`) and the bound that limits it, as a run's
+        :attr:`achieved` reports it."""
+        w, tm = float(self.omega0(t)), float(self.theta_max(t))
+        return self._turn(t, w, tm, self.feasible_lean(w, tm))
+
+    def _turn(self, t, w, tm, tmf) -> FeasibleTurn:
+        bound = self._feasible.bound(w) if self._feasible is not None and tmf < tm else None
+        return FeasibleTurn(tm, tmf, 2 * math.pi / w, bound, t)
+
     def _note(self, t, w, tm, tmf):
         if np.ndim(tmf):           # a batch of per-figure ellipses: no single report
             return
-        bound = self._feasible.bound(w) if tmf < tm else None
+        turn = self._turn(t, w, tm, tmf)
         a = self.achieved
-        if a is None or (bound is not None and tmf / tm < a.lean / a.commanded_lean):
-            self.achieved = FeasibleTurn(tm, tmf, 2 * math.pi / w, bound, t)
+        if a is None or (turn.limited and tmf / tm < a.lean / a.commanded_lean):
+            self.achieved = turn
 
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):
