@@ -15,9 +15,10 @@ py="$root/.venv/bin/python"
 echo "demo: trajectory $out/slalom.csv, plot $out/slalom.png, figures in $out/figures"
 # The Blender demo (bpy wheel, background): skier, snowboarder and telemark skier down a snowy
 # mountain, a cyclist on a road over a hill, one follow shot each, and a ski school (an
-# instructor and 8 pupils) with a shot of its own, 4 s at 320x180.  Prints its
-# progress, then where the frames (frames/<figure>/, shots.png) and .blend are.
+# instructor and 8 pupils) with a shot of its own, 4 s at 320x180.  Prints a line per figure
+# baked and per shot rendered (with the time left), then where the frames (frames/<figure>/,
+# shots.png) and .blend are.
 "$py" "$root/scripts/render_job.py" --config "$root/scripts/configs/demo.toml" \
-  --output "$out/blender_demo" | grep --line-buffered -v "| Saved:"
+  --output "$out/blender_demo" | grep --line-buffered -v "| Saved:\|rendered frame "
 echo "demo: Blender frames in $out/blender_demo/frames/<figure>, all shots in" \
   "$out/blender_demo/shots.png, scene in $out/blender_demo/demo.blend"

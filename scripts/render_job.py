@@ -50,6 +50,9 @@ import render_terrain  # noqa: E402
 
 ENGINES = ("WORKBENCH", "EEVEE", "CYCLES")
 DEVICES = ("CPU", "GPU")
+#: Workbench's render anti-aliasing (``scene.display.render_aa``): FXAA is one screen-space pass;
+#: the numbers are samples per pixel (Blender's default is 8).
+WORKBENCH_AA = ("OFF", "FXAA", "5", "8", "11", "16", "32")
 GPU_BACKENDS = ("OPTIX", "CUDA", "HIP", "ONEAPI", "METAL")     # Cycles' compute_device_type
 SPORTS = ("skier", "snowboarder", "telemark", "cyclist")
 
@@ -66,7 +69,7 @@ _KNOWN = {
     "": {"job", "render", "camera", "ground", "figures", "paths", "obstacles", "terrain",
          "crowds"},
     "job": {"name", "seconds", "fps", "frame_step", "output"},
-    "render": {"engine", "resolution", "format", "samples"},
+    "render": {"engine", "resolution", "format", "samples", "antialiasing"},
     "camera": {"follow", "distance", "height", "lens"},
     "ground": {"kind"},
     "path": {"points"},
@@ -256,7 +259,8 @@ def load_config(path: Path, overrides) -> dict:
     if fmt not in ("PNG", "VIDEO"):
         r.fail("format", f"= {fmt!r} is not PNG or VIDEO")
     cfg["render"] = {"engine": engine, "resolution": res, "format": fmt,
-                     "samples": r.number("samples", "render_samples", 16), "device": "CPU"}
+                     "samples": r.number("samples", "render_samples", 16), "device": "CPU",
+                     "antialiasing": r.string("antialiasing", "8", choices=WORKBENCH_AA)}
     if getattr(overrides, "device", None) is not None:
         cfg["render"]["device"] = _cli_choice(overrides.device, "--device", DEVICES)
         if cfg["render"]["device"] == "GPU" and engine != "CYCLES":
@@ -503,6 +507,7 @@ def setup_render(bpy, cfg):
         shading = scene.display.shading
         shading.light, shading.color_type = "STUDIO", "MATERIAL"
         shading.show_shadows = True
+        scene.display.render_aa = rc["antialiasing"]
     elif rc["engine"] == "CYCLES":
         scene.cycles.samples = rc["samples"]
         scene.cycles.device = rc["device"]
@@ -612,16 +617,18 @@ def _run(bpy, cfg, render):
 
     bpy.app.handlers.render_post.append(progress)
     t = time.perf_counter()
+    shots = cameras or [(None, None)]
     try:
-        if not cameras:
+        for i, (name, cam) in enumerate(shots, 1):  # one shot per figure, each in its own folder
+            if cam is not None:                     # (relative to the .blend, as setup_render's)
+                scene.camera = cam
+                if cfg["render"]["format"] == "VIDEO":
+                    scene.render.filepath = f"//{cfg['name']}_{name}.mp4"
+                else:
+                    scene.render.filepath = f"//frames/{name}/frame_"
             bpy.ops.render.render(animation=True)
-        for name, cam in cameras:               # one shot per figure, each in its own folder
-            scene.camera = cam                  # (relative to the .blend, as setup_render's)
-            if cfg["render"]["format"] == "VIDEO":
-                scene.render.filepath = f"//{cfg['name']}_{name}.mp4"
-            else:
-                scene.render.filepath = f"//frames/{name}/frame_"
-            bpy.ops.render.render(animation=True)
+            if len(shots) > 1:
+                log(shot_progress(i, len(shots), name, len(done), n, time.perf_counter() - t))
     finally:
         bpy.app.handlers.render_post.remove(progress)
     log(f"rendered {len(done)} frames with {cfg['render']['engine']} in "
@@ -635,6 +642,14 @@ def _run(bpy, cfg, render):
             render_terrain.contact_sheet(bpy, middle, out / "shots.png")
             log(f"shots: {out / 'shots.png'}")
     return result
+
+
+def shot_progress(shot: int, shots: int, name: str, done: int, total: int, elapsed: float) -> str:
+    """The line after shot ``shot`` of ``shots``: frames so far, the time spent and the time left
+    at the pace so far (every frame of a job costs about the same)."""
+    left = elapsed / done * (total - done) if done else float("nan")
+    return (f"shot {shot}/{shots} {name} done: {done}/{total} frames in {elapsed:.0f} s, "
+            f"about {left:.0f} s left")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -186,6 +186,42 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
     return BakeResult(action, count, len(track))
 
 
+def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
+    """Write ``track``'s values into the F-curves the last bake made, in place: the same
+    channels keyed on the same frames (a re-bake after a setting changed).  ``None`` (nothing
+    written) when they differ; then :func:`bake_pose_track` makes the curves anew.
+
+    Removing and adding F-curves makes Blender rebuild the depsgraph's relations (27 ms next to
+    a Rigify rig, measured); writing the keys' values costs a few ms and only tags the action.
+    """
+    check_track(obj, track)
+    action, strip = find_bake(obj)
+    bag = None if action is None else _bag(obj, action, strip)
+    if bag is None:
+        return None
+    chans = _channel_list(obj, track)
+    if set(action.get(BAKED_PATHS, "").splitlines()) != {c[0] for c in chans}:
+        return None
+    curves = {(fc.data_path, fc.array_index): fc for fc in bag.fcurves}
+    n = len(track)
+    todo = [(curves.get((path, index)), values) for path, index, _, values in chans]
+    if len(curves) < len(todo) or any(fc is None or len(fc.keyframe_points) != n
+                                      for fc, _ in todo):
+        return None
+    co = np.empty(2 * n, np.float32)
+    todo[0][0].keyframe_points.foreach_get("co", co)
+    if not np.array_equal(co[0::2], np.asarray(track.frames, np.float32)):
+        return None
+    for fc, values in todo:             # frames stay; LINEAR keys ignore their handles
+        co[1::2] = values
+        fc.keyframe_points.foreach_set("co", co)
+    for prop, values in track.props.items():
+        if prop not in obj.keys():
+            obj[prop] = float(values[0])
+    action.update_tag()                 # re-evaluate the animation, relations unchanged
+    return BakeResult(action, len(todo), n)
+
+
 def _fit_strip(strip, action) -> None:
     """Let a pushed-down strip play the whole re-baked range (it keeps its scale and repeats)."""
     lo, hi = action.frame_range

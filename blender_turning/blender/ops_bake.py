@@ -318,6 +318,7 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
     def execute(self, context):
         figs = [f for f in selected_figures(context) if bake.figure_action(f) is not None]
         for fig in figs:
+            fig.turning.live = False          # else Live Preview would bake it again at once
             recorded = bake.REST in fig       # the pose before the bake, put back exactly
             bake.clear_bake(fig)
             foot_track.remove_foot_track(fig)
