@@ -17,8 +17,9 @@ the figure falls.
 
 In the interface, a change reaches :func:`refresh` through the message bus (any figure setting:
 a slider drag publishes every step) or the depsgraph (keys, the Path curve, obstacles, the Ground
-mesh), both before the next redraw; a drag re-bakes its keys at every step and writes the foot
-track once the settings have stood still for :data:`SETTLE` s.  Nothing here pushes an undo
+mesh), both before the next redraw.  A drag step re-bakes the keys within :data:`WINDOW` frames
+of the current frame (what is on screen); once the settings have stood still for :data:`SETTLE`
+s the timer re-bakes the whole range and writes the foot track.  Nothing here pushes an undo
 step: the step is the one Blender pushes when the drag ends (its undo gives back the bake stored
 with the previous step; a redo re-bakes).  Figures with a Path are planned by Follow Path, which
 takes seconds: they re-bake once the edit has settled.
@@ -27,12 +28,15 @@ from __future__ import annotations
 
 import hashlib
 import time
+from dataclasses import replace
 
 import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
 from ..core.errors import FellOver, TurningError
+from ..mapping import MAPPINGS
+from ..mapping.snow import tilt_gain
 from . import bake, compat, foot_track
 from .ops_common import check_figure
 from .pipeline import figure_pose_track, ground_of
@@ -43,8 +47,14 @@ from .scene_adapters import FrameRange, bezier_control_points, start_from_object
 
 #: ID property on the figure's action: the digest of the inputs its baked keys were made from.
 KEY = "turning_live_key"
-#: Seconds the settings stand still before a drag counts as ended (foot track, Follow Path).
+#: Seconds the settings stand still before a drag counts as ended (the whole range, the foot
+#: track, Follow Path).
 SETTLE = 0.3
+#: A drag step re-bakes the frames within WINDOW of the current one; the simulation runs from
+#: the first frame to MARGIN frames past them, and MARGIN frames on either side are mapped too
+#: (a pole plant, a quaternion's sign depend on the frames around: with 12 or more frames the
+#: window's keys agree with the whole range's, measured on the four sports).
+WINDOW, MARGIN = 12, 24
 #: Settings that do not change the motion.
 _IGNORED = {"rna_type", "name", "live", "show_foot_track", "foot_track", "saved_state",
             "custom_index"}
@@ -55,6 +65,8 @@ FAILURES: dict = {}
 _EDITS: dict = {}
 _MSGBUS_OWNER = object()
 _state = {"last_change": 0.0, "tracks_due": {}}
+#: figure name -> the digest of the settings its window was last re-baked for (the rest waits).
+_WINDOWS: dict = {}
 
 
 class Failure:
@@ -227,6 +239,52 @@ def _rebake_turns(fig, frames, grounds, with_track: bool) -> None:
         _state["tracks_due"][fig.name] = (traj.x, traj.y, traj.z)
 
 
+def _track_rows(track, a: int, b: int):
+    """Rows ``a:b`` of a pose track."""
+    from ..mapping.base import BoneChannels, PoseTrack
+
+    def take(v):
+        return None if v is None else v[a:b]
+
+    return PoseTrack(take(track.frames), take(track.location), take(track.rotation),
+                     {k: BoneChannels(take(ch.location), take(ch.rotation))
+                      for k, ch in track.bones.items()},
+                     {k: take(v) for k, v in track.props.items()})
+
+
+def _rebake_window(fig, frames: FrameRange, grounds) -> bool:
+    """A drag step: the keys within :data:`WINDOW` frames of the current frame, in place
+    (raises as :func:`_rebake_turns`, nothing written).  ``False`` when a window is no cheaper
+    or cannot be written in place (not baked yet, a start offset): then the whole range."""
+    from .pipeline import map_track, simulate_figure, surface_normals
+    s = fig.turning
+    if bake.figure_action(fig) is None or float(s.crowd.time_offset) != 0.0:
+        return False
+    cur = min(max(bpy.context.scene.frame_current, frames.start), frames.end)
+    lo, hi = max(frames.start, cur - WINDOW), min(frames.end, cur + WINDOW)
+    mlo, mhi = max(frames.start, lo - MARGIN), min(frames.end, hi + MARGIN)
+    if mlo == frames.start and mhi == frames.end:
+        return False
+    check_figure(fig)
+    mesh = s.ground
+    if mesh is not None and mesh.name not in grounds:
+        grounds[mesh.name] = ground_of(fig)
+    ground = None if mesh is None else grounds[mesh.name]
+    traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground)
+    # What the mapping reads of the whole run, from the part simulated: the edge tilt's fit
+    # (Section 7), the distance the wheels turn from.
+    part = type(traj)(traj.data[:, mlo - frames.start:],
+                      {**traj.meta, "s_start": float(traj.s[0])})
+    options = MAPPINGS[s.sport.lower()].Options()
+    if hasattr(options, "tilt_gain") and options.tilt_gain is None:
+        options = replace(options, tilt_gain=tilt_gain(traj, None))
+    track = map_track(s.sport, part, FrameRange(mlo, mhi, frames.fps), options, fig,
+                      surface_normals(part, ground))
+    track = _track_rows(track, lo - mlo, hi - mlo + 1)
+    bake.check_track(fig, track)
+    return bake.rewrite_pose_track(fig, track) is not None
+
+
 def _rebake_path(fig) -> None:
     """Follow Path for one figure, planned here and now (seconds)."""
     from . import ops_path     # Follow Path's reader and writer
@@ -234,10 +292,13 @@ def _rebake_path(fig) -> None:
     ops_path.finish(bpy.context, fig, job, job.run())
 
 
-def refresh(scene=None, with_tracks: bool = True, paths: bool = True) -> dict:
+def refresh(scene=None, with_tracks: bool = True, paths: bool = True,
+            window: bool = False) -> dict:
     """Re-bake every pending live figure of ``scene``; ``{name: None or Failure}``.
     ``with_tracks=False`` (a drag step) leaves the foot tracks for :func:`settle`;
-    ``paths=False`` leaves figures with a Path (Follow Path) pending."""
+    ``paths=False`` leaves figures with a Path (Follow Path) pending; ``window`` re-bakes only
+    the frames around the current one where that is cheaper (the figure stays pending: the
+    whole range is the next full refresh's)."""
     scene = scene or bpy.context.scene
     frames = FrameRange.of_scene(scene)
     grounds, out = {}, {}
@@ -250,15 +311,22 @@ def refresh(scene=None, with_tracks: bool = True, paths: bool = True) -> dict:
         if (failed is not None and failed.key == key) or (fig.turning.path is not None
                                                           and not paths):
             continue
+        if window and _WINDOWS.get(fig.name) == key:
+            continue
         try:
             if fig.turning.path is not None:
                 _rebake_path(fig)
+            elif window and _rebake_window(fig, frames, grounds):
+                _WINDOWS[fig.name] = key
+                out[fig.name] = None
+                continue
             else:
                 _rebake_turns(fig, frames, grounds, with_tracks)
         except (ValueError, TurningError) as exc:
             out[fig.name] = _set_failure(fig, key, exc, frames)
             continue
         clear_failure(fig)
+        _WINDOWS.pop(fig.name, None)
         bake.figure_action(fig)[KEY] = fingerprint(fig)
         out[fig.name] = None
     if with_tracks:
@@ -281,7 +349,7 @@ def _tick():
     """The timer: pending drag steps; once the settings stood still for :data:`SETTLE` s, the
     foot tracks and the Follow Path figures (the same :func:`refresh` as
     ``turning.refresh_preview``)."""
-    refresh(with_tracks=False, paths=False)
+    refresh(with_tracks=False, paths=False, window=True)
     wait = _state["last_change"] + SETTLE - time.monotonic()
     if wait > 0:
         return wait
@@ -296,7 +364,7 @@ def schedule(now: bool = True) -> None:
         return
     _state["last_change"] = time.monotonic()
     if now:
-        refresh(with_tracks=False, paths=False)
+        refresh(with_tracks=False, paths=False, window=True)
     if not bpy.app.timers.is_registered(_tick):
         bpy.app.timers.register(_tick, first_interval=0.0 if not now else SETTLE)
 
@@ -328,6 +396,7 @@ def on_load_post(*_args) -> None:
     cleared."""
     FAILURES.clear()
     _EDITS.clear()
+    _WINDOWS.clear()
     _subscribe()
 
 
@@ -350,4 +419,5 @@ def unregister():
         bpy.app.timers.unregister(_tick)
     FAILURES.clear()
     _EDITS.clear()
+    _WINDOWS.clear()
     _state["tracks_due"] = {}
