@@ -55,6 +55,7 @@ MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
 FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
+LIVE = [T + "test_blender_live.py", T + "test_mapping_cyclist.py"]
 
 
 @dataclass(frozen=True)
@@ -368,6 +369,34 @@ MUTANTS = [
       FOLLOW_GROUND, "bake"),
 ]
 
+LIVE_MUTANTS = [
+    # -- Live Preview ---------------------------------------------------------------------------
+    M("live_keys_by_value", "blender/live.py",
+      "            if fc is not None:           # keyed: the curve is what the bake reads",
+      "            if False:", LIVE, "live"),
+    M("live_rewrite_keeps_old_values", "blender/bake.py",
+      "            co[1::2] = values\n            fc.keyframe_points.foreach_set",
+      "            fc.keyframe_points.foreach_set", LIVE, "live"),
+    M("live_failure_forgotten", "blender/live.py",
+      "failure = FAILURES[fig.name] = Failure(", "failure = Failure(", LIVE, "live"),
+    M("live_fall_frame_from_zero", "blender/live.py",
+      "frame = frames.start + int(round(exc.t * frames.fps))",
+      "frame = int(round(exc.t * frames.fps))", LIVE, "live"),
+    M("live_window_quaternion_sign", "blender/bake.py",
+      "-values if signs.get(path, 0.0) < 0 else values", "values", LIVE, "live"),
+    M("live_window_marks_done", "blender/live.py",
+      "                _WINDOWS[fig.name] = key\n",
+      "                _WINDOWS[fig.name] = key\n                bake.figure_action(fig)[KEY] = key\n",
+      LIVE, "live"),
+    M("live_own_track_an_obstacle", "blender/live.py",
+      "                if o not in own:", "                if True:", LIVE, "live"),
+    M("live_wheels_from_part", "mapping/cyclist.py",
+      'float(traj.meta.get("s_start", traj.s[0]))', "float(traj.s[0])", LIVE, "live"),
+    M("live_handlers_left", "blender/live.py",
+      "        while fn in handlers:\n            handlers.remove(fn)", "        pass", LIVE, "live"),
+]
+MUTANTS += LIVE_MUTANTS
+
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",
                                 "out", "dist", "*.egg-info", "build")
 
@@ -409,7 +438,7 @@ def run_tests(python, tree, tests, timeout):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--only", nargs="+", metavar="NAME", help="run only these mutants")
-    ap.add_argument("--group", choices=("core", "mapping", "bake"), action="append",
+    ap.add_argument("--group", choices=("core", "mapping", "bake", "live"), action="append",
                     help="run only these groups (repeatable; default all)")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
     ap.add_argument("--python", default=sys.executable, help="interpreter for pytest")

@@ -167,7 +167,9 @@ def fingerprint(fig) -> str:
     for role, obj in objects:
         if isinstance(obj, bpy.types.Collection):
             for o in sorted(obj.all_objects, key=lambda o: o.name):
-                if o not in own:
+                # Figures (and their bodies) move with their bakes: two live figures among
+                # each other's obstacles would re-bake each other without end.
+                if o not in own and figure_settings(o.parent or o) is None:
                     h.update(_object_bytes(o, role))
         elif isinstance(obj, bpy.types.Object):
             h.update(_object_bytes(obj, role))
