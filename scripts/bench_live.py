@@ -91,7 +91,17 @@ def case_setup(name, figs):
         return fig, "mass", [75.0 + 0.25 * k for k in range(400)]
     fig = figs["-".join(parts[:-1])]
     base = math.degrees(fig.turning.lean)
-    return fig, "lean", [math.radians(base + 0.01 * k) for k in range(400)]
+    # The cyclist on the Ground mesh's rolls falls at some leans a little above 5 deg: dragged
+    # down from there (a step that fails still counts: Live Preview keeps the last bake).
+    sign = -1.0 if parts[0] == "cyclist" else 1.0
+    return fig, "lean", [math.radians(base + sign * 0.01 * k) for k in range(400)]
+
+
+def bake_op():
+    try:
+        bpy.ops.turning.bake_turns()
+    except RuntimeError:                   # a fall: reported, nothing written
+        pass
 
 
 def run_case(name, figs, steps):
@@ -99,10 +109,10 @@ def run_case(name, figs, steps):
     for f in figs.values():
         f.turning.live = f == fig
     select(fig)
-    bpy.ops.turning.bake_turns()
+    bake_op()
     bpy.ops.turning.refresh_preview()            # the first live bake: in place from here on
     ways = {
-        "bake op": lambda: bpy.ops.turning.bake_turns(),
+        "bake op": bake_op,
         "refresh op": lambda: bpy.ops.turning.refresh_preview(),
         "drag step": live.schedule,
     }
