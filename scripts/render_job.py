@@ -69,7 +69,8 @@ _KNOWN = {
     "": {"job", "render", "camera", "ground", "figures", "paths", "obstacles", "terrain",
          "crowds"},
     "job": {"name", "seconds", "fps", "frame_step", "output"},
-    "render": {"engine", "resolution", "format", "samples", "antialiasing"},
+    "render": {"engine", "resolution", "format", "samples", "antialiasing",
+               "crowd_antialiasing"},
     "camera": {"follow", "distance", "height", "lens"},
     "ground": {"kind"},
     "path": {"points"},
@@ -261,6 +262,10 @@ def load_config(path: Path, overrides) -> dict:
     cfg["render"] = {"engine": engine, "resolution": res, "format": fmt,
                      "samples": r.number("samples", "render_samples", 16), "device": "CPU",
                      "antialiasing": r.string("antialiasing", "8", choices=WORKBENCH_AA)}
+    # A crowd's shot shows many thin tracks far off, which one FXAA pass breaks into dashes.
+    cfg["render"]["crowd_antialiasing"] = r.string("crowd_antialiasing",
+                                                   cfg["render"]["antialiasing"],
+                                                   choices=WORKBENCH_AA)
     if getattr(overrides, "device", None) is not None:
         cfg["render"]["device"] = _cli_choice(overrides.device, "--device", DEVICES)
         if cfg["render"]["device"] == "GPU" and engine != "CYCLES":
@@ -622,6 +627,9 @@ def _run(bpy, cfg, render):
         for i, (name, cam) in enumerate(shots, 1):  # one shot per figure, each in its own folder
             if cam is not None:                     # (relative to the .blend, as setup_render's)
                 scene.camera = cam
+                crowd = any(c["name"] == name for c in cfg["crowds"])
+                scene.display.render_aa = cfg["render"]["crowd_antialiasing" if crowd
+                                                        else "antialiasing"]
                 if cfg["render"]["format"] == "VIDEO":
                     scene.render.filepath = f"//{cfg['name']}_{name}.mp4"
                 else:
