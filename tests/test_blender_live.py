@@ -208,6 +208,31 @@ def test_a_drag_step_rebakes_the_window_on_screen_and_the_rest_when_it_stops(sce
     assert any(not np.array_equal(step[k][w], before[k][w]) for k in step)
 
 
+class LayoutStub:
+    """Stands in for ``UILayout`` (no windows in background mode): records the labels."""
+
+    def __init__(self, labels):
+        object.__setattr__(self, "labels", labels)
+
+    def __getattr__(self, name):
+        def call(*args, **kwargs):
+            if name == "label":
+                self.labels.append(kwargs.get("text"))
+            return LayoutStub(self.labels)
+        return call
+
+    def __setattr__(self, name, value):
+        pass
+
+
+def panel_labels(fig) -> list:
+    """The labels the Bake panel draws for ``fig``."""
+    from blender_turning.blender import panel
+    labels = []
+    panel.draw_live(LayoutStub(labels), fig, 1)
+    return labels
+
+
 def ground_figure():
     """A skier on a 20 deg slope traversing 30 deg below +x: lean 5 deg every 2 s carves; every
     6 s it falls at t = 9.16 s (measured), frame 221 at 24 fps."""
@@ -240,6 +265,9 @@ def test_a_fall_keeps_the_last_good_bake_and_marks_the_frame(scene):
     assert [(m.name, m.frame) for m in scene.timeline_markers] == [(f"{fig.name} falls", 221)]
     assert_same(baked(fig), good)
     assert not live.is_pending(fig)               # not tried again until something changes
+    labels = panel_labels(fig)
+    assert "Falls at frame 221: the last good bake stays" in labels
+    assert failure.message in labels
     fig.turning.period = 2.0                       # back to the settings of the bake shown
     assert not live.is_pending(fig)
     bpy.ops.turning.refresh_preview()
@@ -249,6 +277,7 @@ def test_a_fall_keeps_the_last_good_bake_and_marks_the_frame(scene):
     bpy.ops.turning.refresh_preview()
     fig.turning.live = False                       # off: the failure and its marker go
     assert fig.name not in live.FAILURES and len(scene.timeline_markers) == 0
+    assert not any("Falls" in t for t in panel_labels(fig))
 
 
 def test_the_operator_switches_the_whole_selection(scene):
@@ -270,10 +299,12 @@ def test_unregister_removes_the_handlers(scene):
     live.schedule(now=False)
     assert bpy.app.timers.is_registered(live._tick)
     assert live.on_depsgraph_update in bpy.app.handlers.depsgraph_update_post
+    assert live._state.get("overlay") is not None              # the viewport's fall notes
     addon.unregister()
     try:
         for handlers, fn in live.HANDLERS:
             assert fn not in handlers
+        assert "overlay" not in live._state
         assert not bpy.app.timers.is_registered(live._tick)
         assert not hasattr(bpy.types.Object, "turning")
     finally:

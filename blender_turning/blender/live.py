@@ -12,8 +12,8 @@ Preview is on and its digest differs from the stored one (and from the one that 
 :func:`refresh` re-bakes every pending figure: computed first, written only when that succeeded,
 into the existing F-curves in place where the channels and frames are the same
 (:func:`.bake.rewrite_pose_track`).  A failure (a fall, a setting out of range) leaves the last
-good bake, and is shown in the panel and, for a fall, as a timeline marker at the frame where
-the figure falls.
+good bake, and is shown in the panel, beside the figure in the viewport and, for a fall, as a
+timeline marker at the frame where the figure falls.
 
 In the interface, a change reaches :func:`refresh` through the message bus (any figure setting:
 a slider drag publishes every step) or the depsgraph (keys, the Path curve, obstacles, the Ground
@@ -402,6 +402,30 @@ def on_load_post(*_args) -> None:
     _subscribe()
 
 
+def draw_failures() -> None:
+    """The viewport's overlay: "falls at frame N" (or why it cannot bake) beside every live
+    figure whose last re-bake failed, at the figure's place on screen."""
+    import blf
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+    context = bpy.context
+    region, rv3d = context.region, context.region_data
+    if not FAILURES or region is None or rv3d is None:
+        return
+    for name, failure in FAILURES.items():
+        fig = bpy.data.objects.get(name)
+        if fig is None or not fig.visible_get():
+            continue
+        xy = location_3d_to_region_2d(region, rv3d, fig.matrix_world.translation)
+        if xy is None:
+            continue
+        text = (f"{name}: falls at frame {failure.frame}" if failure.frame is not None
+                else f"{name}: cannot bake these settings")
+        blf.size(0, 14)
+        blf.color(0, 1.0, 0.25, 0.2, 1.0)
+        blf.position(0, xy[0] + 12, xy[1] + 12, 0)
+        blf.draw(0, text)
+
+
 HANDLERS = ((bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
             (bpy.app.handlers.load_post, on_load_post))
 
@@ -410,6 +434,8 @@ def register():
     for handlers, fn in HANDLERS:
         handlers.append(fn)
     _subscribe()
+    _state["overlay"] = bpy.types.SpaceView3D.draw_handler_add(draw_failures, (), "WINDOW",
+                                                               "POST_PIXEL")
 
 
 def unregister():
@@ -417,6 +443,9 @@ def unregister():
         while fn in handlers:
             handlers.remove(fn)
     bpy.msgbus.clear_by_owner(_MSGBUS_OWNER)
+    overlay = _state.pop("overlay", None)
+    if overlay is not None:
+        bpy.types.SpaceView3D.draw_handler_remove(overlay, "WINDOW")
     if bpy.app.timers.is_registered(_tick):
         bpy.app.timers.unregister(_tick)
     FAILURES.clear()
