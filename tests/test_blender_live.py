@@ -233,6 +233,28 @@ def panel_labels(fig) -> list:
     return labels
 
 
+def test_a_body_slider_step_takes_a_nearby_body_s_feasible_turns(scene):
+    from blender_turning.core.controllers import feasible
+    scene.frame_end = 240
+    fig = live_figure()
+    scene.frame_set(100)
+    built = feasible._feasible_turns.cache_info().misses
+    fig.turning.mass = 75.5                       # 0.7 % more: within NEARBY_BODY (2 %)
+    live.schedule()                               # the drag step
+    assert feasible._feasible_turns.cache_info().misses == built
+    step = baked(fig)
+    live._state["last_change"] -= live.SETTLE     # the release: the body's own table
+    assert live._tick() is None and not live.is_pending(fig)
+    assert feasible._feasible_turns.cache_info().misses == built + 1
+    full = baked(fig)
+    assert_same(full, fresh_bake(fig))
+    w = slice(2 * (100 - live.WINDOW - 1), 2 * (100 + live.WINDOW))
+    # The lean the window shows is the exact one's to 0.05 deg: the commanded 23 deg is well
+    # inside both bodies' feasible turns (0.0 deg measured).
+    key = ('["turn_lean"]', 0)
+    assert np.abs(step[key][w][1::2] - full[key][w][1::2]).max() < math.radians(0.05)
+
+
 def ground_figure():
     """A skier on a 20 deg slope traversing 30 deg below +x: lean 5 deg every 2 s carves; every
     6 s it falls at t = 9.16 s (measured), frame 221 at 24 fps."""

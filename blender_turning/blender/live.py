@@ -34,6 +34,7 @@ import bpy
 import numpy as np
 from bpy.app.handlers import persistent
 
+from ..core.controllers.feasible import nearby_tables
 from ..core.errors import FellOver, TurningError
 from ..mapping import MAPPINGS
 from ..mapping.snow import tilt_gain
@@ -55,6 +56,9 @@ SETTLE = 0.3
 #: (a pole plant, a quaternion's sign depend on the frames around: with 12 or more frames the
 #: window's keys agree with the whole range's, measured on the four sports).
 WINDOW, MARGIN = 12, 24
+#: A drag step's controller may take the feasible turns of a body within this (relative) of the
+#: figure's (:func:`..core.controllers.feasible.nearby_tables`); the release bakes its own.
+NEARBY_BODY = 0.02
 #: Settings that do not change the motion.
 _IGNORED = {"rna_type", "name", "live", "show_foot_track", "foot_track", "saved_state",
             "custom_index"}
@@ -272,7 +276,8 @@ def _rebake_window(fig, frames: FrameRange, grounds) -> bool:
     if mesh is not None and mesh.name not in grounds:
         grounds[mesh.name] = ground_of(fig)
     ground = None if mesh is None else grounds[mesh.name]
-    traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground)
+    with nearby_tables(NEARBY_BODY):      # a Body slider's step: no new feasibility table
+        traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground)
     # What the mapping reads of the whole run, from the part simulated: the edge tilt's fit
     # (Section 7), the distance the wheels turn from.
     part = type(traj)(traj.data[:, mlo - frames.start:],
