@@ -393,6 +393,8 @@ LIVE_MUTANTS = [
       "if figure_settings(o.parent or o) is None:", LIVE, "live"),
     M("live_wheels_from_part", "mapping/cyclist.py",
       'float(traj.meta.get("s_start", traj.s[0]))', "float(traj.s[0])", LIVE, "live"),
+    M("live_body_step_builds_tables", "blender/live.py",
+      "with nearby_tables(NEARBY_BODY):", "with nearby_tables(0.0):", LIVE, "live"),
     M("live_handlers_left", "blender/live.py",
       "        while fn in handlers:\n            handlers.remove(fn)", "        pass", LIVE, "live"),
 ]
