@@ -7,7 +7,7 @@ line in a gentle S (2 m to each side every 30 m) at x = 50 m, away from the mogu
 
 Timed, best of ``--repeat``, flat and terrain interleaved: reading the scene into a planning job
 (``follow_scene.prepare``: on terrain reading the mesh, checking it is a height field and that the
-path lies over it), the plan (``FollowJob.run``), and writing it (``ops_path.finish``: resample,
+path lies over it), the plan (``FollowJob.run``), and writing it (``follow_scene.finish``: resample,
 ray-cast the feet, map, F-curves); on terrain also the mesh reading and the height-field check
 alone.
 """
@@ -29,7 +29,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import follow_scene, ops_path  # noqa: E402
+from blender_turning.blender import follow_scene  # noqa: E402
 from blender_turning.blender.follow_ground import check_height_field  # noqa: E402
 from blender_turning.blender.ground import mesh_from_height_field, read_ground  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
@@ -81,7 +81,7 @@ def main(argv=None):
             t1 = time.perf_counter()
             result = job.run()
             t2 = time.perf_counter()
-            ops_path.finish(bpy.context, fig, job, result)
+            follow_scene.finish(bpy.context, fig, job, result)
             t3 = time.perf_counter()
             for key, dt in zip(("prepare", "plan", "write"), (t1 - t0, t2 - t1, t3 - t2)):
                 times[name][key].append(dt)

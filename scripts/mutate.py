@@ -68,6 +68,7 @@ REGISTRY = [T + "test_registry.py", T + "test_crowd.py"]
 BLENDER_REGISTRY = [T + "test_blender_registry.py"]
 NOTES = [T + "test_blender_model_notes.py"]
 EXPORT = [T + "test_blender_export.py"]
+LIVE = [T + "test_blender_live.py", T + "test_mapping_cyclist.py"]
 
 
 @dataclass(frozen=True)
@@ -557,6 +558,37 @@ MUTANTS = [
       "        _switch(obj, on=False)", "        pass", EXPORT, "bake"),
 ]
 
+LIVE_MUTANTS = [
+    # -- Live Preview ---------------------------------------------------------------------------
+    M("live_keys_by_value", "blender/live.py",
+      "            if fc is not None:           # keyed: the curve is what the bake reads",
+      "            if False:", LIVE, "live"),
+    M("live_rewrite_keeps_old_values", "blender/bake.py",
+      "            co[1::2] = values\n            fc.keyframe_points.foreach_set",
+      "            fc.keyframe_points.foreach_set", LIVE, "live"),
+    M("live_failure_forgotten", "blender/live.py",
+      "failure = FAILURES[fig.name] = Failure(", "failure = Failure(", LIVE, "live"),
+    M("live_fall_frame_from_zero", "blender/live.py",
+      "frame = frames.start + int(round(exc.t * frames.fps))",
+      "frame = int(round(exc.t * frames.fps))", LIVE, "live"),
+    M("live_window_quaternion_sign", "blender/bake.py",
+      "-values if signs.get(path, 0.0) < 0 else values", "values", LIVE, "live"),
+    M("live_window_marks_done", "blender/live.py",
+      "                _WINDOWS[fig.name] = key\n",
+      "                _WINDOWS[fig.name] = key\n                bake.figure_action(fig)[KEY] = key\n",
+      LIVE, "live"),
+    M("live_own_track_an_obstacle", "blender/live.py",
+      "if o not in own and figure_settings(o.parent or o) is None:",
+      "if figure_settings(o.parent or o) is None:", LIVE, "live"),
+    M("live_wheels_from_part", "mapping/cyclist.py",
+      'float(traj.meta.get("s_start", traj.s[0]))', "float(traj.s[0])", LIVE, "live"),
+    M("live_body_step_builds_tables", "blender/live.py",
+      "with nearby_tables(NEARBY_BODY):", "with nearby_tables(0.0):", LIVE, "live"),
+    M("live_handlers_left", "blender/live.py",
+      "        while fn in handlers:\n            handlers.remove(fn)", "        pass", LIVE, "live"),
+]
+MUTANTS += LIVE_MUTANTS
+
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",
                                 "out", "dist", "*.egg-info", "build")
 
@@ -598,7 +630,7 @@ def run_tests(python, tree, tests, timeout):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--only", nargs="+", metavar="NAME", help="run only these mutants")
-    ap.add_argument("--group", choices=("core", "mapping", "registry", "bake"), action="append",
+    ap.add_argument("--group", choices=("core", "mapping", "registry", "bake", "live"), action="append",
                     help="run only these groups (repeatable; default all)")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
     ap.add_argument("--python", default=sys.executable, help="interpreter for pytest")

@@ -52,6 +52,9 @@ import render_terrain  # noqa: E402
 
 ENGINES = ("WORKBENCH", "EEVEE", "CYCLES")
 DEVICES = ("CPU", "GPU")
+#: Workbench's render anti-aliasing (``scene.display.render_aa``): FXAA is one screen-space pass;
+#: the numbers are samples per pixel (Blender's default is 8).
+WORKBENCH_AA = ("OFF", "FXAA", "5", "8", "11", "16", "32")
 GPU_BACKENDS = ("OPTIX", "CUDA", "HIP", "ONEAPI", "METAL")     # Cycles' compute_device_type
 
 
@@ -67,7 +70,8 @@ _KNOWN = {
     "": {"job", "render", "camera", "ground", "figures", "paths", "obstacles", "terrain",
          "crowds"},
     "job": {"name", "seconds", "fps", "frame_step", "output"},
-    "render": {"engine", "resolution", "format", "samples"},
+    "render": {"engine", "resolution", "format", "samples", "antialiasing",
+               "crowd_antialiasing"},
     "camera": {"follow", "distance", "height", "lens"},
     "ground": {"kind"},
     "path": {"points"},
@@ -257,7 +261,12 @@ def load_config(path: Path, overrides) -> dict:
     if fmt not in ("PNG", "VIDEO"):
         r.fail("format", f"= {fmt!r} is not PNG or VIDEO")
     cfg["render"] = {"engine": engine, "resolution": res, "format": fmt,
-                     "samples": r.number("samples", "render_samples", 16), "device": "CPU"}
+                     "samples": r.number("samples", "render_samples", 16), "device": "CPU",
+                     "antialiasing": r.string("antialiasing", "8", choices=WORKBENCH_AA)}
+    # A crowd's shot shows many thin tracks far off, which one FXAA pass breaks into dashes.
+    cfg["render"]["crowd_antialiasing"] = r.string("crowd_antialiasing",
+                                                   cfg["render"]["antialiasing"],
+                                                   choices=WORKBENCH_AA)
     if getattr(overrides, "device", None) is not None:
         cfg["render"]["device"] = _cli_choice(overrides.device, "--device", DEVICES)
         if cfg["render"]["device"] == "GPU" and engine != "CYCLES":
@@ -531,6 +540,7 @@ def setup_render(bpy, cfg):
         shading = scene.display.shading
         shading.light, shading.color_type = "STUDIO", "MATERIAL"
         shading.show_shadows = True
+        scene.display.render_aa = rc["antialiasing"]
     elif rc["engine"] == "CYCLES":
         scene.cycles.samples = rc["samples"]
         scene.cycles.device = rc["device"]
@@ -638,8 +648,12 @@ def _run(bpy, cfg, render):
     shots = [(None, scene.camera)] if not cameras else cameras
     t = time.perf_counter()
     count = [0, len(frames) * len(shots)]
-    for name, cam in shots:                     # one shot per figure, each in its own folder
+    for i, (name, cam) in enumerate(shots, 1):  # one shot per figure, each in its own folder
         scene.camera = cam
+        if name is not None:                    # a crowd's shot: its own anti-aliasing
+            crowd = any(c["name"] == name for c in cfg["crowds"])
+            scene.display.render_aa = cfg["render"]["crowd_antialiasing" if crowd
+                                                    else "antialiasing"]
         if cfg["render"]["format"] == "VIDEO":
             render_video(bpy, out / (f"{cfg['name']}.mp4" if name is None
                                      else f"{cfg['name']}_{name}.mp4"))
@@ -647,6 +661,8 @@ def _run(bpy, cfg, render):
         else:
             render_frames(bpy, out / "frames" if name is None else out / "frames" / name,
                           frames, count)
+        if len(shots) > 1:
+            log(shot_progress(i, len(shots), name, count[0], count[1], time.perf_counter() - t))
     log(f"rendered {count[0]} frames with {cfg['render']['engine']} in "
         f"{time.perf_counter() - t:.1f} s")
     result["frames"] = (out / f"{cfg['name']}.mp4" if cfg["render"]["format"] == "VIDEO"
@@ -751,6 +767,14 @@ def render_video(bpy, final: Path) -> None:
         staged.unlink(missing_ok=True)
     KEPT.append(final)
     signals.checkpoint()
+
+
+def shot_progress(shot: int, shots: int, name: str, done: int, total: int, elapsed: float) -> str:
+    """The line after shot ``shot`` of ``shots``: frames so far, the time spent and the time left
+    at the pace so far (every frame of a job costs about the same)."""
+    left = elapsed / done * (total - done) if done else float("nan")
+    return (f"shot {shot}/{shots} {name} done: {done}/{total} frames in {elapsed:.0f} s, "
+            f"about {left:.0f} s left")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -155,8 +155,9 @@ def world(registered):
 
 def test_the_run_follows_the_projected_curve_around_the_post(world):
     assert world["result"] == {"FINISHED"}, world["reports"]
-    assert re.fullmatch(r"Follow Path: baked Skier over frames 1-\d+ \(Target Speed is not used: "
-                        r".*the drawn line sets the speed\)", world["reports"][-1][1])
+    assert any(re.fullmatch(r"Follow Path: baked Skier over frames 1-\d+ \(Target Speed is not "
+                            r"used: .*the drawn line sets the speed\)", r[1])
+               for r in world["reports"]), world["reports"]
     progress = [v for v in world["progress"] if isinstance(v, int)]
     assert progress == sorted(progress) and progress[-1] == 100 and "end" in world["progress"]
     cv = world["curves"]

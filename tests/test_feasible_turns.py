@@ -171,3 +171,23 @@ def test_the_commanded_turn_is_the_one_a_run_follows(heading):
     skier = preset("skier")
     ctl = PhaseEllipse(skier.body, math.pi, math.radians(23), heading, limits=skier.limits)
     assert not ctl.commanded_turn(0.0).limited
+
+
+def test_nearby_tables_answer_with_a_close_body_s_table_only_inside_the_block():
+    """Live Preview's Body slider: inside ``nearby_tables(rel)`` a body within ``rel`` of one
+    whose table was built gets that table; outside, every body its own."""
+    from dataclasses import replace as rep
+    from blender_turning.core.controllers.feasible import feasible_turns, nearby_tables
+    fig = preset("skier")
+    base = feasible_turns(fig.body, fig.limits)
+    close, far = rep(fig.body, m=fig.body.m * 1.01), rep(fig.body, m=fig.body.m * 1.05)
+    with nearby_tables(0.02):
+        assert feasible_turns(close, fig.limits) is base
+        assert feasible_turns(far, fig.limits) is not base
+        other = rep(fig.limits, C_f_max=fig.limits.C_f_max * 1.001)    # limits must match
+        assert feasible_turns(fig.body, other) is not base
+    own = feasible_turns(close, fig.limits)
+    assert own is not base and own.body == close
+    # The nearby table's leans are close to the body's own: within 2 % at 1% more mass.
+    w = 2 * math.pi / 2.0
+    assert own.max_lean(w) == pytest.approx(base.max_lean(w), rel=0.02)

@@ -137,3 +137,23 @@ def test_the_fork_is_raked_with_trail():
     ground = np.asarray(fork.head) - fork.head[2] / k[2] * k          # the axis at z = 0
     trail = ground[1] - hub[1]
     assert 0.03 < trail < 0.10
+
+
+def test_a_part_of_a_run_turns_the_wheels_as_the_run_does(cyclist):
+    """Live Preview maps a window of a run: with the run's first distance (meta ``s_start``) its
+    rows are the whole run's rows, wheels and crank included (the rest of the mapping is frame
+    by frame)."""
+    traj, track, *_ = cyclist
+    a, b = 100, 160
+    part = type(traj)(traj.data[:, a:b], {**traj.meta, "s_start": float(traj.s[0])})
+    window = map_trajectory("cyclist", part, frame_start=1 + a)
+    np.testing.assert_array_equal(window.frames, track.frames[a:b])
+    for name, ch in window.bones.items():
+        if ch.rotation is not None:
+            # the same rotations (a quaternion and its negative are one), to float round-off
+            dots = np.abs(np.sum(ch.rotation * track.bones[name].rotation[a:b], axis=1))
+            np.testing.assert_allclose(dots, 1.0, atol=1e-9, err_msg=name)
+    # Without it the part's wheels start from where the part starts: not the run's.
+    q = map_trajectory("cyclist", type(traj)(traj.data[:, a:b], traj.meta)).bones["wheel.F"]
+    dots = np.abs(np.sum(q.rotation * track.bones["wheel.F"].rotation[a:b], axis=1))
+    assert dots.min() < 0.99

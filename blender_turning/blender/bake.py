@@ -191,6 +191,62 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
     return BakeResult(action, count, len(track))
 
 
+def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
+    """Write ``track``'s values into the F-curves the last bake made, in place: the same
+    channels, keyed on the same frames or on a run of them (a window of the range; the keys
+    around it stay).  ``None`` (nothing written) when they differ; then :func:`bake_pose_track`
+    makes the curves anew.  A window's quaternions take the sign of the keys they replace, so
+    a bone does not spin the long way round into the keys beside the window.
+
+    Removing and adding F-curves makes Blender rebuild the depsgraph's relations (27 ms next to
+    a Rigify rig, measured); writing the keys' values costs a few ms and only tags the action.
+    """
+    check_track(obj, track)
+    action, strip = find_bake(obj)
+    bag = None if action is None else _bag(obj, action, strip)
+    if bag is None:
+        return None
+    chans = _channel_list(obj, track)
+    if set(action.get(BAKED_PATHS, "").splitlines()) != {c[0] for c in chans}:
+        return None
+    curves = {(fc.data_path, fc.array_index): fc for fc in bag.fcurves}
+    todo = [(curves.get((path, index)), path, values) for path, index, _, values in chans]
+    if any(fc is None for fc, _, _ in todo):
+        return None
+    total = len(todo[0][0].keyframe_points)
+    if any(len(fc.keyframe_points) != total for fc, _, _ in todo):
+        return None
+    co = np.empty(2 * total, np.float32)
+    todo[0][0].keyframe_points.foreach_get("co", co)
+    frames, n = np.asarray(track.frames, np.float32), len(track)
+    i0 = int(np.searchsorted(co[0::2], frames[0]))
+    if i0 + n > total or not np.array_equal(co[0::2][i0:i0 + n], frames):
+        return None
+    if n == total:
+        for fc, _, values in todo:      # frames stay; LINEAR keys ignore their handles
+            co[1::2] = values
+            fc.keyframe_points.foreach_set("co", co)
+    else:
+        old = {}
+        for fc, _, _ in todo:
+            buf = np.empty(2 * total, np.float32)
+            fc.keyframe_points.foreach_get("co", buf)
+            old[fc] = buf
+        signs = {}
+        for fc, path, values in todo:   # w, x, y, z of one bone: the dot with the keys replaced
+            if path.endswith(".rotation_quaternion"):
+                signs[path] = signs.get(path, 0.0) + float(old[fc][2 * i0 + 1]) * float(values[0])
+        for fc, path, values in todo:
+            buf = old[fc]
+            buf[2 * i0 + 1:2 * (i0 + n):2] = -values if signs.get(path, 0.0) < 0 else values
+            fc.keyframe_points.foreach_set("co", buf)
+    for prop, values in track.props.items():
+        if prop not in obj.keys():
+            obj[prop] = float(values[0])
+    action.update_tag()                 # re-evaluate the animation, relations unchanged
+    return BakeResult(action, len(todo), n)
+
+
 def _fit_strip(strip, action) -> None:
     """Let a pushed-down strip play the whole re-baked range (it keeps its scale and repeats)."""
     lo, hi = action.frame_range

@@ -242,7 +242,7 @@ class CrowdFollow:
                                          ground=getattr(ground, "field", None))
             traj = type(traj)(traj.data[:, :shown.end - shown.start + 1], traj.meta)
             shown = FrameRange(shown.start, shown.start + len(traj) - 1, fps)
-            if ground is not None:              # the foot on the mesh, as ops_path.finish does
+            if ground is not None:              # the foot on the mesh, as follow_scene.finish does
                 traj = on_ground(traj, ground)
             track = map_track(fig.turning.sport, traj, shown, obj=fig,
                               normal=surface_normals(traj, ground))

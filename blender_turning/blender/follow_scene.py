@@ -1,17 +1,21 @@
 """Reading a figure's Follow Path settings into a planning job (:class:`.follow_job.FollowJob`):
 its path curve, the footprints of its obstacles (never its own objects), its body and limits, and
-its Ground mesh.  Shared by Follow Path on one figure and on several, and by Add Crowd."""
+its Ground mesh; and writing a finished plan (:func:`finish`).  Shared by Follow Path on one
+figure and on several, by Add Crowd and by Live Preview."""
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from ..core.follow_problem import DEFAULT_CLEARANCE
 from ..core.obstacles import Obstacles
-from . import follow_ground
+from . import bake, follow_ground
+from .figure_bake import apply_bake
 from .figure_context import check_figure
 from .follow_job import FollowJob
-from .scene_adapters import (SceneInputError, bezier_control_points, figure_from_settings,
-                             obstacle_footprints)
+from .pipeline import map_track, on_ground, surface_normals
+from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
+                             figure_from_settings, obstacle_footprints)
 
 
 def own_objects(fig) -> set:
@@ -55,3 +59,23 @@ def prepare(context, fig) -> FollowJob:
     job.footprints = footprints                        # names, for the report of a failed plan
     job.mesh_ground = ground
     return job
+
+
+def finish(context, fig, job, result):
+    """Write a finished plan: frame range to fit, F-curves, foot track.  Returns the frames."""
+    scene = context.scene
+    fps = scene.render.fps / scene.render.fps_base
+    n = int(math.floor(result.trajectory.duration * fps + 1e-9))
+    frames = FrameRange(scene.frame_start, scene.frame_start + max(n, 1), fps)
+    ground = getattr(job, "mesh_ground", None)
+    traj = result.trajectory.resample(fps, start=0.0, ground=getattr(ground, "field", None))
+    traj = type(traj)(traj.data[:, :frames.end - frames.start + 1], traj.meta)
+    if ground is not None:
+        traj = on_ground(traj, ground)    # the foot on the mesh, as a terrain Bake Turns
+    check_figure(fig)                     # the rig may have changed while the plan ran
+    track = map_track(fig.turning.sport, traj, frames, obj=fig,   # may raise: nothing written
+                      normal=surface_normals(traj, ground))
+    bake.check_track(fig, track)
+    scene.frame_end = frames.end
+    apply_bake(fig, traj, track)
+    return frames

@@ -255,6 +255,7 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
     def execute(self, context):
         figs = [f for f in selected_figures(context) if bake.figure_action(f) is not None]
         for fig in figs:
+            fig.turning.live = False          # else Live Preview would bake it again at once
             recorded = bake.REST in fig       # the pose before the bake, put back exactly
             export_ready_mod.clear_equipment(fig)
             bake.clear_bake(fig)

@@ -3,22 +3,17 @@ the ground footprints of a collection's objects.  Modal with a progress bar; ESC
 the scene exactly as it was (nothing is written until the plan is complete)."""
 from __future__ import annotations
 
-import math
-
 import bpy
 from bpy.props import FloatProperty
 
 from ..core.errors import PlanInfeasible
 from ..core.obstacles import Obstacles
-from . import bake, crowd_job, follow_ground
-from .figure_bake import apply_bake
+from . import crowd_job, follow_ground
 from .figure_context import check_figure, end_modal, poll_figure, report_error
 from .follow_job import Cancelled
-from .follow_scene import prepare
+from .follow_scene import finish, prepare
 from .model_notes import WARN_DISTANCE, follow_note, warn_distance
-from .pipeline import map_track, on_ground, surface_normals
 from .props import figure_settings
-from .scene_adapters import FrameRange
 
 
 def nearest_obstacle(exc, footprints) -> str:
@@ -28,26 +23,6 @@ def nearest_obstacle(exc, footprints) -> str:
     gaps = [float(Obstacles(polygons=[p]).min_distance(exc.position)[0]) for _, p in footprints]
     k = min(range(len(gaps)), key=gaps.__getitem__)
     return f" (nearest obstacle: {footprints[k][0]!r}, {max(gaps[k], 0.0):.1f} m away)"
-
-
-def finish(context, fig, job, result):
-    """Write a finished plan: frame range to fit, F-curves, foot track.  Returns the frames."""
-    scene = context.scene
-    fps = scene.render.fps / scene.render.fps_base
-    n = int(math.floor(result.trajectory.duration * fps + 1e-9))
-    frames = FrameRange(scene.frame_start, scene.frame_start + max(n, 1), fps)
-    ground = getattr(job, "mesh_ground", None)
-    traj = result.trajectory.resample(fps, start=0.0, ground=getattr(ground, "field", None))
-    traj = type(traj)(traj.data[:, :frames.end - frames.start + 1], traj.meta)
-    if ground is not None:
-        traj = on_ground(traj, ground)    # the foot on the mesh, as a terrain Bake Turns
-    check_figure(fig)                     # the rig may have changed while the plan ran
-    track = map_track(fig.turning.sport, traj, frames, obj=fig,   # may raise: nothing written
-                      normal=surface_normals(traj, ground))
-    bake.check_track(fig, track)
-    scene.frame_end = frames.end
-    apply_bake(fig, traj, track)
-    return frames
 
 
 class TURNING_OT_follow_path(crowd_job.CrowdOptions, bpy.types.Operator):

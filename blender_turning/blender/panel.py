@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import bake, model_notes
+from . import bake, live, model_notes
 from .figure_context import context_figure, selected_figures
 from .registry_items import sport_label
 
@@ -97,10 +97,30 @@ class VIEW3D_PT_turning_bake(FigurePanel, bpy.types.Panel):
         row.operator_menu_enum("turning.bake_turns", "frame_range", text="", icon="PREVIEW_RANGE")
         row.operator("turning.clear_bake", text="", icon="TRASH")
         fig = context_figure(context)
+        draw_live(layout, fig, count)
         layout.prop(fig.turning, "show_foot_track")
         action = bake.figure_action(fig)
         if action is not None:
             layout.label(text=f"Action: {action.name}", icon="ACTION")
+
+
+def draw_live(layout, fig, count: int) -> None:
+    """Live Preview's switch (for the selection when several figures are selected) and, when the
+    figure's settings make it fail, why and where it falls."""
+    row = layout.row(align=True)
+    row.prop(fig.turning, "live", toggle=True, icon="PLAY" if fig.turning.live else "PAUSE")
+    if count > 1:
+        row.operator("turning.live_preview", text=f"All {count}", icon="GROUP")
+    failure = live.FAILURES.get(fig.name) if fig.turning.live else None
+    if failure is not None:
+        col = layout.column(align=True)
+        col.alert = True
+        if failure.frame is not None:
+            col.label(text=f"Falls at frame {failure.frame}: the last good bake stays",
+                      icon="ERROR")
+        else:
+            col.label(text="Cannot bake these settings: the last good bake stays", icon="ERROR")
+        col.label(text=failure.message)
 
 
 class VIEW3D_PT_turning_body(FigurePanel, bpy.types.Panel):

@@ -27,6 +27,11 @@ def _show_foot_track(settings, context):
     update_visibility(settings, context)
 
 
+def _live_changed(settings, context):
+    from . import live                           # a sibling module, imported when used
+    live.live_changed(settings.id_data)
+
+
 def _range(key: str) -> dict:
     """``min``/``max`` of a setting: the core's table of ranges (core/ranges.py), so a value
     typed here is held to the same bounds as a flag, a scene file or a render-job key."""
@@ -165,6 +170,9 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                              description="Friction, drag and target speed on the Ground mesh")
     crowd: PointerProperty(type=TurningCrowdSettings, options=_STATIC,
                            description="The figure's start offset and first turn in a crowd")
+    live: BoolProperty(name="Live Preview", default=False, options=_STATIC, update=_live_changed,
+                       description="Re-bake the figure whenever one of its settings, keys, its "
+                                   "Path, obstacles or Ground change (docs/live-preview.md)")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.

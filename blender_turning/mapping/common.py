@@ -13,7 +13,7 @@ import numpy as np
 
 from . import bones as B
 from .kinematics import (PoseBuilder, frame_from_yx, quat_from_axis_angle, quat_mul, quat_to_matrix,
-                         stack_dot, two_bone_ik)
+                         rigid_inverse, stack_dot, two_bone_ik)
 
 __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "static_force",
            "add_local_rotation", "lean", "carried", "limb_frames", "ik_limb", "place_on_ground",
@@ -93,7 +93,7 @@ def lean(b: PoseBuilder, theta_v):
 def carried(b: PoseBuilder, bone: str, carrier: str) -> np.ndarray:
     """The pose ``bone`` would have if rigidly attached to ``carrier`` as in the rest pose."""
     skel = b.skel
-    return stack_dot(b.pose(carrier), np.linalg.inv(skel.rest_of(carrier)) @ skel.rest_of(bone))
+    return stack_dot(b.pose(carrier), rigid_inverse(skel.rest_of(carrier)) @ skel.rest_of(bone))
 
 
 def leg_lengths(skel, upper: str, lower: str):

@@ -89,8 +89,9 @@ class CyclistMapping(Mapping):
         add_local_rotation(b, B.FORK, fork_axis, delta)
 
         # Wheels and crank turn with the distance travelled (rolling without slip): forward
-        # rolling is a negative rotation about the axle (+X, the bones' Y axes).
-        s = np.asarray(traj.s, float) - float(traj.s[0])
+        # rolling is a negative rotation about the axle (+X, the bones' Y axes).  A part of a
+        # run (meta "s_start": the distance at the run's first frame) turns them as the run does.
+        s = np.asarray(traj.s, float) - float(traj.meta.get("s_start", traj.s[0]))
         wheel_angle = s / radius
         crank_angle = wheel_angle / o.gear_ratio
         axle = np.array([1.0, 0.0, 0.0])

@@ -275,7 +275,7 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
     def carried(j):
         pj = _parent_joint(bm, rig, j)
         p = np.append(rest[j][:3, 3], 1.0)
-        return (poses[pj] @ (np.linalg.inv(rest[pj]) @ p))[:, :3]
+        return (poses[pj] @ (rigid_inverse(rest[pj]) @ p))[:, :3]
 
     def aimed(j, target_vec, rest_vec):
         """``rot[j]`` swung so the rest vector ``rest_vec`` (armature space) points along
@@ -352,7 +352,7 @@ def _channels(rig: UserRig, bone: str, pose, parent_delta):
 
 
 def _delta(poses, rig, bm, joint):
-    return None if joint is None else poses[joint] @ np.linalg.inv(rig.rest_of(bm.bone(joint)))
+    return None if joint is None else poses[joint] @ rigid_inverse(rig.rest_of(bm.bone(joint)))
 
 
 def _fk_ancestor(rig, bm, bone):

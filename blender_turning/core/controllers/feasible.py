@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from contextlib import contextmanager
 from functools import lru_cache
 
 import numpy as np
@@ -208,8 +209,47 @@ class FeasibleTurns:
 
 
 @lru_cache(maxsize=256)
+def _feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
+    return FeasibleTurns(body, limits)
+
+
+#: ``[relative tolerance or None]``: see :func:`nearby_tables`.
+_NEARBY = [None]
+_BODY_FIELDS = ("m", "l", "I_v", "V_cm", "g")
+
+
 def feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
     """:class:`FeasibleTurns` for ``body`` and ``limits``, built once (about 30 ms).  256: a run
     down a slope passes through a table per 0.5 m/s of speed (10 to 27.5 m/s: 36), and a
-    cache smaller than one run's sweep would rebuild every table on every run."""
-    return FeasibleTurns(body, limits)
+    cache smaller than one run's sweep would rebuild every table on every run.  Inside
+    :func:`nearby_tables`, a table already built for a nearby body."""
+    rel = _NEARBY[0]
+    if rel is not None:
+        for (b, lim), table in reversed(list(_TABLES.items())):
+            if lim == limits and all(abs(getattr(b, f) - getattr(body, f))
+                                     <= rel * abs(getattr(body, f)) for f in _BODY_FIELDS):
+                return table
+    table = _feasible_turns(body, limits)
+    _TABLES[(body, limits)] = table
+    while len(_TABLES) > 256:
+        _TABLES.pop(next(iter(_TABLES)))
+    return table
+
+
+#: The tables built, oldest first (what :func:`nearby_tables` searches).
+_TABLES: dict = {}
+
+
+@contextmanager
+def nearby_tables(rel: float):
+    """Within this block :func:`feasible_turns` answers with a table built before for a body
+    whose mass, height, inertia, speed and gravity are each within ``rel`` (relative) of the
+    one asked for, with the same limits, when there is one: a Body slider's drag step in Live
+    Preview then costs no new table (one is about 60 % of it).  The turns it allows are those of
+    that nearby body (its leans differ by about ``rel`` relative); the bake when the drag ends
+    builds the body's own."""
+    old, _NEARBY[0] = _NEARBY[0], float(rel)
+    try:
+        yield
+    finally:
+        _NEARBY[0] = old

@@ -1,0 +1,177 @@
+"""Benchmark: Live Preview's latency per drag step, against today's way (Bake Turns), in one run.
+
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py [--steps 15] [--only skier-10]
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py --profile rigify-60   # cProfile
+
+Each case is one figure with Live Preview on, the current frame in the middle of the range
+(a drag step re-bakes the frames around it first); a drag step sets its slider (``turning.lean``, or
+for the Body cases ``turning.mass``) a little further and re-bakes.  Timed, median of ``--steps``
+steps (in ms), the three ways interleaved step by step (the machine is shared):
+
+- ``bake op``: today's figure, ``bpy.ops.turning.bake_turns()`` after the set (curves made anew,
+  the foot track, an undo step);
+- ``refresh op``: ``bpy.ops.turning.refresh_preview()`` after the set (what a script does);
+- ``drag step``: :func:`blender_turning.blender.live.schedule`, what the message bus calls at
+  every step of a slider drag in the interface (the keys; the foot track waits for the release).
+
+Cases: the built-in skier, a Rigify rig as a skier, a cyclist on a 200 m x 200 m Ground mesh
+(1 m grid, the rolls of ``ski_slope`` without its slope), each over 10 s and 60 s at 24 fps, and
+a Body slider (mass) on the built-in skier and on the cyclist on the Ground mesh (10 s).
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+for p in (ROOT, ROOT / "tests"):
+    if str(p) not in sys.path:
+        sys.path.insert(0, str(p))
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-bench-"))
+
+import bpy  # noqa: E402
+
+from blender_turning import blender as addon  # noqa: E402
+from blender_turning.blender import live  # noqa: E402
+
+CASES = ("skier-10", "skier-60", "rigify-10", "rigify-60", "cyclist-ground-10",
+         "cyclist-ground-60", "body-skier-10", "body-ground-10")
+
+
+def select(fig):
+    for o in bpy.context.view_layer.objects:
+        o.select_set(o == fig)
+    bpy.context.view_layer.objects.active = fig
+
+
+def build():
+    """The three figures (live off), by kind."""
+    from blender_turning.blender.ground import mesh_from_height_field
+    from blender_turning.core.terrain_gen import ski_slope
+    from rig_fixtures import rigify_rig
+    scene = bpy.context.scene
+    scene.render.fps, scene.frame_start = 24, 1
+    figs = {}
+    scene.cursor.location = (0.0, 0.0, 0.0)
+    bpy.ops.turning.add_figure(sport="SKIER")
+    figs["skier"] = bpy.context.view_layer.objects.active
+    rig = rigify_rig(location=(0.0, 400.0, 0.0))
+    select(rig)
+    assert bpy.ops.turning.make_figure(sport="SKIER", bone_map="RIGIFY") == {"FINISHED"}
+    figs["rigify"] = rig
+    slope = ski_slope(length=200.0, width=200.0, slope_deg=0.0, cell=1.0)
+    mountain = bpy.data.objects.new("Mountain", mesh_from_height_field(bpy, slope, "Mountain"))
+    scene.collection.objects.link(mountain)
+    scene.cursor.location = (-95.0, 10.0, 0.0)
+    scene.cursor.rotation_euler = (0.0, 0.0, math.radians(-90.0))    # facing +x
+    bpy.ops.turning.add_figure(sport="CYCLIST")
+    cyc = bpy.context.view_layer.objects.active
+    cyc.turning.ground = mountain
+    cyc.turning.speed, cyc.turning.period, cyc.turning.lean = 3.0, 3.0, math.radians(5.0)
+    figs["cyclist-ground"] = cyc
+    return figs
+
+
+def case_setup(name, figs):
+    """``(figure, setting, values)`` of a case, the scene's range set."""
+    parts = name.split("-")
+    seconds = int(parts[-1])
+    scene = bpy.context.scene
+    scene.frame_end = 1 + 24 * seconds
+    scene.frame_set(1 + 12 * seconds)            # the current frame in the middle of the range
+    if parts[0] == "body":
+        fig = figs["skier" if parts[1] == "skier" else "cyclist-ground"]
+        return fig, "mass", [75.0 + 0.25 * k for k in range(400)]
+    fig = figs["-".join(parts[:-1])]
+    base = math.degrees(fig.turning.lean)
+    # The cyclist on the Ground mesh's rolls falls at some leans a little above 5 deg: dragged
+    # down from there (a step that fails still counts: Live Preview keeps the last bake).
+    sign = -1.0 if parts[0] == "cyclist" else 1.0
+    return fig, "lean", [math.radians(base + sign * 0.01 * k) for k in range(400)]
+
+
+def bake_op():
+    try:
+        bpy.ops.turning.bake_turns()
+    except RuntimeError:                   # a fall: reported, nothing written
+        pass
+
+
+def run_case(name, figs, steps):
+    fig, setting, values = case_setup(name, figs)
+    for f in figs.values():
+        f.turning.live = f == fig
+    select(fig)
+    bake_op()
+    bpy.ops.turning.refresh_preview()            # the first live bake: in place from here on
+    ways = {
+        "bake op": bake_op,
+        "refresh op": lambda: bpy.ops.turning.refresh_preview(),
+        "drag step": live.schedule,
+    }
+    times = {k: [] for k in ways}
+    cpu = {k: [] for k in ways}
+    k = 0
+    for _ in range(steps):
+        for way, fn in ways.items():
+            k += 1
+            setattr(fig.turning, setting, values[k])
+            t, c = time.perf_counter(), time.process_time()
+            fn()
+            times[way].append(time.perf_counter() - t)
+            cpu[way].append(time.process_time() - c)
+    if bpy.app.timers.is_registered(live._tick):
+        bpy.app.timers.unregister(live._tick)
+    live.settle()
+    setattr(fig.turning, setting, values[0])
+    fig.turning.live = False
+    return ({way: 1000 * statistics.median(v) for way, v in times.items()},
+            {way: 1000 * statistics.median(v) for way, v in cpu.items()})
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--steps", type=int, default=15)
+    ap.add_argument("--only", nargs="*", choices=CASES, default=None)
+    ap.add_argument("--profile", choices=CASES, help="cProfile 20 drag steps of one case")
+    args = ap.parse_args(argv)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon.register()
+    try:
+        figs = build()
+        if args.profile:
+            import cProfile
+            import pstats
+            fig, setting, values = case_setup(args.profile, figs)
+            fig.turning.live = True
+            select(fig)
+            bpy.ops.turning.refresh_preview()
+            prof = cProfile.Profile()
+            for k in range(1, 21):
+                setattr(fig.turning, setting, values[k])
+                prof.runcall(live.schedule)
+            pstats.Stats(prof).sort_stats("cumulative").print_stats(30)
+            return
+        print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load average "
+              f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}, Python "
+              f"{platform.python_version()}, bpy {bpy.app.version_string}")
+        print(f"median ms per drag step of {args.steps} (24 fps; goal <= 40 ms): wall (CPU)")
+        print(f"{'case':20s} {'bake op':>15s} {'refresh op':>15s} {'drag step':>15s}")
+        for name in args.only or CASES:
+            wall, cpu = run_case(name, figs, args.steps)
+            print(f"{name:20s} " + " ".join(f"{wall[w]:7.1f} ({cpu[w]:5.1f})" for w in wall),
+                  flush=True)
+        print(f"load average after: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+    finally:
+        addon.unregister()
+
+
+if __name__ == "__main__":
+    main()
