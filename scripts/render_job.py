@@ -416,8 +416,8 @@ def bake_figure(bpy, obj, fig, frame_end):
 
 
 def _sampled_locations(bpy, obj, frames):
-    from blender_turning.blender import compat
-    bag = compat.channels(obj)
+    from blender_turning.blender import bake
+    bag = bake.baked_channels(obj)
     fcs = {fc.array_index: fc for fc in bag.fcurves if fc.data_path == "location"}
     return [[fcs[i].evaluate(f) for i in range(3)] for f in frames]
 

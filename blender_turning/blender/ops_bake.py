@@ -62,7 +62,7 @@ def _baked_curves(fig) -> dict:
     action = bake.figure_action(fig)
     paths = set(action.get(bake.BAKED_PATHS, "").splitlines())
     out = {}
-    for fc in compat.channels(fig).fcurves:
+    for fc in bake.baked_channels(fig).fcurves:
         if fc.data_path in paths:
             co = np.empty(2 * len(fc.keyframe_points))
             fc.keyframe_points.foreach_get("co", co)
