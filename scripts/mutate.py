@@ -55,6 +55,8 @@ MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py"]
 FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
+LAYERS = [T + "test_blender_layers.py", T + "test_blender_robustness.py"]
+STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
 
 
 @dataclass(frozen=True)
@@ -335,7 +337,7 @@ MUTANTS = [
     M("nan_track_baked", "blender/bake.py",
       "if not all(np.all(np.isfinite(a)) for a in arrays):", "if False:", BAKE, "bake"),
     M("clear_bake_drops_user_keys", "blender/bake.py",
-      "if user is not None or bag is None or len(bag.fcurves) == 0:", "if True:", BAKE, "bake"),
+      "if has_user or bag is None or len(bag.fcurves) == 0:", "if True:", BAKE, "bake"),
     M("bake_drops_keyed_params", "blender/bake.py",
       "params = [fc for fc in (bag.fcurves if bag else ())", "params = [fc for fc in ()",
       BAKE, "bake"),
@@ -345,6 +347,23 @@ MUTANTS = [
     M("rebake_removes_all_curves", "blender/bake.py",
       "for fc in [fc for fc in bag.fcurves if fc.data_path in paths]:",
       "for fc in list(bag.fcurves):", BAKE, "bake"),
+    # -- the bake's layers: tweaks above the bake (docs/layers.md) --------------------------------
+    M("tweaks_replace_the_bake", "blender/bake_layers.py",
+      'adt.action_blend_type = "COMBINE"', 'adt.action_blend_type = "REPLACE"', LAYERS, "bake"),
+    M("edited_bake_layer_rebaked", "blender/bake_layers.py",
+      "    if edited:\n", "    if False:\n", LAYERS, "bake"),
+    M("clear_bake_deletes_tweaks", "blender/bake_layers.py",
+      "    if left == 0:\n", "    if True:\n", LAYERS, "bake"),
+    M("rebake_makes_new_tweaks", "blender/bake_layers.py",
+      "    if action is None:\n        action = compat.assign_new_action",
+      "    if True:\n        action = compat.assign_new_action", LAYERS, "bake"),
+    # -- crowd staging (docs/crowds.md) -----------------------------------------------------------
+    M("staging_always_waits", "crowd/staging.py",
+      '    if staging == "wait":\n', "    if True:\n", STAGING),
+    M("staging_ahead_of_the_leader", "crowd/staging.py",
+      "- late * leader.figure.body.V_cm * d", "+ late * leader.figure.body.V_cm * d", STAGING),
+    M("staging_keeps_the_offset", "crowd/staging.py",
+      "time_offset=leader.time_offset))", "time_offset=m.time_offset))", STAGING),
     # -- Follow Path on a Ground mesh (issue 10) -------------------------------------------------
     M("follow_ground_is_an_obstacle", "blender/ops_path.py",
       "(s.foot_track, s.path, s.ground)", "(s.foot_track, s.path)", FOLLOW_GROUND, "bake"),
