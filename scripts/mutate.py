@@ -53,7 +53,8 @@ TERRAIN = [T + "test_terrain.py", T + "test_terrain_symbolic.py", T + "test_terr
            T + "test_terrain_fast.py", T + "test_terrain_lazy.py"]
 MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
-        T + "test_blender_operators.py", T + "test_blender_robustness.py"]
+        T + "test_blender_operators.py", T + "test_blender_robustness.py",
+        T + "test_blender_layers.py"]
 FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
 LAYERS = [T + "test_blender_layers.py", T + "test_blender_robustness.py"]
 STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
@@ -377,7 +378,8 @@ MUTANTS = [
       'V0 = float(sampled_setting(fig, "speed", first)[0])', "V0 = float(fig.turning.speed)",
       FOLLOW_GROUND, "bake"),
     M("follow_ground_upright", "blender/ops_path.py",
-      "normal=surface_normals(traj, ground))", "normal=None)", FOLLOW_GROUND, "bake"),
+      "normal=surface_normals(traj, ground), surface", "normal=None, surface", FOLLOW_GROUND,
+      "bake"),
     M("follow_ground_track_flat", "blender/ops_bake.py",
       "z=traj.z)", "z=None)", FOLLOW_GROUND, "bake"),
     M("follow_ground_any_mesh", "blender/follow_ground.py",

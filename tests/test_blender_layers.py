@@ -168,3 +168,39 @@ def test_the_bake_plays_from_its_own_track_below_the_tweaks(scene):
     scene.frame_set(90)                           # the figure moves on the new frames
     np.testing.assert_allclose(obj.location[:2], [loc[i].evaluate(90) for i in range(2)],
                                atol=1e-5)
+
+
+def as_older_versions_left_it(obj):
+    """The bake as the figure's active action (no bake track, no tweak layer)."""
+    adt = obj.animation_data
+    action, tweaks = bake.figure_action(obj), adt.action
+    adt.action = None
+    bpy.data.actions.remove(tweaks)
+    adt.nla_tracks.remove(adt.nla_tracks[bake_layers.BAKE_TRACK])
+    adt.action_blend_type = "REPLACE"
+    slots = getattr(action, "slots", None)
+    compat.restore_action(obj, action, slots[0].identifier if slots else None)
+    return action
+
+
+def test_an_older_bake_in_the_action_slot_keeps_the_users_keys(scene):
+    obj = add("SKIER")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    action = as_older_versions_left_it(obj)
+    obj.keyframe_insert("turning.period", frame=1)          # the user's key, in the bake
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}     # ... stays, as the user's action
+    assert obj.animation_data.action == action and bake.figure_action(obj) is None
+    assert [fc.data_path for fc in compat.channels(obj).fcurves] == ["turning.period"]
+
+
+def test_rebaking_an_older_bake_moves_the_users_keys_to_the_tweak_layer(scene):
+    obj = add("SKIER")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    action = as_older_versions_left_it(obj)
+    obj.turning.period = 2.5
+    obj.keyframe_insert("turning.period", frame=1)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert bake.figure_action(obj) == action                # rebaked in place, now on the NLA
+    assert [t.name for t in obj.animation_data.nla_tracks] == [bake_layers.BAKE_TRACK]
+    assert [fc.data_path for fc in compat.channels(obj).fcurves] == ["turning.period"]
+    assert "turning.period" not in {fc.data_path for fc in bake.baked_channels(obj).fcurves}

@@ -45,7 +45,7 @@ from ..crowd.runner import run_crowd
 from . import bake
 from .ops_bake import apply_bake
 from .ops_common import check_figure
-from .pipeline import map_track, on_ground, started, surface_normals
+from .pipeline import map_track, on_ground, started, surface_heights, surface_normals
 from .scene_adapters import FrameRange
 from .workers import PumpedExecutor, worker_pool
 
@@ -242,7 +242,8 @@ class CrowdFollow:
             if ground is not None:              # the foot on the mesh, as ops_path.finish does
                 traj = on_ground(traj, ground)
             track = map_track(fig.turning.sport, traj, shown, obj=fig,
-                              normal=surface_normals(traj, ground))
+                              normal=surface_normals(traj, ground),
+                              surface=surface_heights(ground))
             bake.check_track(fig, track)
             computed.append((fig, traj, track))
         scene.frame_end = frames.end

@@ -125,15 +125,16 @@ def facing(obj) -> float:
                    mirrored(obj)).travel
 
 
-def figure_track(obj, traj, frames, options=None, normal=None):
+def figure_track(obj, traj, frames, options=None, normal=None, surface=None):
     """The pose track of ``obj`` for ``traj`` (one sample per frame of ``frames``) when it is a
     user's rig or rides goofy: the built-in figure's Section 7 mapping (of the mirrored run for
     a goofy stance), retargeted onto the user's rig, or mirrored onto the built-in rig itself.
     ``normal`` ((n, 3)): the surface normal at the foot on a Ground mesh; the figure then stands
-    in the local surface as the built-in figures do (:mod:`..mapping.surface`)."""
+    in the local surface as the built-in figures do (:mod:`..mapping.surface`); ``surface``: the
+    ground's height, where the built-in's poles are planted."""
     sport, mirror = obj.turning.sport.lower(), mirrored(obj)
     track = map_trajectory(sport, mirrored_trajectory(traj) if mirror else traj, options,
-                           frame_start=frames.start, normal=normal)
+                           frame_start=frames.start, normal=normal, surface=surface)
     if not is_user_rig(obj):
         return goofy_track(sport, track)
     return retarget(track, sport, user_rig(obj), figure_bone_map(obj), mirror=mirror)

@@ -171,10 +171,14 @@ class SkierMapping(Mapping):
             length = skel.length(pole)
             arm = _Arm(b, B.side("upper_arm", s), B.side("forearm", s), elbow_dir, pole)
 
+            # The free pole swings forward (and down) for the plant only: after the plant it
+            # trails, as a pole dragged out of its hole does, until the swing to the next one.
+            w_aim = np.where(d > 0.0, 0.0, w)
+
             def free_axis(grip):
-                beta = POLE_AIM_TRAIL + w * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
+                beta = POLE_AIM_TRAIL + w_aim * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
                 horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
-                dz = o.pole_lift * (1.0 - w) - grip[:, 2]
+                dz = o.pole_lift * (1.0 - w_aim) - grip[:, 2]
                 rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
                 return (rho[:, None] * horiz + dz[:, None] * up) / length
 
@@ -249,6 +253,42 @@ class _Arm:
                 head + self.fore * r_low[:, :, 1])
 
 
+#: The last part of the swing to a plant, as a fraction of ``pole_swing``: the tip comes to rest
+#: in its hole over it (world space), instead of landing at the figure's speed and sliding.
+APPROACH = 0.5
+
+
+def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at) -> None:
+    """The frames before the plant at ``i0`` within ``phase`` of it: the tip goes from the free
+    swing's to the hole ``P`` (world) along a smoothstep, so that it arrives at rest; the grip is
+    the pole's length from it towards the free swing's grip.  Frames of an earlier plant stay."""
+    j = i0 - 1
+    while j >= 0 and d[i0] - phase < d[j] <= d[j + 1] and not (held[j] or after[j]):
+        j -= 1
+    idx = np.arange(j + 1, i0)
+    if not len(idx):
+        return
+    s = smoothstep((d[idx] - (d[i0] - phase)) / phase)[:, None]
+    world = (1.0 - s) * place.to_world_many(tips[idx], idx) + s * P
+    local = place.to_local(world, idx)
+    local[:, 2] = np.maximum(local[:, 2], 0.0)      # on or above the snow under the foot
+    if place.surface is not None:                   # ... and the Ground mesh under the tip
+        world = place.to_world_many(local, idx)
+        world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1]))
+        local = place.to_local(world, idx)
+    away = free[idx] - local
+    held[idx], tip_at[idx] = True, local
+    grip_at[idx] = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
+
+
+def on_snow(place, p):
+    """The world point ``p`` moved onto the ground (vertically; the plane under the foot when
+    there is no Ground mesh, where it already is)."""
+    if place.surface is None:
+        return p
+    return np.array([p[0], p[1], float(place.surface(np.array([p[0]]), np.array([p[1]]))[0])])
+
+
 @dataclass
 class _Plants:
     held: np.ndarray      # (n,) bool: the tip is in the snow
@@ -273,7 +313,10 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> 
     edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
     for i0, i1 in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):   # runs [i0, i1)
         idx = np.arange(i0, i1)
-        P = place.to_world(tips[i0], i0)
+        # The hole: where the swinging tip meets the snow.
+        P = on_snow(place, place.to_world(np.array([tips[i0, 0], tips[i0, 1], 0.0]), i0))
+        _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
+                  grip_at)
         local = place.to_local(np.broadcast_to(P, (len(idx), 3)), idx)
         away = free[idx] - local
         grip = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
