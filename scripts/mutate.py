@@ -58,6 +58,7 @@ BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
 FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
 LAYERS = [T + "test_blender_layers.py", T + "test_blender_robustness.py"]
 STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
+POLES = [T + "test_blender_poles.py"]
 
 
 @dataclass(frozen=True)
@@ -358,6 +359,15 @@ MUTANTS = [
     M("rebake_makes_new_tweaks", "blender/bake_layers.py",
       "    if action is None:\n        action = compat.assign_new_action",
       "    if True:\n        action = compat.assign_new_action", LAYERS, "bake"),
+    # -- poles that plant (Section 7) -------------------------------------------------------------
+    M("pole_lands_at_speed", "mapping/skier.py",
+      "        _approach(place, d, swing * APPROACH,", "        0 and _approach(place, d, swing * APPROACH,",
+      POLES, "bake"),
+    M("pole_aims_forward_after_plant", "mapping/skier.py",
+      "w_aim = np.where(d > 0.0, 0.0, w)", "w_aim = w", POLES, "bake"),
+    M("users_pole_follows_the_hand", "mapping/retarget.py",
+      "                rot[chain[2]] = turn @ (A[chain[2]] @ rest[chain[2]][:3, :3])\n", "",
+      POLES, "bake"),
     # -- crowd staging (docs/crowds.md) -----------------------------------------------------------
     M("staging_always_waits", "crowd/staging.py",
       '    if staging == "wait":\n', "    if True:\n", STAGING),

@@ -57,6 +57,13 @@ class SkierOptions(SpringLegOptions):
     """Phase over which the pole swings between planted and trailing, rad."""
     pole_lift: float = 0.35
     """Height of the pole tip when trailing, m."""
+    plant_scale: float = 1.0
+    """Size of the figure shown relative to the built-in rig (retargeting's ``k``, which scales
+    the pose about the foot point): the pole holes are planned to stay put in that figure's
+    world."""
+    plant_reach: float = 1.0
+    """The shown figure's arm length over ``plant_scale`` times the built-in's: a plant lasts
+    only as long as that arm can follow the figure past its hole."""
     twist_amp: float = math.radians(12.0)
     """Amplitude of the upper-body counter-twist (against the turn), rad."""
     twist_phase: float = 0.0
@@ -72,6 +79,8 @@ class SkierOptions(SpringLegOptions):
         check_range("pole_hold", self.pole_hold, 0.0, math.pi / 2)
         check_range("pole_swing", self.pole_swing, 0.0, math.pi, lo_open=True)
         check_range("pole_lift", self.pole_lift, 0.0, 1.0)
+        check_range("plant_scale", self.plant_scale, 0.1, 10.0)
+        check_range("plant_reach", self.plant_reach, 0.1, 10.0)
         check_range("twist_amp", self.twist_amp, -math.pi / 2, math.pi / 2)
         check_range("twist_phase", self.twist_phase, -2 * math.pi, 2 * math.pi)
 
@@ -155,7 +164,8 @@ class SkierMapping(Mapping):
         """
         skel = b.skel
         chest = stack_dot(b.pose(B.CHEST)[:, :3, :3], skel.rest_of(B.CHEST)[:3, :3].T)
-        reach = 0.98 * (skel.length(B.side("upper_arm", "L")) + skel.length(B.side("forearm", "L")))
+        reach = 0.98 * o.plant_reach * (skel.length(B.side("upper_arm", "L"))
+                                        + skel.length(B.side("forearm", "L")))
         place = b.placement
         for s, sx in SIDES:
             plant = o.pole_plant_L if s == "L" else o.pole_plant_R
@@ -187,7 +197,7 @@ class SkierMapping(Mapping):
             offset = grip - wrist
             free = hand + offset
             plan = _plan_plants(place, d, o.pole_hold, o.pole_swing, grip + length * free_axis(grip),
-                                free, shoulder + offset, length, reach)
+                                free, shoulder + offset, length, reach, o.plant_scale)
             lift = plan.u[plan.after, None]
             target = free.copy()
             target[plan.held] = plan.grip_at[plan.held]
@@ -258,7 +268,21 @@ class _Arm:
 APPROACH = 0.5
 
 
-def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at) -> None:
+def _world(place, p, idx, k):
+    """Armature-space points ``p`` (m, 3) of frames ``idx`` in the world of the figure ``k``
+    times the built-in's size (scaled about the foot point, as retargeting scales the pose)."""
+    return place.origin[idx] + k * np.einsum("nij,nj->ni", place.R[idx], p)
+
+
+def _local(place, P, idx, k):
+    """World points ``P`` (m, 3) of the figure ``k`` times the size, in the built-in's armature
+    space of frames ``idx`` (the inverse of :func:`_world`)."""
+    P = np.broadcast_to(P, (len(idx), 3))
+    return place.to_local(place.origin[idx] + (P - place.origin[idx]) / k, idx)
+
+
+def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at,
+              k=1.0) -> None:
     """The frames before the plant at ``i0`` within ``phase`` of it: the tip goes from the free
     swing's to the hole ``P`` (world) along a smoothstep, so that it arrives at rest; the grip is
     the pole's length from it towards the free swing's grip.  Frames of an earlier plant stay."""
@@ -269,13 +293,13 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
     if not len(idx):
         return
     s = smoothstep((d[idx] - (d[i0] - phase)) / phase)[:, None]
-    world = (1.0 - s) * place.to_world_many(tips[idx], idx) + s * P
-    local = place.to_local(world, idx)
+    world = (1.0 - s) * _world(place, tips[idx], idx, k) + s * P
+    local = _local(place, world, idx, k)
     local[:, 2] = np.maximum(local[:, 2], 0.0)      # on or above the snow under the foot
     if place.surface is not None:                   # ... and the Ground mesh under the tip
-        world = place.to_world_many(local, idx)
+        world = _world(place, local, idx, k)
         world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1]))
-        local = place.to_local(world, idx)
+        local = _local(place, world, idx, k)
     away = free[idx] - local
     held[idx], tip_at[idx] = True, local
     grip_at[idx] = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
@@ -298,8 +322,10 @@ class _Plants:
     grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
 
 
-def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> _Plants:
-    """Where each plant goes into the snow and how long it can stay (see arms_and_poles).
+def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
+                 scale: float = 1.0) -> _Plants:
+    """Where each plant goes into the snow and how long it can stay (see arms_and_poles); the
+    holes stay put in the world of the figure ``scale`` times the built-in's size.
 
     ``d`` is the signed phase from the plant, ``tips`` and ``free`` the free swing's tip and grip
     (armature space), ``shoulder`` the shoulder shifted by the grip's offset from the wrist, so
@@ -314,10 +340,10 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> 
     for i0, i1 in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):   # runs [i0, i1)
         idx = np.arange(i0, i1)
         # The hole: where the swinging tip meets the snow.
-        P = on_snow(place, place.to_world(np.array([tips[i0, 0], tips[i0, 1], 0.0]), i0))
+        P = on_snow(place, _world(place, np.array([[tips[i0, 0], tips[i0, 1], 0.0]]), [i0], scale)[0])
         _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
-                  grip_at)
-        local = place.to_local(np.broadcast_to(P, (len(idx), 3)), idx)
+                  grip_at, scale)
+        local = _local(place, P, idx, scale)
         away = free[idx] - local
         grip = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
         ok = np.linalg.norm(grip - shoulder[idx], axis=1) <= reach
@@ -333,5 +359,5 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> 
         after[r + 1:j], grip_at[r + 1:j] = True, grip[-1]
         # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
         # rises off the snow along that line) while it swings free.
-        tip_at[r + 1:j] = place.to_local(np.broadcast_to(P, (j - r - 1, 3)), np.arange(r + 1, j))
+        tip_at[r + 1:j] = _local(place, P, np.arange(r + 1, j), scale)
     return _Plants(held, after, u, tip_at, grip_at)
