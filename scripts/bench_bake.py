@@ -68,7 +68,7 @@ def keyframe_insert_loop(obj, track) -> None:
 
 def curves(obj) -> dict:
     out = {}
-    for fc in compat.channels(obj).fcurves:
+    for fc in bake.baked_channels(obj).fcurves:
         co = np.empty(2 * len(fc.keyframe_points), np.float32)
         fc.keyframe_points.foreach_get("co", co)
         out[(fc.data_path, fc.array_index)] = co

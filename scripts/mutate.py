@@ -55,7 +55,8 @@ MODEL = [T + "test_model_kernels.py", T + "test_energy.py", T + "test_speed_is_p
          T + "test_terrain.py", T + "test_terrain_symbolic.py"]
 MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
-        T + "test_blender_operators.py", T + "test_blender_robustness.py"]
+        T + "test_blender_operators.py", T + "test_blender_robustness.py",
+        T + "test_blender_layers.py"]
 FOLLOW_GROUND = [T + "test_blender_follow_ground.py"]
 SURFACE = [T + "test_terrain_smooth.py", T + "test_terrain_fast.py", T + "test_terrain.py",
            T + "test_terrain_lazy.py"]
@@ -69,6 +70,9 @@ BLENDER_REGISTRY = [T + "test_blender_registry.py"]
 NOTES = [T + "test_blender_model_notes.py"]
 EXPORT = [T + "test_blender_export.py"]
 LIVE = [T + "test_blender_live.py", T + "test_mapping_cyclist.py"]
+LAYERS = [T + "test_blender_layers.py", T + "test_blender_robustness.py"]
+STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
+POLES = [T + "test_blender_poles.py"]
 
 
 @dataclass(frozen=True)
@@ -501,7 +505,7 @@ MUTANTS = [
     M("nan_track_baked", "blender/bake.py",
       "if not all(np.all(np.isfinite(a)) for a in arrays):", "if False:", BAKE, "bake"),
     M("clear_bake_drops_user_keys", "blender/bake.py",
-      "if user is not None or bag is None or len(bag.fcurves) == 0:", "if True:", BAKE, "bake"),
+      "if has_user or bag is None or len(bag.fcurves) == 0:", "if True:", BAKE, "bake"),
     M("bake_drops_keyed_params", "blender/bake.py",
       "params = [fc for fc in (bag.fcurves if bag else ())", "params = [fc for fc in ()",
       BAKE, "bake"),
@@ -511,6 +515,32 @@ MUTANTS = [
     M("rebake_removes_all_curves", "blender/bake.py",
       "for fc in [fc for fc in bag.fcurves if fc.data_path in paths]:",
       "for fc in list(bag.fcurves):", BAKE, "bake"),
+    # -- the bake's layers: tweaks above the bake (docs/layers.md) --------------------------------
+    M("tweaks_replace_the_bake", "blender/bake_layers.py",
+      'adt.action_blend_type = "COMBINE"', 'adt.action_blend_type = "REPLACE"', LAYERS, "bake"),
+    M("edited_bake_layer_rebaked", "blender/bake_layers.py",
+      "    if edited:\n", "    if False:\n", LAYERS, "bake"),
+    M("clear_bake_deletes_tweaks", "blender/bake_layers.py",
+      "    if left == 0:\n", "    if True:\n", LAYERS, "bake"),
+    M("rebake_makes_new_tweaks", "blender/bake_layers.py",
+      "    if action is None:\n        action = compat.assign_new_action",
+      "    if True:\n        action = compat.assign_new_action", LAYERS, "bake"),
+    # -- poles that plant (Section 7) -------------------------------------------------------------
+    M("pole_lands_at_speed", "mapping/skier.py",
+      "        _approach(place, d, swing * APPROACH,", "        0 and _approach(place, d, swing * APPROACH,",
+      POLES, "bake"),
+    M("pole_aims_forward_after_plant", "mapping/skier.py",
+      "w_aim = np.where(d > 0.0, 0.0, w)", "w_aim = w", POLES, "bake"),
+    M("users_pole_follows_the_hand", "mapping/retarget.py",
+      "                rot[chain[2]] = turn @ (A[chain[2]] @ rest[chain[2]][:3, :3])\n", "",
+      POLES, "bake"),
+    # -- crowd staging (docs/crowds.md) -----------------------------------------------------------
+    M("staging_always_waits", "crowd/staging.py",
+      '    if staging == "wait":\n', "    if True:\n", STAGING),
+    M("staging_ahead_of_the_leader", "crowd/staging.py",
+      "- late * leader.figure.body.V_cm * d", "+ late * leader.figure.body.V_cm * d", STAGING),
+    M("staging_keeps_the_offset", "crowd/staging.py",
+      "time_offset=leader.time_offset))", "time_offset=m.time_offset))", STAGING),
     # -- Follow Path on a Ground mesh -------------------------------------------------
     M("follow_ground_is_an_obstacle", "blender/follow_scene.py",
       "(s.foot_track, s.path, s.ground)", "(s.foot_track, s.path)", FOLLOW_GROUND, "bake"),
@@ -523,8 +553,9 @@ MUTANTS = [
     M("follow_ground_start_speed_current", "blender/follow_ground.py",
       'V0 = float(sampled_setting(fig, "speed", first)[0])', "V0 = float(fig.turning.speed)",
       FOLLOW_GROUND, "bake"),
-    M("follow_ground_upright", "blender/ops_path.py",
-      "normal=surface_normals(traj, ground))", "normal=None)", FOLLOW_GROUND, "bake"),
+    M("follow_ground_upright", "blender/follow_scene.py",
+      "normal=surface_normals(traj, ground), surface", "normal=None, surface", FOLLOW_GROUND,
+      "bake"),
     M("follow_ground_track_flat", "blender/figure_bake.py",
       "z=traj.z)", "z=None)", FOLLOW_GROUND, "bake"),
     M("follow_ground_any_mesh", "blender/follow_ground.py",

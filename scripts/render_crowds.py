@@ -10,11 +10,12 @@ cycled over the followers), with small random differences of body (``body_jitter
 ``seed``.  Every member is an ordinary figure of the job: its own rig, baked by the same
 operator as the others, on the leader's ground.
 
-In the Blender scene each figure starts at frame 1 from its own place, so a follower's time
-behind the leader becomes a distance behind it (``gap_s`` x the leader's speed, the timing
-jitter likewise) and it starts its turns at the leader's phase at the leader's start: a line of
-skiers a gap apart down the slope, each turning in its own lane, rather than each retracing the
-leader's turns late (the core's crowd clock: ``crowd.run_crowd``).
+The followers are staged as Blender's Add Crowd stages them (:func:`blender_turning.crowd.stage`,
+docs/crowds.md): with ``staging = "along_track"`` (the default) each figure moves from frame 1,
+a follower's time behind the leader becoming a distance behind it along the leader's mean
+heading (``gap_s`` x the leader's speed, the timing jitter likewise), at the leader's phase; with
+``staging = "wait"`` each follower waits at the leader's start until its time, and the shot's
+``seconds`` must let the last one start.
 """
 from __future__ import annotations
 
@@ -24,13 +25,13 @@ from dataclasses import replace
 import numpy as np
 
 from blender_turning.core.params import preset
-from blender_turning.crowd import CrowdFigure, Turns
+from blender_turning.crowd import STAGINGS, CrowdFigure, Turns, stage
 from blender_turning.crowd.formations import FORMATIONS
 from blender_turning.crowd.registry import FormationRefused
 from render_terrain import follow_target, key_locations, tracking_camera
 
 #: A crowd's own keys; its formation's keys are the formation record's (crowd/registry.py).
-KNOWN = {"name", "formation", "leader", "count", "shot"}
+KNOWN = {"name", "formation", "leader", "count", "shot", "staging"}
 
 
 def _led_formations() -> tuple:
@@ -38,11 +39,13 @@ def _led_formations() -> tuple:
     return tuple(n for n, r in FORMATIONS.items() if r.template == "leader")
 
 
-def read_crowds(top, figures: list, paths, obstacles, terrains, read_figure) -> list:
+def read_crowds(top, figures: list, paths, obstacles, terrains, read_figure,
+                seconds: float | None = None) -> list:
     """Read the ``[[crowds]]`` of the config ``top``; append every member (leader first) to
     ``figures`` as a figure dict with ``crowd`` set to the crowd's name; return the crowds
     ``[{"name", "members", "shot"}]``.  ``read_figure`` reads and checks the leader's table as
-    a ``[[figures]]`` one."""
+    a ``[[figures]]`` one; ``seconds``, the shot's length, is checked against a waiting crowd's
+    last start."""
     crowds = []
     known = KNOWN.union(*(FORMATIONS[n].keys for n in _led_formations()))
     for c in top.tables("crowds", known):
@@ -65,6 +68,15 @@ def read_crowds(top, figures: list, paths, obstacles, terrains, read_figure) -> 
             followers = record.read(c, leader, 0, f"{name} ")
         except FormationRefused as exc:           # e.g. a timing jitter over half the gap
             c.fail("formation", f"{kind}: {exc}")
+        staging = c.string("staging", "along_track", choices=STAGINGS)
+        heading = lead["heading_deg"] if lead["heading_deg"] is not None \
+            else lead["direction_deg"]
+        followers = stage(leader, followers, math.radians(heading), staging)
+        last = max(f.time_offset for f in followers)
+        if seconds is not None and last >= seconds:
+            c.fail("staging", f"= 'wait': the last follower starts at {last:.2f} s, not before "
+                              f"the shot ends (job.seconds = {seconds:g}); give the shot more "
+                              "seconds or stage the crowd 'along_track'")
         members = [dict(lead, crowd=name)]
         for f in followers:
             if any(f.name == g["name"] for g in figures + members):
@@ -90,15 +102,10 @@ def _leader(lead) -> CrowdFigure:
 
 
 def _member(lead: dict, f: CrowdFigure, crowd: str) -> dict:
-    """A follower as a figure of the job: the leader's settings, its own start (behind the
-    leader by its time offset at the leader's speed, along the leader's mean heading), period
-    and body."""
-    heading = lead["heading_deg"] if lead["heading_deg"] is not None else lead["direction_deg"]
-    back = f.time_offset * f.figure.body.V_cm
-    d = np.array([math.cos(math.radians(heading)), math.sin(math.radians(heading))])
-    start = np.asarray(f.position) - back * d
+    """A staged follower as a figure of the job: the leader's settings, its own start, start
+    offset, period and body."""
     b = f.figure.body
-    return dict(lead, name=f.name, start=(float(start[0]), float(start[1])),
+    return dict(lead, name=f.name, start=tuple(f.position), time_offset=f.time_offset,
                 period=f.controller.period, body={"mass": b.m, "com_height": b.l,
                                                   "inertia": b.I_v}, crowd=crowd)
 

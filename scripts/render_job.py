@@ -196,7 +196,7 @@ def read_figure(f, earlier, paths, obstacles, terrains) -> dict:
            "speed": f.number("speed", "V_cm", None),
            "target_speed": f.number("target_speed", "target_speed", 0.0),
            "tracks": f.boolean("tracks", True),
-           "body": None, "crowd": None}
+           "body": None, "crowd": None, "time_offset": 0.0}
     if fig["ground"] is not None and fig["ground"] not in terrains:
         f.fail("ground", f"= {fig['ground']!r} is not a [terrain.<name>] of the config")
     fall = math.degrees(SPORTS[sport].figure.limits.theta_fall)
@@ -319,7 +319,7 @@ def load_config(path: Path, overrides) -> dict:
     for f in figures:
         cfg["figures"].append(read_figure(f, cfg["figures"], paths, obstacles, terrains))
     cfg["crowds"] = render_crowds.read_crowds(top, cfg["figures"], paths, obstacles, terrains,
-                                              read_figure)
+                                              read_figure, cfg["seconds"])
     names = [fig["name"] for fig in cfg["figures"]]
     cfg["terrain"] = terrains
     if cfg["camera"]["follow"] not in ("all", "each", *names):
@@ -430,6 +430,7 @@ def add_figure(bpy, fig, cfg, paths, groups, grounds):
     if fig["body"] is not None:                      # a crowd's follower: its own body
         s.mass, s.com_height, s.inertia = (fig["body"][k] for k in ("mass", "com_height",
                                                                      "inertia"))
+    s.crowd.time_offset = fig["time_offset"]         # a waiting follower's start
     if fig["ground"] is not None:                    # rides on that terrain's mesh
         s.ground = grounds[fig["ground"]]
         s.terrain.target_speed = fig["target_speed"]
@@ -453,8 +454,8 @@ def bake_figure(bpy, obj, fig, frame_end):
 
 
 def _sampled_locations(bpy, obj, frames):
-    from blender_turning.blender import compat
-    bag = compat.channels(obj)
+    from blender_turning.blender import bake
+    bag = bake.baked_channels(obj)
     fcs = {fc.array_index: fc for fc in bag.fcurves if fc.data_path == "location"}
     return [[fcs[i].evaluate(f) for i in range(3)] for f in frames]
 

@@ -25,7 +25,7 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender import bake, compat  # noqa: E402
 from blender_turning.blender.rig_builder import material, primitive  # noqa: E402
 from rig_fixtures import activate, mixamo_skeleton, rigify_rig  # noqa: E402
 
@@ -119,7 +119,7 @@ def render(args):
         bpy.ops.turning.bake_turns()
     frame = args.frame
     if not frame:
-        fc = next(c for c in compat.channels(builtin).fcurves if c.data_path == '["turn_lean"]')
+        fc = next(c for c in bake.baked_channels(builtin).fcurves if c.data_path == '["turn_lean"]')
         frame = max(range(20, 49), key=lambda f: abs(fc.evaluate(f)))
     scene.frame_set(frame)
     centre = np.array(builtin.matrix_world.translation)

@@ -95,8 +95,8 @@ def make_tracks(bpy, fig_obj, ground_obj, material, frames):
     """The figure's tracks in the snow: a shaded groove ribbon along the baked foot point (a ski
     pair's width, a board's), growing behind the figure (a Build modifier reveals its faces in
     order, one a frame)."""
-    from blender_turning.blender import compat
-    bag = compat.channels(fig_obj)
+    from blender_turning.blender import bake
+    bag = bake.baked_channels(fig_obj)
     fcs = {fc.array_index: fc for fc in bag.fcurves if fc.data_path == "location"}
     xy = np.array([[fcs[i].evaluate(f) for i in range(2)] for f in frames])
     # A board cuts one groove its width; skis two, a hip's width apart.
@@ -131,7 +131,9 @@ def make_follow_cameras(bpy, figures, distance, height, lens):
 
 def key_locations(compat, obj, frames) -> np.ndarray:
     """``obj``'s keyed location at every frame of ``frames``: shape ``(frames, 3)``."""
-    fcs = {fc.array_index: fc for fc in compat.channels(obj).fcurves if fc.data_path == "location"}
+    from blender_turning.blender import bake
+    fcs = {fc.array_index: fc for fc in bake.baked_channels(obj).fcurves
+           if fc.data_path == "location"}
     return np.array([[fcs[i].evaluate(f) for i in range(3)] for f in frames])
 
 

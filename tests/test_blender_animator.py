@@ -12,7 +12,7 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import compat, ops_figure, panel  # noqa: E402
+from blender_turning.blender import bake, compat, ops_figure, panel  # noqa: E402
 from blender_turning.blender.props import TurningFigureSettings  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
 from modal_stand_ins import Context, WindowManager  # noqa: E402
@@ -43,8 +43,9 @@ def select(objs, active):
 
 
 def keys(obj, path, index=0):
-    """``(frames, values)`` of the F-curve ``path[index]`` of ``obj``'s action."""
-    fc = next(f for f in compat.channels(obj).fcurves
+    """``(frames, values)`` of the F-curve ``path[index]`` of ``obj``'s bake or tweak layer."""
+    bags = [bake.baked_channels(obj), compat.channels(obj)]
+    fc = next(f for bag in bags if bag is not None for f in bag.fcurves
               if f.data_path == path and f.array_index == index)
     co = np.empty(2 * len(fc.keyframe_points), np.float32)
     fc.keyframe_points.foreach_get("co", co)
@@ -52,8 +53,10 @@ def keys(obj, path, index=0):
 
 
 def all_keys(obj):
+    """Every key of the figure: its bake layer's and its active action's (the tweak layer)."""
     out = {}
-    for fc in compat.channels(obj).fcurves:
+    bags = [bake.baked_channels(obj), compat.channels(obj)]
+    for fc in [fc for bag in bags if bag is not None for fc in bag.fcurves]:
         co = np.empty(2 * len(fc.keyframe_points), np.float32)
         fc.keyframe_points.foreach_get("co", co)
         out[(fc.data_path, fc.array_index)] = co
@@ -126,7 +129,7 @@ def test_modal_bake_reports_progress_and_esc_writes_nothing(scene):
     while (ret := op_cls.modal(fake, Context(wm), timer)) == {"RUNNING_MODAL"}:
         pass
     assert ret == {"FINISHED"} and wm.progress == [1, 2, 3, "end"]
-    assert all(f.animation_data.action.name == f.name for f in figs)
+    assert all(bake.figure_action(f).name == f.name for f in figs)
 
 
 # -- frame range and step ---------------------------------------------------------------------
@@ -161,7 +164,7 @@ def test_a_step_keys_every_nth_frame_and_interpolates_smoothly(scene):
             continue
         np.testing.assert_array_equal(co[0::2], want)
         np.testing.assert_array_equal(co[1::2], exact[key][1::2][want - 1])    # the same keys
-    for fc in compat.channels(fig).fcurves:
+    for fc in bake.baked_channels(fig).fcurves:
         if not fc.data_path.startswith("turning."):
             assert {k.interpolation for k in fc.keyframe_points} == {"BEZIER"}
             bezier += 1
@@ -170,7 +173,7 @@ def test_a_step_keys_every_nth_frame_and_interpolates_smoothly(scene):
     # keys with the motion's own slopes): the lean, a 2 s turn keyed every 1/6 s, within
     # 0.05 deg (measured 0.043 in the start's transient, 0.006 after; linear in-betweens miss
     # by 0.8 deg, auto-clamped handles by 1.4 deg).
-    fc = next(f for f in compat.channels(fig).fcurves if f.data_path == '["turn_lean"]')
+    fc = next(f for f in bake.baked_channels(fig).fcurves if f.data_path == '["turn_lean"]')
     between = np.array([fc.evaluate(f) for f in range(1, 49)])
     err = np.abs(between - exact[('["turn_lean"]', 0)][1::2])
     assert np.degrees(err.max()) < 0.05, np.degrees(err).round(4)

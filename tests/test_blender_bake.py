@@ -9,7 +9,7 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import bake, compat, rig_builder  # noqa: E402
+from blender_turning.blender import bake, bake_layers, compat, rig_builder  # noqa: E402
 from blender_turning.mapping.base import BoneChannels, PoseTrack  # noqa: E402
 
 pytestmark = pytest.mark.blender
@@ -58,8 +58,8 @@ def read_fcurve(fc):
     return co[0::2].astype(float), co[1::2].astype(float)
 
 
-def fcurve_map(obj):
-    bag = compat.channels(obj)
+def fcurve_map(obj, bag=None):
+    bag = bag or bake.baked_channels(obj)
     return {(fc.data_path, fc.array_index): fc for fc in bag.fcurves}
 
 
@@ -103,7 +103,11 @@ def test_bad_spec_names_the_bone(scene):
 def test_bake_reads_back_equal(figure):
     track = synthetic_track()
     res = bake.bake_pose_track(figure, track)
-    assert res.action.name == figure.name and figure.animation_data.action == res.action
+    assert res.action.name == figure.name and bake.figure_action(figure) == res.action
+    adt = figure.animation_data                  # the bake plays from its own NLA track
+    assert [(t.name, [s.action for s in t.strips]) for t in adt.nla_tracks] == \
+        [(bake_layers.BAKE_TRACK, [res.action])]
+    assert bake_layers.is_tweaks(adt.action, figure) and adt.action_blend_type == "COMBINE"
     fcs = fcurve_map(figure)
     expect = {("location", i): track.location[:, i] for i in range(3)}
     expect.update({("rotation_euler", i): track.rotation[:, i] for i in range(3)})
@@ -139,11 +143,11 @@ def test_rebake_replaces_only_the_baked_curves(figure):
     track = synthetic_track(n=100, seed=2)
     res = bake.bake_pose_track(figure, track)
     fcs = fcurve_map(figure)
-    assert ('["user_thing"]', 0) in fcs                              # the user's key stays
+    assert ('["user_thing"]', 0) in fcurve_map(figure, compat.channels(figure))  # in the tweaks
     _, got = read_fcurve(fcs[("location", 0)])
     np.testing.assert_allclose(got, track.location[:, 0], atol=1e-6)
-    assert len(bpy.data.actions) == 2 and bpy.data.actions["UserWalk"] == other
-    assert res.action == figure.animation_data.action
+    assert len(bpy.data.actions) == 3 and bpy.data.actions["UserWalk"] == other
+    assert res.action == bake.figure_action(figure)
     # Twice = once.
     snap = {k: read_fcurve(v) for k, v in fcurve_map(figure).items()}
     bake.bake_pose_track(figure, track)

@@ -24,12 +24,12 @@ from scene_snapshot import diff, snapshot  # noqa: E402
 from test_blender_operators import add, make_path  # noqa: E402
 
 import blender_turning  # noqa: E402
-from blender_turning.blender import compat, crowd_job, follow_scene, scene_adapters  # noqa: E402
+from blender_turning.blender import bake, compat, crowd_job, follow_scene, scene_adapters  # noqa: E402
 from blender_turning.blender import retarget_adapter as ra  # noqa: E402
 from blender_turning.core import (DEFAULT_DT, BodyParams, Figure, Limits,  # noqa: E402
                                   PhaseEllipse, Schedule, simulate)
 from blender_turning.crowd import (Crowd, CrowdFigure, Turns, follow_leader,  # noqa: E402
-                                   synchronized)
+                                   stage, synchronized)
 from blender_turning.crowd.poses import map_task  # noqa: E402
 from blender_turning.crowd.runner import crowd_tasks, run_task  # noqa: E402
 
@@ -61,7 +61,7 @@ def crowd_of(fig):
 def curves(fig) -> dict:
     """``{(data_path, index): (frames, values)}`` of the figure's F-curves."""
     out = {}
-    for fc in compat.channels(fig).fcurves:
+    for fc in bake.baked_channels(fig).fcurves:
         co = np.empty(2 * len(fc.keyframe_points))
         fc.keyframe_points.foreach_get("co", co)
         out[fc.data_path, fc.array_index] = (co[0::2], co[1::2])
@@ -79,13 +79,16 @@ def core_member(fig) -> CrowdFigure:
 
 # -- Add Crowd ------------------------------------------------------------------------------------
 
-def test_follow_the_leader_is_the_core_formation(scene):
+@pytest.mark.parametrize("staging", ["ALONG_TRACK", "WAIT"])
+def test_follow_the_leader_is_the_core_formation(scene, staging):
     lead = add("SKIER", at=(2.0, 1.0, 0.0))
-    expected = follow_leader(core_member(lead), 5, 1.25, "time", [-1.5, 1.5], seed=7,
-                             body_jitter=0.05, timing_jitter=0.3, period_jitter=0.1, name="m")
+    expected = stage(core_member(lead), follow_leader(
+        core_member(lead), 5, 1.25, "time", [-1.5, 1.5], seed=7, body_jitter=0.05,
+        timing_jitter=0.3, period_jitter=0.1, name="m"), lead.turning.heading, staging.lower())
     assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=5, gap_time=1.25,
                                      lateral=1.5, alternate=True, seed=7, body_jitter=0.05,
-                                     timing_jitter=0.3, period_jitter=0.1) == {"FINISHED"}
+                                     timing_jitter=0.3, period_jitter=0.1,
+                                     staging=staging) == {"FINISHED"}
     coll = crowd_of(lead)
     figs = sorted((o for o in coll.objects if o.type == "ARMATURE"), key=lambda o: o.name)
     assert [o.name for o in figs] == ["Skier"] + [f"Skier {k}" for k in range(1, 6)]
@@ -213,7 +216,7 @@ def test_an_active_crowd_collection_is_baked_whole(scene):
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     for o in coll.objects:
         if o.type == "ARMATURE":
-            assert compat.channels(o) is not None and len(compat.channels(o).fcurves) > 0, o
+            assert bake.baked_channels(o) is not None and len(bake.baked_channels(o).fcurves), o
 
 
 @pytest.mark.installed
@@ -222,7 +225,7 @@ def test_a_users_rig_is_a_template(scene):
     activate(rig)
     assert bpy.ops.turning.make_figure(sport="CYCLIST", bone_map="MIXAMO") == {"FINISHED"}
     assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=2, gap_time=1.0,
-                                     lateral=2.0) == {"FINISHED"}
+                                     lateral=2.0, staging="WAIT") == {"FINISHED"}
     followers = [bpy.data.objects[f"{rig.name} {k}"] for k in (1, 2)]
     pieces = {eq.name for eq in rig.turning.rig.equipment.objects}
     for fig in followers:
@@ -352,7 +355,7 @@ def test_modal_follow_path_shows_one_progress_bar_then_bakes_all(scene):
     values = [v for v in wm.progress if isinstance(v, int)]
     assert values == sorted(values) and values[-1] == 100
     assert "baked 2 figures" in reports[-1][1]
-    assert all(f.animation_data.action.name == f.name for f in figs)
+    assert all(bake.figure_action(f).name == f.name for f in figs)
 
 
 def test_a_figure_without_a_plan_fails_the_crowd_and_writes_nothing(scene):

@@ -21,6 +21,12 @@ from blender_turning.blender import compat  # noqa: E402
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 FRAMES = (1, 9, 17, 24)
 FORMATS = ("glb", "fbx")
+#: FBX with the bake on its own NLA layer (docs/layers.md): the exporter's defaults write the
+#: bake's strip, the bake's action and the tweak layer as three takes, and the takes it re-imports
+#: first are not the baked one: a known gap (docs/export.md), recorded so it turns red when fixed.
+FBX_TAKES = pytest.mark.xfail(strict=True, reason="FBX writes the bake's NLA strip, its action "
+                              "and the tweak layer as separate takes")
+FORMATS_LAYERED = ("glb", pytest.param("fbx", marks=FBX_TAKES))
 GLTF_HOOK = "blender_turning.blender.export_gltf"
 TOLERANCE = {"glb": 1e-5, "fbx": 1e-3}         # m, see the measurements where they are used
 
@@ -83,7 +89,7 @@ def reimport(path):
 
 
 @pytest.mark.installed
-@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("fmt", FORMATS_LAYERED)
 def test_a_user_rigs_equipment_rides_along_in_the_file(scene, tmp_path, fmt):
     rig = mixamo_skeleton("Ann")
     activate(rig)
@@ -110,7 +116,7 @@ def test_a_user_rigs_equipment_rides_along_in_the_file(scene, tmp_path, fmt):
 
 
 @pytest.mark.installed
-@pytest.mark.parametrize("fmt", FORMATS)
+@pytest.mark.parametrize("fmt", FORMATS_LAYERED)
 def test_one_figure_exports_its_own_animation_only(scene, tmp_path, fmt):
     first = add("SKIER", at=(0, 0, 0))
     first.turning.period = 2.5
@@ -141,7 +147,7 @@ def test_clear_bake_gives_the_equipment_back_to_its_constraints(scene):
     actions = len(bpy.data.actions)
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}        # a re-bake keys them afresh
-    assert len(bpy.data.actions) == actions + 1 + len(gear)
+    assert len(bpy.data.actions) == actions + 2 + len(gear)     # the bake, its tweak layer
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
     assert len(bpy.data.actions) == actions
     assert [o.rotation_mode for o in gear] == modes

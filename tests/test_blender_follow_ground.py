@@ -16,7 +16,7 @@ bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import diff, snapshot  # noqa: E402
 
-from blender_turning.blender import compat, follow_scene, scene_adapters  # noqa: E402
+from blender_turning.blender import bake, compat, follow_scene, scene_adapters  # noqa: E402
 from blender_turning.blender.ground import height_field_of, mesh_from_height_field  # noqa: E402
 from blender_turning.core.follow_problem import DEFAULT_CLEARANCE  # noqa: E402
 from blender_turning.core.obstacles import Obstacles  # noqa: E402
@@ -81,7 +81,7 @@ def add_figure(sport="SKIER"):
 
 def curves_of(obj):
     out = {}
-    for fc in compat.channels(obj).fcurves:
+    for fc in bake.baked_channels(obj).fcurves:
         co = np.empty(2 * len(fc.keyframe_points))
         fc.keyframe_points.foreach_get("co", co)
         out[(fc.data_path, fc.array_index)] = co[1::2]

@@ -37,7 +37,7 @@ def baked(obj) -> dict:
     """``{(data_path, index): keys (2 n,)}`` of the curves the bake wrote."""
     paths = set(bake.figure_action(obj)[bake.BAKED_PATHS].splitlines())
     out = {}
-    for fc in compat.channels(obj).fcurves:
+    for fc in bake.baked_channels(obj).fcurves:
         if fc.data_path in paths:
             co = np.empty(2 * len(fc.keyframe_points), np.float32)
             fc.keyframe_points.foreach_get("co", co)

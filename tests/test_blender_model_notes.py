@@ -15,7 +15,7 @@ bpy = pytest.importorskip("bpy")
 
 from test_blender_operators import LayoutStub, add, make_path, scene  # noqa: E402,F401
 
-from blender_turning.blender import compat, panel, scene_adapters  # noqa: E402
+from blender_turning.blender import bake, compat, panel, scene_adapters  # noqa: E402
 from blender_turning.core.path import HermitePath  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
@@ -27,7 +27,7 @@ FAR = re.compile(r"(Info|Warning): Follow Path: (\S+): the foot is at most ([\d.
 
 
 def keyed(obj, path):
-    fc = next(f for f in compat.channels(obj).fcurves if f.data_path == path)
+    fc = next(f for f in bake.baked_channels(obj).fcurves if f.data_path == path)
     co = np.empty(2 * len(fc.keyframe_points))
     fc.keyframe_points.foreach_get("co", co)
     return co[0::2], co[1::2]

@@ -13,7 +13,7 @@ bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import snapshot  # noqa: E402
 
-from blender_turning.blender import compat, follow_scene, presets, scene_adapters  # noqa: E402
+from blender_turning.blender import bake, compat, follow_scene, presets, scene_adapters  # noqa: E402
 from blender_turning.blender.follow_job import Cancelled  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import PLAN_CURVATURE_RATE, FrameRange  # noqa: E402
@@ -123,9 +123,9 @@ def test_bake_turns_reads_back_equal_to_the_mapping(scene):
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     frames = FrameRange.of_scene(scene)
     _, track = figure_pose_track(obj, frames)
-    bag = compat.channels(obj)
-    fcs = {(fc.data_path, fc.array_index): fc for fc in bag.fcurves}
-    assert ("turning.period", 0) in fcs                   # the user's keys stay
+    fcs = {(fc.data_path, fc.array_index): fc for fc in bake.baked_channels(obj).fcurves}
+    assert ("turning.period", 0) in {(fc.data_path, fc.array_index)   # the user's keys stay,
+                                     for fc in compat.channels(obj).fcurves}  # in the tweaks
     for bone, ch in track.bones.items():
         for attr, arr in (("location", ch.location), ("rotation_quaternion", ch.rotation)):
             if arr is None:
@@ -223,7 +223,7 @@ def test_follow_path_bakes_and_fits_the_frame_range(scene, sport):
     obj = add(sport)                                 # the preset's planner curvature rate
     obj.turning.path = make_path([(0, 0), (3, -12), (-3, -24), (0, -36)])
     assert bpy.ops.turning.follow_path() == {"FINISHED"}
-    action = obj.animation_data.action
+    action = bake.figure_action(obj)
     assert action.name == obj.name
     # The foot follows the curve (within 3 m) to its end; the scene's range fits the run.
     track = obj.turning.foot_track.data.splines[0].points
@@ -237,7 +237,7 @@ def test_follow_path_bakes_and_fits_the_frame_range(scene, sport):
     assert dist.max() < 3.0, dist.max()
     assert np.linalg.norm(xy[-1] - (0, -36)) < 3.0
     assert scene.frame_end == scene.frame_start + len(track) - 1
-    fc = next(f for f in compat.channels(obj).fcurves if f.data_path == "location")
+    fc = next(f for f in bake.baked_channels(obj).fcurves if f.data_path == "location")
     assert len(fc.keyframe_points) == len(track)
 
 
@@ -325,7 +325,7 @@ def test_modal_follow_path_reports_progress_then_bakes(scene):
     assert ret == {"FINISHED"}, reports
     values = [v for v in wm.progress if isinstance(v, int)]
     assert values and values == sorted(values) and values[-1] == 100
-    assert obj.animation_data.action.name == obj.name
+    assert bake.figure_action(obj).name == obj.name
 
 
 @needs_mapping
@@ -349,7 +349,7 @@ def test_keyed_lean_is_followed_over_time(scene):
     obj.turning.lean = np.radians(28.0)
     obj.keyframe_insert("turning.lean", frame=241)
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    fc = next(f for f in compat.channels(obj).fcurves if f.data_path == '["turn_lean"]')
+    fc = next(f for f in bake.baked_channels(obj).fcurves if f.data_path == '["turn_lean"]')
     co = np.empty(2 * len(fc.keyframe_points), np.float32)
     fc.keyframe_points.foreach_get("co", co)
     lean = np.abs(co[1::2])

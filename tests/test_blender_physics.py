@@ -12,7 +12,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender import bake, compat  # noqa: E402
 from blender_turning.blender.figure_bake import apply_bake  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
@@ -86,7 +86,7 @@ def figure(baked, sport):
 def test_fcurves_read_back_equal_to_mapping(baked, sport):
     b = figure(baked, sport)
     tr = b.track
-    fcs = {(fc.data_path, fc.array_index): fc for fc in compat.channels(b.obj).fcurves}
+    fcs = {(fc.data_path, fc.array_index): fc for fc in bake.baked_channels(b.obj).fcurves}
     expect = {("location", i): tr.location[:, i] for i in range(3)}
     expect.update({("rotation_euler", i): tr.rotation[:, i] for i in range(3)})
     for name, ch in tr.bones.items():

@@ -58,16 +58,16 @@ READ = """
 import json, sys, bpy
 sys.path.insert(0, sys.argv[2])
 from blender_turning import blender as addon
-from blender_turning.blender import compat
+from blender_turning.blender import bake, compat
 addon.register()
 bpy.ops.wm.open_mainfile(filepath=sys.argv[1])
 out = {"figures": {}, "cameras": sorted(o.name for o in bpy.data.objects if o.type == "CAMERA")}
 for o in bpy.data.objects:
     if o.type != "ARMATURE":
         continue
-    fcs = list(compat.channels(o).fcurves)
+    fcs = list(bake.baked_channels(o).fcurves)
     loc = {fc.array_index: fc for fc in fcs if fc.data_path == "location"}
-    out["figures"][o.name] = {"data": o.data.name, "action": o.animation_data.action.name,
+    out["figures"][o.name] = {"data": o.data.name, "action": bake.figure_action(o).name,
                               "start": [loc[i].evaluate(1.0) for i in range(2)],
                               "keys": len(loc[0].keyframe_points), "curves": len(fcs),
                               "mass": o.turning.mass, "period": o.turning.period}

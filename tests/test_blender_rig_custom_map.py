@@ -8,7 +8,7 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import compat, ops_bone_map  # noqa: E402
+from blender_turning.blender import bake, compat, ops_bone_map  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
 from rig_fixtures import PREFIX, activate, mixamo_skeleton  # noqa: E402
 
@@ -52,7 +52,7 @@ def test_custom_map_edit_save_load_and_bake():
     assert other.turning.mass == pytest.approx(PRESETS["skier"].body.m * k * k, rel=1e-3)
     bpy.context.scene.frame_start, bpy.context.scene.frame_end = 1, 24
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    keyed = {fc.data_path.split('"')[1] for fc in compat.channels(other).fcurves
+    keyed = {fc.data_path.split('"')[1] for fc in bake.baked_channels(other).fcurves
              if fc.data_path.startswith("pose")}
     assert {"bob_Hips", "bob_LeftUpLeg", "bob_RightFoot", "bob_LeftHand"} <= keyed
     with pytest.raises(RuntimeError, match="must be a plain file name"):

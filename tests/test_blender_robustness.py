@@ -19,8 +19,8 @@ from modal_stand_ins import Context, WindowManager  # noqa: E402
 from test_blender_operators import (add, make_path, make_wall, modal_operator,  # noqa: E402,F401
                                     scene)
 
-from blender_turning.blender import (bake, compat, follow_job, follow_scene, ops_path,  # noqa: E402
-                                     pipeline)
+from blender_turning.blender import (bake, bake_layers, compat, follow_job, follow_scene,  # noqa: E402
+                                     ops_path, pipeline)
 from blender_turning.blender import presets  # noqa: E402
 from blender_turning.blender.scene_adapters import obstacle_footprints  # noqa: E402
 
@@ -204,7 +204,7 @@ def test_bake_then_clear_gives_the_users_action_back(scene):
     user_keys(obj)
     before = settled()
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    assert obj.animation_data.action.name == obj.name
+    assert bake.figure_action(obj).name == obj.name
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
     assert settled() == before, diff(before, snapshot())
@@ -248,7 +248,8 @@ def test_another_action_assigned_between_bakes_loses_nothing(scene):
     if compat.SLOTTED_ACTIONS:
         obj.animation_data.action_slot = second.slots.new(id_type="OBJECT", name=obj.name)
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    assert sorted(a.name for a in bpy.data.actions) == ["First", "Second", "Skier"]
+    assert sorted(a.name for a in bpy.data.actions) == ["First", "Second", "Skier",
+                                                        "Skier Tweaks"]
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
     assert obj.animation_data.action == second
     save_and_reload()
@@ -259,26 +260,30 @@ def test_another_action_assigned_between_bakes_loses_nothing(scene):
     assert [s.action for t in obj.animation_data.nla_tracks for s in t.strips] == [first]
 
 
-def push_down(obj):
-    """What the NLA editor's Push Down does: the action onto a new strip, none assigned."""
+def move_bake_strip(obj):
+    """What an animator may do in the NLA editor: the bake strip onto a track of their own."""
     adt = obj.animation_data
-    action = adt.action
+    old = next(t for t in adt.nla_tracks if t.name == bake_layers.BAKE_TRACK)
+    strip = old.strips[0]
+    action, slot = strip.action, compat.strip_slot(strip)
     track = adt.nla_tracks.new()
-    compat.nla_strip_new(track, action.name, int(action.frame_range[0]), action)
-    adt.action = None
+    new = track.strips.new(action.name, int(strip.frame_start), action)
+    if slot is not None:
+        new.action_slot = slot
+    adt.nla_tracks.remove(old)
     return track
 
 
-def test_bake_and_clear_understand_a_pushed_down_bake(scene):
+def test_bake_and_clear_understand_a_moved_bake_strip(scene):
     obj = add("SKIER")
     before = settled()
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     baked = settled()
-    push_down(obj)
+    move_bake_strip(obj)
     bpy.context.scene.frame_set(30)               # the strip moved the figure away from its start
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    assert [a.name for a in bpy.data.actions] == ["Skier"]           # no Skier.001
-    assert obj.animation_data.action is None
+    assert [a.name for a in bpy.data.actions] == ["Skier", "Skier Tweaks"]   # no Skier.001
+    assert bake_layers.is_tweaks(obj.animation_data.action, obj)
     again = settled()
     key = ("action", "Skier")
     assert again[key]["fcurves"] == baked[key]["fcurves"]            # the same run, in place
@@ -311,6 +316,9 @@ def test_duplicated_figure_owns_its_foot_track(scene):
     assert copy.turning.foot_track not in (None, track)
     assert bpy.ops.turning.clear_bake() == {"FINISHED"}
     after = snapshot()
+    # The copy played the original's bake strip (one user more) until its Clear Bake.
+    before[("action", "Skier")].pop("users")
+    after[("action", "Skier")].pop("users")
     assert {k: after.get(k) for k in before} == before, diff(before, after)
     assert orig.turning.foot_track == track
 
@@ -402,7 +410,7 @@ def test_renaming_the_figure_while_it_plans_keeps_the_plan(scene):
     op_cls, fake, reports = modal_operator(obj)
     obj.name = "Renamed"
     assert run_modal(op_cls, fake, Context(WindowManager())) == {"FINISHED"}, reports
-    assert obj.animation_data.action.name == "Renamed"
+    assert bake.figure_action(obj).name == "Renamed"
 
 
 def test_deleting_the_figure_while_it_plans_writes_nothing(scene):
@@ -506,8 +514,10 @@ def test_foot_track_never_renders_nor_exports(scene, tmp_path):
 def test_nla_tweak_mode_is_refused_by_poll(scene):
     obj = add("SKIER")
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    push_down(obj)
-    obj.animation_data.use_tweak_mode = True          # editing the pushed-down bake's strip
+    adt = obj.animation_data
+    adt.nla_tracks.active = next(t for t in adt.nla_tracks if t.name == bake_layers.BAKE_TRACK)
+    adt.nla_tracks.active.strips[0].select = True
+    adt.use_tweak_mode = True                         # editing the bake's strip in the NLA
     before = snapshot()
     for op in (bpy.ops.turning.bake_turns, bpy.ops.turning.clear_bake):
         with pytest.raises(RuntimeError, match="NLA is in tweak mode"):

@@ -12,7 +12,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender import bake, compat  # noqa: E402
 from blender_turning.blender.ground import mesh_from_height_field  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
 
@@ -22,7 +22,7 @@ SECONDS, FPS = 8, 24
 
 def _curves(obj):
     out = {}
-    for fc in compat.channels(obj).fcurves:
+    for fc in bake.baked_channels(obj).fcurves:
         co = np.empty(2 * len(fc.keyframe_points))
         fc.keyframe_points.foreach_get("co", co)
         out[(fc.data_path, fc.array_index)] = co[1::2]

@@ -84,6 +84,18 @@ def test_a_time_gap_is_that_long_at_the_leaders_speed(tmp_path):
     assert np.allclose(np.diff(ys), 0.5 * 9.0)
 
 
+def test_a_waiting_crowd_stands_at_the_leaders_start_until_its_time(tmp_path):
+    cfg = load(tmp_path, CROWD.format(extra='staging = "wait"', leader=""))
+    lead, followers = cfg["figures"][0], cfg["figures"][1:]
+    assert lead["time_offset"] == 0.0
+    for i, f in enumerate(followers, start=1):
+        assert f["start"][1] == pytest.approx(50.0, abs=1e-9)      # all at the leader's start
+        assert f["start"][0] == pytest.approx(-4.0 + (-1.0 if i % 2 else 1.0), abs=1e-9)
+        assert f["time_offset"] == pytest.approx(3.0 * i / 9.0, rel=1e-12)   # 3 m at 9 m/s
+    strung = load(tmp_path, CROWD.format(extra="", leader=""))["figures"]
+    assert all(f["time_offset"] == 0.0 for f in strung)
+
+
 def test_the_demo_has_a_ski_school_of_eight_with_a_shot(tmp_path):
     cfg = load(tmp_path, (ROOT / "scripts" / "configs" / "demo.toml").read_text())
     assert cfg["camera"]["follow"] == "each"
@@ -104,6 +116,9 @@ def test_the_demo_has_a_ski_school_of_eight_with_a_shot(tmp_path):
     ("timing_jitter_s = 2.0", "", ["crowds[0].formation", "timing_jitter"]),
     ("", 'sport = "unicyclist"', ["crowds[0].leader.sport = 'unicyclist'"]),
     ("", 'ground = "moon"', ["crowds[0].leader.ground = 'moon'"]),
+    ('staging = "queue"', "", ["crowds[0].staging = 'queue'", "along_track, wait"]),
+    ('staging = "wait"\ncount = 20', "", ["crowds[0].staging = 'wait'", "starts at 6.67 s",
+                                          "job.seconds = 5"]),
 ])
 def test_bad_crowds_name_the_key(tmp_path, extra, leader, names):
     text = CROWD

@@ -85,8 +85,8 @@ def user_fk(rig, track):
     return skel.fk(track.bones, len(track))
 
 
-def builtin_fk(track):
-    return Skeleton.from_spec(load_rig("skier")).fk(track.bones, len(track))
+def builtin_fk(track, sport="skier"):
+    return Skeleton.from_spec(load_rig(sport)).fk(track.bones, len(track))
 
 
 def world(track, P, facing_up=None):
@@ -132,15 +132,29 @@ def test_feet_lean_and_equipment_follow_the_builtin(run, scale, shin_ratio):
             continue
         Mu = P[piece.bone] @ np.linalg.inv(rig.rest_of(piece.bone)) @ piece.rest
         # The built-in's equipment as carried by the joint from rest (the ski is glued to the
-        # foot; the built-in's pole also swings in its hand, the user's is rigid in it).
-        Mb = Pb[piece.joint] @ np.linalg.inv(SKEL.rest_of(piece.joint)) @ SKEL.rest_of(
-            piece.name)
+        # foot); a pole swings in the built-in's hand and the user's hand turns with it, so the
+        # user's pole is the built-in's own.
+        Mb = Pb[piece.name] if piece.name.startswith("pole") else \
+            Pb[piece.joint] @ np.linalg.inv(SKEL.rest_of(piece.joint)) @ SKEL.rest_of(piece.name)
         R = rot_z(out.rotation[:, 2])
-        assert np.max(np.abs(R @ Mu[:, :3, :3] - rot_z(run.rotation[:, 2]) @ Mb[:, :3, :3])) < 1e-6
         head_u = sw(out, Mu[:, :3, 3])
         foot_pt = np.column_stack([run.location[:, :2], np.zeros(len(run))])
         head_b = foot_pt + fit.k * (world(run, Mb[:, :3, 3]) - foot_pt)
-        assert np.max(np.abs(head_u - head_b)) < 1e-6
+        rot_u, rot_b = R @ Mu[:, :3, :3], rot_z(run.rotation[:, 2]) @ Mb[:, :3, :3]
+        if piece.name.startswith("pole"):
+            # Where the arm reaches, exactly the built-in's pole; where it falls short, the
+            # pole points from where the grip got to at the built-in's tip (the hole).
+            # (This rig's arms, 1.1 times the built-in's, reach its grip on 4% of the frames.)
+            reached = np.linalg.norm(head_u - head_b, axis=1) < 1e-6
+            assert reached.any()
+            tip_b = foot_pt + fit.k * (world(run, Mb[:, :3, 3] + SKEL.length(piece.name)
+                                             * Mb[:, :3, 1]) - foot_pt)
+            aim = (tip_b - head_u) / np.linalg.norm(tip_b - head_u, axis=1, keepdims=True)
+            assert np.max(np.abs(rot_u[:, :, 1] - aim)) < 1e-6
+            rot_u, rot_b = rot_u[reached], rot_b[reached]
+        else:
+            assert np.max(np.abs(head_u - head_b)) < 1e-6
+        assert np.max(np.abs(rot_u - rot_b)) < 1e-6
 
 
 def test_knee_flexion_follows_within_5_deg(run):
@@ -166,14 +180,14 @@ def _u(v):
 
 
 def test_t_pose_arms_hang_like_the_builtins(run):
-    """The rest difference: a T-pose upper arm ends up pointing where the built-in's does."""
-    out = retarget(run, "skier", user_rig(t_pose=True), BM)
-    P, Pb = user_fk(user_rig(), out), builtin_fk(run)
+    """The rest difference: a T-pose rig's arms move as the same rig's with hanging arms do
+    (the wrist's target, the pole's grip on the built-in's, is the same for both)."""
+    P_t = user_fk(user_rig(t_pose=True), retarget(run, "skier", user_rig(t_pose=True), BM))
+    P_a = user_fk(user_rig(), retarget(run, "skier", user_rig(), BM))
     for s in "LR":
-        yu = _u(P[PREFIX + f"forearm.{s}"][:, :3, 3] - P[PREFIX + f"upper_arm.{s}"][:, :3, 3])
-        yb = _u(Pb[f"forearm.{s}"][:, :3, 3] - Pb[f"upper_arm.{s}"][:, :3, 3])
-        yb = yb @ rot_z(np.array(math.pi)).T       # into the user's (-Y facing) axes
-        assert np.degrees(np.max(np.arccos(np.clip(np.sum(yu * yb, 1), -1, 1)))) < 20
+        yt, ya = (_u(P[PREFIX + f"forearm.{s}"][:, :3, 3] - P[PREFIX + f"upper_arm.{s}"][:, :3, 3])
+                  for P in (P_t, P_a))
+        assert np.degrees(np.max(np.arccos(np.clip(np.sum(yt * ya, 1), -1, 1)))) < 0.01
 
 
 def test_swing_takes_a_onto_b_including_opposite():

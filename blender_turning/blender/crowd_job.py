@@ -47,7 +47,7 @@ from .figure_bake import apply_bake
 from .figure_context import check_figure, end_modal, report_error, selected_figures
 from .follow_scene import prepare
 from .model_notes import follow_note, warn_distance
-from .pipeline import map_track, on_ground, started, surface_normals
+from .pipeline import map_track, on_ground, started, surface_heights, surface_normals
 from .scene_adapters import FrameRange
 from .workers import PumpedExecutor, worker_pool
 
@@ -245,7 +245,8 @@ class CrowdFollow:
             if ground is not None:              # the foot on the mesh, as follow_scene.finish does
                 traj = on_ground(traj, ground)
             track = map_track(fig.turning.sport, traj, shown, obj=fig,
-                              normal=surface_normals(traj, ground))
+                              normal=surface_normals(traj, ground),
+                              surface=surface_heights(ground))
             bake.check_track(fig, track)
             computed.append((fig, traj, track))
         scene.frame_end = frames.end

@@ -9,7 +9,7 @@ import bpy
 import numpy as np
 
 from ..mapping.base import BoneChannels, PoseTrack
-from . import bake, compat, foot_track, retarget_adapter
+from . import bake, foot_track, retarget_adapter
 from . import export_ready as export_ready_mod
 
 
@@ -35,7 +35,7 @@ def _baked_curves(fig) -> dict:
     action = bake.figure_action(fig)
     paths = set(action.get(bake.BAKED_PATHS, "").splitlines())
     out = {}
-    for fc in compat.channels(fig).fcurves:
+    for fc in bake.baked_channels(fig).fcurves:
         if fc.data_path in paths:
             co = np.empty(2 * len(fc.keyframe_points))
             fc.keyframe_points.foreach_get("co", co)

@@ -13,7 +13,7 @@ from . import bake, follow_ground
 from .figure_bake import apply_bake
 from .figure_context import check_figure
 from .follow_job import FollowJob
-from .pipeline import map_track, on_ground, surface_normals
+from .pipeline import map_track, on_ground, surface_heights, surface_normals
 from .scene_adapters import (FrameRange, SceneInputError, bezier_control_points,
                              figure_from_settings, obstacle_footprints)
 
@@ -74,7 +74,7 @@ def finish(context, fig, job, result):
         traj = on_ground(traj, ground)    # the foot on the mesh, as a terrain Bake Turns
     check_figure(fig)                     # the rig may have changed while the plan ran
     track = map_track(fig.turning.sport, traj, frames, obj=fig,   # may raise: nothing written
-                      normal=surface_normals(traj, ground))
+                      normal=surface_normals(traj, ground), surface=surface_heights(ground))
     bake.check_track(fig, track)
     scene.frame_end = frames.end
     apply_bake(fig, traj, track)

@@ -38,7 +38,7 @@ from ..core.controllers.feasible import nearby_tables
 from ..core.errors import FellOver, TurningError
 from ..mapping import MAPPINGS
 from ..mapping.snow import tilt_gain
-from . import bake, compat, export_ready, foot_track
+from . import bake, compat, export_ready, foot_track, props
 from .figure_context import check_figure
 from .pipeline import figure_pose_track, ground_of
 from .props import figure_settings
@@ -440,6 +440,7 @@ HANDLERS = ((bpy.app.handlers.depsgraph_update_post, on_depsgraph_update),
 
 
 def register():
+    props.on_live_switched = live_changed
     for handlers, fn in HANDLERS:
         handlers.append(fn)
     _subscribe()
@@ -448,6 +449,7 @@ def register():
 
 
 def unregister():
+    props.on_live_switched = None
     for handlers, fn in HANDLERS:
         while fn in handlers:
             handlers.remove(fn)

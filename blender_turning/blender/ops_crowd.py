@@ -8,6 +8,7 @@ collection, selected, so Bake Turns (or Follow Path) then does the whole crowd.
 """
 from __future__ import annotations
 
+import math
 import types
 
 import bpy
@@ -17,11 +18,19 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 from ..core.errors import TurningError
 from ..core.validate import check
 from ..crowd.formations import FORMATIONS
+from ..crowd import shot_length, stage
 from ..core.ranges import CROWD_RANGES
 from . import crowd_scene
 from .figure_context import context_figure, poll_figure, report_error
 from .registry_items import formation_items
 
+STAGING = (
+    ("ALONG_TRACK", "Along the Track",
+     "Every figure moves from the first frame; a follower due later starts that far behind on "
+     "the leader's line (path followers wait at the start of their path)"),
+    ("WAIT", "Wait at the Start",
+     "Each follower stands at the leader's start until its start offset"),
+)
 GAP_BY = (("TIME", "Time", "Each follower starts Gap seconds after the one before"),
           ("DISTANCE", "Distance", "Each follower starts Gap metres (at the leader's speed) "
                                    "behind the one before"))
@@ -92,6 +101,11 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
     row_spacing: FloatProperty(name="Row Spacing", default=0.8, **_r("spacing_m", soft_max=3.0),
                                unit="LENGTH",
                                description="Distance between riders of a row")
+    staging: EnumProperty(name="Staging", items=STAGING, default="ALONG_TRACK",
+                          description="Where the followers are at the first frame")
+    fit_range: BoolProperty(name="Fit Scene Range", default=True,
+                            description="Lengthen the scene's frame range so that the last "
+                                        "follower to start runs as long as the leader")
 
     @classmethod
     def poll(cls, context):
@@ -105,6 +119,10 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
         record = FORMATIONS.get(self.formation.lower())
         for name in record.fields(self) if record is not None else ():
             layout.prop(self, name)
+        layout.prop(self, "staging")
+        row = layout.row()
+        row.active = self.staging == "WAIT"
+        row.prop(self, "fit_range")
 
     def _values(self) -> types.SimpleNamespace:
         """The settings as typed (a float property keeps float32: 0.05 is read back as
@@ -120,7 +138,7 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
             if isinstance(v, float):
                 v = float(np.format_float_positional(np.float32(v), unique=True, trim="0"))
             out[name] = check(name, v, CROWD_RANGES[key])
-        for name in ("formation", "gap_by", "alternate", "antiphase"):
+        for name in ("formation", "gap_by", "alternate", "antiphase", "staging", "fit_range"):
             out[name] = getattr(self, name)
         return types.SimpleNamespace(**out)
 
@@ -148,11 +166,30 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
                                         f"{template.name} {k} Path",
                                         float(template.turning.start[2]), collection)
 
+    @staticmethod
+    def staged(template, lead, members, v) -> tuple:
+        """``members`` staged as the render job stages them (:func:`..crowd.stage`)."""
+        s = template.turning
+        heading = float(s.heading) if s.use_heading else float(s.start_heading)
+        return stage(lead, members, heading, v.staging.lower())
+
+    @staticmethod
+    def fitted_end(scene, lead, members, v):
+        """The last frame the crowd needs (``None``: the scene's range already fits)."""
+        if v.staging != "WAIT" or not v.fit_range:
+            return None
+        fps = scene.render.fps / scene.render.fps_base
+        length = (scene.frame_end - scene.frame_start) / fps
+        end = scene.frame_start + math.ceil(shot_length(lead, members, length) * fps - 1e-9)
+        return end if end > scene.frame_end else None
+
     def execute(self, context):
         template = context_figure(context)
         try:
             v = self._values()
             lead, members = self.members(context, template, v)
+            members = self.staged(template, lead, members, v)
+            end = self.fitted_end(context.scene, lead, members, v)
         except (ValueError, TurningError) as exc:
             return report_error(self, "Add Crowd", template.name, exc)
         coll = crowd_scene.new_crowd_collection(context)
@@ -175,9 +212,14 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
         for fig in figs:
             fig.select_set(True)
         context.view_layer.objects.active = figs[0]
+        staged = "strung out along the track" if v.staging == "ALONG_TRACK" \
+            else "waiting at the start"
+        if end is not None:
+            context.scene.frame_end = end
+            staged += f", the scene's range now ends at frame {end} to fit them"
         self.report({"INFO"}, f"Add Crowd: {len(figs)} figures in {coll.name!r} "
-                              f"({FORMATIONS[v.formation.lower()].label.lower()}); Bake Turns or "
-                              "Follow Path now does them all")
+                              f"({FORMATIONS[v.formation.lower()].label.lower()}, {staged}); Bake "
+                              "Turns or Follow Path now does them all")
         return {"FINISHED"}
 
 

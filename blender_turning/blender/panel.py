@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import bpy
 
-from . import bake, live, model_notes
+from . import bake, bake_layers, live, model_notes
 from .figure_context import context_figure, selected_figures
 from .registry_items import sport_label
 
@@ -99,9 +99,25 @@ class VIEW3D_PT_turning_bake(FigurePanel, bpy.types.Panel):
         fig = context_figure(context)
         draw_live(layout, fig, count)
         layout.prop(fig.turning, "show_foot_track")
-        action = bake.figure_action(fig)
-        if action is not None:
-            layout.label(text=f"Action: {action.name}", icon="ACTION")
+        draw_layers(layout, fig)
+
+
+#: Icon per layer kind (:func:`.bake.layers`).
+LAYER_ICONS = {"TWEAKS": "GREASEPENCIL", "BAKE": "NLA", "USER": "ACTION"}
+
+
+def draw_layers(layout, fig) -> None:
+    """The figure's animation layers, top first, and Start Tweak Layer when it has none playing."""
+    rows = bake.layers(fig)
+    if not rows:
+        return
+    box = layout.box()
+    box.label(text="Layers (top first)")
+    for kind, name, state in rows:
+        box.label(text=f"{kind.title()}: {name} ({state})", icon=LAYER_ICONS[kind])
+    tweaks = bake_layers.tweak_layer(fig)[0]
+    if bake.figure_action(fig) is not None and not bake_layers.playing(fig, tweaks):
+        box.operator("turning.start_tweaks", icon="ADD")
 
 
 def draw_live(layout, fig, count: int) -> None:

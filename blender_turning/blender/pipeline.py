@@ -26,16 +26,18 @@ from .scene_adapters import (FrameRange, SceneInputError, controller_from_settin
                              start_state)
 
 
-def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None, normal=None):
+def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None, normal=None,
+              surface=None):
     """The sport's Section 7 mapping of ``traj`` (already at ``frames.fps``) to a pose track;
     retargeted onto ``obj`` when it is a figure made from the user's own rig.
-    ``normal`` ((n, 3)): the surface normal at the foot on every frame (terrain)."""
+    ``normal`` ((n, 3)): the surface normal at the foot on every frame (terrain); ``surface``:
+    the ground's height (:func:`surface_heights`)."""
     from ..mapping import map_trajectory      # the mapping layer's entry point
     from . import retarget_adapter
     if obj is not None and (retarget_adapter.is_user_rig(obj) or retarget_adapter.mirrored(obj)):
-        return retarget_adapter.figure_track(obj, traj, frames, options, normal)
+        return retarget_adapter.figure_track(obj, traj, frames, options, normal, surface)
     return map_trajectory(sport.lower(), traj, options, frame_start=frames.start,
-                          normal=normal)
+                          normal=normal, surface=surface)
 
 
 def first_frame(offset: float, fps: float) -> int:
@@ -149,6 +151,12 @@ def surface_normals(traj, ground) -> np.ndarray | None:
     return np.asarray(fr.n, float).T
 
 
+def surface_heights(ground):
+    """``(x, y) -> z`` of ``ground`` (a :class:`.ground.MeshGround`: the mesh's own heights);
+    ``None`` on flat ground."""
+    return None if ground is None else ground.heights
+
+
 def figure_pose_track(obj, frames: FrameRange, options=None, start=None, height=None,
                       ground="read"):
     """``(trajectory, pose track)`` of the figure ``obj`` over ``frames`` (see
@@ -158,4 +166,4 @@ def figure_pose_track(obj, frames: FrameRange, options=None, start=None, height=
     traj = simulate_figure(obj, frames, start, height, ground)
     shown = started(frames, float(obj.turning.crowd.time_offset))
     return traj, map_track(obj.turning.sport, traj, shown, options, obj,
-                           surface_normals(traj, ground))
+                           surface_normals(traj, ground), surface_heights(ground))

@@ -27,9 +27,14 @@ def _show_foot_track(settings, context):
     update_visibility(settings, context)
 
 
+#: What switching a figure's Live Preview calls, with the figure: set by ``live.register()``
+#: (props is read by live, so it takes the call from there instead of importing it).
+on_live_switched = None
+
+
 def _live_changed(settings, context):
-    from . import live                           # a sibling module, imported when used
-    live.live_changed(settings.id_data)
+    if on_live_switched is not None:
+        on_live_switched(settings.id_data)
 
 
 def _range(key: str) -> dict:

@@ -7,13 +7,14 @@ Reads ``bone.matrix_local``, parents and ``use_local_location`` into a
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 import math
 
 import bpy
 import numpy as np
 from mathutils import Matrix, Quaternion
 
-from ..mapping import map_trajectory
+from ..mapping import MAPPINGS, map_trajectory
 from ..mapping.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map, parse_bone_map,
                                 require_joints)
 from ..mapping.equipment import equipment_rest
@@ -147,18 +148,46 @@ def facing(obj) -> float:
                    mirrored(obj)).travel
 
 
-def figure_track(obj, traj, frames, options=None, normal=None):
+def figure_track(obj, traj, frames, options=None, normal=None, surface=None):
     """The pose track of ``obj`` for ``traj`` (one sample per frame of ``frames``) when it is a
     user's rig or rides goofy: the built-in figure's Section 7 mapping (of the mirrored run for
     a goofy stance), retargeted onto the user's rig, or mirrored onto the built-in rig itself.
     ``normal`` ((n, 3)): the surface normal at the foot on a Ground mesh; the figure then stands
-    in the local surface as the built-in figures do (:mod:`..mapping.surface`)."""
+    in the local surface as the built-in figures do (:mod:`..mapping.surface`); ``surface``: the
+    ground's height, where the built-in's poles are planted."""
     sport, mirror = obj.turning.sport.lower(), mirrored(obj)
+    fit = None
+    if is_user_rig(obj):
+        rig, bm = user_rig(obj), figure_bone_map(obj)
+        fit = fit_rig(rig, bm, sport, mirror)
+        options = plants_for(sport, options, fit.k, arm_ratio(rig, bm, sport, fit))
     track = map_trajectory(sport, mirrored_trajectory(traj) if mirror else traj, options,
-                           frame_start=frames.start, normal=normal)
-    if not is_user_rig(obj):
+                           frame_start=frames.start, normal=normal, surface=surface)
+    if fit is None:
         return goofy_track(sport, track)
-    return retarget(track, sport, user_rig(obj), figure_bone_map(obj), mirror=mirror)
+    return retarget(track, sport, rig, bm, fit, mirror=mirror)
+
+
+def plants_for(sport: str, options, k: float, reach: float = 1.0):
+    """The sport's mapping options with the pole plants planned for a figure ``k`` times the
+    built-in's size whose arms are ``reach`` times as long again (the retargeted rig), so its
+    holes stay put and its hands can follow them; unchanged without poles."""
+    opts = MAPPINGS[sport].Options() if options is None else options
+    if not hasattr(opts, "plant_scale"):
+        return options
+    return replace(opts, plant_scale=k, plant_reach=reach)
+
+
+def arm_ratio(rig: UserRig, bm: BoneMap, sport: str, fit) -> float:
+    """The user's arm (shoulder to wrist, world metres) over ``k`` times the built-in's."""
+    from ..mapping.stance import builtin_skeleton
+    skel = builtin_skeleton(sport)
+    joints = [bm.bone(j) for j in ("upper_arm.L", "forearm.L", "hand.L")]
+    if any(b is None or b not in rig.names for b in joints):
+        return 1.0
+    h = [rig.head(b) for b in joints]
+    user = fit.scale * float(np.linalg.norm(h[1] - h[0]) + np.linalg.norm(h[2] - h[1]))
+    return user / (fit.k * (skel.length("upper_arm.L") + skel.length("forearm.L")))
 
 
 # -- the rig as it was -------------------------------------------------------------------------

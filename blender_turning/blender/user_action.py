@@ -112,13 +112,13 @@ def restore_rest(obj) -> None:
             pb.rotation_euler = b["rotation_euler"]
 
 
-def give_back(bag, user_bag) -> None:
-    """Put what is left in the figure's action (the user's keys: copied parameters, and anything
-    keyed while baked) into the user's action, replacing only curves that differ."""
+def give_back(curves, user_bag) -> None:
+    """Put the user's keys ``curves`` (copied parameters, and anything keyed while baked) into the
+    user's action, replacing only curves that differ."""
     if user_bag is None:
         return
     have = {(fc.data_path, fc.array_index): fc for fc in user_bag.fcurves}
-    for fc in bag.fcurves:
+    for fc in list(curves):
         old = have.get((fc.data_path, fc.array_index))
         if old is not None and fcurve_keys(old) == fcurve_keys(fc) and old.mute == fc.mute:
             continue
@@ -141,11 +141,14 @@ def unstash(obj, user) -> None:
     assigned another one); forget the stash."""
     adt = obj.animation_data
     if user is not None:
-        track, _ = stash_strip(obj, user)
+        track, strip = stash_strip(obj, user)
+        slot = compat.strip_slot(strip) if strip is not None else None
+        # The slot the stash played through: files from 4.2 recorded no slot name.
+        name = slot.identifier if slot is not None else obj.get(STASHED + "_slot")
         if track is not None:
             adt.nla_tracks.remove(track)
         if adt.action is None:
-            compat.restore_action(obj, user, obj.get(STASHED + "_slot"))
+            compat.restore_action(obj, user, name)
     for key in (STASHED, STASHED + "_slot"):
         if key in obj:
             del obj[key]

@@ -7,8 +7,9 @@ from ..core.moving import MovingBodies, closest_approach
 from .poses import map_crowd
 from .reader import crowd_from_dict, load_crowd
 from .runner import CrowdResult, FigureResult, crowd_tasks, run_crowd, run_task
+from .staging import STAGINGS, shot_length, stage
 
 __all__ = ["Crowd", "CrowdFigure", "FollowPath", "Turns", "follow_leader", "synchronized",
            "peloton", "offset_path", "point_at_distance", "load_crowd", "crowd_from_dict",
            "CrowdResult", "FigureResult", "run_crowd", "crowd_tasks", "run_task",
-           "MovingBodies", "closest_approach", "map_crowd"]
+           "MovingBodies", "closest_approach", "map_crowd", "STAGINGS", "stage", "shot_length"]

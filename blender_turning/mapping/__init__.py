@@ -27,12 +27,13 @@ __all__ = ["STATE_PROPS", "BoneChannels", "Mapping", "PoseTrack", "MAPPINGS", "m
 
 
 def map_trajectory(sport: str, traj, options=None, frame_start: int = 1,
-                   fps: float | None = None, normal=None) -> PoseTrack:
+                   fps: float | None = None, normal=None, surface=None) -> PoseTrack:
     """Map ``traj`` onto the rig of ``sport``: one pose per sample, at frames
     ``frame_start + k``.  With ``fps`` the trajectory is first resampled at that rate (one
     sample per frame); without it the samples are used as they are (already resampled).
     ``normal`` ((n, 3), per sample): the surface normal at the foot on terrain; the figure then
-    stands on the surface (:mod:`.surface`)."""
+    stands on the surface (:mod:`.surface`); ``surface(x, y) -> z``: the ground's height, where
+    the poles are planted (default: the plane under the foot)."""
     if sport not in MAPPINGS:
         raise ValueError(f"sport = {sport!r} is not one of {', '.join(MAPPINGS)}")
     if fps is not None:
@@ -42,4 +43,4 @@ def map_trajectory(sport: str, traj, options=None, frame_start: int = 1,
     if len(traj) == 0:
         raise ValueError("the trajectory has no samples")
     frames = float(frame_start) + np.arange(len(traj), dtype=float)
-    return MAPPINGS[sport].map(traj, options, frames, normal)
+    return MAPPINGS[sport].map(traj, options, frames, normal, surface)

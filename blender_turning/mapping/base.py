@@ -87,9 +87,10 @@ class Mapping:
     def pose(self, builder, traj, options, spec) -> None:  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def map(self, traj, options=None, frames=None, normal=None) -> PoseTrack:
+    def map(self, traj, options=None, frames=None, normal=None, surface=None) -> PoseTrack:
         """``normal``: (n, 3) surface normals at the foot on terrain (``None``: flat ground);
-        the object then stands on the surface (:mod:`.surface`)."""
+        the object then stands on the surface (:mod:`.surface`); ``surface``: the ground's
+        height, ``surface(x, y) -> z``, for the pole plants (:class:`.surface.Placement`)."""
         from .bones import REQUIRED, require
         from .kinematics import PoseBuilder, Skeleton, quat_continuous
         from .rig_spec import load_rig
@@ -104,7 +105,7 @@ class Mapping:
         n = len(traj)
         frames = np.arange(n, dtype=float) + 1.0 if frames is None else np.asarray(frames, float)
         builder = PoseBuilder(Skeleton.from_spec(spec), n)
-        builder.placement = Placement(traj, normal)
+        builder.placement = Placement(traj, normal, surface)
         self.pose(builder, traj, options, spec)
         skel = builder.skel
         bones = {}

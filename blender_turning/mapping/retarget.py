@@ -29,10 +29,11 @@ user's armature at rest, read by the Blender side) through a :class:`~.bone_map.
   built-in's are, on the saddle.  Wrists reach the built-in's by IK; the rest is carried.
 * **Equipment** (:func:`.equipment.equipment_rest`) is rigid with its joint (``ATTACH``), placed
   at rest as on the built-in through the same ``A``: a ski under its foot lands exactly on the
-  built-in's ski.  A pole is rigid in the hand, so it follows the built-in's hand, not the
-  built-in pole's own aim (the built-in's pole swings in its hand; an object tied to a bone
-  cannot, and a hand turned with the pole would put the wrist out of the arm's reach on about
-  40% of the frames).
+  built-in's ski.  A pole is rigid in the hand, so the hand turns as the built-in's pole does
+  and the wrist goes where that puts the grip on the built-in's: the pole lies where the
+  built-in's lies, and the plants, planned for the user's size (``SkierOptions.plant_scale``),
+  stay in their holes.  Where the arm falls short the hand turns the pole at the built-in's
+  tip, so the tip rises along that line.
 * **Stance** (:mod:`.stance`): a goofy snowboarder is the mirror image of the regular
   built-in on the mirrored run (``mirror=True``).
 * **Channels.**  For a rig with controls (Rigify) the bake keys the controls, each moving rigidly
@@ -309,6 +310,7 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
                     _knee_distance(bi, rest, s), s)
     for s, turn in turns.items():
         rot[f"foot.{s}"] = turn @ rot[f"foot.{s}"]
+    held_poles = {}
     for j in rest:
         if j == B.HIPS or j in poses:
             continue
@@ -319,6 +321,17 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         elif j.startswith("upper_arm"):
             chain = (j, f"forearm.{side}", f"hand.{side}")
             target = bi.head(chain[2])
+            pole = f"pole.{side}"
+            if ATTACH[sport].get(pole) == chain[2] and chain[2] in rest:
+                # The pole is rigid in the user's hand: the hand turns as the built-in's pole
+                # does, and the wrist goes where that puts the grip on the built-in's (the
+                # pole's rest offset from the wrist, k times the built-in's), so the pole lies
+                # where the built-in's lies and its planted tip stays in its hole.
+                turn = bi.delta(pole)
+                rot[chain[2]] = turn @ (A[chain[2]] @ rest[chain[2]][:3, :3])
+                grip = (fit.k / fit.scale) * bi.rest_vec(chain[2], pole)
+                target = bi.head(pole) - np.einsum("nij,j->ni", turn, grip)
+                held_poles[chain[2]] = (pole, grip)
         else:
             place(j, carried(j))
             continue
@@ -327,10 +340,36 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         l1 = float(np.linalg.norm(rest[b][:3, 3] - rest[a][:3, 3]))
         l2 = float(np.linalg.norm(rest[c][:3, 3] - rest[b][:3, 3]))
         mid, end = two_bone_ik(root, target, l1, l2, _pole(bi, a, b, c))
+        if c in held_poles:
+            rot[c] = _aim_pole(bi, fit, held_poles[c], rot[c], end, target)
         place(a, root, aimed(a, mid - root, rest[b][:3, 3] - rest[a][:3, 3]))
         place(b, mid, aimed(b, end - mid, rest[c][:3, 3] - rest[b][:3, 3]))
         place(c, end)
     return poses
+
+
+def _aim_pole(bi, fit, pole_grip, rot_hand, wrist, target):
+    """The hand's rotation where the arm fell short of ``target`` (the user's arm is shorter
+    than the built-in's, scaled): turned about the wrist so that the pole still points from
+    its grip at the built-in's tip (the hole, while planted), as the built-in's pole aims at
+    the hole it leaves; the tip then rises along that line instead of dragging through the
+    snow."""
+    pole, grip = pole_grip
+    short = np.linalg.norm(wrist - target, axis=1) > 1e-6
+    if not short.any():
+        return rot_hand
+    turn = bi.delta(pole)[short]
+    P = bi.P[pole][short]
+    tip = bi.fit.point(P[:, :3, 3] + bi.skel.length(pole) * P[:, :3, 1])
+    axis = bi.fit.C @ bi.skel.rest_of(pole)[:3, 1]
+    S = np.broadcast_to(np.eye(3), turn.shape).copy()
+    for _ in range(6):      # turning the hand moves the grip: aim again (0.2 deg, then 1e-9)
+        now = np.einsum("nij,j->ni", S @ turn, axis)
+        at = wrist[short] + np.einsum("nij,j->ni", S @ turn, grip)
+        S = swing(now, tip - at) @ S
+    out = rot_hand.copy()
+    out[short] = S @ rot_hand[short]
+    return out
 
 
 def _channels(rig: UserRig, bone: str, pose, parent_delta):

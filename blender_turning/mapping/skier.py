@@ -59,6 +59,13 @@ class SkierOptions(SpringLegOptions):
     """Phase over which the pole swings between planted and trailing, rad."""
     pole_lift: float = 0.35
     """Height of the pole tip when trailing, m."""
+    plant_scale: float = 1.0
+    """Size of the figure shown relative to the built-in rig (retargeting's ``k``, which scales
+    the pose about the foot point): the pole holes are planned to stay put in that figure's
+    world."""
+    plant_reach: float = 1.0
+    """The shown figure's arm length over ``plant_scale`` times the built-in's: a plant lasts
+    only as long as that arm can follow the figure past its hole."""
     twist_amp: float = math.radians(12.0)
     """Amplitude of the upper-body counter-twist (against the turn), rad."""
     twist_phase: float = 0.0
@@ -74,6 +81,8 @@ class SkierOptions(SpringLegOptions):
         check_range("pole_hold", self.pole_hold, 0.0, math.pi / 2)
         check_range("pole_swing", self.pole_swing, 0.0, math.pi, lo_open=True)
         check_range("pole_lift", self.pole_lift, 0.0, 1.0)
+        check_range("plant_scale", self.plant_scale, 0.1, 10.0)
+        check_range("plant_reach", self.plant_reach, 0.1, 10.0)
         check_range("twist_amp", self.twist_amp, -math.pi / 2, math.pi / 2)
         check_range("twist_phase", self.twist_phase, -2 * math.pi, 2 * math.pi)
 
@@ -157,7 +166,8 @@ class SkierMapping(Mapping):
         """
         skel = b.skel
         chest = stack_dot(b.pose(B.CHEST)[:, :3, :3], skel.rest_of(B.CHEST)[:3, :3].T)
-        reach = 0.98 * (skel.length(B.side("upper_arm", "L")) + skel.length(B.side("forearm", "L")))
+        reach = 0.98 * o.plant_reach * (skel.length(B.side("upper_arm", "L"))
+                                        + skel.length(B.side("forearm", "L")))
         place = b.placement
         for s, sx in SIDES:
             plant = o.pole_plant_L if s == "L" else o.pole_plant_R
@@ -173,10 +183,14 @@ class SkierMapping(Mapping):
             length = skel.length(pole)
             arm = _Arm(b, B.side("upper_arm", s), B.side("forearm", s), elbow_dir, pole)
 
+            # The free pole swings forward (and down) for the plant only: after the plant it
+            # trails, as a pole dragged out of its hole does, until the swing to the next one.
+            w_aim = np.where(d > 0.0, 0.0, w)
+
             def free_axis(grip):
-                beta = POLE_AIM_TRAIL + w * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
+                beta = POLE_AIM_TRAIL + w_aim * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
                 horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
-                dz = o.pole_lift * (1.0 - w) - grip[:, 2]
+                dz = o.pole_lift * (1.0 - w_aim) - grip[:, 2]
                 rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
                 return (rho[:, None] * horiz + dz[:, None] * up) / length
 
@@ -185,7 +199,7 @@ class SkierMapping(Mapping):
             offset = grip - wrist
             free = hand + offset
             plan = _plan_plants(place, d, o.pole_hold, o.pole_swing, grip + length * free_axis(grip),
-                                free, shoulder + offset, length, reach)
+                                free, shoulder + offset, length, reach, o.plant_scale)
             lift = plan.u[plan.after, None]
             target = free.copy()
             target[plan.held] = plan.grip_at[plan.held]
@@ -251,6 +265,56 @@ class _Arm:
                 head + self.fore * r_low[:, :, 1])
 
 
+#: The last part of the swing to a plant, as a fraction of ``pole_swing``: the tip comes to rest
+#: in its hole over it (world space), instead of landing at the figure's speed and sliding.
+APPROACH = 0.5
+
+
+def _world(place, p, idx, k):
+    """Armature-space points ``p`` (m, 3) of frames ``idx`` in the world of the figure ``k``
+    times the built-in's size (scaled about the foot point, as retargeting scales the pose)."""
+    return place.origin[idx] + k * np.einsum("nij,nj->ni", place.R[idx], p)
+
+
+def _local(place, P, idx, k):
+    """World points ``P`` (m, 3) of the figure ``k`` times the size, in the built-in's armature
+    space of frames ``idx`` (the inverse of :func:`_world`)."""
+    P = np.broadcast_to(P, (len(idx), 3))
+    return place.to_local(place.origin[idx] + (P - place.origin[idx]) / k, idx)
+
+
+def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at,
+              k=1.0) -> None:
+    """The frames before the plant at ``i0`` within ``phase`` of it: the tip goes from the free
+    swing's to the hole ``P`` (world) along a smoothstep, so that it arrives at rest; the grip is
+    the pole's length from it towards the free swing's grip.  Frames of an earlier plant stay."""
+    j = i0 - 1
+    while j >= 0 and d[i0] - phase < d[j] <= d[j + 1] and not (held[j] or after[j]):
+        j -= 1
+    idx = np.arange(j + 1, i0)
+    if not len(idx):
+        return
+    s = smoothstep((d[idx] - (d[i0] - phase)) / phase)[:, None]
+    world = (1.0 - s) * _world(place, tips[idx], idx, k) + s * P
+    local = _local(place, world, idx, k)
+    local[:, 2] = np.maximum(local[:, 2], 0.0)      # on or above the snow under the foot
+    if place.surface is not None:                   # ... and the Ground mesh under the tip
+        world = _world(place, local, idx, k)
+        world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1]))
+        local = _local(place, world, idx, k)
+    away = free[idx] - local
+    held[idx], tip_at[idx] = True, local
+    grip_at[idx] = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
+
+
+def on_snow(place, p):
+    """The world point ``p`` moved onto the ground (vertically; the plane under the foot when
+    there is no Ground mesh, where it already is)."""
+    if place.surface is None:
+        return p
+    return np.array([p[0], p[1], float(place.surface(np.array([p[0]]), np.array([p[1]]))[0])])
+
+
 @dataclass
 class _Plants:
     held: np.ndarray      # (n,) bool: the tip is in the snow
@@ -260,8 +324,10 @@ class _Plants:
     grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
 
 
-def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> _Plants:
-    """Where each plant goes into the snow and how long it can stay (see arms_and_poles).
+def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
+                 scale: float = 1.0) -> _Plants:
+    """Where each plant goes into the snow and how long it can stay (see arms_and_poles); the
+    holes stay put in the world of the figure ``scale`` times the built-in's size.
 
     ``d`` is the signed phase from the plant, ``tips`` and ``free`` the free swing's tip and grip
     (armature space), ``shoulder`` the shoulder shifted by the grip's offset from the wrist, so
@@ -275,8 +341,11 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> 
     edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
     for i0, i1 in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):   # runs [i0, i1)
         idx = np.arange(i0, i1)
-        P = place.to_world(tips[i0], i0)
-        local = place.to_local(np.broadcast_to(P, (len(idx), 3)), idx)
+        # The hole: where the swinging tip meets the snow.
+        P = on_snow(place, _world(place, np.array([[tips[i0, 0], tips[i0, 1], 0.0]]), [i0], scale)[0])
+        _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
+                  grip_at, scale)
+        local = _local(place, P, idx, scale)
         away = free[idx] - local
         grip = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
         ok = np.linalg.norm(grip - shoulder[idx], axis=1) <= reach
@@ -292,7 +361,7 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach) -> 
         after[r + 1:j], grip_at[r + 1:j] = True, grip[-1]
         # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
         # rises off the snow along that line) while it swings free.
-        tip_at[r + 1:j] = place.to_local(np.broadcast_to(P, (j - r - 1, 3)), np.arange(r + 1, j))
+        tip_at[r + 1:j] = _local(place, P, np.arange(r + 1, j), scale)
     return _Plants(held, after, u, tip_at, grip_at)
 
 

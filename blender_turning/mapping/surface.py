@@ -52,10 +52,13 @@ def euler_xyz(R, yaw_near) -> np.ndarray:
 
 class Placement:
     """Armature space <-> world for every frame of ``traj``; ``normal`` ((n, 3), or ``None`` for
-    flat ground) the surface normal at the foot."""
+    flat ground) the surface normal at the foot; ``surface``: the ground's height under world
+    points, ``surface(x, y) -> z`` (arrays; ``None``: the plane through the foot, normal to
+    ``normal``), where what touches the snow away from the foot (a pole's tip) goes."""
 
-    def __init__(self, traj, normal=None):
+    def __init__(self, traj, normal=None, surface=None):
         n = len(traj)
+        self.surface = surface
         z = np.asarray(getattr(traj, "z", np.zeros(n)), float)
         self.origin = np.stack([traj.x, traj.y, z], 1)
         yaw = np.asarray(traj.theta_dir, float) - math.pi / 2
@@ -70,6 +73,10 @@ class Placement:
 
     def to_world(self, p, i):
         return self.origin[i] + self.R[i] @ p
+
+    def to_world_many(self, p, idx):
+        """Armature-space points ``p`` (k, 3) of frames ``idx`` to world."""
+        return self.origin[idx] + np.einsum("nij,nj->ni", self.R[idx], p)
 
     def to_local(self, p_world, idx):
         return np.einsum("nji,nj->ni", self.R[idx], p_world - self.origin[idx])
