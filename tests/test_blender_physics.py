@@ -12,7 +12,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import bake, compat  # noqa: E402
+from blender_turning.blender import bake, compat, export_ready  # noqa: E402
 from blender_turning.blender.figure_bake import apply_bake  # noqa: E402
 from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
@@ -95,6 +95,9 @@ def test_fcurves_read_back_equal_to_mapping(baked, sport):
                 expect.update({(f'pose.bones["{name}"].{attr}', i): arr[:, i]
                                for i in range(arr.shape[1])})
     expect.update({(f'["{p}"]', 0): v for p, v in tr.props.items()})
+    # The figure's own take (export_ready.py: a constant that only its own object has, so FBX
+    # gives no other object this action).
+    expect[(f'["{export_ready.TAKE}{b.obj.name}"]', 0)] = np.zeros(len(tr))
     assert set(fcs) == set(expect)
     for key, values in expect.items():
         co = np.empty(2 * len(fcs[key].keyframe_points), np.float32)
