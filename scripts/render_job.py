@@ -862,10 +862,11 @@ def _main(argv, made) -> int:
         f"{cfg['fps']} fps, {cfg['render']['engine']} {cfg['render']['resolution'][0]}x"
         f"{cfg['render']['resolution'][1]}")
     try:
-        with OutputLock(out, flag, f"render_job {cfg['name']}"), signals.deferred():
+        with signals.deferred(), OutputLock(out, flag, f"render_job {cfg['name']}"):
             # Held signals: Blender prints, rather than passes on, an exception raised in the
             # add-on's code it calls; the job stops at its checkpoints (after each figure's
-            # bake, each frame) instead.
+            # bake, each frame) instead.  Held from before the lock is taken, so a signal
+            # cannot leave a lock file (and the folder made for it) behind.
             res = run(cfg, render=not args.no_render)
     except OutputLocked as exc:
         print(f"render_job: error: {exc}", file=sys.stderr, flush=True)

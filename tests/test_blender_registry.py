@@ -97,7 +97,7 @@ def test_a_formation_registered_after_the_addon_is_in_add_crowd(scene, own):
     lead.turning.use_heading, lead.turning.heading = True, 0.0
     lead.turning.start_heading = 0.0
     assert bpy.ops.turning.add_crowd(formation="ECHELON", count=3, gap_time=1.0,
-                                     spacing=2.0) == {"FINISHED"}
+                                     spacing=2.0, staging="WAIT") == {"FINISHED"}   # the crowd's clock
     crowd = sorted((o for o in bpy.data.objects if o.name.startswith(f"{lead.name} ")
                     and o.type == "ARMATURE"), key=lambda o: o.name)
     assert len(crowd) == 3

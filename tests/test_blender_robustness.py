@@ -450,7 +450,7 @@ def test_exception_inside_the_mapping_is_reported_and_writes_nothing(scene, monk
     with pytest.raises(RuntimeError, match=r"internal error \(RuntimeError: injected\)"):
         bpy.ops.turning.bake_turns()
     assert_unchanged(before)
-    monkeypatch.setattr(ops_path, "map_track", boom)
+    monkeypatch.setattr(follow_scene, "map_track", boom)
     obj.turning.path = make_path([(3, 0), (3, -20)])
     bpy.context.view_layer.objects.active = obj
     before = snapshot()

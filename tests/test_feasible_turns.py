@@ -173,11 +173,14 @@ def test_the_commanded_turn_is_the_one_a_run_follows(heading):
     assert not ctl.commanded_turn(0.0).limited
 
 
-def test_nearby_tables_answer_with_a_close_body_s_table_only_inside_the_block():
+def test_nearby_tables_answer_with_a_close_body_s_table_only_inside_the_block(monkeypatch):
     """Live Preview's Body slider: inside ``nearby_tables(rel)`` a body within ``rel`` of one
-    whose table was built gets that table; outside, every body its own."""
+    whose table was built gets that table; outside, every body its own.  (The tables built so
+    far start empty: an earlier test may have built one for the close body itself.)"""
     from dataclasses import replace as rep
+    from blender_turning.core.controllers import feasible
     from blender_turning.core.controllers.feasible import feasible_turns, nearby_tables
+    monkeypatch.setattr(feasible, "_TABLES", {})
     fig = preset("skier")
     base = feasible_turns(fig.body, fig.limits)
     close, far = rep(fig.body, m=fig.body.m * 1.01), rep(fig.body, m=fig.body.m * 1.05)

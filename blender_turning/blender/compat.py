@@ -11,6 +11,9 @@ VERSION = bpy.app.version
 
 # Slotted (layered) actions arrived in 4.4; 5.0 removed Action.fcurves/groups/id_root.
 SLOTTED_ACTIONS = VERSION >= (4, 4, 0)
+# Before 5.0 an add-on's registered properties live among the object's ID properties, and reading
+# one that was never set (``obj.turning.is_figure``) creates the group there: look at the keys.
+SETTINGS_IN_IDPROPS = VERSION < (5, 0, 0)
 
 # EEVEE's engine id was 'BLENDER_EEVEE_NEXT' in 4.2-4.5 and is 'BLENDER_EEVEE' again in 5.0.
 _ENGINES = {e.identifier for e in bpy.types.RenderSettings.bl_rna.properties["engine"].enum_items}

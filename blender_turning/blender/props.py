@@ -15,6 +15,7 @@ from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorPro
                        PointerProperty)
 
 from ..core.ranges import RANGES
+from . import compat
 from .props_crowd import TurningCrowdSettings
 from .props_rig import TurningRigSettings
 from .registry_items import sport_items
@@ -190,6 +191,8 @@ def figure_settings(obj):
     """``obj.turning`` when ``obj`` is a figure's armature, else ``None``."""
     if obj is None or obj.type != "ARMATURE":
         return None
+    if compat.SETTINGS_IN_IDPROPS and "turning" not in obj.keys():
+        return None                       # never a figure; reading would add the group
     settings = getattr(obj, "turning", None)
     return settings if settings is not None and settings.is_figure else None
 
