@@ -57,6 +57,7 @@ def key_head_tweak(obj, frame=50):
 ANGLE_TOL = 1e-4
 
 
+@pytest.mark.installed
 def test_a_key_set_after_a_bake_survives_the_rebake(scene):
     obj = add("SKIER")
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
@@ -122,6 +123,7 @@ def test_a_stepped_bake_is_not_taken_for_the_users_edits(scene):
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
 
 
+@pytest.mark.installed
 def test_start_tweak_layer_and_the_panel_shows_the_layers(scene):
     obj = add("SKIER")
     user_keys(obj)

@@ -77,6 +77,7 @@ def live_figure(sport="SKIER"):
     return fig
 
 
+@pytest.mark.installed
 def test_a_set_leaves_a_pending_rebake_that_refresh_runs_as_bake_turns_would(scene):
     fig = live_figure()
     before = baked(fig)
@@ -304,6 +305,7 @@ def test_a_fall_keeps_the_last_good_bake_and_marks_the_frame(scene):
     assert not any("Falls" in t for t in panel_labels(fig))
 
 
+@pytest.mark.installed
 def test_the_operator_switches_the_whole_selection(scene):
     figs = [add("SKIER"), add("CYCLIST", (5, 0, 0)), add("TELEMARK", (10, 0, 0))]
     for o in bpy.context.view_layer.objects:
