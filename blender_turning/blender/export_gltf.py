@@ -11,7 +11,7 @@ which an importer plays as one).
 """
 from __future__ import annotations
 
-from . import bake, bake_layers
+from . import bake, bake_layers, compat
 
 MERGE_INTO = bake.MERGE_INTO
 
@@ -20,6 +20,12 @@ def _foreign(action, obj) -> bool:
     """A bake of another object (a figure or a piece of equipment)."""
     owner = action.get(bake.OWNER) if action is not None else None
     return owner is not None and owner != obj
+
+
+def _empty_tweaks(action, obj) -> bool:
+    """The figure's tweak layer (docs/layers.md) without a key: nothing of its own to export."""
+    return bake_layers.is_tweaks(action, obj) and \
+        not any(len(fc.keyframe_points) for fc in compat.all_fcurves(action))
 
 
 def _merge_name(action, obj):
@@ -37,7 +43,8 @@ class glTF2ExportUserExtension:  # noqa: N801 (the name the exporter looks for)
     def gather_actions_hook(self, blender_object, actions, export_settings):
         if hasattr(actions, "actions"):                   # 4.4+: ActionsData of ActionData
             for key in list(actions.actions):
-                kept = [a for a in actions.actions[key] if not _foreign(a.action, blender_object)]
+                kept = [a for a in actions.actions[key] if not _foreign(a.action, blender_object)
+                        and not _empty_tweaks(a.action, blender_object)]
                 for data in kept:
                     name = _merge_name(data.action, blender_object)
                     if name is not None:
@@ -49,7 +56,8 @@ class glTF2ExportUserExtension:  # noqa: N801 (the name the exporter looks for)
             return
         # 4.2/4.3: parallel lists of actions, NLA track names and target types; animations
         # merge by track name.
-        keep = [a for a in actions.blender_actions if not _foreign(a, blender_object)]
+        keep = [a for a in actions.blender_actions if not _foreign(a, blender_object)
+                and not _empty_tweaks(a, blender_object)]
         actions.blender_actions = keep
         for act in keep:
             name = _merge_name(act, blender_object)
