@@ -187,22 +187,32 @@ def _crowd_with_quick_figures(tmp_path) -> Path:
 
 @pytest.mark.parametrize("keep_going", [False, True])
 def test_a_worker_killed_mid_crowd_is_reported_by_figure(tmp_path, keep_going):
-    """Three tasks on two workers: the 101-skier batch (30 s of motion: 4 s on an idle machine,
-    measured) and two single figures that start 0.5 s before the end (0.3 s each).  A worker killed while the batch runs: the batch's figures
-    are named; --keep-going writes the other two and lists the lost ones in the summary."""
+    """Three tasks on two workers: the 101-skier batch and two single figures.  The tasks leave
+    marks (tests/crowd_task_marks.py): the batch holds its worker until it is killed, so the kill
+    lands in the middle of it on any machine.  The batch's figures are named; --keep-going writes
+    the other two and lists the lost ones in the summary."""
     scene = _crowd_with_quick_figures(tmp_path)
-    out = tmp_path / "out"
+    out, marks = tmp_path / "out", tmp_path / "marks"
     out.mkdir()
-    proc = start("crowd", scene, "--out", out, "--workers", 2,
-                 *(["--keep-going"] if keep_going else []))
-    wait_for_hidden(out, proc)
-    end = time.monotonic() + 60
-    while len(children(proc.pid)) < 2 and time.monotonic() < end and proc.poll() is None:
+    marks.mkdir()
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, str(ROOT / "tests" / "crowd_task_marks.py"), marks,
+                             "crowd", scene, "--out", out, "--workers", "2",
+                             *(["--keep-going"] if keep_going else [])],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            start_new_session=True)
+    want = {"done-board", "done-bike"}
+    end = time.monotonic() + 120
+    while time.monotonic() < end and proc.poll() is None:
+        names = {p.name for p in marks.iterdir()}
+        holds = [n for n in names if n.startswith("hold-")]
+        if holds and want <= names:
+            break
         time.sleep(0.02)
-    time.sleep(1.5)                    # the two quick tasks are done, the batch is not
-    pool = children(proc.pid)
-    assert len(pool) >= 2, pool
-    os.kill(pool[0], signal.SIGKILL)
+    assert proc.poll() is None, proc.communicate()
+    assert holds and want <= names, names
+    time.sleep(0.2)                    # the parent collects the two quick results
+    os.kill(int(holds[0].split("-")[1]), signal.SIGKILL)
     _, err = proc.communicate(timeout=120)
     line = one_line(err)
     assert proc.returncode == 1, err
