@@ -13,8 +13,9 @@ def unregister():
 
 
 def __getattr__(name):
-    # The glTF exporter looks for this on every enabled add-on's module (export_gltf.py).
+    # The glTF exporter looks for this on every enabled add-on's module
+    # (blender_turning/blender/anim/export_gltf.py).
     if name == "glTF2ExportUserExtension":
-        from .blender_turning.blender.export_gltf import glTF2ExportUserExtension
+        from .blender_turning.blender.anim.export_gltf import glTF2ExportUserExtension
         return glTF2ExportUserExtension
     raise AttributeError(name)

@@ -26,11 +26,14 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
-from blender_turning.blender import bake, compat, rig_builder  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.scene import rig_builder  # noqa: E402
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.core.registry import SPORTS  # noqa: E402
-from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
-from blender_turning.blender.scene_adapters import FrameRange, settings_from_preset  # noqa: E402
+from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import (FrameRange,  # noqa: E402
+                                                          settings_from_preset)
 
 
 def build(sport: str, name: str, x: float):

@@ -26,9 +26,9 @@ import bpy  # noqa: E402
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.core.registry import SPORTS as REGISTERED  # noqa: E402
 from blender_turning.core import PhaseEllipse, Schedule, preset, simulate  # noqa: E402
-from blender_turning.blender.figure_bake import apply_bake  # noqa: E402
-from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
-from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.blender.anim.figure_bake import apply_bake  # noqa: E402
+from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
 from bench_common import best  # noqa: E402  (scripts/)
 
 SPORTS = tuple(s.key for s in REGISTERED.values())        # every registered sport

@@ -26,7 +26,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender.scene_adapters import MAX_FRAMES  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import MAX_FRAMES  # noqa: E402
 
 
 def peak_mb() -> float:

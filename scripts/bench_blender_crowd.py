@@ -9,7 +9,7 @@ either side), are planned
   time: ``follow_scene.prepare(...).run()``, the single-figure job's planner call) -- the baseline:
   *warm* (the planner's fall table, built once per body and settings and kept for the process,
   already built) and *cold* (that cache emptied first: the first plan of a session);
-- all at once by the multi-figure job (``blender/crowd_job.py``): spawned worker processes, one
+- all at once by the multi-figure job (``blender/jobs/crowd_job.py``): spawned worker processes, one
   per core, started for the job, each importing the core and building its fall table (cold).
 
 Interleaved, best of ``--repeat``.  The plans are checked equal first.  The mapping and bake
@@ -35,7 +35,8 @@ sys.path.insert(0, str(ROOT / "scripts"))
 from bench_common import best  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import crowd_job, follow_scene  # noqa: E402
+from blender_turning.blender.jobs import crowd_job  # noqa: E402
+from blender_turning.blender.scene import follow_scene  # noqa: E402
 from blender_turning.core.planner import fall_table  # noqa: E402
 
 

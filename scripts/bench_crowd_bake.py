@@ -1,6 +1,6 @@
 """Benchmark: a crowd of 100 parametric figures, 60 s at 24 fps: simulate (one batch), map
 (``crowd.map_crowd``: ``mapping.map_trajectory`` per figure, on ``--workers`` processes) and
-bake (``blender.bake.bake_pose_track``, whole F-curves with ``foreach_set``, as
+bake (``blender.anim.bake.bake_pose_track``, whole F-curves with ``foreach_set``, as
 ``scripts/bench_bake.py``), each step timed; the rigs are built untimed.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_crowd_bake.py [--figures 100] [--workers 2]
@@ -31,7 +31,8 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 
 import bpy  # noqa: E402
 
-from blender_turning.blender import bake, rig_builder  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.scene import rig_builder  # noqa: E402
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.core import preset  # noqa: E402
 from blender_turning.crowd import (Crowd, CrowdFigure, Turns, follow_leader,  # noqa: E402

@@ -29,9 +29,9 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import follow_scene  # noqa: E402
-from blender_turning.blender.follow_ground import check_height_field  # noqa: E402
-from blender_turning.blender.ground import mesh_from_height_field, read_ground  # noqa: E402
+from blender_turning.blender.scene import follow_scene  # noqa: E402
+from blender_turning.blender.scene.follow_ground import check_height_field  # noqa: E402
+from blender_turning.blender.scene.ground import mesh_from_height_field, read_ground  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
 
 

@@ -11,7 +11,7 @@ steps (in ms), the three ways interleaved step by step (the machine is shared):
 - ``bake op``: today's figure, ``bpy.ops.turning.bake_turns()`` after the set (curves made anew,
   the foot track, an undo step);
 - ``refresh op``: ``bpy.ops.turning.refresh_preview()`` after the set (what a script does);
-- ``drag step``: :func:`blender_turning.blender.live.schedule`, what the message bus calls at
+- ``drag step``: :func:`blender_turning.blender.jobs.live.schedule`, what the message bus calls at
   every step of a slider drag in the interface (the keys; the foot track waits for the release).
 
 Cases: the built-in skier, a Rigify rig as a skier, a cyclist on a 200 m x 200 m Ground mesh
@@ -39,7 +39,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import live  # noqa: E402
+from blender_turning.blender.jobs import live  # noqa: E402
 
 CASES = ("skier-10", "skier-60", "rigify-10", "rigify-60", "cyclist-ground-10",
          "cyclist-ground-60", "body-skier-10", "body-ground-10")
@@ -53,7 +53,7 @@ def select(fig):
 
 def build():
     """The three figures (live off), by kind."""
-    from blender_turning.blender.ground import mesh_from_height_field
+    from blender_turning.blender.scene.ground import mesh_from_height_field
     from blender_turning.core.terrain_gen import ski_slope
     from rig_fixtures import rigify_rig
     scene = bpy.context.scene

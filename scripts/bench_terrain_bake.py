@@ -31,11 +31,11 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import ground as mesh_ground  # noqa: E402
-from blender_turning.blender.ground import mesh_from_height_field  # noqa: E402
-from blender_turning.blender.pipeline import simulate_figure  # noqa: E402
-from blender_turning.blender.ops_bake import BakeJob  # noqa: E402
-from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.blender.scene import ground as mesh_ground  # noqa: E402
+from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
+from blender_turning.blender.jobs.pipeline import simulate_figure  # noqa: E402
+from blender_turning.blender.ops.bake import BakeJob  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
 from bench_common import best  # noqa: E402  (scripts/)
 

@@ -454,7 +454,7 @@ def bake_figure(bpy, obj, fig, frame_end):
 
 
 def _sampled_locations(bpy, obj, frames):
-    from blender_turning.blender import bake
+    from blender_turning.blender.anim import bake
     bag = bake.baked_channels(obj)
     fcs = {fc.array_index: fc for fc in bag.fcurves if fc.data_path == "location"}
     return [[fcs[i].evaluate(f) for i in range(3)] for f in frames]
@@ -462,7 +462,7 @@ def _sampled_locations(bpy, obj, frames):
 
 def make_camera(bpy, cfg, figures):
     import numpy as np
-    from blender_turning.blender import bake
+    from blender_turning.blender.anim import bake
     scene = bpy.context.scene
     frames = list(range(scene.frame_start, scene.frame_end + 1))
     follow = cfg["camera"]["follow"]

@@ -25,8 +25,9 @@ import bpy  # noqa: E402
 import numpy as np  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import bake, compat  # noqa: E402
-from blender_turning.blender.rig_builder import material, primitive  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.scene.rig_builder import material, primitive  # noqa: E402
 from rig_fixtures import activate, mixamo_skeleton, rigify_rig  # noqa: E402
 
 #: The Rigify rig's deforming limb and spine bones that get a capsule.

@@ -41,7 +41,7 @@ def height_field(spec) -> HeightField:
 
 def make_terrain(bpy, name, spec, material):
     """The ground mesh of ``spec`` (smooth shaded), linked to the scene."""
-    from blender_turning.blender.ground import mesh_from_height_field
+    from blender_turning.blender.scene.ground import mesh_from_height_field
     field = height_field(spec)
     mesh = mesh_from_height_field(bpy, field, name)
     mesh.polygons.foreach_set("use_smooth", np.ones(len(mesh.polygons), bool))
@@ -95,7 +95,7 @@ def make_tracks(bpy, fig_obj, ground_obj, material, frames):
     """The figure's tracks in the snow: a shaded groove ribbon along the baked foot point (a ski
     pair's width, a board's), growing behind the figure (a Build modifier reveals its faces in
     order, one a frame)."""
-    from blender_turning.blender import bake
+    from blender_turning.blender.anim import bake
     bag = bake.baked_channels(fig_obj)
     fcs = {fc.array_index: fc for fc in bag.fcurves if fc.data_path == "location"}
     xy = np.array([[fcs[i].evaluate(f) for i in range(2)] for f in frames])
@@ -131,7 +131,7 @@ def make_follow_cameras(bpy, figures, distance, height, lens):
 
 def key_locations(compat, obj, frames) -> np.ndarray:
     """``obj``'s keyed location at every frame of ``frames``: shape ``(frames, 3)``."""
-    from blender_turning.blender import bake
+    from blender_turning.blender.anim import bake
     fcs = {fc.array_index: fc for fc in bake.baked_channels(obj).fcurves
            if fc.data_path == "location"}
     return np.array([[fcs[i].evaluate(f) for i in range(3)] for f in frames])
@@ -140,7 +140,8 @@ def key_locations(compat, obj, frames) -> np.ndarray:
 def follow_target(bpy, name, aim, frames):
     """An empty keyed at ``aim`` (``(frames, 3)``) 0.9 m up, smoothed over half a second so a
     shot aimed at it does not swing with every turn."""
-    from blender_turning.blender import bake, compat
+    from blender_turning.blender import compat
+    from blender_turning.blender.anim import bake
     scene = bpy.context.scene
     k = max(1, int(round(0.5 * scene.render.fps)))
     kernel = np.ones(k) / k

@@ -144,8 +144,8 @@ def sample(scene, frames, bindings, ground=None):
     frame; joint ``'pelvis'``: the hip joints' midpoint; a wheel's lowest point is its tyre's
     circle's) and every deforming bone's
     (armature-space, world) matrices."""
-    from blender_turning.blender.retarget_adapter import (facing, figure_bone_map, mirrored,
-                                                          user_rig)
+    from blender_turning.blender.scene.retarget_adapter import (facing, figure_bone_map, mirrored,
+                                                                user_rig)
     from blender_turning.mapping.bones import mirror
     ground_names = set(bindings if ground is None else ground)
     from blender_turning.mapping.kinematics import Skeleton

@@ -12,8 +12,11 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import bake, compat, ops_figure, panel  # noqa: E402
-from blender_turning.blender.props import TurningFigureSettings  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.ops import figure as ops_figure  # noqa: E402
+from blender_turning.blender.ui import panel  # noqa: E402
+from blender_turning.blender.props.figure import TurningFigureSettings  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
 from modal_stand_ins import Context, WindowManager  # noqa: E402
 
@@ -104,7 +107,7 @@ def test_one_bad_figure_bakes_nothing(scene):
 
 def modal_bake(figs):
     """A stand-in ``self`` for the modal Bake Turns over ``figs`` (no window in the wheel)."""
-    from blender_turning.blender.ops_bake import BakeJob, FrameRange
+    from blender_turning.blender.ops.bake import BakeJob, FrameRange
     op_cls = bpy.types.TURNING_OT_bake_turns
     reports = []
     fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),

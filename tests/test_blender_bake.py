@@ -9,7 +9,9 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import bake, bake_layers, compat, rig_builder  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake, bake_layers  # noqa: E402
+from blender_turning.blender.scene import rig_builder  # noqa: E402
 from blender_turning.mapping.base import BoneChannels, PoseTrack  # noqa: E402
 
 pytestmark = pytest.mark.blender

@@ -24,8 +24,11 @@ from scene_snapshot import diff, snapshot  # noqa: E402
 from test_blender_operators import add, make_path  # noqa: E402
 
 import blender_turning  # noqa: E402
-from blender_turning.blender import bake, compat, crowd_job, follow_scene, scene_adapters  # noqa: E402
-from blender_turning.blender import retarget_adapter as ra  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.jobs import crowd_job  # noqa: E402
+from blender_turning.blender.scene import follow_scene, scene_adapters  # noqa: E402
+from blender_turning.blender.scene import retarget_adapter as ra  # noqa: E402
 from blender_turning.core import (DEFAULT_DT, BodyParams, Figure, Limits,  # noqa: E402
                                   PhaseEllipse, Schedule, simulate)
 from blender_turning.crowd import (Crowd, CrowdFigure, Turns, follow_leader,  # noqa: E402
@@ -412,7 +415,7 @@ def extension_package(monkeypatch):
 
 def test_workers_load_tasks_of_the_package_under_its_extension_name(scene, extension_package):
     ext = extension_package
-    job_mod = importlib.import_module(ext + ".blender.workers")
+    job_mod = importlib.import_module(ext + ".blender.jobs.workers")
     crowd_mod = importlib.import_module(ext + ".crowd")
     core = importlib.import_module(ext + ".core")
     assert job_mod._worker_stubs() == [("bl_ext_test", []),
@@ -459,7 +462,7 @@ def test_followers_on_a_road_follow_the_core_offset_paths(scene):
 
 
 def test_a_peloton_starts_where_the_core_places_its_rows(scene):
-    from blender_turning.blender import crowd_scene
+    from blender_turning.blender.scene import crowd_scene
     from blender_turning.crowd import offset_path, peloton
     lead = road_figure()
     road = path_of(lead)
@@ -489,7 +492,7 @@ def test_a_figure_that_cannot_be_read_is_named_and_nothing_changes(scene):
 
 @pytest.mark.installed
 def test_the_crowd_panel_draws_the_settings_and_add_crowd(scene):
-    from blender_turning.blender import panel_crowd
+    from blender_turning.blender.ui import crowd as panel_crowd
     from test_blender_operators import LayoutStub
     add("SKIER")
     calls = []

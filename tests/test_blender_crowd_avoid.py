@@ -19,7 +19,8 @@ from scene_snapshot import diff, snapshot  # noqa: E402
 from test_blender_crowd import ESC, curves, modal_crowd, started_workers  # noqa: E402
 from test_blender_operators import add, make_path  # noqa: E402
 
-from blender_turning.blender import crowd_job, follow_scene, scene_adapters  # noqa: E402
+from blender_turning.blender.jobs import crowd_job  # noqa: E402
+from blender_turning.blender.scene import follow_scene, scene_adapters  # noqa: E402
 from blender_turning.core.moving import MovingBodies, closest_approach  # noqa: E402
 from blender_turning.crowd import Crowd, CrowdFigure, FollowPath, run_crowd  # noqa: E402
 
@@ -235,7 +236,7 @@ def test_esc_before_the_workers_got_the_plans_ends_the_planning_thread(scene):
 
 
 def test_the_crowd_panel_shows_the_planning_order(scene):
-    from blender_turning.blender import panel_crowd
+    from blender_turning.blender.ui import crowd as panel_crowd
     from test_blender_operators import LayoutStub
     figs = crossing()
     figs[0].turning.crowd.priority = 3

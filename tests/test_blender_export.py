@@ -27,7 +27,7 @@ FORMATS = ("glb", "fbx")
 FBX_TAKES = pytest.mark.xfail(strict=True, reason="FBX writes the bake's NLA strip, its action "
                               "and the tweak layer as separate takes")
 FORMATS_LAYERED = ("glb", pytest.param("fbx", marks=FBX_TAKES))
-GLTF_HOOK = "blender_turning.blender.export_gltf"
+GLTF_HOOK = "blender_turning.blender.anim.export_gltf"
 TOLERANCE = {"glb": 1e-5, "fbx": 1e-3}         # m, see the measurements where they are used
 
 
@@ -155,7 +155,7 @@ def test_clear_bake_gives_the_equipment_back_to_its_constraints(scene):
     np.testing.assert_allclose(np.array([o.matrix_basis for o in gear]), before, atol=1e-6)
     assert all(c.enabled for o in gear for c in o.constraints)
     assert not [p for o in [rig, *gear] for p in o.keys() if p.startswith("turn_take")]
-    from blender_turning.blender.export_ready import KEYED
+    from blender_turning.blender.anim.export_ready import KEYED
     assert not any(KEYED in o for o in gear)
 
 

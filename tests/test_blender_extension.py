@@ -66,7 +66,7 @@ def test_built_zip_holds_the_addon_only(built_zip):
     import zipfile
     names = zipfile.ZipFile(built_zip).namelist()
     assert "__init__.py" in names and "blender_manifest.toml" in names
-    assert "blender_turning/blender/bake.py" in names
+    assert "blender_turning/blender/anim/bake.py" in names
     assert any(n.startswith("rigs/") for n in names)
     assert any(n.startswith("rigs/bone_maps/") for n in names)
     assert not [n for n in names if n.startswith("presets/")]   # the sports' records are
@@ -103,7 +103,7 @@ def test_the_installed_run_runs_the_installed_copy():
     """Run with ``TURNING_INSTALLED=1`` (scripts/test.sh), ``blender_turning`` is the installed
     extension's package, the object Blender loaded; otherwise the checkout."""
     import blender_turning
-    from blender_turning.blender import workers
+    from blender_turning.blender.jobs import workers
     import installed_addon
     here = Path(blender_turning.__file__).resolve()
     if not installed_addon.ACTIVE:

@@ -16,8 +16,11 @@ bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import diff, snapshot  # noqa: E402
 
-from blender_turning.blender import bake, compat, follow_scene, scene_adapters  # noqa: E402
-from blender_turning.blender.ground import height_field_of, mesh_from_height_field  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.scene import follow_scene, scene_adapters  # noqa: E402
+from blender_turning.blender.scene.ground import (height_field_of,  # noqa: E402
+                                                  mesh_from_height_field)
 from blender_turning.core.follow_problem import DEFAULT_CLEARANCE  # noqa: E402
 from blender_turning.core.obstacles import Obstacles  # noqa: E402
 from blender_turning.core.path import HermitePath  # noqa: E402
@@ -289,7 +292,7 @@ def test_a_plan_that_fails_near_the_ground_edge_says_where_it_ends(world):
     """The planner clips every branch that leaves the ground, so a plan failing within one
     horizon's reach of the mesh's edge gets a note saying where the ground ends (planning such a
     run to its failure searches the whole tree: the note is tested on the failure itself)."""
-    from blender_turning.blender.follow_ground import edge_note, read_follow_ground
+    from blender_turning.blender.scene.follow_ground import edge_note, read_follow_ground
     from blender_turning.core.errors import PlanInfeasible
     fig = world["fig"]
     ground = read_follow_ground(fig, bpy.context.evaluated_depsgraph_get())
@@ -306,8 +309,8 @@ def test_the_plan_starts_at_the_speed_keyed_at_the_first_frame(world):
     """A keyed Speed: the plan on the ground starts at its value at the scene's first frame (the
     speed is a state from there), whatever frame is current; friction and drag are the
     figure's."""
-    from blender_turning.blender.follow_ground import plan_inputs
-    from blender_turning.blender.scene_adapters import figure_from_settings
+    from blender_turning.blender.scene.follow_ground import plan_inputs
+    from blender_turning.blender.scene.scene_adapters import figure_from_settings
     sc = world["scene"]
     fig = add_figure("SKIER")
     fig.turning.ground = world["ground"]

@@ -10,7 +10,8 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender.ground import height_field_of, mesh_from_height_field  # noqa: E402
+from blender_turning.blender.scene.ground import (height_field_of,  # noqa: E402
+                                                  mesh_from_height_field)
 from blender_turning.core.terrain import Plane  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
 
@@ -69,7 +70,7 @@ def test_the_grid_is_what_ray_casts_from_above_return():
     bumpy mesh with a hole and an overhang-free fold: equal to float32 round-off, NaN where no
     ray hits (before the holes are filled)."""
     from mathutils.bvhtree import BVHTree
-    from blender_turning.blender.ground import _rasterize, _world_triangles
+    from blender_turning.blender.scene.ground import _rasterize, _world_triangles
     bpy.ops.wm.read_factory_settings(use_empty=True)
     slope = ski_slope(length=30, width=24, cell=1.5, seed=5)
     obj = _object(mesh_from_height_field(bpy, slope, "Bumps"), "Bumps")

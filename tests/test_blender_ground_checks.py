@@ -12,7 +12,7 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import ground  # noqa: E402
+from blender_turning.blender.scene import ground  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
 
 pytestmark = pytest.mark.blender

@@ -17,7 +17,9 @@ from test_blender_animator import LayoutStub  # noqa: E402
 from test_blender_operators import add, scene  # noqa: E402,F401
 from test_blender_robustness import settled, user_keys  # noqa: E402
 
-from blender_turning.blender import bake, bake_layers, compat, panel  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake, bake_layers  # noqa: E402
+from blender_turning.blender.ui import panel  # noqa: E402
 
 pytestmark = pytest.mark.blender
 

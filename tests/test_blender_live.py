@@ -1,4 +1,4 @@
-"""Live Preview (blender/live.py, docs/live-preview.md): a live figure's changed settings, keys,
+"""Live Preview (blender/jobs/live.py, docs/live-preview.md): a live figure's changed settings, keys,
 Start, Path or obstacles leave a pending re-bake; ``turning.refresh_preview`` runs it, writing the
 keys a fresh Bake Turns writes; a fall keeps the last good bake and marks the frame; off, nothing
 happens; unregister removes every handler."""
@@ -13,7 +13,9 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import bake, compat, live  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.jobs import live  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 
@@ -229,7 +231,7 @@ class LayoutStub:
 
 def panel_labels(fig) -> list:
     """The labels the Bake panel draws for ``fig``."""
-    from blender_turning.blender import panel
+    from blender_turning.blender.ui import panel
     labels = []
     panel.draw_live(LayoutStub(labels), fig, 1)
     return labels
@@ -260,7 +262,7 @@ def test_a_body_slider_step_takes_a_nearby_body_s_feasible_turns(scene):
 def ground_figure():
     """A skier on a 20 deg slope traversing 30 deg below +x: lean 5 deg every 2 s carves; every
     6 s it falls at t = 9.00 s (measured), frame 217 at 24 fps, as Bake Turns says."""
-    from blender_turning.blender.ground import mesh_from_height_field
+    from blender_turning.blender.scene.ground import mesh_from_height_field
     from blender_turning.core.terrain_gen import ski_slope
     scene = bpy.context.scene
     scene.frame_end = 240

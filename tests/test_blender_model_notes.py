@@ -15,7 +15,10 @@ bpy = pytest.importorskip("bpy")
 
 from test_blender_operators import LayoutStub, add, make_path, scene  # noqa: E402,F401
 
-from blender_turning.blender import bake, compat, panel, scene_adapters  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.ui import panel  # noqa: E402
+from blender_turning.blender.scene import scene_adapters  # noqa: E402
 from blender_turning.core.path import HermitePath  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]

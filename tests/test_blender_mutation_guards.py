@@ -11,9 +11,10 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import bake, compat  # noqa: E402
-from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
-from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
 from blender_turning.mapping.base import BoneChannels, PoseTrack  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]

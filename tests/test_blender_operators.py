@@ -13,10 +13,14 @@ bpy = pytest.importorskip("bpy")
 
 from scene_snapshot import snapshot  # noqa: E402
 
-from blender_turning.blender import bake, compat, follow_scene, presets, scene_adapters  # noqa: E402
-from blender_turning.blender.follow_job import Cancelled  # noqa: E402
-from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
-from blender_turning.blender.scene_adapters import PLAN_CURVATURE_RATE, FrameRange  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.scene import follow_scene, scene_adapters  # noqa: E402
+from blender_turning.blender.ui import presets  # noqa: E402
+from blender_turning.blender.jobs.follow_job import Cancelled  # noqa: E402
+from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import (PLAN_CURVATURE_RATE,  # noqa: E402
+                                                          FrameRange)
 from blender_turning.core.params import PRESETS  # noqa: E402
 from modal_stand_ins import Context, WindowManager  # noqa: E402
 
@@ -261,7 +265,7 @@ class LayoutStub:
 
 @pytest.mark.installed
 def test_panels_draw_every_setting(scene):
-    from blender_turning.blender import panel
+    from blender_turning.blender.ui import panel
     obj = add("SKIER")
     ctx = bpy.context
     drawn = []
@@ -359,7 +363,8 @@ def test_keyed_lean_is_followed_over_time(scene):
 
 
 def test_obstacle_footprints_and_path_points_in_world_space(scene):
-    from blender_turning.blender.scene_adapters import bezier_control_points, obstacle_footprints
+    from blender_turning.blender.scene.scene_adapters import (bezier_control_points,
+                                                              obstacle_footprints)
     coll = bpy.data.collections.new("Obs")
     scene.collection.children.link(coll)
     wall = make_wall("W", (10.0, 5.0), (4.0, 2.0))

@@ -12,10 +12,11 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import bake, compat, export_ready  # noqa: E402
-from blender_turning.blender.figure_bake import apply_bake  # noqa: E402
-from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
-from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake, export_ready  # noqa: E402
+from blender_turning.blender.anim.figure_bake import apply_bake  # noqa: E402
+from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
 
 pytestmark = pytest.mark.blender
 SPORTS = ("SKIER", "SNOWBOARDER", "TELEMARK", "CYCLIST")

@@ -14,7 +14,7 @@ bpy = pytest.importorskip("bpy")
 from rig_fixtures import activate, mixamo_skeleton, rigify_rig  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender.ground import mesh_from_height_field  # noqa: E402
+from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
 
 pytestmark = pytest.mark.blender

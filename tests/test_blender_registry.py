@@ -16,7 +16,8 @@ from rig_fixtures import activate, mixamo_skeleton  # noqa: E402
 from test_blender_animator import LayoutStub  # noqa: E402
 from test_blender_operators import add  # noqa: E402
 
-from blender_turning.blender import ops_figure, presets  # noqa: E402
+from blender_turning.blender.ops import figure as ops_figure  # noqa: E402
+from blender_turning.blender.ui import presets  # noqa: E402
 from blender_turning.blender.registry_items import (formation_items,  # noqa: E402
                                                      retargeted_sport_items, sport_items)
 

@@ -58,7 +58,8 @@ READ = """
 import json, sys, bpy
 sys.path.insert(0, sys.argv[2])
 from blender_turning import blender as addon
-from blender_turning.blender import bake, compat
+from blender_turning.blender import compat
+from blender_turning.blender.anim import bake
 addon.register()
 bpy.ops.wm.open_mainfile(filepath=sys.argv[1])
 out = {"figures": {}, "cameras": sorted(o.name for o in bpy.data.objects if o.type == "CAMERA")}

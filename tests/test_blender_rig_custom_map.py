@@ -8,7 +8,9 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import bake, compat, ops_bone_map  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.ops import bone_map as ops_bone_map  # noqa: E402
 from blender_turning.core.params import PRESETS  # noqa: E402
 from rig_fixtures import PREFIX, activate, mixamo_skeleton  # noqa: E402
 

@@ -11,7 +11,8 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import bake, compat  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
 from rig_fixtures import (activate, knee, lean, mixamo_skeleton, name, rigify_rig,  # noqa: E402
                           sample, state, world_head)
 

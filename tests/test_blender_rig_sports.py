@@ -13,7 +13,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender.retarget_adapter import facing  # noqa: E402
+from blender_turning.blender.scene.retarget_adapter import facing  # noqa: E402
 from rig_fixtures import (activate, knee, lean, mixamo_skeleton, rigify_rig, sample,  # noqa: E402
                           state)
 

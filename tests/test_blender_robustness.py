@@ -19,10 +19,13 @@ from modal_stand_ins import Context, WindowManager  # noqa: E402
 from test_blender_operators import (add, make_path, make_wall, modal_operator,  # noqa: E402,F401
                                     scene)
 
-from blender_turning.blender import (bake, bake_layers, compat, follow_job, follow_scene,  # noqa: E402
-                                     ops_path, pipeline)
-from blender_turning.blender import presets  # noqa: E402
-from blender_turning.blender.scene_adapters import obstacle_footprints  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake, bake_layers  # noqa: E402
+from blender_turning.blender.jobs import follow_job, pipeline  # noqa: E402
+from blender_turning.blender.scene import follow_scene  # noqa: E402
+from blender_turning.blender.ops import path as ops_path  # noqa: E402
+from blender_turning.blender.ui import presets  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import obstacle_footprints  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 TIMER = type("E", (), {"type": "TIMER"})()
@@ -544,7 +547,7 @@ def test_linked_figure_is_refused_by_poll(scene, tmp_path):
 
 
 def test_a_frame_range_too_long_to_bake_is_refused(scene):
-    from blender_turning.blender.scene_adapters import MAX_FRAMES
+    from blender_turning.blender.scene.scene_adapters import MAX_FRAMES
     add("SKIER")
     scene.frame_end = scene.frame_start + MAX_FRAMES          # one frame too many
     before = snapshot()
@@ -578,7 +581,7 @@ def test_nan_in_a_path_or_an_obstacle_is_named(scene):
 
 def test_foot_track_of_an_older_file_without_owner(scene):
     """Tracks drawn before owners were recorded: the figure's own unless a duplicate shares it."""
-    from blender_turning.blender import foot_track
+    from blender_turning.blender.anim import foot_track
     orig = add("SKIER")
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     track = orig.turning.foot_track
@@ -605,7 +608,7 @@ def test_path_that_is_not_one_curve_is_refused(scene):
     assert_unchanged(before)
     mesh = make_wall("Mesh Path", (0, 0), (1, 1))
     bpy.context.scene.collection.objects.link(mesh)
-    from blender_turning.blender.scene_adapters import SceneInputError, bezier_control_points
+    from blender_turning.blender.scene.scene_adapters import SceneInputError, bezier_control_points
     with pytest.raises(SceneInputError, match="'Mesh Path' is a mesh object, not a curve"):
         bezier_control_points(mesh)
 

@@ -12,8 +12,9 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import bake, compat  # noqa: E402
-from blender_turning.blender.ground import mesh_from_height_field  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
 
 pytestmark = pytest.mark.blender
@@ -85,7 +86,7 @@ def test_the_figure_rides_on_the_ground_mesh(scene, sport):
     assert np.abs(z - _ray(mountain, x, y)).max() < 0.01
     # The object's +Z is the surface normal: the skis / wheels lie in the local surface.
     from blender_turning.core.terrain import surface_frame
-    from blender_turning.blender.ground import height_field_of
+    from blender_turning.blender.scene.ground import height_field_of
     field = height_field_of(mountain, bpy.context.evaluated_depsgraph_get())
     R = _object_matrices(fig, cv)
     theta_dir = np.arctan2(R[:, 1, 1], R[:, 0, 1])

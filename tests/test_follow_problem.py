@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from blender_turning.blender.follow_job import FollowJob
+from blender_turning.blender.jobs.follow_job import FollowJob
 from blender_turning.core import preset
 from blender_turning.core.errors import PathNotFinished
 from blender_turning.core.follow_problem import (DEFAULT_CLEARANCE, TIME_LIMIT_FACTOR,

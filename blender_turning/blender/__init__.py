@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import importlib
 
-_MODULES = ("props_crowd", "props_rig", "props", "presets", "ops_figure", "ops_bake",
-            "ops_layers", "ops_path", "ops_live", "ops_rig", "ops_bone_map", "ops_crowd", "panel",
-            "panel_rig", "panel_crowd")
+_MODULES = ("props.crowd", "props.rig", "props.figure", "ui.presets", "ops.figure", "ops.bake",
+            "ops.layers", "ops.path", "ops.live", "ops.rig", "ops.bone_map", "ops.crowd",
+            "ui.panel", "ui.rig", "ui.crowd")
 
 
 def _modules():

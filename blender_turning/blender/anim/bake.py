@@ -1,0 +1,397 @@
+"""Write a :class:`~blender_turning.mapping.base.PoseTrack` into F-curves, whole curves at once.
+
+One action per figure, named after the figure's armature and tagged as the add-on's, played
+from an NLA track of its own; the figure's active action is the animator's tweak layer above it
+(:mod:`.bake_layers`, docs/layers.md).  Each animated channel becomes one F-curve filled by
+``keyframe_points.add(n)`` and two ``foreach_set`` calls (no ``bpy.ops``, no ``frame_set``, no
+mode switch).  Baking again replaces exactly the F-curves the previous bake wrote, and refuses
+when the user keyed one of them in the bake layer.  If the figure was playing an action of the
+user's, that action is kept on a muted NLA track and comes back on :func:`clear_bake`
+(:mod:`.user_action`).  The action belongs to its figure (an ID pointer on it), so a duplicate
+bakes its own; a bake the user moved to another NLA track is re-baked and cleared in place.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import bpy
+import numpy as np
+
+from .. import compat
+from . import bake_layers, user_action
+from .user_action import PROP_GROUP, REST, STASHED
+from ...mapping.base import PoseTrack
+
+#: ID property on an action made by :func:`bake_pose_track`: the paths it wrote, one per line.
+BAKED_PATHS = "turning_baked_paths"
+#: ID property on that action: the figure (object) it belongs to.  An ID pointer, so a duplicated
+#: figure's copied action points at the copy, and an action shared by two figures is the owner's.
+OWNER = "turning_figure"
+#: Parameter F-curves (``Object.turning.*``) the user keys; a bake copies them, never drops them.
+PARAM_PREFIX = bake_layers.PARAM_PREFIX
+
+
+class BakeError(ValueError):
+    """A pose track that does not fit the armature (names the bone or property)."""
+
+
+@dataclass(frozen=True)
+class BakeResult:
+    action: object
+    """The figure's action (``bpy.types.Action``)."""
+    fcurves: int
+    """F-curves written."""
+    frames: int
+    """Keys per F-curve."""
+
+
+#: ID property on an equipment object's action: the name of its figure's action (the glTF
+#: animation its keys merge into; export_ready.py writes it, export_gltf.py reads it).
+MERGE_INTO = "turning_export_merge"
+
+
+def _channel_list(obj, track: PoseTrack):
+    """``[(data_path, index, group, values (n,)), ...]`` for every channel of ``track``."""
+    out = []
+    for i in range(3):
+        out.append(("location", i, "Object Transforms", track.location[:, i]))
+    for i in range(3):
+        out.append(("rotation_euler", i, "Object Transforms", track.rotation[:, i]))
+    for name, ch in track.bones.items():
+        base = f'pose.bones["{bpy.utils.escape_identifier(name)}"]'
+        if ch.location is not None:
+            out.extend((base + ".location", i, name, ch.location[:, i]) for i in range(3))
+        if ch.rotation is not None:
+            out.extend((base + ".rotation_quaternion", i, name, ch.rotation[:, i])
+                       for i in range(4))
+    for prop, values in track.props.items():
+        out.append((f'["{bpy.utils.escape_identifier(prop)}"]', 0, PROP_GROUP, np.asarray(values)))
+    return out
+
+
+def check_track(obj, track: PoseTrack) -> None:
+    """Raise :class:`BakeError` if ``track`` names a bone ``obj`` lacks or holds a non-finite value.
+
+    Called before anything is written, so a bad track leaves the scene untouched.
+    """
+    if obj is None or obj.type != "ARMATURE":
+        raise BakeError("the figure must be an armature object")
+    missing = [b for b in track.bones if b not in obj.pose.bones]
+    if missing:
+        raise BakeError(f"armature {obj.name!r} has no bone {missing[0]!r}")
+    if len(track) == 0:
+        raise BakeError("the pose track has no frames")
+    arrays = [track.frames, track.location, track.rotation, *track.props.values()]
+    for ch in track.bones.values():
+        arrays += [a for a in (ch.location, ch.rotation) if a is not None]
+    if not all(np.all(np.isfinite(a)) for a in arrays):
+        raise BakeError("the pose track holds a value that is not a finite number")
+    action, strip = find_bake(obj)
+    if action is not None:
+        try:
+            bake_layers.check_unedited(obj, action, _bag(obj, action, strip))
+        except bake_layers.EditedBakeError as exc:
+            raise BakeError(str(exc)) from None
+
+
+def _is_ours(action, obj) -> bool:
+    """Is ``action`` a bake of the figure ``obj`` (not a user's, not another figure's)?"""
+    if action is None or BAKED_PATHS not in action:
+        return False
+    owner = action.get(OWNER)
+    return owner is None or owner == obj       # None: made before owners were recorded
+
+
+def find_bake(obj):
+    """``(action, nla_strip)`` of the figure's own action: assigned (strip ``None``) or pushed
+    down onto an NLA strip; ``(None, None)`` when the figure is not baked."""
+    adt = obj.animation_data if obj is not None else None
+    if adt is None:
+        return None, None
+    if _is_ours(adt.action, obj):
+        return adt.action, None
+    for track in adt.nla_tracks:
+        for strip in track.strips:
+            if _is_ours(strip.action, obj):
+                return strip.action, strip
+    return None, None
+
+
+def inherited_bakes(obj) -> list:
+    """Bake tracks of ``obj`` playing another figure's bake: a duplicate's copies of its
+    template's tracks (Shift+D shares NLA strips' actions).  A bake of ``obj`` replaces them."""
+    adt = obj.animation_data if obj is not None else None
+    return [t for t in (adt.nla_tracks if adt else ()) if t.name == bake_layers.BAKE_TRACK
+            and any(s.action is not None and BAKED_PATHS in s.action and not _is_ours(s.action, obj)
+                    for s in t.strips)]
+
+
+def _bag(obj, action, strip):
+    if strip is None:
+        return compat.channels(obj, action)
+    return compat.channelbag(action, compat.strip_slot(strip))
+
+
+def _figure_action(obj):
+    """``(action, strip, keep)``: the figure's own action and strip (see :func:`find_bake`), made
+    and assigned when there is none, and the curves ``keep`` the tweak layer takes over (the
+    user's keyed parameters).  A user's action is stashed, not touched."""
+    action, strip = find_bake(obj)
+    if action is not None and _bag(obj, action, strip) is not None:
+        keep = []
+        current = obj.animation_data.action
+        if strip is None:                 # assigned (an older bake): what is not baked moves up
+            paths = set(action.get(BAKED_PATHS, "").splitlines())
+            keep = [fc for fc in _bag(obj, action, None).fcurves if fc.data_path not in paths]
+        elif current is not None and not bake_layers.is_tweaks(current, obj):
+            keep = _stash_users(obj, current)   # the user plays an action of theirs over the bake
+        return action, strip, keep
+    adt = obj.animation_data
+    current = adt.action if adt else None
+    params = []
+    for inherited in inherited_bakes(obj):
+        adt.nla_tracks.remove(inherited)
+    if bake_layers.is_tweaks(current, obj):
+        adt.action = None                 # played again above the new bake
+    elif current is not None:
+        params = _stash_users(obj, current)
+    user_action.record_rest(obj)
+    for old in [a for a in bpy.data.actions if a.get(OWNER) == obj and a.users == 0]:
+        bpy.data.actions.remove(old)          # an earlier bake the user unassigned: unused, ours
+    action = compat.assign_new_action(obj, obj.name)
+    action[BAKED_PATHS] = ""
+    action[OWNER] = obj
+    return action, None, params
+
+
+def _stash_users(obj, current) -> list:
+    """Stash the user's ``current`` action; return its keyed parameter curves."""
+    bag = compat.channels(obj)
+    params = [fc for fc in (bag.fcurves if bag else ()) if fc.data_path.startswith(PARAM_PREFIX)]
+    user_action.stash(obj, current)
+    obj.animation_data.action = None
+    return params
+
+
+def _remove_baked(bag, action) -> None:
+    paths = set(action.get(BAKED_PATHS, "").splitlines())
+    for fc in [fc for fc in bag.fcurves if fc.data_path in paths]:
+        bag.fcurves.remove(fc)
+    for grp in [g for g in bag.groups if len(g.channels) == 0]:
+        bag.groups.remove(grp)
+    action[BAKED_PATHS] = ""
+
+
+def write_channels(bag, channels, frames) -> int:
+    """Write each ``(data_path, index, group, values)`` as one whole F-curve; return the count."""
+    n = len(frames)
+    co = np.empty(2 * n, np.float32)
+    co[0::2] = frames
+    ipo = np.full(n, compat.linear_interpolation_value(), np.int32)
+    for data_path, index, group, values in channels:
+        fc = compat.new_fcurve(bag, data_path, index, group)
+        co[1::2] = values
+        kp = fc.keyframe_points
+        kp.add(n)
+        kp.foreach_set("co", co)
+        kp.foreach_set("interpolation", ipo)
+        fc.update()                       # handles and the cached range; keys are already sorted
+    return len(channels)
+
+
+def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
+    """Bake ``track`` into ``obj``'s figure action (created or reused; in place when the user
+    pushed it down onto an NLA strip); see the module doc."""
+    check_track(obj, track)
+    chans = _channel_list(obj, track)
+    action, strip, keep = _figure_action(obj)
+    for name, ch in track.bones.items():
+        if ch.rotation is not None:
+            obj.pose.bones[name].rotation_mode = "QUATERNION"
+    obj.rotation_mode = "XYZ"
+    for prop, values in track.props.items():
+        if prop not in obj.keys():
+            obj[prop] = float(values[0])
+    bag = _bag(obj, action, strip)
+    action[bake_layers.FINGERPRINTS] = ""     # a bake cut short must not read as the user's edits
+    _remove_baked(bag, action)
+    # Tagged before writing: curves of a bake cut short (an exception, a crash) are still known as
+    # the bake's, so the next bake or Clear Bake removes them instead of colliding with them.
+    action[BAKED_PATHS] = "\n".join(sorted({c[0] for c in chans}))
+    count = write_channels(bag, chans, np.asarray(track.frames, float))
+    bake_layers.fingerprint(action, bag)
+    if strip is not None:
+        _fit_strip(strip, action)
+    else:
+        bake_layers.push_bake(obj, action)
+    _play_tweaks(obj, keep, bag)
+    return BakeResult(action, count, len(track))
+
+
+def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
+    """Write ``track``'s values into the F-curves the last bake made, in place: the same
+    channels, keyed on the same frames or on a run of them (a window of the range; the keys
+    around it stay).  ``None`` (nothing written) when they differ; then :func:`bake_pose_track`
+    makes the curves anew.  A window's quaternions take the sign of the keys they replace, so
+    a bone does not spin the long way round into the keys beside the window.
+
+    Removing and adding F-curves makes Blender rebuild the depsgraph's relations (27 ms next to
+    a Rigify rig, measured); writing the keys' values costs a few ms and only tags the action.
+    """
+    check_track(obj, track)
+    action, strip = find_bake(obj)
+    bag = None if action is None else _bag(obj, action, strip)
+    if bag is None:
+        return None
+    chans = _channel_list(obj, track)
+    if set(action.get(BAKED_PATHS, "").splitlines()) != {c[0] for c in chans}:
+        return None
+    curves = {(fc.data_path, fc.array_index): fc for fc in bag.fcurves}
+    todo = [(curves.get((path, index)), path, values) for path, index, _, values in chans]
+    if any(fc is None for fc, _, _ in todo):
+        return None
+    total = len(todo[0][0].keyframe_points)
+    if any(len(fc.keyframe_points) != total for fc, _, _ in todo):
+        return None
+    co = np.empty(2 * total, np.float32)
+    todo[0][0].keyframe_points.foreach_get("co", co)
+    frames, n = np.asarray(track.frames, np.float32), len(track)
+    i0 = int(np.searchsorted(co[0::2], frames[0]))
+    if i0 + n > total or not np.array_equal(co[0::2][i0:i0 + n], frames):
+        return None
+    if n == total:
+        for fc, _, values in todo:      # frames stay; LINEAR keys ignore their handles
+            co[1::2] = values
+            fc.keyframe_points.foreach_set("co", co)
+    else:
+        old = {}
+        for fc, _, _ in todo:
+            buf = np.empty(2 * total, np.float32)
+            fc.keyframe_points.foreach_get("co", buf)
+            old[fc] = buf
+        signs = {}
+        for fc, path, values in todo:   # w, x, y, z of one bone: the dot with the keys replaced
+            if path.endswith(".rotation_quaternion"):
+                signs[path] = signs.get(path, 0.0) + float(old[fc][2 * i0 + 1]) * float(values[0])
+        for fc, path, values in todo:
+            buf = old[fc]
+            buf[2 * i0 + 1:2 * (i0 + n):2] = -values if signs.get(path, 0.0) < 0 else values
+            fc.keyframe_points.foreach_set("co", buf)
+    for prop, values in track.props.items():
+        if prop not in obj.keys():
+            obj[prop] = float(values[0])
+    bake_layers.fingerprint(action, bag)    # the bake's own keys now: not the user's edits
+    action.update_tag()                 # re-evaluate the animation, relations unchanged
+    return BakeResult(action, len(todo), n)
+
+
+def _play_tweaks(obj, keep, bake_bag) -> None:
+    """The tweak layer above the bake, holding the user's keyed parameters (``keep``: copies of
+    the stashed action's, or curves moved out of an older bake that was the active action)."""
+    bake_layers.start_tweaks(obj)
+    bake_layers.take_parameters(obj, keep)
+    for fc in [fc for fc in bake_bag.fcurves if fc in keep]:
+        bake_bag.fcurves.remove(fc)       # moved, not copied, out of an older assigned bake
+
+
+def baked_channels(obj):
+    """The F-curve container of ``obj``'s bake layer, or ``None`` when it is not baked."""
+    action, strip = find_bake(obj)
+    return None if action is None else _bag(obj, action, strip)
+
+
+def _fit_strip(strip, action) -> None:
+    """Let a pushed-down strip play the whole re-baked range (it keeps its scale and repeats)."""
+    lo, hi = action.frame_range
+    if (strip.action_frame_start, strip.action_frame_end) != (lo, hi):
+        strip.action_frame_end = max(hi, strip.action_frame_start + 1)
+        strip.action_frame_start = lo
+        strip.action_frame_end = hi
+
+
+def figure_action(obj):
+    """The add-on's action of ``obj`` (assigned or on one of its NLA strips), or ``None``; a
+    duplicate playing its template's bake: that bake."""
+    action = find_bake(obj)[0]
+    if action is None:
+        for track in inherited_bakes(obj):
+            return track.strips[0].action
+    return action
+
+
+def _drop_strip(adt, strip) -> None:
+    for track in adt.nla_tracks:
+        if any(s == strip for s in track.strips):
+            track.strips.remove(strip)
+            if len(track.strips) == 0:
+                adt.nla_tracks.remove(track)
+            return
+
+
+def clear_bake(obj) -> bool:
+    """Remove what the bakes wrote and give the user's action back as it was (with any keys the
+    user set while baked), and the transform and pose the first bake overrode; a tweak layer
+    that holds keys is parked (:func:`.bake_layers.park_tweaks`).  ``False`` if nothing was
+    baked.
+
+    The figure's action is deleted, unless it holds keys of the user's and there is no user action
+    to give them back to: then it stays, as the user's (no longer tagged as a bake).
+    """
+    action, strip = find_bake(obj)
+    inherited = inherited_bakes(obj)
+    if action is None and not inherited:
+        return False
+    for track in inherited:               # a duplicate's copy of its template's bake: not ours
+        obj.animation_data.nla_tracks.remove(track)
+    user = user_action.stashed_action(obj)
+    user_bag = user_action.stashed_channels(obj, user) if user is not None else None
+    if action is not None:
+        _remove_bake_action(obj, action, strip, user is not None, user_bag)
+    bake_layers.park_tweaks(obj, user is not None, user_bag)   # frees the active slot
+    if STASHED in obj:
+        user_action.unstash(obj, user)
+    for prop in [p for p in obj.keys() if p.startswith("turn_")]:
+        del obj[prop]
+    if REST in obj:
+        user_action.restore_rest(obj)
+    adt = obj.animation_data
+    if adt.action is None and len(adt.nla_tracks) == 0 and len(adt.drivers) == 0:
+        obj.animation_data_clear()        # the bake made it; nothing of the user's is in it
+    return True
+
+
+def _remove_bake_action(obj, action, strip, has_user: bool, user_bag) -> None:
+    bag = _bag(obj, action, strip)
+    if bag is not None:
+        _remove_baked(bag, action)
+    if user_bag is not None and bag is not None:
+        user_action.give_back(bag.fcurves, user_bag)
+    if has_user or bag is None or len(bag.fcurves) == 0:
+        if strip is not None:
+            _drop_strip(obj.animation_data, strip)
+        else:
+            obj.animation_data.action = None
+        bpy.data.actions.remove(action)
+    else:                                 # only the user's keys are left: it is their action now
+        for key in (BAKED_PATHS, OWNER):
+            del action[key]
+
+
+def layers(obj) -> list:
+    """``[(kind, name, state)]`` of ``obj``'s layers, top first, for the panel: kind is
+    ``'TWEAKS'``, ``'BAKE'`` or ``'USER'``."""
+    out = []
+    tweaks, parked = bake_layers.tweak_layer(obj)
+    if tweaks is not None:
+        bag = bake_layers.tweak_channels(obj)
+        n = sum(len(fc.keyframe_points) for fc in bag.fcurves) if bag else 0
+        out.append(("TWEAKS", tweaks.name, f"{n} keys" + (", parked (muted)" if parked else "")))
+    action, strip = find_bake(obj)
+    if action is not None:
+        where = "NLA strip" if strip is not None else "active action"
+        lo, hi = action.frame_range
+        out.append(("BAKE", action.name, f"{where}, frames {lo:g}-{hi:g}"))
+    user = user_action.stashed_action(obj)
+    if user is not None:
+        out.append(("USER", user.name, "kept for Clear Bake (muted)"))
+    return out

@@ -1,0 +1,89 @@
+"""What the model changed, said to the user: the lean a bake reached when the figure's bounds
+kept it below the asked one (the core's :class:`~..core.controllers.feasible.FeasibleTurn`
+report), and how far a Follow Path run strayed from its drawn path (the core's
+:func:`~..core.path.path_deviation`).  Bake Turns, Follow Path (one figure and several) and the
+Turns panel all take their words from here; nothing is recomputed in an operator.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict
+
+from ...core.controllers.feasible import FeasibleTurn
+from ...core.path import path_deviation
+from ..scene.scene_adapters import FrameRange, controller_from_settings, figure_from_settings
+
+#: The trajectory ``meta`` key of a run's limited turn (``asdict`` of its FeasibleTurn).
+TURN_KEY = "turn_limited"
+
+#: Which setting lets the figure lean further, per bound of ``feasible.BOUNDS`` (a longer Turn
+#: Period eases every one of them).
+BOUND_SETTING = {"C_f_max": "Limits > Max Curvature", "dC_f_max": "Limits > Max Curvature Rate",
+                 "theta_fall": "Limits > Fall Angle", "physical branch": "Body > COM Height"}
+
+#: Follow Path warns when the foot strays farther than this from the drawn path, m.  The four
+#: shipped sports follow a slalom of 3 m offsets 12 m apart, the crowd tests' path and a bend of
+#: 25 m radius to 0.9-2.4 m (measured, largest near the path's end); a right-angle corner is cut
+#: by 6.6 m (the telemark) to 14.7 m (the skier).
+WARN_DISTANCE = 3.0
+
+
+def with_turn(traj, controller):
+    """``traj`` with the core's report of a limited turn in its meta (unchanged when the turn
+    was the one asked for, or the controller reports none)."""
+    turn = getattr(controller, "achieved", None)
+    if turn is None or not turn.limited:
+        return traj
+    return type(traj)(traj.data, {**traj.meta, TURN_KEY: asdict(turn)})
+
+
+def _why(turn: FeasibleTurn) -> str:
+    setting = BOUND_SETTING.get(turn.bound)
+    more = f" or a higher {setting}" if setting and turn.bound != "physical branch" else ""
+    return f"{turn.describe()}: a longer Turn Period{more} leans further"
+
+
+def turn_note(traj) -> str:
+    """``"lean 17.01 deg at period ... (asked 23.00 deg; limited by C_f_max ...)"`` and what to
+    change, for a bake whose lean its bounds limited; ``""`` when it leaned as asked."""
+    turn = traj.meta.get(TURN_KEY)
+    return "" if turn is None else _why(FeasibleTurn(**turn))
+
+
+def panel_turn(obj, scene) -> FeasibleTurn | None:
+    """The turn a bake follows for the figure's Turns settings at the current frame (before
+    baking); ``None`` when the settings cannot be read (the bake says why)."""
+    fps = scene.render.fps / scene.render.fps_base
+    try:
+        figure = figure_from_settings(obj.turning)
+        ctl = controller_from_settings(obj, figure, FrameRange(scene.frame_current,
+                                                               scene.frame_current + 1, fps))
+    except ValueError:
+        return None
+    return ctl.commanded_turn(0.0)
+
+
+def panel_text(turn: FeasibleTurn) -> str:
+    return (f"Leans {math.degrees(turn.lean):.1f}\u00b0, not {math.degrees(turn.commanded_lean):.1f}"
+            f"\u00b0: limited by {turn.bound}")
+
+
+def warn_distance(op) -> float:
+    """Follow Path's *Warn Beyond* (stand-ins of the operator in tests may lack it)."""
+    return float(getattr(op, "warn_distance", WARN_DISTANCE))
+
+
+def follow_note(path, traj, frame_start: int, fps: float, warn: float) -> tuple[str, str]:
+    """``(level, text)`` of a Follow Path run's largest distance from its drawn ``path`` (the
+    core's ``HermitePath``) and its largest lean; ``level`` is ``"WARNING"`` above ``warn`` m.
+    ``traj``'s ``t = 0`` is ``frame_start`` (a crowd's follower: its own offset included)."""
+    dev = path_deviation(path, traj.t, traj.x, traj.y)
+    frame = frame_start + round(dev.t * fps)
+    text = (f"the foot is at most {dev.distance:.1f} m from the drawn path (at frame {frame}, "
+            f"{dev.along:.0f} m along it); lean up to "
+            f"{math.degrees(float(abs(traj.theta_v).max())):.1f} deg, planned for the path")
+    if dev.distance > warn:
+        return "WARNING", (text + f": more than {warn:g} m, the drawn line is not followed there "
+                           "(a gentler bend, a higher Planner Curvature Rate or Max Curvature, "
+                           "or less Speed)")
+    return "INFO", text

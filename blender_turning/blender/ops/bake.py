@@ -1,0 +1,271 @@
+"""``turning.bake_turns`` and ``turning.clear_bake``: the parametric controller (Section 5) for
+every selected figure over a frame range, and its removal.
+
+A bake computes every figure first (:class:`BakeJob`) and writes only when all succeeded: a
+failure or Esc leaves the scene as it was.  With several figures and a window the operator is
+modal (one figure per timer tick, a progress bar, Esc cancels between figures).
+"""
+from __future__ import annotations
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, IntProperty
+
+from ..anim import bake, foot_track
+from ..anim import export_ready as export_ready_mod
+from ..anim.figure_bake import apply_bake, reset_pose
+from ..jobs.model_notes import turn_note
+from ..scene.figure_context import (check_figure, end_modal, poll_figure, report_error,
+                                    selected_figures)
+from ..jobs.pipeline import figure_pose_track, ground_of
+from ..scene.scene_adapters import FrameRange, start_from_object
+
+FRAME_RANGES = (
+    ("SCENE", "Scene", "The scene's frame range (Output properties)"),
+    ("PREVIEW", "Preview", "The scene's preview range (the Timeline's clock button)"),
+    ("CUSTOM", "Custom", "The Start and End frames given here"),
+)
+
+
+def bake_frames(scene, choice: str, start: int, end: int) -> FrameRange:
+    """The frames to bake: the scene's range, its preview range or ``start..end``."""
+    fps = scene.render.fps / scene.render.fps_base
+    if choice == "PREVIEW":
+        if not scene.use_preview_range:
+            raise ValueError("the scene has no preview range (turn it on in the Timeline)")
+        return FrameRange(scene.frame_preview_start, scene.frame_preview_end, fps)
+    if choice == "CUSTOM":
+        return FrameRange(start, end, fps)
+    return FrameRange.of_scene(scene)
+
+
+class BakeJob:
+    """Bake figures (by name) over ``frames``: :meth:`compute_next` one at a time (nothing is
+    written), then :meth:`write` all of them."""
+
+    def __init__(self, names, frames: FrameRange, step: int = 1, export_ready: bool = True,
+                 root_motion: bool = False):
+        self.names, self.frames, self.step = list(names), frames, step
+        self.export_ready, self.root_motion = export_ready, root_motion
+        self.results = []                     # (name, start or None, traj, track)
+        self.grounds = {}                     # ground mesh name -> MeshGround
+
+    @property
+    def done(self) -> bool:
+        return len(self.results) == len(self.names)
+
+    @property
+    def current(self) -> str:
+        """The figure :meth:`compute_next` works on."""
+        return self.names[min(len(self.results), len(self.names) - 1)]
+
+    def compute_next(self) -> None:
+        """Simulate and map the next figure (raises ``ValueError`` or ``TurningError``)."""
+        name = self.current
+        fig = bpy.data.objects.get(name)
+        if fig is None:
+            raise ValueError("the figure was deleted while baking")
+        check_figure(fig)
+        # Not baked yet: start where the user put the figure; baked: from its Start settings.
+        start = start_from_object(fig) if bake.figure_action(fig) is None else None
+        height = None if start is None else float(fig.location[2])
+        traj, track = figure_pose_track(fig, self.frames, start=start, height=height,
+                                        ground=self._ground(fig))
+        if self.root_motion:
+            track = export_ready_mod.root_motion(fig, track)
+        bake.check_track(fig, track)
+        self.results.append((name, start, traj, track))
+
+    def _ground(self, fig):
+        """The figure's Ground mesh, read once per job for all figures on it."""
+        mesh = fig.turning.ground
+        if mesh is None:
+            return None
+        if mesh.name not in self.grounds:
+            self.grounds[mesh.name] = ground_of(fig)
+        return self.grounds[mesh.name]
+
+    def write(self) -> list:
+        """Write every computed figure; ``[(name, BakeResult)]``."""
+        out = []
+        for name, start, traj, track in self.results:
+            fig = bpy.data.objects[name]
+            if start is not None:                 # the height where the user put it stays
+                fig.turning.start = (start[0], start[1], float(fig.location[2]))
+                fig.turning.start_heading = start[2]
+            out.append((name, apply_bake(fig, traj, track, self.step, self.export_ready)))
+        return out
+
+
+class TURNING_OT_bake_turns(bpy.types.Operator):
+    """Simulate the turns of every selected figure over a frame range and bake them to keys"""
+
+    bl_idname = "turning.bake_turns"
+    bl_label = "Bake Turns"
+    bl_options = {"REGISTER", "UNDO"}
+
+    # Range and step are not remembered between bakes (SKIP_SAVE): the button always bakes the
+    # scene's range on every frame, as the panel says; a custom Start/End is remembered.
+    frame_range: EnumProperty(name="Frames", items=FRAME_RANGES, default="SCENE",
+                              options={"SKIP_SAVE"}, description="Which frames to bake")
+    frame_start: IntProperty(name="Start", default=1, min=-1048574, max=1048574,
+                             description="First frame of a custom range")
+    frame_end: IntProperty(name="End", default=250, min=-1048574, max=1048574,
+                           description="Last frame of a custom range")
+    step: IntProperty(name="Step", default=1, min=1, max=1000, soft_max=12,
+                      options={"SKIP_SAVE"},
+                      description="Key every n-th frame (and the last); smooth (Bezier) in "
+                                  "between.  1 keys every frame, exactly")
+    export_ready: BoolProperty(
+        name="Export-Ready Equipment", default=True,
+        description="A figure made from your own rig: key its skis, poles or bicycle on every "
+                    "baked frame too (their constraints and drivers off while baked), so glTF "
+                    "and FBX carry them. Off: they follow the rig live, and exporters drop them")
+    root_motion: BoolProperty(
+        name="Root Motion", default=False,
+        description="Key the travel on the rig's root bone (Rigify's or the built-in figures' "
+                    "'root') instead of the armature object, which then stays where the bake "
+                    "starts: for game engines that take a character's motion from its root")
+
+    _job = None
+    _timer = None
+
+    @classmethod
+    def poll(cls, context):
+        return poll_figure(cls, context)
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "frame_range")
+        col = layout.column(align=True)
+        col.active = self.frame_range == "CUSTOM"
+        col.prop(self, "frame_start")
+        col.prop(self, "frame_end")
+        layout.prop(self, "step")
+        layout.prop(self, "export_ready")
+        layout.prop(self, "root_motion")
+
+    def _prepare(self, context):
+        """The job for the selected figures, or ``None`` (reported)."""
+        scene = context.scene
+        for name, value in (("frame_start", scene.frame_start), ("frame_end", scene.frame_end)):
+            if not self.properties.is_property_set(name):
+                setattr(self, name, value)          # a custom range starts as the scene's
+        try:
+            frames = bake_frames(scene, self.frame_range, self.frame_start, self.frame_end)
+        except ValueError as exc:
+            self.report({"ERROR"}, f"Bake Turns: {exc}")
+            return None
+        return BakeJob([f.name for f in selected_figures(context)], frames, self.step,
+                       self.export_ready, self.root_motion)
+
+    def _finish(self, job):
+        try:
+            written = job.write()
+        except Exception as exc:
+            # Everything that can be checked was, before writing; a failure now is a bug (or the
+            # disk).  One line, not a traceback, and FINISHED so that the undo step is pushed:
+            # Ctrl+Z takes the scene back to before the bake.
+            report_error(self, "Bake Turns", job.current, exc,
+                         "; the bake was cut short: Undo (Ctrl+Z) puts the scene back")
+            return {"FINISHED"}
+        frames = job.frames
+        every = "" if job.step == 1 else f", every {job.step} frames"
+        what = ", ".join(f"{name} ({r.fcurves} F-curves x {r.frames} keys)" for name, r in written)
+        self.report({"INFO"}, f"Baked {what} over frames {frames.start}-{frames.end}{every}")
+        for name, _, traj, _ in job.results:     # last: the status bar shows the last report
+            note = turn_note(traj)
+            if note:
+                self.report({"WARNING"}, f"Bake Turns: {name}: {note}")
+        return {"FINISHED"}
+
+    def execute(self, context):
+        job = self._prepare(context)
+        if job is None:
+            return {"CANCELLED"}
+        try:                              # everything that can fail, before anything is written
+            while not job.done:
+                job.compute_next()
+        except Exception as exc:
+            return report_error(self, "Bake Turns", job.current, exc)
+        return self._finish(job)
+
+    def invoke(self, context, event):
+        if context.window is None or len(selected_figures(context)) < 2:
+            return self.execute(context)
+        self._job = self._prepare(context)
+        if self._job is None:
+            return {"CANCELLED"}
+        wm = context.window_manager
+        wm.progress_begin(0, len(self._job.names))
+        self._timer = wm.event_timer_add(0.01, window=context.window)
+        wm.modal_handler_add(self)
+        self._status(context)
+        return {"RUNNING_MODAL"}
+
+    def _status(self, context):
+        job = self._job
+        context.workspace.status_text_set(
+            f"Bake Turns: {len(job.results)} of {len(job.names)} figures (Esc to cancel)")
+
+    def _cleanup(self, context):
+        end_modal(self, context)
+
+    def cancel(self, context):
+        """Blender ends the operator (a file opened, Blender quits): stop, write nothing."""
+        self._cleanup(context)
+
+    def modal(self, context, event):
+        if event.type == "ESC":
+            self._cleanup(context)
+            self.report({"WARNING"}, "Bake Turns cancelled; nothing was written")
+            return {"CANCELLED"}
+        if event.type != "TIMER":
+            return {"PASS_THROUGH"}
+        job = self._job
+        try:
+            job.compute_next()
+        except Exception as exc:
+            self._cleanup(context)
+            return report_error(self, "Bake Turns", job.current, exc)
+        context.window_manager.progress_update(len(job.results))
+        if not job.done:
+            self._status(context)
+            return {"RUNNING_MODAL"}
+        self._cleanup(context)
+        return self._finish(job)
+
+
+class TURNING_OT_clear_bake(bpy.types.Operator):
+    """Remove the baked turns and foot tracks of the selected figures (the user's own keys
+    stay)"""
+
+    bl_idname = "turning.clear_bake"
+    bl_label = "Clear Bake"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        if not poll_figure(cls, context):
+            return False
+        if not any(bake.figure_action(f) is not None for f in selected_figures(context)):
+            cls.poll_message_set("The selected figures have no baked turns")
+            return False
+        return True
+
+    def execute(self, context):
+        figs = [f for f in selected_figures(context) if bake.figure_action(f) is not None]
+        for fig in figs:
+            fig.turning.live = False          # else Live Preview would bake it again at once
+            recorded = bake.REST in fig       # the pose before the bake, put back exactly
+            export_ready_mod.clear_equipment(fig)
+            bake.clear_bake(fig)
+            foot_track.remove_foot_track(fig)
+            if not recorded:                  # baked before the pose was recorded
+                reset_pose(fig)
+        self.report({"INFO"}, f"Cleared the bake of {', '.join(f.name for f in figs)}")
+        return {"FINISHED"}
+
+
+classes = (TURNING_OT_bake_turns, TURNING_OT_clear_bake)
+register, unregister = bpy.utils.register_classes_factory(classes)
