@@ -6,7 +6,7 @@ them from a template and a seed, the reader (:mod:`.reader`) from a crowd scene 
 
 - :class:`Turns`: the parametric controller of Section 5 (phase ellipse with directional
   control), one turn period, lean and heading per figure.  All such figures of a crowd that share
-  a body run as one batch of :func:`blender_turning.core.run`.
+  a body run as one task (:mod:`.kernels`: each on floats, or one numpy batch when many).
 - :class:`FollowPath`: path following (Section 6) of a core :class:`~..core.scene.Scene` (its
   path, obstacles, start, speed profile and planner settings); planned one task per figure.
 

@@ -1,8 +1,8 @@
 """Running a crowd: parametric figures in batches, path figures one task each, on any executor.
 
 The work is split into tasks the same way whatever runs them: one task per group of
-:class:`~.model.Turns` figures that share a body and limits (one batch of
-:func:`blender_turning.core.run`, per-figure ellipses, a figure that falls stops alone), and one
+:class:`~.model.Turns` figures that share a body and limits (:func:`blender_turning.core.run` on the cheaper kernel for their number, :mod:`.kernels`:
+per-figure ellipses, a figure that falls stops alone), and one
 task per :class:`~.model.FollowPath` figure (the planner of Section 6).  Tasks run in this
 process (``workers=1``), on a :class:`concurrent.futures.ProcessPoolExecutor` (``workers=K``),
 on a Dask distributed scheduler (``scheduler="tcp://..."``, through ``Client.get_executor()``)
@@ -16,7 +16,6 @@ per group of figures that can see each other, each figure around the bodies of t
 """
 from __future__ import annotations
 
-import math
 import re
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -26,11 +25,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..core import signals
-from ..core.controllers import PhaseEllipse
 from ..core.errors import PlanInfeasible, TurningError, WorkerLost
-from ..core.simulate import run
 from ..core.trajectory import Trajectory, body_meta
 from . import priority as priority_
+from .kernels import run_turns
 from .model import Crowd, CrowdFigure
 
 __all__ = ["FigureResult", "CrowdResult", "run_crowd", "crowd_tasks", "run_task", "execute",
@@ -152,28 +150,15 @@ def _group(clearance: float, bodies: tuple, figures: tuple) -> list:
 
 
 def _batch(dt: float, duration: float, figures: tuple) -> list:
-    """One batch of parametric figures (Section 5) sharing body and limits, each run for the
-    crowd's duration less its time offset, on its own clock."""
+    """One task of parametric figures (Section 5) sharing body and limits, each run for the
+    crowd's duration less its time offset, on its own clock, on the cheaper kernel
+    (:mod:`.kernels`)."""
     fig = figures[0].figure
-    w = np.array([f.controller.omega0 for f in figures])
-    tm = np.array([f.controller.lean for f in figures])
-    heading = None if figures[0].controller.heading is None \
-        else np.array([f.controller.heading for f in figures])
-    state0 = np.stack([f.state0() for f in figures], axis=1)
-    spans = [duration - f.time_offset for f in figures]
-    r = run(fig.body, fig.limits, PhaseEllipse(fig.body, w, tm, heading=heading), state0,
-            max(spans), dt)
-    fell = dict(r.falls)
+    meta = {"preset": fig.name, "dt": dt, **body_meta(fig.body)}
     out = []
-    for k, f in enumerate(figures):
-        n = min(int(math.floor(spans[k] / dt + 1e-9)) + 1, len(r.columns["t"]))
-        status, msg = "ok", ""
-        if k in fell:
-            n = min(n, int(round(fell[k] / dt)) + 1)
-            status = "fell"
-            msg = f"fell over at t = {fell[k] + f.time_offset:.2f} s"
-        cols = {c: v[:n, k] for c, v in r.columns.items()}
-        meta = {"preset": fig.name, "dt": dt, **body_meta(fig.body)}
+    for f, (cols, fell_at) in zip(figures, run_turns(dt, duration, figures)):
+        status, msg = ("ok", "") if fell_at is None else \
+            ("fell", f"fell over at t = {fell_at + f.time_offset:.2f} s")
         out.append(FigureResult(f.name, _on_crowd_clock(Trajectory.from_columns(cols, meta), f),
                                 status, msg))
     return out

@@ -7,10 +7,13 @@ modal (one figure per timer tick, a progress bar, Esc cancels between figures).
 """
 from __future__ import annotations
 
-import bpy
-from bpy.props import BoolProperty, EnumProperty, IntProperty
+import math
 
-from ..anim import bake, foot_track
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
+
+from ...mapping.keys import KeyTolerance
+from ..anim import bake, fewer_keys, foot_track
 from ..anim import export_ready as export_ready_mod
 from ..anim.figure_bake import apply_bake, reset_pose
 from ..jobs.model_notes import turn_note
@@ -43,9 +46,11 @@ class BakeJob:
     written), then :meth:`write` all of them."""
 
     def __init__(self, names, frames: FrameRange, step: int = 1, export_ready: bool = True,
-                 root_motion: bool = False):
+                 root_motion: bool = False, fewer_keys: KeyTolerance | None = None):
         self.names, self.frames, self.step = list(names), frames, step
         self.export_ready, self.root_motion = export_ready, root_motion
+        self.fewer_keys = fewer_keys              # None: a key on every (step-th) frame
+        self.key_reports = {}                 # name -> fewer_keys.KeyReport
         self.results = []                     # (name, start or None, traj, track)
         self.grounds = {}                     # ground mesh name -> MeshGround
 
@@ -93,6 +98,8 @@ class BakeJob:
                 fig.turning.start = (start[0], start[1], float(fig.location[2]))
                 fig.turning.start_heading = start[2]
             out.append((name, apply_bake(fig, traj, track, self.step, self.export_ready)))
+            if self.fewer_keys is not None:
+                self.key_reports[name] = fewer_keys.reduce_bake(fig, self.fewer_keys)
         return out
 
 
@@ -115,6 +122,17 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
                       options={"SKIP_SAVE"},
                       description="Key every n-th frame (and the last); smooth (Bezier) in "
                                   "between.  1 keys every frame, exactly")
+    fewer_keys: BoolProperty(
+        name="Fewer Keys", default=False, options={"SKIP_SAVE"},
+        description="Key only where needed to stay within the tolerances of the every-frame "
+                    "motion, with smooth (Bezier) handles: curves to edit, and a smaller file")
+    key_angle: FloatProperty(
+        name="Angle Tolerance", default=math.radians(0.1), min=math.radians(0.001),
+        max=math.radians(10.0), subtype="ANGLE", precision=3,
+        description="Fewer Keys: how far a rotation may stray from the every-frame motion")
+    key_length: FloatProperty(
+        name="Length Tolerance", default=0.001, min=1e-5, max=0.1, unit="LENGTH", precision=4,
+        description="Fewer Keys: how far a position may stray from the every-frame motion")
     export_ready: BoolProperty(
         name="Export-Ready Equipment", default=True,
         description="A figure made from your own rig: key its skis, poles or bicycle on every "
@@ -142,6 +160,11 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         col.prop(self, "frame_start")
         col.prop(self, "frame_end")
         layout.prop(self, "step")
+        layout.prop(self, "fewer_keys")
+        col = layout.column(align=True)
+        col.active = self.fewer_keys
+        col.prop(self, "key_angle")
+        col.prop(self, "key_length")
         layout.prop(self, "export_ready")
         layout.prop(self, "root_motion")
 
@@ -153,11 +176,16 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
                 setattr(self, name, value)          # a custom range starts as the scene's
         try:
             frames = bake_frames(scene, self.frame_range, self.frame_start, self.frame_end)
+            tolerance = KeyTolerance(self.key_angle, self.key_length) if self.fewer_keys \
+                else None
+            if tolerance is not None and self.step > 1:
+                raise ValueError(f"Fewer Keys picks the frames to key; Step = {self.step} keys "
+                                 "every n-th frame: use one of them (Step 1 with Fewer Keys)")
         except ValueError as exc:
             self.report({"ERROR"}, f"Bake Turns: {exc}")
             return None
         return BakeJob([f.name for f in selected_figures(context)], frames, self.step,
-                       self.export_ready, self.root_motion)
+                       self.export_ready, self.root_motion, tolerance)
 
     def _finish(self, job):
         try:
@@ -173,6 +201,8 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         every = "" if job.step == 1 else f", every {job.step} frames"
         what = ", ".join(f"{name} ({r.fcurves} F-curves x {r.frames} keys)" for name, r in written)
         self.report({"INFO"}, f"Baked {what} over frames {frames.start}-{frames.end}{every}")
+        for name, keyed in job.key_reports.items():
+            self.report({"INFO"}, f"Bake Turns: {name}: Fewer Keys: {keyed.summary()}")
         for name, _, traj, _ in job.results:     # last: the status bar shows the last report
             note = turn_note(traj)
             if note:
