@@ -34,7 +34,7 @@ from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender.scene import ground as mesh_ground  # noqa: E402
 from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
 from blender_turning.blender.jobs.pipeline import simulate_figure  # noqa: E402
-from blender_turning.blender.ops.bake import BakeJob  # noqa: E402
+from blender_turning.blender.jobs.bake_job import BakeJob  # noqa: E402
 from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
 from bench_common import best  # noqa: E402  (scripts/)

@@ -107,7 +107,8 @@ def test_one_bad_figure_bakes_nothing(scene):
 
 def modal_bake(figs):
     """A stand-in ``self`` for the modal Bake Turns over ``figs`` (no window in the wheel)."""
-    from blender_turning.blender.ops.bake import BakeJob, FrameRange
+    from blender_turning.blender.jobs.bake_job import BakeJob
+    from blender_turning.blender.scene.scene_adapters import FrameRange
     op_cls = bpy.types.TURNING_OT_bake_turns
     reports = []
     fake = type("Op", (), {"report": lambda self, kind, msg: reports.append((kind, msg)),

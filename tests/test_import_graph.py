@@ -176,16 +176,49 @@ def test_only_the_blender_layer_imports_blender():
     assert not bad, "\n".join(bad)
 
 
+def script_imports() -> dict:
+    """``{script: {imported name: line}}`` of the scripts (``scripts/``), which use the package
+    by its absolute names; ``from pkg import mod`` counts as ``pkg.mod``."""
+    out = {}
+    for path in sorted((ROOT.parent / "scripts").rglob("*.py")):
+        found = out[path.relative_to(ROOT.parent).as_posix()] = {}
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+            if isinstance(node, ast.Import):
+                found.update((a.name, node.lineno) for a in node.names)
+            elif isinstance(node, ast.ImportFrom) and not node.level:
+                found.update((f"{node.module}.{a.name}", node.lineno) for a in node.names)
+    return out
+
+
 def test_operators_are_leaves():
-    """Nothing imports an operator module (``blender/ops/``): what operators share lives in a
-    module of its own.  Only the Blender layer's ``register()`` loads them, by name."""
+    """Nothing imports an operator module (``blender/ops/``), not even a script: what operators
+    share lives in a module of its own (a job, a scene reader).  Only the Blender layer's
+    ``register()`` loads them, by name."""
     edges, _ = graph()
     ops = f"{PACKAGE}.blender.ops"
+    found = dict(edges, **script_imports())
+    assert len(found) > len(edges) and "bpy" in found["scripts/bench_bake.py"]
     bad = [f"{name} (line {line}) imports {target}"
-           for name, targets in sorted(edges.items())
+           for name, targets in sorted(found.items())
            for target, line in sorted(targets.items())
            if target == ops or target.startswith(ops + ".")]
     assert not bad, "\n".join(bad)
+
+
+#: The most modules one folder of ``blender/`` holds (docs/ARCHITECTURE.md Section 1).
+FOLDER_MODULES = 12
+
+
+def test_blender_folders_hold_a_dozen_modules_at_most():
+    """Each folder of ``blender/`` holds the modules of one part, at most a dozen (``__init__``
+    not counted): a new module goes into the folder of its part, a part that outgrows it
+    splits."""
+    folders = {p.parent for p in (ROOT / "blender").rglob("*.py")}
+    counts = {f.relative_to(ROOT.parent).as_posix():
+              sum(p.name != "__init__.py" for p in f.glob("*.py")) for f in folders}
+    assert len(counts) >= 7 and sum(counts.values()) >= 30, counts      # the walk sees them
+    big = {f: n for f, n in sorted(counts.items()) if n > FOLDER_MODULES}
+    assert not big, f"more than {FOLDER_MODULES} modules in a folder: {big}"
 
 
 @pytest.mark.parametrize("edges, circle", [

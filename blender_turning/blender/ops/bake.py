@@ -1,7 +1,7 @@
 """``turning.bake_turns`` and ``turning.clear_bake``: the parametric controller (Section 5) for
 every selected figure over a frame range, and its removal.
 
-A bake computes every figure first (:class:`BakeJob`) and writes only when all succeeded: a
+A bake computes every figure first (:class:`..jobs.bake_job.BakeJob`) and writes only when all succeeded: a
 failure or Esc leaves the scene as it was.  With several figures and a window the operator is
 modal (one figure per timer tick, a progress bar, Esc cancels between figures).
 """
@@ -13,14 +13,13 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 from ...mapping.keys import KeyTolerance
-from ..anim import bake, fewer_keys, foot_track
+from ..anim import bake, foot_track
 from ..anim import export_ready as export_ready_mod
-from ..anim.figure_bake import apply_bake, reset_pose
+from ..anim.figure_bake import reset_pose
+from ..jobs.bake_job import BakeJob
 from ..jobs.model_notes import turn_note
-from ..scene.figure_context import (check_figure, end_modal, poll_figure, report_error,
-                                    selected_figures)
-from ..jobs.pipeline import figure_pose_track, ground_of
-from ..scene.scene_adapters import FrameRange, start_from_object
+from ..scene.figure_context import end_modal, poll_figure, report_error, selected_figures
+from ..scene.scene_adapters import FrameRange
 
 FRAME_RANGES = (
     ("SCENE", "Scene", "The scene's frame range (Output properties)"),
@@ -39,68 +38,6 @@ def bake_frames(scene, choice: str, start: int, end: int) -> FrameRange:
     if choice == "CUSTOM":
         return FrameRange(start, end, fps)
     return FrameRange.of_scene(scene)
-
-
-class BakeJob:
-    """Bake figures (by name) over ``frames``: :meth:`compute_next` one at a time (nothing is
-    written), then :meth:`write` all of them."""
-
-    def __init__(self, names, frames: FrameRange, step: int = 1, export_ready: bool = True,
-                 root_motion: bool = False, fewer_keys: KeyTolerance | None = None):
-        self.names, self.frames, self.step = list(names), frames, step
-        self.export_ready, self.root_motion = export_ready, root_motion
-        self.fewer_keys = fewer_keys              # None: a key on every (step-th) frame
-        self.key_reports = {}                 # name -> fewer_keys.KeyReport
-        self.results = []                     # (name, start or None, traj, track)
-        self.grounds = {}                     # ground mesh name -> MeshGround
-
-    @property
-    def done(self) -> bool:
-        return len(self.results) == len(self.names)
-
-    @property
-    def current(self) -> str:
-        """The figure :meth:`compute_next` works on."""
-        return self.names[min(len(self.results), len(self.names) - 1)]
-
-    def compute_next(self) -> None:
-        """Simulate and map the next figure (raises ``ValueError`` or ``TurningError``)."""
-        name = self.current
-        fig = bpy.data.objects.get(name)
-        if fig is None:
-            raise ValueError("the figure was deleted while baking")
-        check_figure(fig)
-        # Not baked yet: start where the user put the figure; baked: from its Start settings.
-        start = start_from_object(fig) if bake.figure_action(fig) is None else None
-        height = None if start is None else float(fig.location[2])
-        traj, track = figure_pose_track(fig, self.frames, start=start, height=height,
-                                        ground=self._ground(fig))
-        if self.root_motion:
-            track = export_ready_mod.root_motion(fig, track)
-        bake.check_track(fig, track)
-        self.results.append((name, start, traj, track))
-
-    def _ground(self, fig):
-        """The figure's Ground mesh, read once per job for all figures on it."""
-        mesh = fig.turning.ground
-        if mesh is None:
-            return None
-        if mesh.name not in self.grounds:
-            self.grounds[mesh.name] = ground_of(fig)
-        return self.grounds[mesh.name]
-
-    def write(self) -> list:
-        """Write every computed figure; ``[(name, BakeResult)]``."""
-        out = []
-        for name, start, traj, track in self.results:
-            fig = bpy.data.objects[name]
-            if start is not None:                 # the height where the user put it stays
-                fig.turning.start = (start[0], start[1], float(fig.location[2]))
-                fig.turning.start_heading = start[2]
-            out.append((name, apply_bake(fig, traj, track, self.step, self.export_ready)))
-            if self.fewer_keys is not None:
-                self.key_reports[name] = fewer_keys.reduce_bake(fig, self.fewer_keys)
-        return out
 
 
 class TURNING_OT_bake_turns(bpy.types.Operator):
