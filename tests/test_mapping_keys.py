@@ -30,7 +30,7 @@ def channels(track):
 
 def reduced(frames, values, bound):
     idx = keys.reduce_keys(frames, values, bound)
-    d = keys.slopes(frames, values)
+    d = keys.key_slopes(frames, values, bound)
     return idx, keys.hermite(frames[idx], values[idx], d[idx], frames)
 
 
@@ -73,6 +73,29 @@ def test_ends_and_extrema_are_keys_and_a_cubic_needs_only_its_ends():
     assert list(idx) == [0, 199]
 
 
+def test_a_corner_is_one_key_with_two_slopes():
+    """A joint reaching its limit: the slope jumps at frame 100.  The key there arrives and
+    leaves with each side's own slope, so the corner costs one key, not a cluster of them."""
+    f = np.arange(1.0, 201.0)
+    v = np.where(f < 100, 0.3, 0.6) * np.sin((f - 100.0) / 20.0)
+    bound = 1e-4
+    idx, curve = reduced(f, v, bound)
+    assert np.max(np.abs(curve - v)) <= bound
+    d = keys.key_slopes(f, v, bound)
+    assert 99 in idx and d[99, 0] == pytest.approx(0.3 / 20, rel=1e-3)
+    assert d[99, 1] == pytest.approx(0.6 / 20, rel=1e-3)
+    rounded = keys.reduce_keys(f, v, bound, keys.slopes(f, v))      # one slope everywhere
+    assert {98, 100} <= set(rounded) and not {98, 100} & set(idx)
+
+
+def test_read_outs_are_held_to_their_range_and_the_lean_to_the_angle():
+    tol = keys.KeyTolerance(readout=2e-3)
+    assert keys.channel_tolerance("readout", tol, [700.0, 650.0, 760.0]) == pytest.approx(0.22)
+    assert keys.channel_tolerance("readout", tol, [10.0, 10.0]) == pytest.approx(0.02)
+    assert keys.channel_tolerance("angle", tol) == tol.angle
+    assert set(keys.READOUTS) == {"turn_lean", "turn_curvature", "turn_leg_force", "turn_speed"}
+
+
 def test_a_constant_channel_with_round_off_keeps_two_keys():
     f = np.arange(1.0, 1441.0)
     v = 1.0 + np.random.default_rng(0).normal(scale=1e-16, size=f.size)
@@ -87,7 +110,7 @@ def test_float32_storage_stays_within_the_bound():
     v = (10.0 * f / 24.0 + 3.0 * np.sin(f / 8.0)).astype(np.float32).astype(float)
     bound = keys.channel_tolerance("location", keys.DEFAULT_TOLERANCE)
     idx = keys.reduce_keys(f, v, bound)
-    d = keys.slopes(f, v)
+    d = keys.key_slopes(f, v, bound)
     kv = v[idx].astype(np.float32).astype(float)
     kd = d[idx].astype(np.float32).astype(float)
     stored = keys.hermite(f[idx], kv, kd, f).astype(np.float32).astype(float)
