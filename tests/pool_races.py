@@ -1,11 +1,13 @@
-"""``python tests/pool_races.py RACE crowd ...``: the crowd command with a race of its
-process pool made certain rather than left to the machine's scheduling (docs/failures.md,
+"""``python tests/pool_races.py RACE crowd ...``: the crowd command with one of two races of
+its process pool made certain rather than left to the machine's scheduling (docs/failures.md,
 tests/test_failure_pool_exit.py):
 
 - ``slow-close``: at exit, ``concurrent.futures`` wakes every pool management thread still
   running (``_python_exit``): it checks that the thread's pipe is open, then writes to it.  Here
   the management thread takes a second to end its pool (and close that pipe), and the write
   comes only once the pipe is closed, as a busy machine may interleave them.
+- ``signal-at-fork``: SIGTERM arrives while the pool forks its first worker, when Python runs
+  its own at-fork hooks (whose exceptions it prints and drops).
 """
 import os
 import runpy
@@ -35,6 +37,15 @@ if RACE == "slow-close":
 
     process._ExecutorManagerThread.join_executor_internals = join_executor_internals
     process._ThreadWakeup.wakeup = wakeup
+elif RACE == "signal-at-fork":
+    sent = []
+
+    def before_fork():
+        if not sent:
+            sent.append(True)
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    os.register_at_fork(before=before_fork)
 else:
     raise SystemExit(f"unknown race {RACE!r}")
 

@@ -45,3 +45,13 @@ def test_the_pool_has_ended_before_the_exit(tmp_path):
     assert one_line(err).endswith("interrupted (SIGINT); nothing written")
     assert snapshot(out) == {}
 
+
+def test_a_signal_while_the_pool_forks_is_not_lost(tmp_path):
+    """SIGTERM while the pool forks its first worker, inside Python's at-fork hooks (which drop
+    what they raise): the crowd still stops, rather than going on to exit 0."""
+    scene, out = crowd_and_out(tmp_path)
+    proc = start("signal-at-fork", scene, out)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 143, err
+    assert one_line(err).endswith("interrupted (SIGTERM); nothing written")
+    assert snapshot(out) == {}
