@@ -81,8 +81,16 @@ def run(args) -> int:
 
 
 def _run(args, crowd, out: Path) -> int:
-    outputs = Outputs()                       # every file checked before the work
+    outputs = Outputs()
     try:
+        return _write(args, crowd, out, outputs)
+    except BaseException:         # the hidden files go before the folder made for them does
+        outputs.discard()
+        raise
+
+
+def _write(args, crowd, out: Path, outputs: Outputs) -> int:
+    try:                                      # every file checked before the work
         for f in crowd.figures:
             outputs.reserve(f"--out {f.name}.csv", out / f"{f.name}.csv")
         outputs.reserve("--out summary.json", out / "summary.json")
@@ -90,12 +98,8 @@ def _run(args, crowd, out: Path) -> int:
             result = run_crowd(crowd, workers=args.workers, scheduler=args.scheduler,
                                progress=bar, keep_going=args.keep_going)
     except WorkerLost as exc:
-        outputs.discard()
         raise WorkerLost(f"{exc}; nothing written (--keep-going writes the other figures)",
                          exc.figures) from None
-    except BaseException:
-        outputs.discard()
-        raise
     tracks = [(f.name, r.trajectory, f.figure.body.l) for f, r in zip(crowd.figures,
                                                                     result.figures)]
     near = closest_approach(MovingBodies.from_tracks(tracks, dt=0.1)) \

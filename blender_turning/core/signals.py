@@ -117,12 +117,21 @@ def ignore_in_worker() -> None:
 
 def stop_pool(pool) -> None:
     """End a ``ProcessPoolExecutor`` now: cancel what has not started, terminate its worker
-    processes and reap them (``shutdown(wait=True)`` would wait for the running tasks)."""
-    # The executor keeps no public list of its processes.
+    processes, reap them and wait for the pool's management thread to finish
+    (``shutdown(wait=True)`` would wait for the running tasks).
+
+    The wait for that thread matters at exit: ``concurrent.futures`` wakes every management
+    thread still running (``_python_exit``) by writing to a pipe the thread closes as it ends;
+    one still ending then can close it under that write, and the exit prints a traceback."""
+    # Private ProcessPoolExecutor internals (CPython 3.9-3.13): it keeps no public list of its
+    # processes or handle on its management thread; both are gone once shutdown() returns.
     procs = list((getattr(pool, "_processes", None) or {}).values())
+    manager = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)
     for p in procs:
         if p.is_alive():
             p.terminate()
     for p in procs:
         p.join(timeout=5)
+    if manager is not None:
+        manager.join(timeout=5)

@@ -280,13 +280,16 @@ def _fan_out(executor, fn, tasks, collect, keep_going: bool = False) -> None:
             collect(i, fn(task))
         return
     futures, lost = {}, {}
-    for i, task in enumerate(tasks):
-        try:
-            futures[executor.submit(fn, task)] = i
-        except Exception as exc:              # the pool broke before this task went out
-            if not _worker_died(exc):
-                raise
-            lost[i] = exc
+    # A process pool forks its workers in submit(), where Python runs its at-fork hooks and
+    # drops what they raise: a signal there would be lost, so it is held until the tasks are out.
+    with signals.deferred():
+        for i, task in enumerate(tasks):
+            try:
+                futures[executor.submit(fn, task)] = i
+            except Exception as exc:          # the pool broke before this task went out
+                if not _worker_died(exc):
+                    raise
+                lost[i] = exc
     for fut in as_completed(futures):
         i = futures[fut]
         try:

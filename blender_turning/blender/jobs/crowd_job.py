@@ -35,6 +35,7 @@ import time
 import bpy
 from bpy.props import BoolProperty, FloatProperty
 
+from ...core.errors import WorkerLost
 from ...core.follow_problem import start_state
 from ...core.ranges import RANGES
 from ...core.scene import Scene
@@ -182,6 +183,10 @@ class CrowdFollow:
         self._shutdown()
         return list(zip(self.names, self._result.figures))
 
+    def object_names(self, members) -> list:
+        """The objects' names of the crowd figures ``members`` (:func:`member_names`)."""
+        return [self.names[self.members.index(m)] for m in members if m in self.members]
+
     def rank(self, member: str) -> int:
         """Where the crowd figure ``member`` plans (its place in the priority; alone: its place
         in the selection)."""
@@ -310,7 +315,11 @@ def complete_crowd(op, context, job) -> set:
     strayed from its path (:func:`.model_notes.follow_note`)."""
     try:
         results = job.results()
-    except Exception as exc:                       # a worker raised: a bug, or it was killed
+    except WorkerLost as exc:                      # killed (by hand, out of memory): not a bug
+        op.report({"ERROR"}, f"{TITLE}: a worker process died while planning "
+                             f"{', '.join(job.object_names(exc.figures))}; nothing was changed")
+        return {"CANCELLED"}
+    except Exception as exc:                       # a worker raised: a bug
         return report_error(op, TITLE, job.current, exc)
     failed = sorted(((name, r) for name, r in results if r.status != "ok"),
                     key=lambda nr: job.rank(nr[1].name))
