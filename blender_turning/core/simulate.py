@@ -144,7 +144,8 @@ def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: flo
 
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
              state0=None, C_f0=None, meta: dict | None = None, speed=None, ground=FLAT,
-             resistance: Resistance | None = None, target_speed=None) -> Trajectory:
+             resistance: Resistance | None = None, target_speed=None,
+             skidding=None) -> Trajectory:
     """Simulate one figure on ``ground`` (:mod:`.model`: ``Flat()``, the default, a
     :class:`.terrain.Plane` or a :class:`.terrain.HeightField`); raise a
     :class:`.errors.RunEnded` (:class:`.errors.FellOver`, :class:`.errors.Stopped`,
@@ -156,16 +157,17 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
     model, bit for bit.  Anywhere else it is a state that balances energy (docs/TERRAIN.md
     Sections 3-4; ``state0`` may carry ``V_cm`` as a sixth entry), slowed by ``resistance``
     (:class:`.model.Resistance`) and braked to ``target_speed`` (m/s or
-    :class:`.braking.TargetSpeed`) by turning across the hill.  The trajectory's ``z`` is the
-    ground under the foot."""
+    :class:`.braking.TargetSpeed`) by turning across the hill and, with ``skidding`` (a
+    :class:`.skidding.Skidding`: a style, the grip, a stop), by skidding within the grip
+    (docs/skidding.md).  The trajectory's ``z`` is the ground under the foot."""
     ground = FLAT if ground is None else ground
     res = NO_RESISTANCE if resistance is None else resistance
-    if target_speed is not None or not speed_held(ground, res):
+    if target_speed is not None or skidding is not None or not speed_held(ground, res):
         if speed is not None:
             raise ValueError("speed is a state on terrain (it follows the slope): give a "
                              "speed schedule or a ground, not both")
         return simulate_free(figure, controller, duration, dt, state0, ground, res, C_f0, meta,
-                             target_speed)
+                             target_speed, skidding)
     if ground.z0 != 0.0:                                  # flat ground at a height
         traj = simulate(figure, controller, duration, dt, state0, C_f0, meta, speed)
         return Trajectory.from_columns({**traj.columns(), "z": traj.z + ground.z0}, traj.meta)
