@@ -240,13 +240,16 @@ def _terrain_rows(body, ground, res, meta, t, c, tn, i, u) -> dict:
     free = Limits()                         # the recorded C_f is already bounded
     state = tuple(c[k] for k in ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm"))
     deriv, _, _, V_f, _, _ = model.rhs(body, free, ground, c["C_f"], state, resistance=res)
-    # The recorded braking force, already bounded by the grip (docs/skidding.md Section 2).
+    # The recorded braking force, already bounded by the grip; a figure at rest (after a stop)
+    # is held there by the snow (docs/skidding.md Section 4).
     V_cm = c["V_cm"]
-    deriv = deriv[:5] + (deriv[5] - c["brake"] * np.where(V_cm > 0.0, V_f / np.where(
-        V_cm > 0.0, V_cm, 1.0), 0.0),)
+    moving = V_cm > 0.0
+    deriv = tuple(np.where(moving, dy, 0.0) for dy in deriv[:5]) + (np.where(
+        moving, deriv[5] - c["brake"] * V_f / np.where(moving, V_cm, 1.0), 0.0),)
     names = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
     out = {"t": tn, **{k: _hermite(t, c[k], dy, i, u) for k, dy in zip(names, deriv)},
            "s": _hermite(t, c["s"], V_f, i, u)}
+    out["V_cm"] = np.maximum(out["V_cm"], 0.0)          # coming to rest: never backwards
     cf = out["C_f"] = (1.0 - u) * c["C_f"][i] + u * c["C_f"][i + 1]
     st = tuple(out[k] for k in names)
     _, _, alpha, V_f, _, fr = model.rhs(body, free, ground, cf, st, resistance=res)
