@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import sys
 
 from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, slalom_start
 from ..core.ranges import RANGES
@@ -110,6 +111,8 @@ def run(args) -> int:
               slalom_start(fig.body, w0, tm0, heading(0.0), x0, y0)[:3]) + (theta0, omega_v0)
     traj = simulate(fig, ctl, duration, dt, state0, meta={"controller": args.controller},
                     **terrain)
+    if "grip_limited" in traj.meta:
+        print(f"simulate: warning: {traj.meta['grip_limited']}", file=sys.stderr)
     if args.fps:
         traj = traj.resample(args.fps, ground=terrain.get("ground"))
     if args.plot:

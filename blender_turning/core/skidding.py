@@ -28,6 +28,7 @@ below :data:`.terrain_sim.MIN_SPEED` the figure stands still across the fall lin
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,7 +38,8 @@ from .schedule import Schedule
 from .terrain import surface_frame
 from .validate import check
 
-__all__ = ["Skidding", "STYLES", "STOP_SIDES", "STOP_EDGE", "WEDGE_MAX", "turning_share"]
+__all__ = ["Skidding", "STYLES", "STOP_SIDES", "STOP_EDGE", "WEDGE_MAX", "turning_share",
+           "lean_within_grip", "skid_meta", "stand_rows"]
 
 STYLES = ("carve", "skid", "wedge", "slip")
 STOP_SIDES = ("heel", "toe")
@@ -77,6 +79,11 @@ class Skidding:
     reset_time: float = 20.0
     """The skid's integral time, s (twice the turning rule's: turning acts first)."""
 
+    @property
+    def brakes(self) -> bool:
+        """Whether the foot ever brakes (``carve`` without a stop: the paper's model)."""
+        return self.style != "carve" or self.stop_at is not None
+
     def __post_init__(self):
         if self.style not in STYLES:
             raise ValueError(f"style = {self.style!r} is not one of {', '.join(STYLES)}")
@@ -106,17 +113,19 @@ class _Skid:
         self.skid_max = SKID_MAX_STOP if tyre or rule.style in ("wedge", "slip") else \
             SKID_MAX_TURNING
         self.edge = WEDGE_EDGE if rule.style == "wedge" else 0.0
-        self.theta_max, self.heading = controller.theta_max, controller.heading
+        self.theta_max = getattr(controller, "theta_max", None)
+        self.heading = getattr(controller, "heading", None)
         # The lean the controller follows (its float law reads the schedule it had when the
         # run began): a slip's small turns, a stop's turns dying out.
         tm = self.theta_max
         self.lean = (lambda t: min(float(tm(t)), SLIP_LEAN)) if rule.style == "slip" else tm
-        if rule.style == "slip" or rule.stop_at is not None:
+        if tm is not None and (rule.style == "slip" or rule.stop_at is not None):
             controller.theta_max = Schedule(lambda t: self.lean(t))
 
     def restore(self) -> None:
         """Give the controller back its own lean schedule and heading."""
-        self.ctl.theta_max, self.ctl.heading = self.theta_max, self.heading
+        if self.theta_max is not None:
+            self.ctl.theta_max, self.ctl.heading = self.theta_max, self.heading
 
     def update(self, t: float, state, F_lat: float) -> None:
         """Set the step's braking command (``F_lat``: the foot's lateral force over the mass at
@@ -130,9 +139,10 @@ class _Skid:
                 self.stopping = True
                 if self.side == 0.0:
                     self.side = 1.0 if F_lat >= 0.0 else -1.0
-                t0, tm = t, self.lean
-                self.lean = lambda tt: max(STOP_LEAN, float(tm(tt)) * math.exp(-(tt - t0)))
-                self.ctl.heading = None          # no directional control: the turns die out
+                if self.theta_max is not None:
+                    t0, tm = t, self.lean
+                    self.lean = lambda tt: max(STOP_LEAN, float(tm(tt)) * math.exp(-(tt - t0)))
+                    self.ctl.heading = None      # no directional control: the turns die out
             self.stage.brake = FootBrake(math.inf, r.grip, SKID_MAX_STOP,
                                          0.0 if r.grip.kind == "tyre" else STOP_EDGE)
             return
@@ -181,18 +191,21 @@ def skid_meta(rule: Skidding) -> dict:
     return out
 
 
-def stand_rows(rows: list, n: int, ground, g: float) -> list:
+def stand_rows(rows: list, n: int, ground, g: float, grip: Grip) -> list:
     """``rows`` (the terrain loop's, :func:`.terrain_sim._loop`) completed to ``n`` rows by a
-    figure standing still where its stop ended: at rest (``V_cm = V_f = 0``), plumb, its ski
-    across the fall line (the one of the two directions nearer the ski's heading at rest);
-    the snow holds it (static friction, ``brake`` 0)."""
+    figure standing still where its stop ended: at rest (``V_cm = V_f = 0``), plumb, a ski or
+    board across the fall line (the one of the two directions nearer its heading at rest; a
+    tyre, or flat ground, keeps its heading); the ground holds it (static friction, ``brake``
+    0)."""
     x, y, d, _, _, _, _, _, _, w, tm, _, _, skid = rows[-1]
     hx, hy = (float(v) for v in ground.derivatives(x, y)[1:3])
-    fall = math.atan2(-hy, -hx) if math.hypot(hx, hy) > 1e-9 else d + skid
-    ski = d + skid
-    across = min((fall + 0.5 * math.pi, fall - 0.5 * math.pi),
-                 key=lambda a: abs(_wrap(a - ski)))
-    skid = _wrap(across - d)
+    if grip.kind == "tyre" or math.hypot(hx, hy) < 1e-9:
+        skid = 0.0 if grip.kind == "tyre" else skid
+    else:
+        fall, ski = math.atan2(-hy, -hx), d + skid
+        across = min((fall + 0.5 * math.pi, fall - 0.5 * math.pi),
+                     key=lambda a: abs(_wrap(a - ski)))
+        skid = _wrap(across - d)
     fr = surface_frame(ground, x, y, d, g)
     plumb = math.atan2(-float(fr.g_lateral), float(fr.g_normal))
     still = (x, y, d, plumb, 0.0, 0.0, 0.0, 0.0, 0.0, w, tm, 0.0, 0.0, skid)
@@ -201,3 +214,36 @@ def stand_rows(rows: list, n: int, ground, g: float) -> list:
 
 def _wrap(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+@contextmanager
+def lean_within_grip(controller, grip):
+    """While in the block, a tyre's figure leans no further than its grip holds
+    (docs/skidding.md Section 5): a steady turn needs ``F_lat / N = tan theta_v`` from the
+    road, so the controller's ``theta_max`` is held to ``atan(mu)``.  Yields a list that holds
+    the report (one line) once a lean asked was limited; snow (a ski skids instead) and
+    controllers without a ``theta_max`` pass unchanged."""
+    report = []
+    tm = getattr(controller, "theta_max", None)
+    if grip is None or grip.kind != "tyre" or tm is None:
+        yield report
+        return
+    cap = math.atan(grip.mu)
+
+    def held(t):
+        v = float(tm(t))
+        if v > cap and not report:
+            report.append(f"the lean asked ({math.degrees(v):.1f} deg at t = {t:g} s) is more "
+                          f"than the tyre's grip holds (mu {grip.mu:g}): limited to "
+                          f"{math.degrees(cap):.1f} deg")
+        return min(v, cap)
+
+    const = tm.constant_value
+    controller.theta_max = Schedule.constant(min(const, cap)) if const is not None else \
+        Schedule(held)
+    if const is not None:
+        held(0.0)
+    try:
+        yield report
+    finally:
+        controller.theta_max = tm

@@ -89,7 +89,7 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         st = np.append(st, body.V_cm)
     check_range("V_cm (state0)", st[5], MIN_SPEED, 100.0)
     ground.derivatives(st[0], st[1])              # off the terrain: fail before stepping
-    if skidding is not None and skidding.style == "carve" and skidding.stop_at is None:
+    if skidding is not None and not skidding.brakes:
         skidding = None                          # the paper's carved model, unchanged
     brake = None
     if target_speed is not None:
@@ -124,7 +124,7 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         if skid is not None:
             skid.restore()
     if stop == "halted":
-        rows, stop = stand_rows(rows, n, ground, body.g), None
+        rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None
     traj = _trajectory(body, ground, np.array(rows, float), dt, info)
     if stop == "fell":
         raise FellOver(float(traj.t[-1]), float(rows[-1][11]), traj,
