@@ -12,8 +12,13 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 from ..core.errors import PathNotFinished, PlanInfeasible
+from ..core.grip import SNOW
+from ..core.params import check_range
+from ..core.planner.speed_cap import SpeedCap
+from ..core.registry import SPORTS
 from ..core.scene import check_horizon, load_scene
 from ..core.validate import check
 from .common import Outputs, require_matplotlib
@@ -29,6 +34,13 @@ def register(sub):
     p.add_argument("--stages", type=int, help="N, stages planned ahead (scene default)")
     p.add_argument("--choices", type=int, help="q, values of dC_f/dt tried per stage")
     p.add_argument("--stage-time", type=float, help="t_stage, s")
+    p.add_argument("--target-speed", type=float, metavar="V",
+                   help="m/s: brake at the foot, within the grip, to hold at most this speed "
+                        "(and what the grip allows on the path's tightest bend; "
+                        "docs/skidding.md)")
+    p.add_argument("--grip", type=float, metavar="MU",
+                   help="the friction circle's mu at the foot, overriding the sport's (with "
+                        "--target-speed)")
     p.add_argument("--out", help="trajectory CSV to write")
     p.add_argument("--stats", help="search statistics JSON to write")
     p.add_argument("--plot", help="PNG of the path, the obstacles and the track")
@@ -46,6 +58,10 @@ def run(args) -> int:
     if args.stage_time is not None:
         changes["t_stage"] = check("--stage-time", args.stage_time, "t_stage")
     scene = load_scene(args.scene)
+    if args.grip is not None and args.target_speed is None:
+        raise ValueError("--grip needs --target-speed (the grip bounds the braking)")
+    if args.target_speed is not None:
+        scene = replace(scene, speed_cap=_speed_cap(args, scene.figure.name))
     if changes:
         try:
             scene = scene.with_settings(**changes)
@@ -84,10 +100,21 @@ def run(args) -> int:
           f"{traj.duration:.2f} s, {tot['replans']} replans, {tot['expanded']} nodes expanded, "
           f"{tot['wall_time']:.2f} s planning; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg"
-          f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if scene.ground else ''}"
+          f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if scene.ground or scene.speed_cap else ''}"
+          f"{f', brake max {traj.brake.max():.1f} m/s^2' if scene.speed_cap else ''}"
           f"{'' if result.reached_end else ' (stopped at the given duration)'}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0
+
+
+def _speed_cap(args, sport: str) -> SpeedCap:
+    """The :class:`..core.planner.speed_cap.SpeedCap` of ``--target-speed`` and ``--grip``."""
+    V = check_range("--target-speed", args.target_speed, 0.0, 100.0, lo_open=True)
+    grip = SPORTS[sport].grip or SNOW["hard"]
+    if args.grip is not None:
+        mu = check("--grip", args.grip, "grip")
+        grip = replace(grip, mu=mu, name=f"{mu:g}")
+    return SpeedCap(V, grip)
 
 
 def _progress(bar, duration):

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import sys
 
 from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, slalom_start
 from ..core.ranges import RANGES
@@ -110,6 +111,8 @@ def run(args) -> int:
               slalom_start(fig.body, w0, tm0, heading(0.0), x0, y0)[:3]) + (theta0, omega_v0)
     traj = simulate(fig, ctl, duration, dt, state0, meta={"controller": args.controller},
                     **terrain)
+    if "grip_limited" in traj.meta:
+        print(f"simulate: warning: {traj.meta['grip_limited']}", file=sys.stderr)
     if args.fps:
         traj = traj.resample(args.fps, ground=terrain.get("ground"))
     if args.plot:
@@ -125,5 +128,21 @@ def run(args) -> int:
           f"{abs(traj.C_f).max():.3f} 1/m, distance {traj.s[-1]:.1f} m"
           f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if terrain else ''}"
           f"{'; turn ' + ctl.achieved.describe() if getattr(ctl, 'achieved', None) else ''}"
+          f"{_skid_summary(traj)}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0
+
+
+def _skid_summary(traj) -> str:
+    """``; style skid (hard snow), skid max 60 deg, brake max 5.2 m/s^2, stopped at 3.1 s`` for
+    a run that brakes at the foot (docs/skidding.md); ``""`` for a carved one."""
+    if "style" not in traj.meta:
+        return ""
+    m = traj.meta
+    text = (f"; style {m['style']} ({m['grip.name']} {m['grip']}), skid max "
+            f"{math.degrees(abs(traj.skid).max()):.0f} deg, brake max {traj.brake.max():.1f} "
+            "m/s^2")
+    if "stop_at" in m:
+        rest = traj.t[traj.V_cm == 0.0]
+        text += f", at rest from {rest[0]:.2f} s" if len(rest) else ", not at rest yet"
+    return text

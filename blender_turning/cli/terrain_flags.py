@@ -6,7 +6,9 @@ from a file"): a scene's ``terrain`` table as JSON (:mod:`..core.scene_terrain`;
 file gives its ``terrain``) or a ``.npy`` height grid with ``--ground-cell`` and
 ``--ground-origin``; ``--start X Y`` where the foot starts.
 ``--friction MU --drag-area CDA --air-density RHO`` what slows the figure;
-``--target-speed V`` brakes by turning across the hill (docs/TERRAIN.md Section 6).  With none
+``--target-speed V`` brakes by turning across the hill (docs/TERRAIN.md Section 6) and, on
+snow, by skidding for what turning leaves; ``--style``, ``--snow``, ``--grip``, ``--stop-at`` and
+``--stop-side`` say how the figure brakes (docs/skidding.md).  With none
 of them the run is today's flat one.  On a slope (``S > 0``) a resistance flag that is not given
 takes the sport's default (its record's ``resistance``, sources there): a skier on a
 slope slides on snow and through air unless told otherwise; on flat ground (``S = 0``) the
@@ -19,7 +21,10 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
+from ..core.grip import SNOW, snow
 from ..core.params import check_range
+from ..core.registry import SPORTS
+from ..core.skidding import STOP_SIDES, Skidding
 from ..core.scene_terrain import read_terrain
 from ..core.terrain import Plane
 from ..core.model import RESISTANCE, Resistance
@@ -53,7 +58,19 @@ def add_terrain_flags(p) -> None:
     g.add_argument("--start", type=float, nargs=2, metavar=("X", "Y"),
                    help="where the foot starts, m (default 0 0)")
     g.add_argument("--target-speed", type=float,
-                   help="m/s: turn across the hill when faster (phase-ellipse controller)")
+                   help="m/s: turn across the hill when faster, and skid for the rest on snow "
+                        "(phase-ellipse controller)")
+    k = p.add_argument_group("grip and skidding (docs/skidding.md)")
+    k.add_argument("--style", help="how the figure brakes: carve|skid|wedge|slip (skis: "
+                                   "wedge, board: slip; default with --target-speed: skid)")
+    k.add_argument("--snow", help="hard|soft: the snow's grip (default hard)")
+    k.add_argument("--grip", type=float, metavar="MU",
+                   help="the friction circle's mu at the foot, overriding the sport's (tyre: "
+                        "dry asphalt 0.9, wet 0.5, gravel 0.35; snow: its largest ratio)")
+    k.add_argument("--stop-at", type=float, metavar="SECONDS",
+                   help="a stop commanded at this time: skid to rest, then stand across the "
+                        "fall line")
+    k.add_argument("--stop-side", help="heel|toe: the snowboarder's edge in a stop or slip")
 
 
 def terrain_options(args, sport: str) -> dict:
@@ -87,7 +104,46 @@ def terrain_options(args, sport: str) -> dict:
     if args.target_speed is not None:
         out["target_speed"] = check_range("--target-speed", args.target_speed, 0.0, 100.0,
                                           lo_open=True)
+    skidding = skid_options(args, sport, args.target_speed is not None)
+    if skidding is not None:
+        out["skidding"] = skidding
     return out
+
+
+def _choice(flag: str, value, allowed) -> str:
+    if value not in allowed:
+        raise ValueError(f"--{flag} = {value!r} is not one of {'|'.join(allowed)}")
+    return value
+
+
+def skid_options(args, sport: str, target: bool):
+    """The :class:`..core.skidding.Skidding` of ``--style``, ``--snow``, ``--grip``,
+    ``--stop-at`` and ``--stop-side`` (``None``: the carved run).  With ``--target-speed`` and
+    no ``--style`` the figure skids (``skid``)."""
+    record = SPORTS[sport]
+    if args.snow is not None:
+        if record.grip is not None:
+            raise ValueError(f"--snow is for a sport on snow; the {sport} rides on "
+                             f"{record.grip.kind}s (give --grip MU)")
+        _choice("snow", args.snow, tuple(SNOW))
+    if args.stop_side is not None:
+        if "slip" not in record.styles:
+            raise ValueError(f"--stop-side is for a board; the {sport} has none")
+        _choice("stop-side", args.stop_side, STOP_SIDES)
+    style = args.style
+    if style is not None:
+        _choice("style", style, record.styles)
+    stop = None if args.stop_at is None else check("--stop-at", args.stop_at, "stop_at")
+    if style is None and stop is None and args.grip is None and args.snow is None \
+            and args.stop_side is None and not target:
+        return None
+    if style is None:
+        style = "skid" if target else "carve"
+    grip = record.grip if record.grip is not None else snow(args.snow or "hard")
+    if args.grip is not None:
+        mu = check("--grip", args.grip, "grip")
+        grip = replace(grip, mu=mu, name=f"{mu:g}")
+    return Skidding(style, grip, stop, args.stop_side)
 
 
 def start_point(args, ground) -> tuple:

@@ -19,7 +19,7 @@ the same inputs, with the same run-out, time limit, start state and end test.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -27,6 +27,7 @@ from .obstacles import Obstacles
 from .params import Figure
 from .path import HermitePath, PathDistance, PathProgress
 from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile, follow
+from .planner.speed_cap import path_curvature_max
 
 __all__ = ["FollowSetup", "DEFAULT_CLEARANCE", "TIME_LIMIT_FACTOR", "start_state"]
 
@@ -68,6 +69,9 @@ class FollowSetup:
     ground at the speed profile, the paper's problem."""
     resistance: object = None
     """Friction and drag on terrain (:class:`.model.Resistance`; ``None``: none)."""
+    speed_cap: object = None
+    """Brake to a target speed within the grip (:class:`.planner.speed_cap.SpeedCap`; its
+    ``curvature`` is taken from the path); ``None``: no braking."""
 
     @property
     def speed_profile(self) -> SpeedProfile:
@@ -78,10 +82,14 @@ class FollowSetup:
         subclass, if the caller needs one)."""
         speed = self.speed_profile
         run_out = self.run_out
-        if self.ground is not None:
+        cap = self.speed_cap
+        if cap is not None:
+            cap = replace(cap, curvature=path_curvature_max(self.path),
+                          lean_bound=self.settings.theta_bound)
+        if self.ground is not None or cap is not None:
             def make(dist, obstacles):
                 return cls(self.figure, dist, obstacles, self.settings, ground=self.ground,
-                           resistance=self.resistance)
+                           resistance=self.resistance, speed_cap=cap)
         else:
             def make(dist, obstacles):
                 return cls(self.figure, dist, obstacles, self.settings, speed)
@@ -108,7 +116,7 @@ class FollowSetup:
         ``duration``, for that long wherever it gets."""
         problem = problem or self.problem()
         state0 = start_state(self.path) if state0 is None else np.asarray(state0, float)
-        if self.ground is not None and len(state0) == 5:         # the speed is a state
+        if (self.ground is not None or self.speed_cap is not None) and len(state0) == 5:
             state0 = np.append(state0, self.figure.body.V_cm)
         if duration is not None:
             return follow(problem, state0, C_f0, duration, meta=meta, on_replan=on_replan)

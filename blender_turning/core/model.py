@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dynamics import bound_cf
+from .grip import foot_lateral
 from .params import BodyParams, Limits
 from .terrain import FLAT, HeightField, LazyHeightField, Plane, surface_frame
 from .registry import SPORTS
@@ -141,13 +142,17 @@ def inverse_cf(body: BodyParams, frame, theta_v, alpha_v, V):
 
 
 def rhs(body: BodyParams, limits: Limits, ground, C_f, state, anchor=None, tau=0.0,
-        resistance: Resistance = NO_RESISTANCE, held: bool = False):
+        resistance: Resistance = NO_RESISTANCE, held: bool = False, brake=None):
     """The model's right-hand side under a demanded curvature (module docstring).
 
     ``C_f`` is bounded as in Section 3 (:func:`.dynamics.bound_cf`, relative to ``anchor``, the
     curvature ``tau`` seconds earlier) and ``alpha_v`` recomputed from the bounded value.
     ``state`` is ``(x, y, theta_dir, theta_v, omega_v, V_cm)`` (floats or arrays); ``held``
-    holds the speed (the paper's constant ``V_cm``).  Returns ``(derivatives, C_f, alpha_v,
+    holds the speed (the paper's constant ``V_cm``).  ``brake`` (a :class:`.grip.FootBrake`)
+    adds the snow's (road's) braking force at the foot, bounded by the grip's friction circle
+    together with the turn's lateral force (docs/skidding.md Section 2): ``dV_cm/dt`` loses
+    ``F_brake / m V_f / V_cm`` (the force works at the foot's speed, as friction does); ``None``
+    is the carved model, unchanged.  Returns ``(derivatives, C_f, alpha_v,
     V_f, N, frame)`` with ``N`` the normal contact force, N.
     """
     x, y, d, th, om, V = state
@@ -165,6 +170,8 @@ def rhs(body: BodyParams, limits: Limits, ground, C_f, state, anchor=None, tau=0
     else:                                                      # docs/TERRAIN.md Section 4
         dV = (fr.g_along - resistance.mu * N / body.m * ratio
               - resistance.drag_k(body.m) * V * V + body.l * om * c * V_f * cf)
+        if brake is not None:                                  # docs/skidding.md Section 2
+            dV = dV - brake.bound(N / body.m, foot_lateral(fr, V, V_f, cf), th) * ratio
     turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)
     tx, ty = (fr.t[0], fr.t[1]) if xp is Numpy else fr.t[:2].tolist()
     deriv = (V_f * tx, V_f * ty, turn, om, alpha, dV)

@@ -57,6 +57,8 @@ class Scene:
     description: str = ""
     ground: object = None
     resistance: object = None
+    speed_cap: object = None
+    """Brake to a target speed within the grip (:class:`.planner.speed_cap.SpeedCap`)."""
 
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))
@@ -65,7 +67,7 @@ class Scene:
         """The shared path-following builder (:mod:`.follow_problem`) for this scene."""
         return FollowSetup(self.figure, self.path, self.obstacles, self.settings, self.speed,
                            self.samples_per_segment, self.exact_distance, self.run_out,
-                           self.ground, self.resistance)
+                           self.ground, self.resistance, self.speed_cap)
 
     def problem(self) -> Problem:
         """The planning problem (the path with its run-out: :mod:`.follow_problem`)."""

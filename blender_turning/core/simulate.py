@@ -23,6 +23,8 @@ from .phase import phase
 from .schedule import Schedule
 from .terrain import FLAT
 from .model import NO_RESISTANCE, Resistance, speed_held
+from .registry import SPORTS
+from .skidding import lean_within_grip
 from .terrain_sim import simulate_free
 from .trajectory import COLUMNS, Trajectory, body_meta
 
@@ -144,7 +146,8 @@ def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: flo
 
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
              state0=None, C_f0=None, meta: dict | None = None, speed=None, ground=FLAT,
-             resistance: Resistance | None = None, target_speed=None) -> Trajectory:
+             resistance: Resistance | None = None, target_speed=None,
+             skidding=None) -> Trajectory:
     """Simulate one figure on ``ground`` (:mod:`.model`: ``Flat()``, the default, a
     :class:`.terrain.Plane` or a :class:`.terrain.HeightField`); raise a
     :class:`.errors.RunEnded` (:class:`.errors.FellOver`, :class:`.errors.Stopped`,
@@ -156,18 +159,37 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
     model, bit for bit.  Anywhere else it is a state that balances energy (docs/TERRAIN.md
     Sections 3-4; ``state0`` may carry ``V_cm`` as a sixth entry), slowed by ``resistance``
     (:class:`.model.Resistance`) and braked to ``target_speed`` (m/s or
-    :class:`.braking.TargetSpeed`) by turning across the hill.  The trajectory's ``z`` is the
-    ground under the foot."""
+    :class:`.braking.TargetSpeed`) by turning across the hill and, with ``skidding`` (a
+    :class:`.skidding.Skidding`: a style, the grip, a stop), by skidding within the grip
+    (docs/skidding.md).  The trajectory's ``z`` is the ground under the foot.
+
+    A tyre (the sport's grip, or ``skidding``'s) holds the lean to what its grip allows
+    (:func:`.skidding.lean_within_grip`); ``meta["grip_limited"]`` then says so."""
+    grip = skidding.grip if skidding is not None else getattr(
+        SPORTS.get(figure.name), "grip", None)
+    with lean_within_grip(controller, grip) as report:
+        traj = _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, ground,
+                         resistance, target_speed, skidding)
+    if report:
+        traj.meta["grip_limited"] = report[0]
+    return traj
+
+
+def _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, ground, resistance,
+              target_speed, skidding) -> Trajectory:
+    """:func:`simulate` with the lean as given."""
     ground = FLAT if ground is None else ground
     res = NO_RESISTANCE if resistance is None else resistance
-    if target_speed is not None or not speed_held(ground, res):
+    brakes = skidding is not None and skidding.brakes
+    if target_speed is not None or brakes or not speed_held(ground, res):
         if speed is not None:
             raise ValueError("speed is a state on terrain (it follows the slope): give a "
                              "speed schedule or a ground, not both")
         return simulate_free(figure, controller, duration, dt, state0, ground, res, C_f0, meta,
-                             target_speed)
+                             target_speed, skidding)
     if ground.z0 != 0.0:                                  # flat ground at a height
-        traj = simulate(figure, controller, duration, dt, state0, C_f0, meta, speed)
+        traj = _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, FLAT,
+                         None, None, None)
         return Trajectory.from_columns({**traj.columns(), "z": traj.z + ground.z0}, traj.meta)
     if state0 is not None and len(state0) == 6:          # a terrain state on flat ground
         figure = replace(figure, body=replace(figure.body, V_cm=float(state0[5])))

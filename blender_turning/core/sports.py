@@ -16,7 +16,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .grip import Grip
 from .params import Figure
+from .skidding import STYLES
 from .registry import SPORTS
 from .model import Resistance
 from .validate import check
@@ -87,6 +89,12 @@ class Sport:
     regular one's mirror image, :mod:`..mapping.stance`); ``()``: one way only."""
     icon: str = "NONE"
     """A Blender icon name for the enum item."""
+    grip: Grip | None = None
+    """The friction circle at the foot (docs/skidding.md); ``None``: snow, as hard as the user
+    says (:data:`.grip.SNOW`)."""
+    styles: tuple = ("carve", "skid")
+    """How the figure may brake (:data:`.skidding.STYLES`): skis add ``wedge``, a board
+    ``slip``."""
 
     def __post_init__(self):
         for name in ("label", "description"):
@@ -112,6 +120,11 @@ class Sport:
             raise ValueError(f"sport {self.name!r}: bones must name the rig's bones")
         if self.retarget is not None and not isinstance(self.retarget, Retarget):
             raise ValueError(f"sport {self.name!r}: retarget must be a Retarget or None")
+        if self.grip is not None and not isinstance(self.grip, Grip):
+            raise ValueError(f"sport {self.name!r}: grip must be a core.grip.Grip or None")
+        if "carve" not in self.styles or not set(self.styles) <= set(STYLES):
+            raise ValueError(f"sport {self.name!r}: styles = {self.styles!r} must hold 'carve' "
+                             f"and only {', '.join(STYLES)}")
         if self.stances not in ((), ("regular", "goofy")):
             raise ValueError(f"sport {self.name!r}: stances = {self.stances!r} is not () or "
                              "('regular', 'goofy')")

@@ -24,7 +24,8 @@ Here one RK4 stage is one function on floats with the body's constants bound as 
   (:func:`.model.inverse_cf`), docs/TERRAIN.md Section 6;
 - Section 3's bounds on ``C_f`` (:func:`.dynamics.bound_cf`);
 - Eq. (21), Eq. (2) on terrain, the normal force and the speed equation
-  (:func:`.model.rhs`, docs/TERRAIN.md Sections 2-3).
+  (:func:`.model.rhs`, docs/TERRAIN.md Sections 2-3), with the braking force at the foot
+  bounded by the grip when :attr:`TerrainStage.brake` is set (docs/skidding.md Section 2).
 
 A controller with a terrain law or an equilibrium lean of its own (:class:`.controllers.Straight`)
 is asked through its methods instead.  ``tests/test_terrain_fast.py`` holds this stage to
@@ -71,6 +72,11 @@ class TerrainStage:
         self._heading = getattr(controller, "heading", None) if self._plumb else None
         H = getattr(self._heading, "constant_value", None)
         self._course = [None, 1.0, 0.0] if H is None else [math.inf, math.cos(H), math.sin(H)]
+        self.brake = None
+        """The braking command of the step (a :class:`.grip.FootBrake`, bounded at every stage
+        as :func:`.model.rhs` bounds it) or ``None``: the carved model."""
+        self.foot = [0.0, 0.0, 0.0]
+        """The last braked stage's ``(F_brake / m, F_lat / m, N / m)``, m/s^2 (:mod:`.grip`)."""
         self.stage, self.lean = self._build(body, limits, resistance, own_law)
 
     def _along(self, t):
@@ -95,6 +101,7 @@ class TerrainStage:
         kind = (0 if self._heading is not None else 1) if self._plumb else 2
         course, along = self._course, self._along
         row = [None, 0.0]                       # the last lean's dv and equilibrium lean
+        foot = self.foot
 
         def lean(t, x, y, d, theta_v, dv):
             """``theta_v`` from the controller's equilibrium lean
@@ -175,6 +182,12 @@ class TerrainStage:
             # The speed: gravity on the body, friction at the foot, drag, the lean's share
             # (docs/TERRAIN.md Section 4).
             dV = -g * tz - mu * N_m * ratio - kd * VV + l * om * cs * V_f * cf
+            fb = self.brake
+            if fb is not None:                        # docs/skidding.md Section 2
+                F_lat = V * V_f * cf - g_b
+                b = fb.bound(N_m, F_lat, th)
+                dV -= b * ratio
+                foot[0], foot[1], foot[2] = b, F_lat, N_m
             return (u * c, u * s, turn, om, alpha, dV, alpha, V_f, cf)
 
         return stage, lean

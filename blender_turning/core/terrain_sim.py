@@ -20,6 +20,7 @@ import math
 import numpy as np
 
 from .braking import TargetSpeed, _Braking
+from .skidding import Skidding, _Skid, skid_meta, stand_rows
 from .controllers import Controller
 from .controllers.feasible import fall_cause
 from .errors import FellOver, LeftTerrain, Stopped
@@ -57,7 +58,8 @@ def describe_ground(ground) -> str:
 def simulate_free(figure: Figure, controller: Controller, duration: float, dt: float,
                   state0=None, ground=FLAT, resistance: Resistance = NO_RESISTANCE,
                   C_f0=None, meta: dict | None = None,
-                  target_speed: TargetSpeed | float | None = None) -> Trajectory:
+                  target_speed: TargetSpeed | float | None = None,
+                  skidding: Skidding | None = None) -> Trajectory:
     """Simulate one figure on ``ground`` with ``resistance``; returns a :class:`Trajectory`
     whose ``z`` is the ground under the foot and ``V_cm`` the speed (a state).
 
@@ -67,7 +69,12 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     ``limits.theta_fall`` (the lean from the plumb lean: a skier leaning 20 deg uphill from the
     normal of a traverse stands upright) and :class:`.errors.Stopped` below
     :data:`MIN_SPEED` and :class:`.errors.LeftTerrain` at the edge of a height field, each with
-    the trajectory so far."""
+    the trajectory so far.
+
+    ``skidding`` (:class:`.skidding.Skidding`, docs/skidding.md) brakes at the foot within the
+    grip: a style other than ``carve`` skids for what turning across the hill leaves of
+    ``target_speed``; a stop skids to rest, and the figure then stands still across the fall line
+    to the end of ``duration`` (no :class:`.errors.Stopped`)."""
     body, limits = figure.body, figure.limits
     check_range("duration", duration, 0.0, 1e6, lo_open=True)
     check_range("dt", dt, 1e-5, 1.0)
@@ -82,9 +89,13 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         st = np.append(st, body.V_cm)
     check_range("V_cm (state0)", st[5], MIN_SPEED, 100.0)
     ground.derivatives(st[0], st[1])              # off the terrain: fail before stepping
+    if skidding is not None and not skidding.brakes:
+        skidding = None                          # the paper's carved model, unchanged
     brake = None
     if target_speed is not None:
-        rule = target_speed if isinstance(target_speed, TargetSpeed) else TargetSpeed(target_speed)
+        rule = target_speed if isinstance(target_speed, TargetSpeed) else \
+            TargetSpeed(target_speed) if skidding is None else \
+            TargetSpeed(target_speed, corridor=skidding.corridor)
         if getattr(controller, "heading", None) is None:
             raise ValueError("target_speed steers the heading: the controller needs a heading "
                              "(the course, e.g. the fall line)")
@@ -94,18 +105,29 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
             **resistance_meta(resistance), **(meta or {})}
     if brake is not None:
         info["target_speed"] = brake.rule.speed
+    if skidding is not None:
+        info.update(skid_meta(skidding))
     course = getattr(controller, "heading", None)
+    skid = None if skidding is None else _Skid(
+        skidding, controller, figure, None if brake is None else brake.rule.speed)
     try:
         if brake is not None:
             controller.heading = Schedule.of(brake)
-        rows, stop = _loop(body, limits, controller, ground, resistance, st, n, dt,
-                           C_f0, brake)
+        stage = TerrainStage(body, limits, resistance, ground, controller)
+        if skid is not None:
+            skid.stage = stage
+        rows, stop = _loop(body, limits, controller, ground, st, n, dt, C_f0, brake, stage,
+                           skid)
     finally:
         if brake is not None:
             controller.heading = course
+        if skid is not None:
+            skid.restore()
+    if stop == "halted":
+        rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None
     traj = _trajectory(body, ground, np.array(rows, float), dt, info)
     if stop == "fell":
-        raise FellOver(float(traj.t[-1]), float(rows[-1][-1]), traj,
+        raise FellOver(float(traj.t[-1]), float(rows[-1][11]), traj,
                        fall_cause(limits, traj.C_f, traj.t))
     if stop == "stopped":
         raise Stopped(float(traj.t[-1]), float(traj.V_cm[-1]), traj)
@@ -114,14 +136,16 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     return traj
 
 
-def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake):
+def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid):
     """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean from
-    the controller's equilibrium lean)``.  Classical RK4 on Python floats, written out
-    (:mod:`.terrain_one_figure` for the stages), ``C_f`` bounded at every stage relative to the
-    curvature at the step's start, as :func:`.model.rk4_step` does.
-    Returns ``(rows, None | "fell" | "stopped" | "left")``."""
+    the controller's equilibrium lean, F_brake / m, skid)``.  Classical RK4 on Python floats,
+    written out (``rhs``, a :class:`.terrain_one_figure.TerrainStage`, for the stages), ``C_f``
+    bounded at every stage relative to the curvature at the step's start, as
+    :func:`.model.rk4_step` does; ``skid`` (:class:`.skidding._Skid`) sets the braking
+    command of each step.  Returns ``(rows, None | "fell" | "stopped" | "halted" | "left")``
+    (``halted``: a commanded stop came to rest)."""
     controller.begin_run(limits)
-    rhs = TerrainStage(body, limits, resistance, ground, controller)
+    foot = rhs.foot
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
     begin, target, fall = controller.begin_step, controller.target, limits.theta_fall
     anchor = None if anchor is None else float(anchor)
@@ -137,8 +161,10 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
             # allows is never made): the last row is steered at the minimum speed.
             controller.follow_speed(max(x5, MIN_SPEED))
             V_now = x5
-        if brake is not None:
+        if brake is not None and not (skid is not None and skid.stopping):
             brake.update(t, (x0, x1, x2, x3, x4, x5))
+        if skid is not None:
+            skid.update(t, (x0, x1, x2, x3, x4, x5), foot[1])
         try:
             dv = derivatives(x0, x1)
         except OffTerrain:                      # the step ended past the edge
@@ -147,11 +173,15 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
         begin(t, (x0, x1, x2, rel, x4))
         a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, dt,
                                                        dv)
-        append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel))
+        skid_b = skid_a = 0.0
+        if skid is not None:
+            skid_b = foot[0]
+            skid_a = skid.skid(skid_b, foot[1], foot[2], x3)
+        append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel, skid_b, skid_a))
         if abs(rel) > fall:
             return rows, "fell"
         if x5 < MIN_SPEED:
-            return rows, "stopped"
+            return rows, "halted" if skid is not None and skid.stopping else "stopped"
         if i + 1 == n:
             break
         try:
@@ -179,12 +209,13 @@ def _loop(body, limits, controller, ground, resistance, st, n, dt, anchor, brake
 def _trajectory(body, ground, rec, dt, info) -> Trajectory:
     """The trajectory columns (docs/ARCHITECTURE.md Section 3) from the per-sample rows."""
     n = len(rec)
-    x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel = rec.T
+    x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel, brake, skid = rec.T
     fr = surface_frame(ground, x, y, d, body.g)
     ds = 0.5 * (V_f[1:] + V_f[:-1]) * dt                 # along the surface (the foot's speed)
     cols = {"t": np.arange(n) * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
             "omega_v": om, "alpha_v": alpha, "C_f": cf, "V_f": V_f, "z": fr.z, "V_cm": V,
             "F_leg": model.leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
             "phi": phase(rel, om, tm, w),
-            "s": np.concatenate([[0.0], np.cumsum(ds)])}
+            "s": np.concatenate([[0.0], np.cumsum(ds)]), "brake": brake, "skid": skid,
+            "ski_heading": d + skid}
     return Trajectory.from_columns(cols, info)

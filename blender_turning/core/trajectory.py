@@ -2,7 +2,10 @@
 
 A :class:`Trajectory` holds equal-length 1-D arrays, one per column of ``COLUMNS`` (SI units,
 radians; ``s`` is the foot's distance travelled, ``z`` the ground's height at the foot and
-``V_cm`` the body's speed: 0 and constant on flat ground at a constant speed), plus a small
+``V_cm`` the body's speed: 0 and constant on flat ground at a constant speed; ``skid`` the angle
+from the foot's travel to the ski (board, tyre), ``ski_heading = theta_dir + skid`` and
+``brake`` the braking force at the foot over the mass, m/s^2: 0, ``theta_dir`` and 0 for a
+carved run, docs/skidding.md), plus a small
 ``meta`` mapping (preset, body parameters, the ground and resistance on terrain) that travels
 with it in JSON.  CSV files have exactly these column names in a header
 row.  Writers write to a temporary file and rename it, so a failure leaves no partial file.
@@ -23,9 +26,12 @@ from .terrain import FLAT
 from .phase import phase
 
 COLUMNS = ("t", "x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f", "F_leg", "phi",
-           "V_f", "s", "z", "V_cm")
-LEGACY_COLUMNS = COLUMNS[:-2]
-"""The columns without ``z`` and ``V_cm``: still read, as flat ground (``z = 0``)."""
+           "V_f", "s", "z", "V_cm", "skid", "ski_heading", "brake")
+CARVED_COLUMNS = COLUMNS[:-3]
+"""The columns without ``skid``, ``ski_heading`` and ``brake``: still read, as a carved run
+(``skid = 0``, ``ski_heading = theta_dir``, ``brake = 0``; docs/skidding.md)."""
+LEGACY_COLUMNS = COLUMNS[:-5]
+"""The columns without ``z`` and ``V_cm`` either: still read, as flat ground (``z = 0``)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -158,6 +164,7 @@ class Trajectory:
         out["F_leg"] = leg_force(body, th, om, out["alpha_v"], cf, V)[0]       # Appendix A
         out["phi"] = phase(th, om, 1.0, _ellipse_rate(c["theta_v"], c["omega_v"], c["phi"])[j])
         out["z"], out["V_cm"] = np.zeros(len(tn)), V
+        _skid_rows(out, c, i, u)
         return Trajectory.from_columns(out, meta)
 
     # -- I/O -----------------------------------------------------------------------------------
@@ -175,7 +182,7 @@ class Trajectory:
         with open(path, newline="") as fh:
             rows = list(csv.reader(fh))
         header = tuple(rows[0]) if rows else ()
-        if header not in (COLUMNS, LEGACY_COLUMNS):
+        if header not in (COLUMNS, CARVED_COLUMNS, LEGACY_COLUMNS):
             raise ValueError(f"{path}: the header must be exactly {','.join(COLUMNS)}")
         try:
             data = np.array([[float(v) for v in r] for r in rows[1:] if r], float).T
@@ -184,6 +191,8 @@ class Trajectory:
         data = data.reshape(len(header), -1)
         if header == COLUMNS:
             return cls(data)
+        if header == CARVED_COLUMNS:
+            return cls.from_columns(dict(zip(header, data)))
         if body is None:
             raise ValueError(f"{path} has no V_cm column (written before terrain): pass body= to "
                              "recover it from Eq. (21)")
@@ -231,9 +240,16 @@ def _terrain_rows(body, ground, res, meta, t, c, tn, i, u) -> dict:
     free = Limits()                         # the recorded C_f is already bounded
     state = tuple(c[k] for k in ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm"))
     deriv, _, _, V_f, _, _ = model.rhs(body, free, ground, c["C_f"], state, resistance=res)
+    # The recorded braking force, already bounded by the grip; a figure at rest (after a stop)
+    # is held there by the snow (docs/skidding.md Section 4).
+    V_cm = c["V_cm"]
+    moving = V_cm > 0.0
+    deriv = tuple(np.where(moving, dy, 0.0) for dy in deriv[:5]) + (np.where(
+        moving, deriv[5] - c["brake"] * V_f / np.where(moving, V_cm, 1.0), 0.0),)
     names = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
     out = {"t": tn, **{k: _hermite(t, c[k], dy, i, u) for k, dy in zip(names, deriv)},
            "s": _hermite(t, c["s"], V_f, i, u)}
+    out["V_cm"] = np.maximum(out["V_cm"], 0.0)          # coming to rest: never backwards
     cf = out["C_f"] = (1.0 - u) * c["C_f"][i] + u * c["C_f"][i + 1]
     st = tuple(out[k] for k in names)
     _, _, alpha, V_f, _, fr = model.rhs(body, free, ground, cf, st, resistance=res)
@@ -244,15 +260,29 @@ def _terrain_rows(body, ground, res, meta, t, c, tn, i, u) -> dict:
     # record: interpolated along the step (the shorter way round), exact at the samples.
     dphi = np.mod(c["phi"][i + 1] - c["phi"][i] + np.pi, 2 * np.pi) - np.pi
     out["phi"] = np.mod(c["phi"][i] + u * dphi, 2 * np.pi)
+    _skid_rows(out, c, i, u)
     return out
 
 
+def _skid_rows(out, c, i, u) -> None:
+    """The ski's columns at the fraction ``u`` of step ``i``: ``skid`` and ``brake`` the chords
+    of the samples' values (controls, as ``C_f``), ``ski_heading = theta_dir + skid``."""
+    for k in ("skid", "brake"):
+        out[k] = (1.0 - u) * c[k][i] + u * c[k][i + 1]
+    out["ski_heading"] = out["theta_dir"] + out["skid"]
+
+
 def _complete(columns: dict, meta: dict) -> dict:
-    """``columns`` with ``z`` (flat: 0) and ``V_cm`` (Eq. 21 with the body in ``meta``) added
-    when missing."""
-    if "z" in columns and "V_cm" in columns:
+    """``columns`` with ``z`` (flat: 0), ``V_cm`` (Eq. 21 with the body in ``meta``) and the
+    carved ski (``skid = brake = 0``, ``ski_heading = theta_dir``) added when missing."""
+    if all(k in columns for k in ("z", "V_cm", "skid", "ski_heading", "brake")):
         return columns
     out = dict(columns)
+    if "theta_dir" in out:
+        d = np.asarray(out["theta_dir"], float)
+        out.setdefault("skid", np.zeros(d.shape))
+        out.setdefault("brake", np.zeros(d.shape))
+        out.setdefault("ski_heading", d + np.asarray(out["skid"], float))
     if "z" not in out and "x" in out:
         out["z"] = np.zeros(np.shape(out["x"]))
     if "V_cm" not in out and all(k in out for k in ("V_f", "C_f", "theta_v")):

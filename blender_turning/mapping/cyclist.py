@@ -18,6 +18,7 @@ import numpy as np
 
 from ..core.params import BodyParams, Figure, Limits, check_range
 from ..core.sports import Retarget, Sport, register_sport
+from ..core.grip import TYRE
 from ..core.model import Resistance
 from . import bones as B
 from .base import Mapping
@@ -140,6 +141,7 @@ SPORT = register_sport(Sport(
     # 0.3-0.4 m^2 (Wilson & Papadopoulos 2004, "Bicycling Science", 3rd ed., Ch. 4-5); sea level.
     resistance=Resistance(mu=0.005, CdA=0.36, rho=1.225),
     plan_curvature_rate=0.5,
+    grip=TYRE["dry"],
     mapping=CyclistMapping(),
     bones=(B.ROOT, B.LEAN) + B.HUMAN + (B.FRAME, B.FORK, B.WHEEL_F, B.WHEEL_R, B.CRANK) + B.PEDAL,
     # The rider sits on the frame (seated: the hips go where the built-in's go), steers the

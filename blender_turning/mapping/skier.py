@@ -383,6 +383,7 @@ SPORT = register_sport(Sport(
     # ISA density there (1.007 kg/m^3).
     resistance=Resistance(mu=0.05, CdA=0.5, rho=1.007),
     plan_curvature_rate=0.2,
+    styles=("carve", "skid", "wedge"),
     mapping=SkierMapping(),
     bones=(B.ROOT, B.LEAN) + B.HUMAN + B.SKI + B.POLE,
     retarget=Retarget(attach={"ski.L": "foot.L", "ski.R": "foot.R", "pole.L": "hand.L",

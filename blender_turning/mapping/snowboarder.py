@@ -110,6 +110,7 @@ SPORT = register_sport(Sport(
     # higher: the top of Meyer et al.'s range.
     resistance=Resistance(mu=0.05, CdA=0.6, rho=1.007),
     plan_curvature_rate=0.3,
+    styles=("carve", "skid", "slip"),
     mapping=SnowboarderMapping(),
     bones=(B.ROOT, B.LEAN) + B.HUMAN + (B.BOARD,),
     # Regular stance: the left boot is the front one; the back boot is bound as exactly.

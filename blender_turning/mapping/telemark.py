@@ -98,6 +98,7 @@ SPORT = register_sport(Sport(
     # Telemark: the skier's skis and air, a more upright lunge.
     resistance=Resistance(mu=0.05, CdA=0.55, rho=1.007),
     plan_curvature_rate=0.3,
+    styles=("carve", "skid", "wedge"),
     mapping=TelemarkMapping(),
     bones=(B.ROOT, B.LEAN) + B.HUMAN + B.SKI + B.POLE,
     # The trailing heel lifts off its ski: the skis go with the toes, flat on them, and the

@@ -63,7 +63,8 @@ class Problem:
     held (:func:`..model.speed_held`, the paper's case) nodes have the 5 rows of
     :data:`..dynamics.STATE` and the speed follows ``speed``; otherwise (:attr:`free`) the speed
     is a sixth row starting at ``V0`` (default the body's) and the search clips what
-    :mod:`.terrain_problem` says."""
+    :mod:`.terrain_problem` says; ``speed_cap`` (:class:`.speed_cap.SpeedCap`) brakes it to a
+    cap within the grip (docs/skidding.md Section 6)."""
 
     #: Other figures' bodies as moving obstacles (:class:`..moving.MovingBodies`), or ``None``
     #: (set with :func:`..moving.around`).
@@ -71,12 +72,14 @@ class Problem:
 
     def __init__(self, figure: Figure, distance: PathDistance, obstacles: Obstacles,
                  settings: PlannerSettings, speed: SpeedProfile | None = None, ground=FLAT,
-                 resistance=None, V0: float | None = None):
+                 resistance=None, V0: float | None = None, speed_cap=None):
         from ..model import NO_RESISTANCE
         self.ground = FLAT if ground is None else ground
         self.resistance = NO_RESISTANCE if resistance is None else resistance
         #: The speed is a state (a sixth row), not held.
-        self.free = not speed_held(self.ground, self.resistance)
+        self.free = not speed_held(self.ground, self.resistance) or speed_cap is not None
+        #: The braking law that caps the speed (:class:`.speed_cap.SpeedCap`) or ``None``.
+        self.speed_cap = speed_cap
         if self.free:
             if speed is not None and not speed.is_constant:
                 raise ValueError("the speed is a state on this ground (it follows the slope): "

@@ -48,6 +48,8 @@ import math
 import numpy as np
 
 from .. import model
+from ..grip import foot_lateral, skid_angle
+from ..params import Limits
 from ..dynamics import PHYSICAL_MARGIN, THETA_V, X, Y
 from ..model import V_CM
 from ..terrain import HeightField, Plane, surface_frame
@@ -110,8 +112,11 @@ def rhs(p, x, tau, C0, u, anchor, rate_step, out, bad=None):
         if off.any():
             px, py = np.clip(px, x_lo, x_hi), np.clip(py, y_lo, y_hi)
     state = (px, py, x[2], x[THETA_V], x[4], x[V_CM])
-    d, cf, alpha, V_f, _, _ = model.rhs(p.body, p.limits, p.ground, C0 + u * tau, state, anchor,
-                                        rate_step, p.resistance)
+    d, cf, alpha, V_f, N, fr = model.rhs(p.body, p.limits, p.ground, C0 + u * tau, state,
+                                         anchor, rate_step, p.resistance)
+    if p.speed_cap is not None:
+        b = p.speed_cap.brake(p.body, d, cf, x[V_CM], V_f, N, fr, x[THETA_V])
+        d = d[:5] + (d[5] - b * V_f / x[V_CM],)
     for row, v in enumerate(d):
         out[row] = v
     if bad is not None:
@@ -132,10 +137,20 @@ def end_rates(p, x, cf):
 
 
 def columns(p, S, A, C, V) -> dict:
-    """``z`` (the ground under the foot), ``V_cm`` (the state) and ``F_leg`` on the ground."""
+    """``z`` (the ground under the foot), ``V_cm`` (the state) and ``F_leg`` on the ground;
+    with a speed cap the braking force and the skid angle it makes (docs/skidding.md)."""
     fr = surface_frame(p.ground, S[X], S[Y], S[2], p.body.g)
     F = model.leg_force(p.body, S[THETA_V], S[4], A, C, S[V_CM], V, fr)[0]
-    return {"z": np.asarray(fr.z, float), "V_cm": S[V_CM], "F_leg": F}
+    out = {"z": np.asarray(fr.z, float), "V_cm": S[V_CM], "F_leg": F}
+    if p.speed_cap is not None:
+        state = tuple(S[k] for k in range(6))
+        d, _, _, V_f, N, fr = model.rhs(p.body, Limits(), p.ground, C, state,
+                                        resistance=p.resistance)
+        b = p.speed_cap.brake(p.body, d, C, S[V_CM], V_f, N, fr, S[THETA_V])
+        out["brake"] = b
+        out["skid"] = skid_angle(b, foot_lateral(fr, S[V_CM], V_f, C))
+        out["ski_heading"] = S[2] + out["skid"]
+    return out
 
 
 def meta(p) -> dict:

@@ -1,0 +1,75 @@
+"""``simulate``'s grip and skidding flags (docs/skidding.md, docs/cli.md): --style, --snow,
+--grip, --stop-at, --stop-side; the skid, ski_heading and brake columns; bad values (one line,
+exit 2, naming the flag, the value and the range, no file)."""
+import math
+
+import numpy as np
+import pytest
+
+from blender_turning.cli import main
+from blender_turning.core import COLUMNS, Trajectory
+
+SLOPE = ["--slope-deg", "15", "--heading-deg", "-90"]
+
+
+def _sim(tmp_path, *args, name="o.csv"):
+    out = tmp_path / name
+    assert main(["simulate", *SLOPE, "--out", str(out), *map(str, args)]) == 0
+    return Trajectory.from_csv(out), out
+
+
+def test_the_csv_carries_the_ski_columns(tmp_path):
+    traj, out = _sim(tmp_path, "--duration", "3")
+    assert out.read_text().splitlines()[0].endswith(",V_cm,skid,ski_heading,brake")
+    assert list(COLUMNS[-3:]) == ["skid", "ski_heading", "brake"]
+    assert np.all(traj.skid == 0.0) and np.all(traj.brake == 0.0)      # carved
+    np.testing.assert_array_equal(traj.ski_heading, traj.theta_dir)
+
+
+def test_target_speed_skids_on_snow_by_default_and_carve_is_todays(tmp_path, capsys):
+    skid, _ = _sim(tmp_path, "--duration", "20", "--target-speed", "10", name="a.csv")
+    assert "style skid (hard snow)" in capsys.readouterr().out
+    assert skid.brake.max() > 0.5 and np.abs(skid.skid).max() > math.radians(10)
+    carve, _ = _sim(tmp_path, "--duration", "20", "--target-speed", "10", "--style", "carve",
+                    name="b.csv")
+    assert np.all(carve.brake == 0.0)
+    assert np.all(carve.skid == 0.0)
+    assert abs(skid.V_cm[skid.t >= 10].mean() - 10.0) < 1.5        # measured 11.05
+
+
+def test_a_stop_from_the_command_line(tmp_path, capsys):
+    traj, _ = _sim(tmp_path, "--preset", "snowboarder", "--speed", "10", "--stop-at", "0",
+                   "--stop-side", "toe", "--duration", "4", "--fps", "25")
+    assert "at rest from" in capsys.readouterr().out
+    assert traj.V_cm[-1] == 0.0 and traj.s[-1] < 15.0
+    assert traj.skid[traj.V_cm > 2.0][3:].max() < 0.0                  # toe side
+
+
+def test_grip_and_snow_change_the_stop(tmp_path):
+    hard, _ = _sim(tmp_path, "--speed", "10", "--stop-at", "0", "--duration", "5", name="h.csv")
+    soft, _ = _sim(tmp_path, "--speed", "10", "--stop-at", "0", "--duration", "5", "--snow",
+                   "soft", name="s.csv")
+    low, _ = _sim(tmp_path, "--speed", "10", "--stop-at", "0", "--duration", "6", "--grip",
+                  "0.45", name="g.csv")
+    assert hard.s[-1] < soft.s[-1] and hard.s[-1] < low.s[-1]
+
+
+@pytest.mark.parametrize("args, names", [
+    (["--style", "fly"], ["--style", "'fly'", "carve|skid|wedge"]),
+    (["--preset", "snowboarder", "--style", "wedge"], ["--style", "'wedge'", "carve|skid|slip"]),
+    (["--snow", "icy"], ["--snow", "'icy'", "hard|soft"]),
+    (["--grip", "0"], ["--grip", "0", "[0.01, 2]"]),
+    (["--grip", "nan"], ["--grip", "nan"]),
+    (["--stop-at", "-1"], ["--stop-at", "-1", "[0, 1e+06]"]),
+    (["--stop-side", "heel"], ["--stop-side", "skier"]),
+    (["--preset", "snowboarder", "--stop-side", "nose"], ["--stop-side", "'nose'", "heel|toe"]),
+    (["--preset", "cyclist", "--snow", "hard"], ["--snow", "cyclist"]),
+])
+def test_bad_skidding_flags(tmp_path, capsys, args, names):
+    out = tmp_path / "o.csv"
+    assert main(["simulate", *SLOPE, "--duration", "1", "--out", str(out), *args]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    for name in names:
+        assert name in err, err
+    assert not out.exists()

@@ -1,0 +1,182 @@
+"""Grip and skidding (core/grip.py, core/skidding.py, docs/skidding.md): the carved model is
+the zero-skid case bit for bit, the braking force stays inside the friction circle, skidded
+speed control holds the target on real pistes, stops, wedges and side-slips.  Tolerances are
+the measured values (BENCHMARKS.md, "Grip and skidding") with the margin stated at each."""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
+from blender_turning.core import model
+from blender_turning.core.grip import (SKID_MAX_TURNING, SNOW, FootBrake, Grip, brake_limit,
+                                       foot_lateral, skid_angle, tyre)
+from blender_turning.core.model import RESISTANCE
+from blender_turning.core.params import Limits
+from blender_turning.core.skidding import Skidding, turning_share
+from blender_turning.core.terrain import Plane
+from blender_turning.core.terrain_one_figure import TerrainStage
+
+W, TM = math.pi, math.radians(23)               # the 2 s / 23 deg turn
+FALL = -math.pi / 2
+
+
+def run(sport, slope_deg, target=None, duration=60.0, V0=None, **skid):
+    fig = preset(sport)
+    if V0 is not None:
+        fig = replace(fig, body=replace(fig.body, V_cm=V0))
+    ground = Plane(math.radians(slope_deg), FALL)
+    ctl = PhaseEllipse(fig.body, W, TM, heading=FALL)
+    ctl.begin_run(fig.limits)
+    s0 = slalom_start(fig.body, *ctl.target(0.0), FALL)        # the ellipse followed
+    traj = simulate(fig, ctl, duration, 0.02, s0, ground=ground, resistance=RESISTANCE[sport],
+                    target_speed=target, skidding=Skidding(**skid) if skid else None)
+    assert traj.t[-1] == pytest.approx(duration)         # simulate raises if it fell
+    return traj, ground
+
+
+# -- the carved case --------------------------------------------------------------------------
+
+def test_a_zero_brake_is_the_carved_right_hand_side_bit_for_bit():
+    """model.rhs with a brake of 0 (any grip) returns today's carved derivatives exactly."""
+    fig = preset("skier")
+    ground = Plane(math.radians(19), FALL)
+    rng = np.random.default_rng(3)
+    st = (rng.uniform(-5, 5, 50), rng.uniform(-5, 5, 50), rng.uniform(-3, 3, 50),
+          rng.uniform(-0.6, 0.6, 50), rng.uniform(-1, 1, 50), rng.uniform(3, 20, 50))
+    cf = rng.uniform(-0.1, 0.1, 50)
+    free = model.rhs(fig.body, Limits(), ground, cf, st, resistance=RESISTANCE["skier"])[0]
+    for grip in (SNOW["hard"], SNOW["soft"], tyre(0.9)):
+        braked = model.rhs(fig.body, Limits(), ground, cf, st, resistance=RESISTANCE["skier"],
+                           brake=FootBrake(0.0, grip))[0]
+        for a, b in zip(free, braked):
+            assert np.array_equal(a, b)
+
+
+def test_a_run_that_never_brakes_is_the_carved_run_bit_for_bit():
+    """Style skid with no target and no stop: the command is 0 every step, the trajectory is
+    the carved one exactly (skid and brake columns 0)."""
+    carved, _ = run("skier", 12, duration=10.0)
+    skid, _ = run("skier", 12, duration=10.0, style="skid")
+    assert np.array_equal(carved.data, skid.data)
+    assert np.all(skid.skid == 0.0) and np.all(skid.brake == 0.0)
+    assert np.array_equal(skid.ski_heading, skid.theta_dir)
+    also, _ = run("skier", 12, 10.0, duration=10.0, style="carve")     # carve: today's brake
+    today, _ = run("skier", 12, 10.0, duration=10.0)
+    assert np.array_equal(also.data, today.data)
+
+
+def test_the_fast_stage_brakes_as_the_model_does():
+    """TerrainStage's fused stage with a brake agrees with model.rhs to round-off."""
+    fig = preset("skier")
+    ground = Plane(math.radians(25), FALL)
+    ctl = PhaseEllipse(fig.body, W, TM, heading=FALL)
+    ctl.begin_run(fig.limits)
+    stage = TerrainStage(fig.body, fig.limits, RESISTANCE["skier"], ground, ctl)
+    rng = np.random.default_rng(7)
+    for _ in range(50):
+        st = (float(rng.uniform(-5, 5)), float(rng.uniform(-5, 5)), float(rng.uniform(-3, 3)),
+              float(rng.uniform(-0.5, 0.5)), float(rng.uniform(-1, 1)), float(rng.uniform(3, 20)))
+        fb = FootBrake(float(rng.uniform(0, 12)), SNOW["hard"], SKID_MAX_TURNING)
+        stage.brake = fb
+        out = stage.stage(0.0, *st, None, 0.02)
+        d, cf, alpha, V_f, N, _ = model.rhs(fig.body, fig.limits, ground, out[8], st,
+                                            resistance=RESISTANCE["skier"], brake=fb)
+        np.testing.assert_allclose(out[:6], d, rtol=0, atol=1e-11)
+        assert stage.foot[2] == pytest.approx(N / fig.body.m, abs=1e-11)
+
+
+# -- the friction circle ----------------------------------------------------------------------
+
+def test_the_brake_shares_the_friction_circle_with_the_turn():
+    mu, N = 0.8, 10.0
+    for F_lat in (0.0, 3.0, 6.0, 7.9, 8.0, 12.0):
+        b = brake_limit(mu, N, F_lat, math.pi / 2)
+        assert b * b + F_lat * F_lat == pytest.approx(max((mu * N) ** 2, F_lat * F_lat))
+    # in a turn the skid is at most 60 deg: the brake at most |F_lat| tan 60
+    assert brake_limit(mu, N, 2.0, SKID_MAX_TURNING) == pytest.approx(2.0 * math.tan(
+        SKID_MAX_TURNING))
+    assert skid_angle(2.0 * math.tan(SKID_MAX_TURNING), 2.0) == pytest.approx(SKID_MAX_TURNING)
+    assert skid_angle(1.0, -1.0) == pytest.approx(-math.pi / 4)      # a right turn: tail left
+    assert skid_angle(1.0, 0.0, -1.0) == pytest.approx(-math.pi / 2)
+
+
+def test_snow_grip_grows_with_the_edge_angle_up_to_its_strength():
+    hard, soft = SNOW["hard"], SNOW["soft"]
+    assert hard.mu_at(0.0) == pytest.approx(math.tan(math.radians(30)))
+    assert hard.mu_at(math.radians(50)) == 1.0 and soft.mu_at(math.radians(50)) == 0.6
+    assert soft.mu_at(0.1) < hard.mu_at(0.1)
+    assert tyre(0.5).mu_at(1.0) == 0.5
+    with pytest.raises(ValueError, match="grip = 5"):
+        Grip("tyre", 5.0)
+
+
+def test_a_skidded_run_keeps_the_brake_inside_the_circle_and_the_skid_below_60_deg():
+    traj, ground = run("skier", 25, 10.0, duration=20.0, style="skid")
+    fig = preset("skier")
+    st = tuple(getattr(traj, k) for k in model.STATE)
+    _, _, _, V_f, N, fr = model.rhs(fig.body, Limits(), ground, traj.C_f, st,
+                                    resistance=RESISTANCE["skier"])
+    F_lat = foot_lateral(fr, traj.V_cm, V_f, traj.C_f)
+    mu = SNOW["hard"].mu_at(traj.theta_v)
+    assert np.all(traj.brake ** 2 + F_lat ** 2 <= (mu * N / fig.body.m) ** 2 * (1 + 1e-9)
+                  + F_lat ** 2 * (traj.brake == 0))
+    assert np.abs(traj.skid).max() <= SKID_MAX_TURNING + 1e-12
+    assert traj.brake.max() > 1.0                       # it does skid
+    np.testing.assert_allclose(traj.ski_heading, traj.theta_dir + traj.skid)
+
+
+# -- speed control ----------------------------------------------------------------------------
+
+@pytest.mark.parametrize("sport", ["skier", "snowboarder"])
+@pytest.mark.parametrize("slope_deg", [12, 18, 25])
+def test_skidding_holds_10_m_s_on_real_pistes(sport, slope_deg):
+    """Mean over the last 30 s of 60 s within 10 +- 1.5 m/s (measured 10.1-10.6), never more
+    than 30 m off the fall line through the start (measured 13-16 m), no fall."""
+    traj, _ = run(sport, slope_deg, 10.0, style="skid")
+    mean = float(traj.V_cm[traj.t >= 30.0].mean())
+    assert 8.5 <= mean <= 11.5
+    assert np.abs(traj.x).max() <= 30.0
+
+
+def test_turning_brakes_more_on_gentle_slopes_than_on_steep_ones():
+    """The share of braking done by turning across the hill falls with the slope (measured
+    0.15 on 12 deg, 0.09 on 25 deg for the skier)."""
+    share = {}
+    for s in (12, 25):
+        traj, ground = run("skier", s, 10.0, style="skid")
+        share[s] = turning_share(traj, ground, 9.81)
+    assert share[12] > share[25] + 0.03
+
+
+# -- stops, wedges, side-slips ----------------------------------------------------------------
+
+@pytest.mark.parametrize("sport,side", [("skier", None), ("snowboarder", "heel"),
+                                        ("snowboarder", "toe")])
+def test_a_stop_from_10_m_s_on_15_deg_within_15_m_then_standing(sport, side):
+    """Measured 8.0-8.2 m in 1.5 s on hard snow; then the figure stands across the fall line."""
+    traj, _ = run(sport, 15, duration=5.0, V0=10.0, style="carve", stop_at=0.0, stop_side=side)
+    i = int(np.argmax(traj.V_cm < 0.3))
+    assert i > 0 and traj.s[i] <= 15.0
+    assert np.all(traj.V_cm[i:] < 0.3) and np.all(traj.V_cm[i + 1:] == 0.0)
+    assert np.ptp(traj.x[i:]) < 0.05 and np.ptp(traj.y[i:]) < 0.05
+    # standing: the ski across the fall line (-y): along +-x
+    assert abs(math.cos(traj.ski_heading[-1])) == pytest.approx(1.0, abs=1e-9)
+    if side is not None:                                 # heel: nose left of the travel
+        sign = 1.0 if side == "heel" else -1.0
+        moving = traj.V_cm > 2.0
+        assert np.all(sign * traj.skid[moving][5:] > 0.0)
+
+
+def test_a_wedge_holds_4_m_s_on_8_deg():
+    """Measured 4.15 m/s; the wedge half-angle below 25 deg."""
+    traj, _ = run("skier", 8, 4.0, V0=4.0, style="wedge")
+    assert 3.0 <= float(traj.V_cm[traj.t >= 30.0].mean()) <= 5.0
+    assert 0.0 <= traj.skid.min() and traj.skid.max() <= math.radians(25.0)
+
+
+def test_a_side_slip_keeps_the_board_across_on_one_edge():
+    traj, _ = run("snowboarder", 20, 4.0, V0=4.0, style="slip")
+    assert 3.0 <= float(traj.V_cm[traj.t >= 30.0].mean()) <= 5.5
+    assert np.all(traj.skid >= 0.0) and traj.skid.max() > math.radians(80.0)
