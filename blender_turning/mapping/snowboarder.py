@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.params import BodyParams, Figure, Limits, check_range
+from ..core.equipment import Carving, SportPreset, carving_limits, register_preset
 from ..core.sports import Retarget, Sport, register_sport
 from ..core.model import Resistance
 from . import bones as B
@@ -115,4 +116,21 @@ SPORT = register_sport(Sport(
     # Regular stance: the left boot is the front one; the back boot is bound as exactly.
     retarget=Retarget(attach={"board": "foot.L"}),
     stances=("regular", "goofy"),
+))
+
+
+# -- the sport's own presets with race equipment (core/equipment.py, docs/racing.md) ---------
+# Eurocarving: a hard-boot alpine (carving) board, 163 cm with a 10 m sidecut radius (alpine
+# boards: 155-185 cm, radii 8-14 m); the rider lays hand and hip on the snow, edge angles to
+# ~80 deg.  Edge to edge in 0.4 s.
+CARVING_BOARD = Carving(length=1.63, sidecut_radius=10.0, edge_max=math.radians(80.0))
+register_preset(SportPreset(
+    name="carver", sport="snowboarder", label="Carver (Eurocarve)", carving=CARVING_BOARD,
+    figure=Figure(
+        "carver", BodyParams(m=75.0, l=0.9, I_v=10.0, V_cm=12.0),
+        carving_limits(CARVING_BOARD, 0.4, math.radians(80)),
+        """A Eurocarving snowboarder on a hard-boot alpine board (163 cm, sidecut radius 10 m).
+        75 kg, centre of mass 0.9 m in the low carving stance, roll inertia 10 kg m^2; 12 m/s.
+        |C_f| <= 1 / (10 m cos 80 deg) = 0.576 1/m; edge to edge in 0.4 s; hand and hip touch
+        the snow at 80 deg."""),
 ))
