@@ -402,12 +402,13 @@ register_preset(SportPreset(
     name="slalom_racer", sport="skier", label="Slalom Racer", carving=SL_SKI,
     figure=Figure(
         "slalom_racer", BodyParams(m=85.0, l=0.95, I_v=13.6, V_cm=12.0),
-        carving_limits(SL_SKI, 0.3, math.radians(80)),
+        carving_limits(SL_SKI, 0.3, math.radians(85)),
         """A World Cup slalom racer on FIS slalom skis (165 cm, sidecut radius 12.5 m).  85 kg
         (men's technical racers are 80-95 kg); centre of mass 0.95 m above the skis in a
         racing stance; roll inertia scaled from the skier's by the mass (12 kg m^2 x 85 / 75);
         12 m/s, Reid et al.'s slalom speed.  |C_f| <= 1 / (12.5 m cos 75 deg) = 0.309 1/m;
-        edge to edge in 0.3 s; the hip touches the snow at 80 deg."""),
+        edge to edge in 0.3 s; the hip touches the snow from ~80 deg and the racer has fallen
+        past 85 deg."""),
 ))
 
 # Giant slalom: FIS (from 2017/18), men's GS ski at least 193 cm, sidecut radius at least
@@ -417,8 +418,8 @@ register_preset(SportPreset(
     name="gs_racer", sport="skier", label="GS Racer", carving=GS_SKI,
     figure=Figure(
         "gs_racer", BodyParams(m=85.0, l=1.0, I_v=13.6, V_cm=18.0),
-        carving_limits(GS_SKI, 0.5, math.radians(80)),
+        carving_limits(GS_SKI, 0.5, math.radians(85)),
         """A giant slalom racer on FIS GS skis (193 cm, sidecut radius 30 m).  85 kg, centre of
         mass 1.0 m, roll inertia 13.6 kg m^2; 18 m/s, a GS speed.  |C_f| <= 1 / (30 m cos
-        75 deg) = 0.129 1/m; edge to edge in 0.5 s; the hip touches the snow at 80 deg."""),
+        75 deg) = 0.129 1/m; edge to edge in 0.5 s; fallen past 85 deg."""),
 ))

@@ -128,9 +128,9 @@ register_preset(SportPreset(
     name="carver", sport="snowboarder", label="Carver (Eurocarve)", carving=CARVING_BOARD,
     figure=Figure(
         "carver", BodyParams(m=75.0, l=0.9, I_v=10.0, V_cm=12.0),
-        carving_limits(CARVING_BOARD, 0.4, math.radians(80)),
+        carving_limits(CARVING_BOARD, 0.4, math.radians(85)),
         """A Eurocarving snowboarder on a hard-boot alpine board (163 cm, sidecut radius 10 m).
         75 kg, centre of mass 0.9 m in the low carving stance, roll inertia 10 kg m^2; 12 m/s.
         |C_f| <= 1 / (10 m cos 80 deg) = 0.576 1/m; edge to edge in 0.4 s; hand and hip touch
-        the snow at 80 deg."""),
+        the snow from ~80 deg, fallen past 85 deg."""),
 ))
