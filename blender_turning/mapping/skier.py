@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.params import BodyParams, Figure, Limits, check_range
-from ..core.equipment import Carving, SportPreset, carving_limits, register_preset
+from ..core.equipment import (Carving, SportPreset, carving_limits, carving_of,
+                              register_preset)
 from ..core.sports import Retarget, Sport, register_sport
 from ..core.model import Resistance
 from . import bones as B
@@ -89,7 +90,13 @@ class SkierOptions(SpringLegOptions):
 
 
 def ski_tilts(traj, o) -> dict:
-    """Tilt (n,) of each ski, rad: linear in C_f, the outside ski (R in a left turn) more."""
+    """Tilt (n,) of each ski, rad: linear in C_f, the outside ski (R in a left turn) more
+    (Section 7); on a preset's carving skis (core/equipment.py) the edge angle that carves
+    C_f by the sidecut relation, R_sc cos(edge) = 1 / |C_f|, both skis alike, unclipped."""
+    carving = carving_of(traj.meta.get("preset"))
+    if carving is not None:
+        edge = carving.edge_angle(traj.C_f)
+        return {s: edge for s, _ in SIDES}
     base = tilt_gain(traj, o.tilt_gain) * traj.C_f
     outside_is_right = traj.C_f > 0
     return {s: np.clip(base * (1.0 + o.outside_extra * np.where(outside_is_right == (s == "R"),

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.params import BodyParams, Figure, Limits, check_range
-from ..core.equipment import Carving, SportPreset, carving_limits, register_preset
+from ..core.equipment import (Carving, SportPreset, carving_limits, carving_of,
+                              register_preset)
 from ..core.sports import Retarget, Sport, register_sport
 from ..core.model import Resistance
 from . import bones as B
@@ -68,7 +69,9 @@ class SnowboarderMapping(Mapping):
         th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
         ankle_rest = {s: skel.rest_of(B.side("foot", s))[:3, 3] for s in SIDES}
         anchor = 0.5 * (ankle_rest["L"] + ankle_rest["R"])
-        tilt = np.clip(tilt_gain(traj, o.tilt_gain) * traj.C_f, -o.tilt_max, o.tilt_max)
+        carving = carving_of(traj.meta.get("preset"))    # a preset's board: the sidecut relation
+        tilt = (carving.edge_angle(traj.C_f) if carving is not None else
+                np.clip(tilt_gain(traj, o.tilt_gain) * traj.C_f, -o.tilt_max, o.tilt_max))
         R = rot_y(-tilt) @ skel.rest_of(B.BOARD)[:3, :3]
         drop = np.zeros(len(traj))
         for _ in range(3):      # the hips drop if a leg cannot reach its boot
