@@ -52,7 +52,7 @@ def test_bake_and_panel_say_the_lean_the_bounds_allow_and_why(scene, capfd):
     assert math.degrees(tele.turning.lean) == pytest.approx(23.0)
     text = turns_panel_labels(bpy.context)
     assert [t for t in text if t.startswith("Leans")] == \
-        ["Leans 17.0\u00b0, not 23.0\u00b0: limited by C_f_max"], text
+        ["Leans 19.6\u00b0, not 23.0\u00b0: limited by C_f_max"], text
     capfd.readouterr()
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     out = capfd.readouterr().out
@@ -62,10 +62,12 @@ def test_bake_and_panel_say_the_lean_the_bounds_allow_and_why(scene, capfd):
     assert (name, float(asked), bound) == ("Telemark", 23.0, "C_f_max")
     assert "Max Curvature" in out.split("Warning: Bake Turns")[1]
     # What was said is what was baked: the keyed lean peaks at the reported value (printed to
-    # 0.01 deg; measured peak 17.0148 deg for the report's 17.01).
+    # 0.01 deg) within the frames' sampling of the apex: a frame at most half a frame from it
+    # at 24 fps and a 2 s period is below the peak by up to theta (1 - cos(pi / 48)) = 0.04 deg
+    # (measured peak 19.610 deg for the report's 19.62).
     _, baked = keyed(tele, '["turn_lean"]')
-    assert math.degrees(np.abs(baked).max()) == pytest.approx(float(lean), abs=0.01)
-    assert float(lean) < 23.0 - 5.0
+    assert math.degrees(np.abs(baked).max()) == pytest.approx(float(lean), abs=0.05)
+    assert float(lean) < 23.0 - 3.0                    # a real difference, worth the warning
 
 
 @pytest.mark.parametrize("sport", ["SKIER", "CYCLIST"])

@@ -22,6 +22,7 @@ from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E40
 from blender_turning.blender.scene.scene_adapters import (PLAN_CURVATURE_RATE,  # noqa: E402
                                                           FrameRange)
 from blender_turning.core.params import PRESETS  # noqa: E402
+from blender_turning.core.registry import SPORT_PRESETS  # noqa: E402
 from modal_stand_ins import Context, WindowManager  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
@@ -94,18 +95,35 @@ def test_add_figure_at_cursor_from_preset(scene, sport):
 
 
 def test_sport_presets_are_the_sport_records(scene):
-    """Each sport's preset (the Sport Presets menu's entry) sets its record's numbers back."""
+    """Each sport's preset (the Sport Presets menu's entry) sets its record's numbers back; a
+    sport's own preset with equipment (the racers, the carver) applies to a figure of its
+    sport and names its equipment, which the figure's core Figure carries."""
     for sport, fig in PRESETS.items():
-        obj = add(sport.upper())
+        own = SPORT_PRESETS.get(sport)
+        obj = add((own.sport if own else sport).upper())
         s = obj.turning
         s.mass, s.inertia, s.curvature_rate_max, s.plan_curvature_rate = 99.0, 3.0, 4.0, 0.9
         assert bpy.ops.turning.apply_figure_preset(sport=sport.upper()) == {"FINISHED"}
-        assert s.sport == sport.upper()
+        assert s.sport == (own.sport if own else sport).upper()
+        assert s.equipment.preset == (sport if own else "")
+        assert scene_adapters.figure_from_settings(s).name == sport
         assert (s.mass, s.com_height, s.inertia, s.speed) == pytest.approx(
             (fig.body.m, fig.body.l, fig.body.I_v, fig.body.V_cm), rel=1e-6)
         assert (s.curvature_max, s.curvature_rate_max, s.fall_angle) == pytest.approx(
             (fig.limits.C_f_max, fig.limits.dC_f_max, fig.limits.theta_fall), rel=1e-6)
-        assert s.plan_curvature_rate == pytest.approx(PLAN_CURVATURE_RATE[sport])
+        assert s.plan_curvature_rate == pytest.approx(PLAN_CURVATURE_RATE[sport] if not own
+                                                      else own.plan_curvature_rate)
+    obj = add("SNOWBOARDER")
+    with pytest.raises(RuntimeError, match="Skier preset would not change its rig"):
+        bpy.ops.turning.apply_figure_preset(sport="SLALOM_RACER")
+    assert obj.turning.equipment.preset == ""
+    assert bpy.ops.turning.apply_figure_preset(sport="CARVER") == {"FINISHED"}
+    assert bpy.ops.turning.apply_figure_preset(sport="SNOWBOARDER") == {"FINISHED"}
+    assert obj.turning.equipment.preset == ""
+    obj.turning.equipment.preset = "gs_racer"               # not a snowboarder's preset
+    with pytest.raises(ValueError, match=r"turning.equipment.preset\) = 'gs_racer' is not a "
+                                         r"preset of the snowboarder \(carver"):
+        scene_adapters.figure_from_settings(obj.turning)
 
 
 def test_bad_setting_is_reported_and_nothing_written(scene):

@@ -8,10 +8,12 @@ from blender_turning.core import Trajectory
 
 def test_summary_states_the_turn_followed(capsys):
     """The skier's default turn at 6 m/s needs more C_f than the ski allows: the figure follows
-    a shallower turn at the same period, says so, and does not fall (it fell at 3.36 s)."""
+    a shallower turn at the same period, says so, and does not fall (it fell at 3.36 s).  The
+    bound named is that of the half-turn directional control flattens (STEER_BETAS: a flatter,
+    faster half-turn needs more C_f rate); 14.13 deg (the former fixed 85 % room: 12.50)."""
     assert main(["simulate", "--speed", "6", "--duration", "60"]) == 0
     out = capsys.readouterr().out
-    assert "turn lean 12.50 deg at period 2.000 s (asked 23.00 deg; limited by C_f_max" in out
+    assert "turn lean 14.13 deg at period 2.000 s (asked 23.00 deg; limited by dC_f_max" in out
     assert main(["simulate", "--duration", "4"]) == 0
     assert capsys.readouterr().out.rstrip().endswith("turn lean 23.00 deg at period 2.000 s")
 

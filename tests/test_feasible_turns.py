@@ -30,15 +30,18 @@ def chord_headings(tr):
 @pytest.mark.parametrize("step", [45, -45, 90, -90, 135, -135, 180, -180])
 def test_heading_steps_never_fall(name, step):
     """A step of the heading at 6.02 s (2 s / 23 deg) is completed to within 0.5 deg and held,
-    the peak lean below theta_fall - 5 deg (measured: done by 30 s, peak <= theta_fall - 8)."""
+    the peak lean below theta_fall - 5 deg (measured: done by 41 s, peak <= theta_fall - 8).
+    The telemark is the slowest: its 23 deg is at its C_f bound, so it skis 19.6 deg and
+    steers by flattening half-turns only (STEER_FLATTEN), a 180 deg step in 35 s (with the
+    former fixed 85 % headroom it skied 17.0 deg and took 24 s)."""
     fig = preset(name)
     head = Schedule(lambda t: 0.0 if t < 6.02 else math.radians(step))
     ctl = PhaseEllipse(fig.body, TWO_PI / 2, math.radians(23), heading=head, limits=fig.limits)
     w, tm = ctl.target(0.0)
-    tr = simulate(fig, ctl, 45.0, state0=slalom_start(fig.body, w, tm))
+    tr = simulate(fig, ctl, 50.0, state0=slalom_start(fig.body, w, tm))
     t, h = chord_headings(tr)
     err = (np.degrees(h) - step + 180) % 360 - 180
-    assert np.abs(err[t > 35]).max() < 0.5
+    assert np.abs(err[t > 42]).max() < 0.5
     assert math.degrees(np.abs(tr.theta_v).max()) < math.degrees(fig.limits.theta_fall) - 5
 
 
@@ -75,7 +78,7 @@ def test_a_command_the_body_cannot_follow_never_falls(name, period, lean):
             rep = ctl.achieved
             assert rep.period == pytest.approx(period)
             assert rep.lean == pytest.approx(tm)
-            assert rep.limited == (math.radians(lean) > 0.85 * table.max_lean(w))
+            assert rep.limited == (math.radians(lean) > table.steerable_lean(w))
             assert np.abs(tr.theta_v).max() < tm + math.radians(1.0)
             assert "deg at period" in rep.describe()
 

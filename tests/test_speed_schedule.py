@@ -58,7 +58,10 @@ def test_accelerating_and_braking_keep_the_turns_and_the_heading(skier):
         # half-turn: 0.2 deg); heading control may make a half-turn shallower (beta < 1).
         assert math.degrees(lean[k]) < peak + 0.2, tr.t[k]
         assert math.degrees(lean[k]) > 0.85 * peak, tr.t[k]
-    assert limited >= 3                                # braking to 8 m/s does limit the lean
+    # At 8 m/s the skis allow 24.8 deg with directional control's room (the modified half-turns
+    # of STEER_BETAS feasible): the 23 deg asked is skied at every speed of the ramp (the
+    # former fixed 85 % of the largest lean cut it to 21.6 deg there).
+    assert limited == 0
     for a, b in [(5, 10), (12, 18), (22, 28), (32, 38)]:
         m = (tr.t >= a) & (tr.t < b)
         assert abs(np.degrees(np.mean(tr.theta_dir[m])) - 90.0) < 2.0, (a, b)

@@ -41,6 +41,7 @@ import math
 from dataclasses import dataclass
 
 from .validate import check
+from .controllers.feasible import BRAKE_BETAS
 
 __all__ = ["TargetSpeed"]
 
@@ -83,6 +84,8 @@ class _Braking:
     def __init__(self, rule: TargetSpeed, controller, figure, ground, resistance, state0):
         self.rule, self.ctl, self.ground = rule, controller, ground
         self.course = controller.heading
+        # Turning across the hill moves the mean heading all the time: the room it steers in.
+        controller.steer_betas = BRAKE_BETAS
         self.g, self.k = figure.body.g, resistance.drag_k(figure.body.m)
         self.mu, self.radius = resistance.mu, 1.0 / figure.limits.C_f_max
         self.x0, self.y0 = float(state0[0]), float(state0[1])

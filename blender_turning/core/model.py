@@ -44,7 +44,7 @@ from .dynamics import bound_cf
 from .grip import foot_lateral
 from .params import BodyParams, Limits
 from .terrain import FLAT, HeightField, LazyHeightField, Plane, surface_frame
-from .registry import SPORTS
+from .registry import SPORT_PRESETS, SPORTS, ChainView
 from .validate import check
 from .xp import Numpy, Scalar, backend
 
@@ -92,8 +92,9 @@ class Resistance:
 NO_RESISTANCE = Resistance(mu=0.0, CdA=0.0)
 
 #: Each sport's friction and drag, ``name -> Resistance``: a live view of the sport registry
-#: (:mod:`.sports`; each sport's record holds its values, with their sources).
-RESISTANCE = SPORTS.view("resistance")
+#: (:mod:`.sports`; each sport's record holds its values, with their sources), then of the
+#: sports' own presets (:mod:`.equipment`: their sport's).
+RESISTANCE = ChainView(SPORTS.view("resistance"), SPORT_PRESETS.view("resistance"))
 
 
 def speed_held(ground, resistance: Resistance) -> bool:

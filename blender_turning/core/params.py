@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 from .ranges import RANGES
-from .registry import SPORTS
+from .registry import SPORT_PRESETS, SPORTS, ChainView
 from .validate import check, check_range
 
 __all__ = ["BodyParams", "Limits", "Figure", "PRESETS", "preset", "check_range"]
@@ -90,9 +90,10 @@ class Figure:
     doc: str = field(default="", compare=False)
 
 
-#: The sports' preset figures, ``name -> Figure``: a live view of the sport registry
-#: (:mod:`.sports`; each sport's record holds its body and limits, with their sources).
-PRESETS = SPORTS.view("figure")
+#: The preset figures, ``name -> Figure``: a live view of the sport registry (:mod:`.sports`;
+#: each sport's record holds its body and limits, with their sources), then of the sports'
+#: own presets (:mod:`.equipment`: the racers and the carver).
+PRESETS = ChainView(SPORTS.view("figure"), SPORT_PRESETS.view("figure"))
 
 
 def preset(name: str, **body_overrides) -> Figure:

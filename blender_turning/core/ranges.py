@@ -84,8 +84,10 @@ RANGES: dict[str, Range] = {
     # -- the parametric controller (Section 5) ---------------------------------------------------
     "period": Range(0.3, 20.0, "s", "a quick edge change to a long carve; 2 pi / omega0"),
     "omega0": Range(2 * math.pi / 20.0, 2 * math.pi / 0.3, "rad/s", "2 pi / period"),
-    "theta_max": Range(1 * _DEG, 60 * _DEG, "rad", "a gentle wiggle to a racer's lean; past "
-                       "60 deg every preset falls (theta_fall 50-60 deg)"),
+    "theta_max": Range(1 * _DEG, 77 * _DEG, "rad", "a gentle wiggle to a racer's 70 deg "
+                       "(Reid et al. 2020: edge angles 66-71 deg in slalom; a Eurocarver's hip "
+                       "on the snow): the largest fall angle, 85 deg, less the 8 deg the "
+                       "controller keeps from it (controllers/feasible.py LEAN_MARGIN)"),
     "heading": Range(-3600 * _DEG, 3600 * _DEG, "rad", "ten full turns either way"),
     # -- the start state --------------------------------------------------------------------------
     "theta_v0": Range(-89 * _DEG, 89 * _DEG, "rad", "the body must start above the ground"),

@@ -20,7 +20,7 @@ import sys
 from collections.abc import Mapping
 from pathlib import Path
 
-__all__ = ["Registry", "RegistryView", "SPORTS", "import_extension"]
+__all__ = ["Registry", "RegistryView", "ChainView", "SPORTS", "SPORT_PRESETS", "import_extension"]
 
 _NAME = re.compile(r"^[a-z][a-z0-9_-]*$")
 
@@ -118,9 +118,40 @@ class RegistryView(Mapping):
         return f"{{{', '.join(f'{k!r}: {v!r}' for k, v in self.items())}}}"
 
 
+class ChainView(Mapping):
+    """Several live mappings read as one: the first that has a name answers for it."""
+
+    def __init__(self, *maps):
+        self._maps = maps
+
+    def __getitem__(self, name):
+        for m in self._maps:
+            if name in m:
+                return m[name]
+        raise KeyError(name)
+
+    def __iter__(self):
+        seen = set()
+        for m in self._maps:
+            for name in m:
+                if name not in seen:
+                    seen.add(name)
+                    yield name
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+    def __repr__(self) -> str:
+        return f"{{{', '.join(f'{k!r}: {v!r}' for k, v in self.items())}}}"
+
+
 #: The sports (:class:`.sports.Sport`), registered by their modules (``mapping/<sport>.py``);
 #: ``number`` is the value a Blender file stores for the sport's enum item.
 SPORTS = Registry("sport", unique=("number",))
+
+#: Presets of a registered sport with their own body, limits and equipment
+#: (:class:`.equipment.SportPreset`: the racers, the carver), by their names.
+SPORT_PRESETS = Registry("preset")
 
 
 def import_extension(spec: str, flag: str = "--register"):

@@ -14,6 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.params import BodyParams, Figure, Limits, check_range
+from ..core.equipment import (Carving, SportPreset, carving_limits, carving_of,
+                              register_preset)
 from ..core.sports import Retarget, Sport, register_sport
 from ..core.model import Resistance
 from . import bones as B
@@ -88,7 +90,13 @@ class SkierOptions(SpringLegOptions):
 
 
 def ski_tilts(traj, o) -> dict:
-    """Tilt (n,) of each ski, rad: linear in C_f, the outside ski (R in a left turn) more."""
+    """Tilt (n,) of each ski, rad: linear in C_f, the outside ski (R in a left turn) more
+    (Section 7); on a preset's carving skis (core/equipment.py) the edge angle that carves
+    C_f by the sidecut relation, R_sc cos(edge) = 1 / |C_f|, both skis alike, unclipped."""
+    carving = carving_of(traj.meta.get("preset"))
+    if carving is not None:
+        edge = carving.edge_angle(traj.C_f)
+        return {s: edge for s, _ in SIDES}
     base = tilt_gain(traj, o.tilt_gain) * traj.C_f
     outside_is_right = traj.C_f > 0
     return {s: np.clip(base * (1.0 + o.outside_extra * np.where(outside_is_right == (s == "R"),
@@ -388,4 +396,38 @@ SPORT = register_sport(Sport(
     bones=(B.ROOT, B.LEAN) + B.HUMAN + B.SKI + B.POLE,
     retarget=Retarget(attach={"ski.L": "foot.L", "ski.R": "foot.R", "pole.L": "hand.L",
                               "pole.R": "hand.R"}),
+))
+
+
+# -- the sport's own presets with race equipment (core/equipment.py, docs/racing.md) ---------
+# Slalom: FIS, Specifications for Alpine Competition Equipment (edition 2023/24), men's SL ski
+# at least 165 cm; the FIS sets no SL radius, and men's SL race skis of 165 cm have sidecut
+# radii of 12.5-13 m.  Reid et al. 2020 (Front. Sports Act. Living 2:25) measured edge angles
+# up to 71.0 +- 1.9 deg in slalom: edge_max 75 deg.  Edge to edge in ~0.3 s (Reid's 10 m
+# gates at 12 m/s take 0.9 s a turn; the edge change is a third of it).
+SL_SKI = Carving(length=1.65, sidecut_radius=12.5, edge_max=math.radians(75.0))
+register_preset(SportPreset(
+    name="slalom_racer", sport="skier", label="Slalom Racer", carving=SL_SKI,
+    figure=Figure(
+        "slalom_racer", BodyParams(m=85.0, l=0.95, I_v=13.6, V_cm=12.0),
+        carving_limits(SL_SKI, 0.3, math.radians(85)),
+        """A World Cup slalom racer on FIS slalom skis (165 cm, sidecut radius 12.5 m).  85 kg
+        (men's technical racers are 80-95 kg); centre of mass 0.95 m above the skis in a
+        racing stance; roll inertia scaled from the skier's by the mass (12 kg m^2 x 85 / 75);
+        12 m/s, Reid et al.'s slalom speed.  |C_f| <= 1 / (12.5 m cos 75 deg) = 0.309 1/m;
+        edge to edge in 0.3 s; the hip touches the snow from ~80 deg and the racer has fallen
+        past 85 deg."""),
+))
+
+# Giant slalom: FIS (from 2017/18), men's GS ski at least 193 cm, sidecut radius at least
+# 30 m.  Edge to edge in ~0.5 s.
+GS_SKI = Carving(length=1.93, sidecut_radius=30.0, edge_max=math.radians(75.0))
+register_preset(SportPreset(
+    name="gs_racer", sport="skier", label="GS Racer", carving=GS_SKI,
+    figure=Figure(
+        "gs_racer", BodyParams(m=85.0, l=1.0, I_v=13.6, V_cm=18.0),
+        carving_limits(GS_SKI, 0.5, math.radians(85)),
+        """A giant slalom racer on FIS GS skis (193 cm, sidecut radius 30 m).  85 kg, centre of
+        mass 1.0 m, roll inertia 13.6 kg m^2; 18 m/s, a GS speed.  |C_f| <= 1 / (30 m cos
+        75 deg) = 0.129 1/m; edge to edge in 0.5 s; fallen past 85 deg."""),
 ))

@@ -16,6 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.params import BodyParams, Figure, Limits, check_range
+from ..core.equipment import (Carving, SportPreset, carving_limits, carving_of,
+                              register_preset)
 from ..core.sports import Retarget, Sport, register_sport
 from ..core.model import Resistance
 from . import bones as B
@@ -67,7 +69,9 @@ class SnowboarderMapping(Mapping):
         th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
         ankle_rest = {s: skel.rest_of(B.side("foot", s))[:3, 3] for s in SIDES}
         anchor = 0.5 * (ankle_rest["L"] + ankle_rest["R"])
-        tilt = np.clip(tilt_gain(traj, o.tilt_gain) * traj.C_f, -o.tilt_max, o.tilt_max)
+        carving = carving_of(traj.meta.get("preset"))    # a preset's board: the sidecut relation
+        tilt = (carving.edge_angle(traj.C_f) if carving is not None else
+                np.clip(tilt_gain(traj, o.tilt_gain) * traj.C_f, -o.tilt_max, o.tilt_max))
         R = rot_y(-tilt) @ skel.rest_of(B.BOARD)[:3, :3]
         drop = np.zeros(len(traj))
         for _ in range(3):      # the hips drop if a leg cannot reach its boot
@@ -116,4 +120,21 @@ SPORT = register_sport(Sport(
     # Regular stance: the left boot is the front one; the back boot is bound as exactly.
     retarget=Retarget(attach={"board": "foot.L"}),
     stances=("regular", "goofy"),
+))
+
+
+# -- the sport's own presets with race equipment (core/equipment.py, docs/racing.md) ---------
+# Eurocarving: a hard-boot alpine (carving) board, 163 cm with a 10 m sidecut radius (alpine
+# boards: 155-185 cm, radii 8-14 m); the rider lays hand and hip on the snow, edge angles to
+# ~80 deg.  Edge to edge in 0.4 s.
+CARVING_BOARD = Carving(length=1.63, sidecut_radius=10.0, edge_max=math.radians(80.0))
+register_preset(SportPreset(
+    name="carver", sport="snowboarder", label="Carver (Eurocarve)", carving=CARVING_BOARD,
+    figure=Figure(
+        "carver", BodyParams(m=75.0, l=0.9, I_v=10.0, V_cm=12.0),
+        carving_limits(CARVING_BOARD, 0.4, math.radians(85)),
+        """A Eurocarving snowboarder on a hard-boot alpine board (163 cm, sidecut radius 10 m).
+        75 kg, centre of mass 0.9 m in the low carving stance, roll inertia 10 kg m^2; 12 m/s.
+        |C_f| <= 1 / (10 m cos 80 deg) = 0.576 1/m; edge to edge in 0.4 s; hand and hip touch
+        the snow from ~80 deg, fallen past 85 deg."""),
 ))

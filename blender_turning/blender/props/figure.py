@@ -12,7 +12,7 @@ import math
 
 import bpy
 from bpy.props import (BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty,
-                       PointerProperty)
+                       PointerProperty, StringProperty)
 
 from ...core.ranges import RANGES
 from .. import compat
@@ -77,6 +77,18 @@ class TurningTerrainSettings(bpy.types.PropertyGroup):
                                 description="Brake by turning across the hill when faster than "
                                             "this (m/s; needs Hold Heading, the course down the "
                                             "hill); 0 lets the speed run")
+
+
+class TurningEquipmentSettings(bpy.types.PropertyGroup):
+    """``Object.turning.equipment``: the sport's preset whose equipment the figure shows (the
+    racers, the carver: core/equipment.py), set by the Sport Presets menu."""
+
+    preset: StringProperty(name="Equipment Preset", default="", options=_STATIC,
+                           description="A preset of the figure's sport with carving equipment "
+                                       "(slalom_racer, gs_racer, carver): the bake shows its "
+                                       "skis or board on the edge angle that carves the "
+                                       "figure's curvature (docs/racing.md).  Empty: the "
+                                       "sport's own, Section 7's linear tilt")
 
 
 class TurningFigureSettings(bpy.types.PropertyGroup):
@@ -179,6 +191,9 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
     live: BoolProperty(name="Live Preview", default=False, options=_STATIC, update=_live_changed,
                        description="Re-bake the figure whenever one of its settings, keys, its "
                                    "Path, obstacles or Ground change (docs/live-preview.md)")
+    equipment: PointerProperty(type=TurningEquipmentSettings, options=_STATIC,
+                               description="The sport's preset whose equipment the figure "
+                                           "shows")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.
@@ -197,7 +212,7 @@ def figure_settings(obj):
     return settings if settings is not None and settings.is_figure else None
 
 
-classes = (TurningTerrainSettings, TurningFigureSettings)
+classes = (TurningTerrainSettings, TurningEquipmentSettings, TurningFigureSettings)
 _register, _unregister = bpy.utils.register_classes_factory(classes)
 
 

@@ -10,7 +10,7 @@ import bpy
 import numpy as np
 
 from ...core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
-from ...core.registry import SPORTS
+from ...core.registry import SPORT_PRESETS, SPORTS
 from ...core.sports import sport as sport_record
 from ...core.model import Resistance
 from .. import compat
@@ -105,7 +105,21 @@ def figure_from_settings(settings) -> Figure:
     check_finite_settings(settings)
     body = BodyParams(**{f: float(getattr(settings, s)) for s, f in BODY_FIELDS.items()})
     limits = Limits(**{f: float(getattr(settings, s)) for s, f in LIMIT_FIELDS.items()})
-    return Figure(settings.sport.lower(), body, limits)
+    return Figure(figure_name(settings), body, limits)
+
+
+def figure_name(settings) -> str:
+    """The figure's preset name: its equipment preset (a preset of its sport, which the mapping
+    shows: core/equipment.py) or its sport's (raises ``ValueError`` naming the field)."""
+    sport, name = settings.sport.lower(), settings.equipment.preset
+    if not name:
+        return sport
+    if name not in SPORT_PRESETS or SPORT_PRESETS[name].sport != sport:
+        raise SceneInputError(
+            f"Equipment Preset (turning.equipment.preset) = {name!r} is not a preset of the "
+            f"{sport} ({', '.join(n for n, r in SPORT_PRESETS.items() if r.sport == sport) or 'none'}"
+            "; empty: the sport's own)")
+    return name
 
 
 #: Largest |dC_f/dt| the path planner tries per sport, 1/(m s): the sport records'
@@ -114,11 +128,14 @@ PLAN_CURVATURE_RATE = SPORTS.view("plan_curvature_rate")
 
 
 def settings_from_preset(settings, sport: str) -> None:
-    """Fill ``obj.turning`` from the record of ``sport`` ('SKIER', ...): its preset, the
-    planner's rate and what slows it on a slope."""
-    record = sport_record(sport)
+    """Fill ``obj.turning`` from the record of ``sport`` ('SKIER', ...) or of a sport's preset
+    ('slalom_racer': core/equipment.py, which sets its sport and equipment too): its preset,
+    the planner's rate and what slows it on a slope."""
+    own = SPORT_PRESETS.get(sport.lower()) if isinstance(sport, str) else None
+    record = own if own is not None else sport_record(sport)
     fig, res = record.figure, record.resistance
-    settings.sport = record.key
+    settings.sport = sport_record(own.sport).key if own is not None else record.key
+    settings.equipment.preset = own.name if own is not None else ""
     settings.plan_curvature_rate = record.plan_curvature_rate
     settings.terrain.friction, settings.terrain.drag_area = res.mu, res.CdA
     settings.terrain.air_density = res.rho

@@ -3,7 +3,8 @@ through Blender's preset system.
 
 The Sport Presets menu lists every registered sport first (its record's body, limits and
 planner rate: nothing is stored in a file, so a sport registered by a script is there too), then
-the presets users save with the "+" button (preset scripts in their ``presets/turning_figure/``,
+the sports' own presets with their equipment (the racers, the carver: core/equipment.py; each
+applies to a figure of its sport), then the presets users save with the "+" button (preset scripts in their ``presets/turning_figure/``,
 next to Blender's other presets).
 """
 from __future__ import annotations
@@ -15,7 +16,7 @@ import bpy
 from bl_operators.presets import AddPresetBase
 from bpy.props import StringProperty
 
-from ...core.registry import SPORTS
+from ...core.registry import SPORT_PRESETS, SPORTS
 from ..registry_items import sport_label
 from ..scene.rig_builder import RIG_TAG
 
@@ -37,10 +38,13 @@ _SPORT_LINE = re.compile(r"""^settings\.sport\s*=\s*['"](\w+)['"]""", re.MULTILI
 
 
 def sport_preset_values(sport: str) -> dict:
-    """``PRESET_VALUES`` (without ``settings.``) of the sport's own preset, from its record."""
+    """``PRESET_VALUES`` (without ``settings.``) of the sport's own preset, from its record, or
+    of a sport's preset (``SLALOM_RACER``: core/equipment.py), with its sport."""
     from ..props.figure import BODY_FIELDS, LIMIT_FIELDS
-    record = SPORTS.lookup(sport.lower())
-    values = {"sport": record.key, "plan_curvature_rate": record.plan_curvature_rate}
+    own = SPORT_PRESETS.get(sport.lower())
+    record = own if own is not None else SPORTS.lookup(sport.lower())
+    key = SPORTS[own.sport].key if own is not None else record.key
+    values = {"sport": key, "plan_curvature_rate": record.plan_curvature_rate}
     values.update({s: getattr(record.figure.body, f) for s, f in BODY_FIELDS.items()})
     values.update({s: getattr(record.figure.limits, f) for s, f in LIMIT_FIELDS.items()})
     return {v.split(".", 1)[1]: values[v.split(".", 1)[1]] for v in PRESET_VALUES}
@@ -66,7 +70,8 @@ class TURNING_OT_apply_figure_preset(bpy.types.Operator):
 
     filepath: StringProperty(subtype="FILE_PATH", options={"SKIP_SAVE", "HIDDEN"})
     sport: StringProperty(name="Sport", options={"SKIP_SAVE", "HIDDEN"},
-                          description="A registered sport's own preset (instead of a file)")
+                          description="A registered sport's own preset, or a sport's preset "
+                                      "with its equipment (instead of a file)")
 
     @classmethod
     def poll(cls, context):
@@ -95,6 +100,8 @@ class TURNING_OT_apply_figure_preset(bpy.types.Operator):
                                                  menu_idname=TURNING_MT_figure_presets.__name__)
         for name, value in values.items():
             setattr(fig.turning, name, value)
+        own = SPORT_PRESETS.get(self.sport.lower())
+        fig.turning.equipment.preset = own.name if own is not None else ""
         return {"FINISHED"}
 
 
@@ -110,6 +117,11 @@ class TURNING_MT_figure_presets(bpy.types.Menu):
         for record in SPORTS.values():
             layout.operator(self.preset_operator, text=record.label,
                             icon=record.icon).sport = record.key
+        if SPORT_PRESETS:
+            layout.separator()
+            for record in SPORT_PRESETS.values():
+                layout.operator(self.preset_operator, text=record.label,
+                                icon=SPORTS[record.sport].icon).sport = record.name.upper()
         if any(Path(p).is_dir() and any(Path(p).glob("*.py"))
                for p in bpy.utils.preset_paths(PRESET_SUBDIR)):
             layout.separator()

@@ -60,10 +60,9 @@ from ..xp import Scalar, backend
 from .base import Controller
 from .registry import ControllerType, register_controller
 from .ellipse_paper import paper_alpha, paper_alpha_one
-from .feasible import FeasibleTurn, feasible_turns
+from .feasible import STEER_BETAS, FeasibleTurn, feasible_turns
 
 GAIN = 3.0
-HEADROOM = 0.85
 SPEED_GRID = 0.5
 """m/s: a speed that varies is followed by feasibility tables at multiples of this (rounded down)."""
 
@@ -136,6 +135,9 @@ class PhaseEllipse(Controller):
         self._rates = {}            # mean_heading_rate at the nominal speed, per table and turn
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
+        self.steer_betas = STEER_BETAS
+        """The modified half-turns directional control keeps feasible (:meth:`feasible_lean`);
+        the braking rule widens them (:data:`.feasible.BRAKE_BETAS`)."""
 
     def begin_run(self, limits: Limits) -> None:
         """A new run: forget the last run's half-turns; take the figure's limits unless given."""
@@ -168,16 +170,18 @@ class PhaseEllipse(Controller):
     def feasible_lean(self, omega0: float, theta_max: float) -> float:
         """The lean followed for a commanded ``(omega0, theta_max)``: at most the largest the
         body's bounds allow at that period (:mod:`.feasible`), and with directional control at
-        most ``HEADROOM`` of it: on the feasible boundary itself no modified half-turn is
-        feasible (a sharper one needs more C_f, a shallower and faster one more C_f rate), so
-        directional control could not steer."""
+        most what leaves it a half-turn to steer with (:meth:`.FeasibleTurns.steerable_lean`):
+        the commanded lean is skied whenever directional control can still flatten a half-turn
+        by ``steer_betas``, and only the turns at the bounds give up some."""
         if self._feasible is None:
             return theta_max
-        room = 1.0 if self.heading is None else HEADROOM
         if np.ndim(omega0) or np.ndim(theta_max):                 # per-figure ellipses
-            top = self._feasible.max_leans(omega0)
-            return np.minimum(theta_max, room * top)
-        return min(theta_max, room * self._feasible.max_lean(omega0))
+            top = (self._feasible.max_leans(omega0) if self.heading is None else
+                   self._feasible.steerable_leans(omega0, self.steer_betas))
+            return np.minimum(theta_max, top)
+        top = (self._feasible.max_lean(omega0) if self.heading is None else
+               self._feasible.steerable_lean(omega0, self.steer_betas))
+        return min(theta_max, top)
 
     def commanded_turn(self, t: float = 0.0) -> FeasibleTurn:
         """The turn followed for the ellipse commanded at ``t`` (one figure), before any run:
@@ -187,7 +191,14 @@ class PhaseEllipse(Controller):
         return self._turn(t, w, tm, self.feasible_lean(w, tm))
 
     def _turn(self, t, w, tm, tmf) -> FeasibleTurn:
-        bound = self._feasible.bound(w) if self._feasible is not None and tmf < tm else None
+        bound = None
+        if self._feasible is not None and tmf < tm:
+            # The turn's own bound, or, when the steering room limits it, the flattened
+            # half-turn's (:meth:`.FeasibleTurns.steerable_lean`).
+            f = self._feasible
+            steer = [b for b in self.steer_betas if self.heading is not None and
+                     tmf >= f.max_lean(w / b) / b * (1 - 1e-12)]
+            bound = f.bound(w / steer[0] if steer else w)
         return FeasibleTurn(tm, tmf, 2 * math.pi / w, bound, t)
 
     def _note(self, t, w, tm, tmf):

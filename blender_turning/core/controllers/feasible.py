@@ -42,6 +42,14 @@ from ..params import BodyParams, Limits
 
 CF_SHARE = 0.9
 RATE_SHARE = 0.9
+STEER_BETAS = (0.8, 1.1)
+"""Directional control keeps half-turns it may flatten and sharpen by these betas (Section
+5.2, ``(beta theta_max, omega0 / beta)``): the steering room of
+:meth:`FeasibleTurns.steerable_lean` for a heading held (corrections only)."""
+BRAKE_BETAS = (0.7, 1.25)
+"""The steering room braking by turning across the hill needs (:mod:`..braking`: the mean
+heading moves all the time): the speed is held within tests/test_braking.py's bounds with it,
+not with ``STEER_BETAS``."""
 LEAN_MARGIN = math.radians(8.0)
 BOUNDS = ("C_f_max", "physical branch", "dC_f_max", "theta_fall")
 _PHASES = np.linspace(0.0, 0.5 * math.pi, 65)
@@ -174,6 +182,26 @@ class FeasibleTurns:
             out = np.where(inside, out, 0.0)
             off = ~inside
             out[off] = [float(self._solve(np.array([float(v)]))[0][0]) for v in w[off]]
+        return out
+
+    def steerable_lean(self, omega0: float, betas=STEER_BETAS) -> float:
+        """The largest lean at ``omega0`` that directional control can still steer (rad): the
+        turn itself feasible (:meth:`max_lean`) and its half-turns modified by each beta of
+        ``betas`` -- ``(beta theta_max, omega0 / beta)``, Section 5.2 -- feasible too.
+        On the feasible boundary no modified half-turn is feasible (a sharper one needs more
+        C_f or lean, a flatter and faster one more C_f rate), so the room comes from the shape
+        of the turn at the bounds: a turn whose modified half-turns fit keeps all its lean,
+        one at the bounds gives up what they need (``1 - 1 / 1.1`` of a turn bound by its lean
+        or its ``g sin`` curvature, about 9 %)."""
+        return min([self.max_lean(omega0)] +
+                   [self.max_lean(omega0 / b) / b for b in betas])
+
+    def steerable_leans(self, omega0, betas=STEER_BETAS) -> np.ndarray:
+        """:meth:`steerable_lean` of every frequency of an array (the same numbers)."""
+        w = np.asarray(omega0, float)
+        out = self.max_leans(w)
+        for b in betas:
+            out = np.minimum(out, self.max_leans(w / b) / b)
         return out
 
     def bound(self, omega0: float) -> str:
