@@ -293,7 +293,8 @@ def test_tooltips_units_and_soft_limits():
                             ("curvature_max", fig.limits.C_f_max),
                             ("curvature_rate_max", fig.limits.dC_f_max),
                             ("fall_angle", fig.limits.theta_fall)):
-            assert props[name].soft_min <= value <= props[name].soft_max, (fig.name, name)
+            v32 = float(np.float32(value))      # Blender keeps a FloatProperty in float32
+            assert props[name].soft_min <= v32 <= props[name].soft_max, (fig.name, name)
 
 
 def test_settings_take_their_ranges_from_the_core_table():

@@ -14,6 +14,7 @@ import json
 import math
 from dataclasses import replace
 
+from ..core.equipment import sport_of
 from ..core.errors import PathNotFinished, PlanInfeasible
 from ..core.grip import SNOW
 from ..core.params import check_range
@@ -110,7 +111,7 @@ def run(args) -> int:
 def _speed_cap(args, sport: str) -> SpeedCap:
     """The :class:`..core.planner.speed_cap.SpeedCap` of ``--target-speed`` and ``--grip``."""
     V = check_range("--target-speed", args.target_speed, 0.0, 100.0, lo_open=True)
-    grip = SPORTS[sport].grip or SNOW["hard"]
+    grip = SPORTS[sport_of(sport)].grip or SNOW["hard"]
     if args.grip is not None:
         mu = check("--grip", args.grip, "grip")
         grip = replace(grip, mu=mu, name=f"{mu:g}")

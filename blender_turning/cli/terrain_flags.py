@@ -21,6 +21,7 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
+from ..core.equipment import sport_of
 from ..core.grip import SNOW, snow
 from ..core.params import check_range
 from ..core.registry import SPORTS
@@ -120,7 +121,7 @@ def skid_options(args, sport: str, target: bool):
     """The :class:`..core.skidding.Skidding` of ``--style``, ``--snow``, ``--grip``,
     ``--stop-at`` and ``--stop-side`` (``None``: the carved run).  With ``--target-speed`` and
     no ``--style`` the figure skids (``skid``)."""
-    record = SPORTS[sport]
+    record = SPORTS[sport_of(sport)]          # a preset (slalom_racer) has its sport's grip
     if args.snow is not None:
         if record.grip is not None:
             raise ValueError(f"--snow is for a sport on snow; the {sport} rides on "

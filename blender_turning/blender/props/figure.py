@@ -130,7 +130,7 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                                                   "to edge (dC_f/dt max, 1/(m s))")
     fall_angle: FloatProperty(name="Fall Angle", default=math.radians(60),
                               **_range("theta_fall"), soft_min=math.radians(30),
-                              soft_max=math.radians(80), subtype="ANGLE", options=_STATIC,
+                              soft_max=math.radians(85), subtype="ANGLE", options=_STATIC,
                               description="How far the body can lean before it falls over "
                                           "(theta_fall)")
     # -- the parametric controller (Section 5), animatable ----------------------------------
