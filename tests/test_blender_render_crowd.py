@@ -1,4 +1,4 @@
-"""Issue 11: a render job with a crowd (scripts/render_job.py ``[[crowds]]``) builds and bakes
+"""A render job with a crowd (scripts/render_job.py ``[[crowds]]``) builds and bakes
 the leader and its N followers, each its own rig, and a shot of the crowd (no render)."""
 import json
 import os

@@ -1,4 +1,4 @@
-"""Issue 11, rendering on a farm (no Blender needed): the render job's farm flags (--frames,
+"""Rendering on a farm (no Blender needed): the render job's farm flags (--frames,
 --device, --name) are validated like every other value, one line naming the flag, exit 2, before
 anything is built; the Flamenco job type is valid JavaScript and authors one bake task and frame
 chunks that depend on it, with arguments the render job accepts."""
