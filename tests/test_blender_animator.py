@@ -298,7 +298,7 @@ def test_tooltips_units_and_soft_limits():
 
 
 def test_settings_take_their_ranges_from_the_core_table():
-    """Issue 9: one table of ranges (core/ranges.py) for flags, files, job keys and these
+    """One table of ranges (core/ranges.py) for flags, files, job keys and these
     settings; Blender holds its floats in single precision."""
     from blender_turning.core.ranges import RANGES
     props = TurningFigureSettings.bl_rna.properties

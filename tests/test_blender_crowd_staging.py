@@ -3,7 +3,6 @@ leader's track, all moving from frame 1, from the one shared rule (``crowd.stage
 at the start, with the scene's range fitted to the last start."""
 import math
 import os
-import sys
 import tempfile
 from types import SimpleNamespace
 
@@ -13,11 +12,9 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from cli_helpers import ROOT  # noqa: E402
 from test_blender_operators import add  # noqa: E402
 
-sys.path.insert(0, str(ROOT / "scripts"))
-import render_job  # noqa: E402
+from blender_turning.blender.render.config import load_config  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 
@@ -60,7 +57,7 @@ def job_figures(tmp_path, extra=""):
     flags = SimpleNamespace(name=None, seconds=None, frame_step=None, output=str(tmp_path / "o"),
                             engine=None, resolution=None, device=None, frames=None,
                             no_render=False)
-    return render_job.load_config(cfg, flags)["figures"]
+    return load_config(cfg, flags)["figures"]
 
 
 def add_crowd(**kw):

@@ -1,4 +1,4 @@
-"""Issue 11: a render job with a crowd (scripts/render_job.py ``[[crowds]]``) builds and bakes
+"""A render job with a crowd (scripts/render_job.py ``[[crowds]]``) builds and bakes
 the leader and its N followers, each its own rig, and a shot of the crowd (no render)."""
 import json
 import os
@@ -72,6 +72,12 @@ for o in bpy.data.objects:
                               "start": [loc[i].evaluate(1.0) for i in range(2)],
                               "keys": len(loc[0].keyframe_points), "curves": len(fcs),
                               "mass": o.turning.mass, "period": o.turning.period}
+# Each figure's tracks in the snow: the grooves (two edges of n vertices each, one a frame) and
+# the first groove's width (its edges' first vertices).
+n = bpy.context.scene.frame_end - bpy.context.scene.frame_start + 1
+out["tracks"] = {o.name[len("Track "):]: [len(o.data.vertices) / (2 * n),
+                                          (o.data.vertices[0].co - o.data.vertices[n].co).xy.length]
+                 for o in bpy.data.objects if o.name.startswith("Track ")}
 addon.unregister()
 print("JSON" + json.dumps(out))
 """
@@ -105,5 +111,11 @@ def test_a_crowd_job_builds_and_bakes_its_leader_and_followers(tmp_path):
     masses = {round(figs[n]["mass"], 6) for n in crowd}
     periods = {round(figs[n]["period"], 6) for n in crowd}
     assert len(masses) == 4 and len(periods) == 4
+    # Tracks from each figure's sport record: a board cuts one groove its width (0.28 m), skis two
+    # narrow ones (0.09 m; float32 vertices).
+    assert sorted(got["tracks"]) == sorted(crowd + ["Snowboarder"])
+    for name, (grooves, width) in got["tracks"].items():
+        want = (1, 0.28) if name == "Snowboarder" else (2, 0.09)
+        assert grooves == want[0] and abs(width - want[1]) < 1e-5, (name, grooves, width)
     # One shot per lone figure and one for the crowd (not one per member).
     assert got["cameras"] == ["Camera School", "Camera Snowboarder"]

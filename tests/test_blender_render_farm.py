@@ -1,4 +1,4 @@
-"""Issue 11, rendering on a farm, on the bpy wheel: the job bakes once and saves a .blend whose
+"""Rendering on a farm, on the bpy wheel: the job bakes once and saves a .blend whose
 output path is relative to itself, so it can move to a farm's storage and be rendered in chunks
 exactly as ``blender -b job.blend -s A -e B -a`` does (open, set the frame range, render the
 animation) with the frames landing next to it; ``--frames`` renders one chunk and keeps the whole

@@ -1,4 +1,4 @@
-"""Issue 9, command line: every hostile or careless input ends in one line naming the flag (or the
+"""The command line: every hostile or careless input ends in one line naming the flag (or the
 file, field, row and column) and exit 2, with no traceback, no numpy warning and the output folder
 as it was; outputs are checked before the work and written all together or not at all."""
 import json

@@ -1,7 +1,9 @@
 """The user documents hold together: every relative link and anchor in README.md and docs/*.md
-resolves, the README stays a front door, no page speaks of issue numbers, and every code block
-says where it runs (tests/test_doc_examples.py runs them)."""
+resolves, the README stays a front door, no page (nor any other file of the tree) speaks of issue
+numbers, and every code block says where it runs (tests/test_doc_examples.py runs them)."""
+import os
 import re
+from pathlib import Path
 
 import pytest
 
@@ -79,9 +81,37 @@ def test_the_readme_is_a_front_door():
     assert n <= README_MAX_LINES, n
 
 
+#: The text files of the repository besides the pages: notes, code (its comments, docstrings and
+#: tooltips), tests, scripts, scenes, rigs and manifests.
+TEXT = {".md", ".py", ".json", ".toml", ".sh", ".js", ".txt", ".cfg"}
+
+
+def repository_text() -> list:
+    """Every text file of the tree (not hidden folders, caches or build output)."""
+    out = []
+    for dirpath, dirs, files in os.walk(ROOT):
+        dirs[:] = sorted(d for d in dirs if not d.startswith(".") and d not in
+                         ("__pycache__", "out", "dist", "build") and not d.endswith(".egg-info"))
+        out += [Path(dirpath) / f for f in sorted(files) if Path(f).suffix in TEXT]
+    return out
+
+
 def test_no_issue_numbers_in_the_documents():
     bad = [f"{p.relative_to(ROOT)}:{i}: {ln.strip()}"
            for p in pages() for i, ln in enumerate(p.read_text(encoding="utf-8").split("\n"), 1)
+           if ISSUE.search(ln)]
+    assert not bad, "\n".join(bad)
+
+
+def test_no_issue_numbers_anywhere_else():
+    """Nor in BENCHMARKS.md, TESTING.md, CONTRIBUTING.md, code comments, docstrings, tooltips,
+    tests, scripts or scene descriptions: the repository says what is, not which issue asked."""
+    files = [p for p in repository_text() if p not in pages()]
+    names = {p.relative_to(ROOT).as_posix() for p in files}
+    assert {"BENCHMARKS.md", "TESTING.md", "blender_turning/blender/props/figure.py",
+            "scripts/mutate.py", "scenes/slalom.json", "tests/test_docs.py"} <= names
+    bad = [f"{p.relative_to(ROOT)}:{i}: {ln.strip()}" for p in files
+           for i, ln in enumerate(p.read_text(encoding="utf-8", errors="replace").split("\n"), 1)
            if ISSUE.search(ln)]
     assert not bad, "\n".join(bad)
 

@@ -1,4 +1,4 @@
-"""Issue 7, item 1: the smooth phase-ellipse law (core/controllers/ellipse.py).
+"""The smooth phase-ellipse law (core/controllers/ellipse.py).
 
 On the ellipse its demand is Eq. (5), so the closed loop must reproduce the open-loop run of the
 same ellipse; off it, it must bring any state onto the ellipse at least as fast as the paper's law

@@ -1,4 +1,4 @@
-"""Issue 7, items 3, 3b and 4 (heading table): heading control and commands the body cannot
+"""Heading control (the heading table) and commands the body cannot
 follow never make the figure fall (core/controllers/feasible.py, core/heading_table.py)."""
 import math
 import warnings

@@ -13,7 +13,7 @@ from blender_turning.core.scene import load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 NAMES = ["tree_skiing", "slalom", "cyclist_corner", "potholes",
-         # Issue 11: scenes tried as a user would.
+         # Scenes tried as a user would.
          "snowboard_hairpin", "cyclist_chicane", "start_facing_away"]
 _RUNS = {}
 

@@ -142,27 +142,23 @@ def test_a_formation_registered_from_outside_is_read_by_the_crowd_file_and_the_j
     with pytest.raises(FieldError, match=r"type = 'ring' is not one of .*echelon"):
         crowd_from_dict({**doc, "formations": [{"type": "ring"}]})
     # The render job's crowds: any formation made from a leader, read by its record.
-    import sys
-    sys.path.insert(0, str(ROOT / "scripts"))
-    import render_crowds
-    assert fx.FORMATION in render_crowds._led_formations()
+    from blender_turning.blender.render import crowds
+    assert fx.FORMATION in crowds._led_formations()
 
 
 def test_the_render_job_takes_the_sport_from_the_registry(own, tmp_path):
-    import sys
     from types import SimpleNamespace
-    sys.path.insert(0, str(ROOT / "scripts"))
-    import render_job
+    from blender_turning.blender.render.config import load_config
     cfg = tmp_path / "job.toml"
     cfg.write_text(f'[[figures]]\nsport = "{fx.SPORT}"\nlean_deg = 20\n')
     flags = SimpleNamespace(name=None, seconds=None, frame_step=None, output=str(tmp_path / "o"),
                             engine=None, resolution=None, device=None, frames=None,
                             no_render=False)
-    (fig,) = render_job.load_config(cfg, flags)["figures"]
+    (fig,) = load_config(cfg, flags)["figures"]
     assert fig["sport"] == fx.SPORT and fig["name"] == "Ski Bike"
     cfg.write_text(f'[[figures]]\nsport = "{fx.SPORT}"\nlean_deg = 56\n')   # its fall: 55 deg
     with pytest.raises(ValueError, match="below the skibike's fall angle"):
-        render_job.load_config(cfg, flags)
+        load_config(cfg, flags)
 
 
 def test_unregistering_removes_the_sport_everywhere(own):

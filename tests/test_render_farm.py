@@ -1,8 +1,7 @@
-"""Issue 11, rendering on a farm (no Blender needed): the render job's farm flags (--frames,
+"""Rendering on a farm (no Blender needed): the render job's farm flags (--frames,
 --device, --name) are validated like every other value, one line naming the flag, exit 2, before
 anything is built; the Flamenco job type is valid JavaScript and authors one bake task and frame
 chunks that depend on it, with arguments the render job accepts."""
-import importlib.util
 import subprocess
 
 import pytest
@@ -11,12 +10,8 @@ from cli_helpers import ROOT, one_line_error
 from flamenco_helpers import JOB_TYPE, compile_job, node
 from test_render_job_config import FIG, job
 
-
-def _render_job():
-    spec = importlib.util.spec_from_file_location("render_job", ROOT / "scripts" / "render_job.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+from blender_turning.blender.render.config import load_config
+from blender_turning.blender.render.job import parse_args
 
 
 @pytest.mark.parametrize("flags, names", [
@@ -50,14 +45,13 @@ def test_frames_are_checked_against_the_seconds_flag(tmp_path):
 
 
 def test_good_farm_flags_are_read():
-    rj = _render_job()
-    args = rj.parse_args(["render_job.py", "--config", str(ROOT / "scripts" / "configs" /
-                          "skier_slalom.toml"), "--frames", " 3 - 9", "--device", "cpu",
-                          "--name", "shot", "--engine", "CYCLES"])
-    cfg = rj.load_config(args.config, args)
+    args = parse_args(["render_job.py", "--config", str(ROOT / "scripts" / "configs" /
+                       "skier_slalom.toml"), "--frames", " 3 - 9", "--device", "cpu",
+                       "--name", "shot", "--engine", "CYCLES"])
+    cfg = load_config(args.config, args)
     assert cfg["frames"] == (3, 9) and cfg["render"]["device"] == "CPU" and cfg["name"] == "shot"
     args.frames, args.device = "7", "gpu"
-    cfg = rj.load_config(args.config, args)
+    cfg = load_config(args.config, args)
     assert cfg["frames"] == (7, 7) and cfg["render"]["device"] == "GPU"
 
 
@@ -83,8 +77,7 @@ def test_one_bake_then_chunks_that_depend_on_it():
     assert cmd["exe"] == "{blender}" and cmd["exeArgs"] == "{blenderArgs}"
     assert cmd["args"][:3] == ["--python", SETTINGS["render_job_script"], "--"]
     # What follows "--" is a command line the render job accepts, baking without rendering.
-    rj = _render_job()
-    args = rj.parse_args(["blender", *cmd["args"]])
+    args = parse_args(["blender", *cmd["args"]])
     assert args.no_render and args.config.as_posix() == SETTINGS["config"]
     assert (args.output, args.name, args.device) == ("/farm/renders/slalom", "slalom", "GPU")
     # 50 frames in chunks of 24: 1-24, 25-48, 49-50, each a plain -s A -e B -a of the baked .blend.
@@ -131,10 +124,9 @@ def test_the_bake_refuses_farm_frames_outside_the_shot(tmp_path):
             "1-1000000")
     one_line_error(r, "--farm-frames last = 1000000", "[1, 241]", "the shot has frames 1-241")
     assert not (tmp_path / "out").exists()
-    rj = _render_job()
-    args = rj.parse_args(["render_job.py", "--config", str(ROOT / "scripts" / "configs" /
-                          "skier_slalom.toml"), "--no-render", "--farm-frames", "1-193"])
-    assert rj.load_config(args.config, args)["frames"] is None        # 8 s at 24 fps: 193
+    args = parse_args(["render_job.py", "--config", str(ROOT / "scripts" / "configs" /
+                       "skier_slalom.toml"), "--no-render", "--farm-frames", "1-193"])
+    assert load_config(args.config, args)["frames"] is None        # 8 s at 24 fps: 193
 
 
 def test_the_job_type_passes_its_frames_to_the_bake_and_caps_the_tasks():

@@ -1,4 +1,4 @@
-"""Issue 9, the headless render job (scripts/render_job.py): the whole config is validated before
+"""The headless render job (scripts/render_job.py): the whole config is validated before
 anything is built (no bpy is imported for a bad one), with the core's ranges and field validator;
 every bad config or flag is one line naming the key, exit 2, no traceback, and the output folder
 is not created."""

@@ -1,5 +1,5 @@
-"""Issue 11: crowds in the headless render job (scripts/render_job.py ``[[crowds]]``, built by
-scripts/render_crowds.py): the config is validated like the other job keys (one line naming the
+"""Crowds in the headless render job (scripts/render_job.py ``[[crowds]]``, built by
+blender/render/crowds.py): the config is validated like the other job keys (one line naming the
 key, nothing built), and a crowd expands into its leader and followers as figures of the job."""
 import math
 import subprocess
@@ -12,10 +12,8 @@ import pytest
 from cli_helpers import ROOT, one_line_error
 
 JOB = ROOT / "scripts" / "render_job.py"
-sys.path.insert(0, str(ROOT / "scripts"))
-import render_job  # noqa: E402
-
-from blender_turning.core.params import PRESETS  # noqa: E402
+from blender_turning.blender.render.config import load_config
+from blender_turning.core.params import PRESETS
 
 CROWD = """
 [terrain.mountain]
@@ -49,7 +47,7 @@ def load(tmp_path, text):
     flags = SimpleNamespace(name=None, seconds=None, frame_step=None, output=str(tmp_path / "o"),
                             engine=None, resolution=None, device=None, frames=None,
                             no_render=False)
-    return render_job.load_config(cfg, flags)
+    return load_config(cfg, flags)
 
 
 def test_a_crowd_is_its_leader_and_followers_in_a_line_behind(tmp_path):

@@ -87,6 +87,9 @@ class Sport:
     stances: tuple = ()
     """``("regular", "goofy")`` for a sport ridden either way round (the goofy rider is the
     regular one's mirror image, :mod:`..mapping.stance`); ``()``: one way only."""
+    snow_tracks: tuple = (0.045, (-0.11, 0.11))
+    """The grooves the equipment cuts in snow, as the render job draws them: ``(half width,
+    lateral offsets)``, m (skis: two narrow ones a hip's width apart)."""
     icon: str = "NONE"
     """A Blender icon name for the enum item."""
     grip: Grip | None = None

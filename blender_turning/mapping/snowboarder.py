@@ -120,6 +120,7 @@ SPORT = register_sport(Sport(
     # Regular stance: the left boot is the front one; the back boot is bound as exactly.
     retarget=Retarget(attach={"board": "foot.L"}),
     stances=("regular", "goofy"),
+    snow_tracks=(0.14, (0.0,)),         # a board cuts one groove its width
 ))
 
 

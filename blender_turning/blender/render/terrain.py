@@ -8,8 +8,9 @@ import math
 
 import numpy as np
 
-from blender_turning.core.terrain import HeightField
-from blender_turning.core.terrain_gen import ski_slope
+from ...core.sports import sport
+from ...core.terrain import HeightField
+from ...core.terrain_gen import ski_slope
 
 #: Stops of exposure (see :func:`light_the_snow`); the colours below are before it.
 EXPOSURE = 1.6
@@ -41,7 +42,7 @@ def height_field(spec) -> HeightField:
 
 def make_terrain(bpy, name, spec, material):
     """The ground mesh of ``spec`` (smooth shaded), linked to the scene."""
-    from blender_turning.blender.scene.ground import mesh_from_height_field
+    from ..scene.ground import mesh_from_height_field
     field = height_field(spec)
     mesh = mesh_from_height_field(bpy, field, name)
     mesh.polygons.foreach_set("use_smooth", np.ones(len(mesh.polygons), bool))
@@ -95,13 +96,11 @@ def make_tracks(bpy, fig_obj, ground_obj, material, frames):
     """The figure's tracks in the snow: a shaded groove ribbon along the baked foot point (a ski
     pair's width, a board's), growing behind the figure (a Build modifier reveals its faces in
     order, one a frame)."""
-    from blender_turning.blender.anim import bake
+    from ..anim import bake
     bag = bake.baked_channels(fig_obj)
     fcs = {fc.array_index: fc for fc in bag.fcurves if fc.data_path == "location"}
     xy = np.array([[fcs[i].evaluate(f) for i in range(2)] for f in frames])
-    # A board cuts one groove its width; skis two, a hip's width apart.
-    half, offsets = ((0.14, (0.0,)) if fig_obj.turning.sport == "SNOWBOARDER" else
-                     (0.045, (-0.11, 0.11)))
+    half, offsets = sport(fig_obj.turning.sport).snow_tracks
     obj = _draped_strip(bpy, f"Track {fig_obj.name}", ground_obj, xy[:, 0], xy[:, 1], half,
                         0.03, material, TRACK, offsets)
     build = obj.modifiers.new("Grow", "BUILD")
@@ -112,7 +111,7 @@ def make_tracks(bpy, fig_obj, ground_obj, material, frames):
 def make_follow_cameras(bpy, figures, distance, height, lens):
     """One camera per figure, behind it (uphill of its mean direction) and to its side, aimed at
     its body; returns ``[(figure name, camera)]``."""
-    from blender_turning.blender import compat
+    from .. import compat
     scene = bpy.context.scene
     frames = np.arange(scene.frame_start, scene.frame_end + 1)
     out = []
@@ -131,7 +130,7 @@ def make_follow_cameras(bpy, figures, distance, height, lens):
 
 def key_locations(compat, obj, frames) -> np.ndarray:
     """``obj``'s keyed location at every frame of ``frames``: shape ``(frames, 3)``."""
-    from blender_turning.blender.anim import bake
+    from ..anim import bake
     fcs = {fc.array_index: fc for fc in bake.baked_channels(obj).fcurves
            if fc.data_path == "location"}
     return np.array([[fcs[i].evaluate(f) for i in range(3)] for f in frames])
@@ -140,8 +139,8 @@ def key_locations(compat, obj, frames) -> np.ndarray:
 def follow_target(bpy, name, aim, frames):
     """An empty keyed at ``aim`` (``(frames, 3)``) 0.9 m up, smoothed over half a second so a
     shot aimed at it does not swing with every turn."""
-    from blender_turning.blender import compat
-    from blender_turning.blender.anim import bake
+    from .. import compat
+    from ..anim import bake
     scene = bpy.context.scene
     k = max(1, int(round(0.5 * scene.render.fps)))
     kernel = np.ones(k) / k

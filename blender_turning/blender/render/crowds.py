@@ -1,4 +1,4 @@
-"""Crowds in the headless job (scripts/render_job.py): ``[[crowds]]`` tables, each a
+"""Crowds in the headless job (scripts/render_job.py, :mod:`.job`): ``[[crowds]]`` tables, each a
 formation of figures around a leader, and a shot of each crowd.
 
 A crowd is a leader (``[crowds.leader]``, a figure table like ``[[figures]]``, on the
@@ -24,11 +24,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from blender_turning.core.params import preset
-from blender_turning.crowd import STAGINGS, CrowdFigure, Turns, stage
-from blender_turning.crowd.formations import FORMATIONS
-from blender_turning.crowd.registry import FormationRefused
-from render_terrain import follow_target, key_locations, tracking_camera
+from ...core.params import preset
+from ...crowd import STAGINGS, CrowdFigure, Turns, stage
+from ...crowd.formations import FORMATIONS
+from ...crowd.registry import FormationRefused
+from .terrain import follow_target, key_locations, tracking_camera
 
 #: A crowd's own keys; its formation's keys are the formation record's (crowd/registry.py).
 KNOWN = {"name", "formation", "leader", "count", "shot", "staging"}
@@ -115,7 +115,7 @@ def make_crowd_cameras(bpy, crowds, figures, distance, height, lens):
     the side (downhill of them, looking back up the line) as they come down; returns
     ``[(crowd name, camera)]``.  ``distance`` and ``height`` are the single figures' (the
     config's camera): the crowd's camera stands back by the line's length as well."""
-    from blender_turning.blender import compat
+    from .. import compat
     scene = bpy.context.scene
     frames = np.arange(scene.frame_start, scene.frame_end + 1)
     by_name = {o.name: o for o in figures}
