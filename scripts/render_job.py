@@ -41,7 +41,8 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 
 from blender_turning.core import signals  # noqa: E402
 from blender_turning.core.files import (OutputLock, OutputLocked, WriteError,  # noqa: E402
-                                        disk_reason, temp_beside, verify_file)
+                                        disk_reason, file_size_limit, temp_beside,
+                                        verify_file)
 from blender_turning.core.registry import SPORTS, import_extension  # noqa: E402
 from blender_turning.core.ranges import RANGES, Range  # noqa: E402
 from blender_turning.core.validate import Fields, check, nearest, read_text  # noqa: E402
@@ -717,9 +718,11 @@ def save_blend(bpy, blend: Path) -> None:
             bpy.ops.wm.save_as_mainfile(filepath=str(staged), check_existing=False)
         except RuntimeError as exc:
             why = str(exc).strip().splitlines()[-1] if str(exc).strip() else ""
-            raise WriteError(f"the .blend {str(blend)!r} was not written: "
-                             f"{disk_reason(blend) or why or 'Blender could not save it'}") \
-                from None
+            why = disk_reason(blend) or why or "Blender could not save it"
+            limit = file_size_limit()          # Blender's own words may not say it hit it
+            if limit is not None and "too large" not in why:
+                why += f" (files are limited to {limit} bytes here: ulimit -f)"
+            raise WriteError(f"the .blend {str(blend)!r} was not written: {why}") from None
         _check_and_place(staged, blend, "the .blend")
     finally:
         staged.unlink(missing_ok=True)
