@@ -125,3 +125,21 @@ def test_the_kept_tweaks_play_again_when_the_rig_is_a_figure_again(scene):
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     assert rig.animation_data.action.name == tweaks
     no_tweak_tracks()
+
+
+@pytest.mark.parametrize("tweak", [False, True])
+def test_a_rig_deleted_while_a_figure_leaves_nothing_of_the_figure_after_a_save(scene, tmp_path,
+                                                                              tweak):
+    """The rig deleted first (the figure still on it): as for any deleted object, Blender
+    keeps its actions until the file is saved (Undo brings the rig back with them) and drops
+    the unused ones then.  After a save and a reload no bake, tweak layer or ``Turning:
+    tweaks`` track of it is left."""
+    rig, _ = figure(with_action=True, tweak=tweak)
+    bpy.data.objects.remove(rig)
+    path = tmp_path / "deleted.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    bpy.ops.wm.open_mainfile(filepath=str(path))
+    no_tweak_tracks()
+    ours = [a.name for a in bpy.data.actions
+            if bake.BAKED_PATHS in a or bake_layers.TWEAKS_OF in a]
+    assert ours == []
