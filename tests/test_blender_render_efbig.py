@@ -14,7 +14,8 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 pytest.importorskip("bpy")
 
-from test_blender_render_failures import JOB, ROOT, SLALOM, TINY, files, no_hidden, one_line  # noqa: E402
+from test_blender_render_failures import (JOB, ROOT, SLALOM, TINY, files,  # noqa: E402
+                                          no_hidden, one_line)
 
 pytestmark = pytest.mark.blender
 

@@ -135,13 +135,19 @@ def temp_beside(path) -> Path:
     """Create an empty hidden file next to ``path`` (same folder, same suffix, so tools that go
     by the suffix still work) with :func:`new_file_mode`, and return its path."""
     path = Path(path)
-    with signals.deferred():          # made and handed back whole, or not at all
-        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".",
-                                   prefix=".tmp-", suffix=path.suffix)
-        try:
-            os.fchmod(fd, new_file_mode())
-        finally:
-            os.close(fd)
+    tmp = None
+    try:
+        with signals.deferred():      # made and handed back whole, or not at all
+            fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".",
+                                       prefix=".tmp-", suffix=path.suffix)
+            try:
+                os.fchmod(fd, new_file_mode())
+            finally:
+                os.close(fd)
+    except BaseException:             # a signal held meanwhile, a failed chmod: never handed back
+        if tmp is not None:
+            os.unlink(tmp)
+        raise
     return Path(tmp)
 
 
