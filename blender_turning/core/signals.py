@@ -83,7 +83,11 @@ def stop_on_signals():
 @contextmanager
 def deferred():
     """Hold SIGINT and SIGTERM for the ``with`` block; one that came meanwhile raises
-    :class:`Interrupted` when the block ends (not if the block raised)."""
+    :class:`Interrupted` when the block ends (not if the block raised).  Outside the main
+    thread (where no signal handler runs) it does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
     _state["depth"] += 1
     try:
         yield
