@@ -17,7 +17,7 @@ from pathlib import Path
 from . import signals
 
 __all__ = ["new_file_mode", "temp_beside", "atomic_write_text", "verify_file", "WriteError",
-           "OutputLock", "OutputLocked", "disk_reason"]
+           "OutputLock", "OutputLocked", "disk_reason", "file_size_limit"]
 
 
 class WriteError(Exception):
@@ -70,14 +70,15 @@ def verify_file(path, kind: str | None = None) -> None:
         raise
     except (OSError, ValueError) as exc:
         raise WriteError(f"the file does not read back ({disk_reason(path, exc)})") from None
+    why = _why_suffix(path, size)
     if kind == "png" and not (head.startswith(_PNG_HEAD) and tail.endswith(_PNG_TAIL)):
-        raise WriteError(f"the PNG is incomplete ({size} bytes){_why_suffix(path)}")
+        raise WriteError(f"the PNG is incomplete ({size} bytes){why}")
     if kind == "blend" and not head.startswith(_BLEND_HEADS):
-        raise WriteError(f"the .blend has no Blender header ({size} bytes){_why_suffix(path)}")
+        raise WriteError(f"the .blend has no Blender header ({size} bytes){why}")
     if kind == "blend" and not _blend_complete(head, tail):
-        raise WriteError(f"the .blend is incomplete ({size} bytes){_why_suffix(path)}")
+        raise WriteError(f"the .blend is incomplete ({size} bytes){why}")
     if kind == "csv" and not tail.endswith(b"\n"):
-        raise WriteError(f"the CSV ends mid-line ({size} bytes){_why_suffix(path)}")
+        raise WriteError(f"the CSV ends mid-line ({size} bytes){why}")
 
 
 def _blend_complete(head: bytes, tail: bytes) -> bool:
@@ -91,9 +92,29 @@ def _blend_complete(head: bytes, tail: bytes) -> bool:
     return True
 
 
-def _why_suffix(path) -> str:
-    why = disk_reason(path)
+def _why_suffix(path, size: int = 0) -> str:
+    why = disk_reason(path) or _size_limit_reason(size)
     return f": {why}" if why else ""
+
+
+def file_size_limit() -> int | None:
+    """This process's file-size limit in bytes (``ulimit -f``, ``RLIMIT_FSIZE``, which a farm
+    may set), or None where there is none."""
+    try:
+        import resource
+        limit = resource.getrlimit(resource.RLIMIT_FSIZE)[0]
+    except (ImportError, OSError, ValueError):       # no such limit (Windows)
+        return None
+    return None if limit == resource.RLIM_INFINITY else int(limit)
+
+
+def _size_limit_reason(size: int) -> str:
+    """"File too large" when a file cut short stopped at :func:`file_size_limit`: the writer
+    (Blender's, for a .blend or a frame) may not say why it stopped."""
+    limit = file_size_limit()
+    if limit is None or size < limit:
+        return ""
+    return f"{os.strerror(errno.EFBIG)} (the file-size limit is {limit} bytes)"
 
 
 def new_file_mode() -> int:
@@ -114,13 +135,19 @@ def temp_beside(path) -> Path:
     """Create an empty hidden file next to ``path`` (same folder, same suffix, so tools that go
     by the suffix still work) with :func:`new_file_mode`, and return its path."""
     path = Path(path)
-    with signals.deferred():          # made and handed back whole, or not at all
-        fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".",
-                                   prefix=".tmp-", suffix=path.suffix)
-        try:
-            os.fchmod(fd, new_file_mode())
-        finally:
-            os.close(fd)
+    tmp = None
+    try:
+        with signals.deferred():      # made and handed back whole, or not at all
+            fd, tmp = tempfile.mkstemp(dir=path.parent if str(path.parent) else ".",
+                                       prefix=".tmp-", suffix=path.suffix)
+            try:
+                os.fchmod(fd, new_file_mode())
+            finally:
+                os.close(fd)
+    except BaseException:             # a signal held meanwhile, a failed chmod: never handed back
+        if tmp is not None:
+            os.unlink(tmp)
+        raise
     return Path(tmp)
 
 

@@ -8,12 +8,17 @@ are removed, locks released, worker processes ended), prints one line and exits
 ``128 + signal`` (130 for SIGINT, 143 for SIGTERM).  A second signal while it unwinds is
 ignored, so the clean-up is not cut short.  Code that must not be cut in the middle (renaming
 finished outputs into place, a call into Blender that would print the exception rather than
-pass it on) runs inside :func:`deferred`: a signal then is held until the block ends.
+pass it on) runs inside :func:`deferred`: a signal then is held until the block ends.  Python
+drops what some code raises (``__del__``, weakref callbacks, its own at-fork hooks) and hands it
+to ``sys.unraisablehook``: an :class:`Interrupted` dropped there is kept, silently, and raised
+again at the next :func:`check` or :func:`checkpoint` (the end of any :func:`deferred` block),
+so a signal is never lost.
 """
 from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 from contextlib import contextmanager
 
@@ -34,7 +39,7 @@ class Interrupted(BaseException):
         self.name = signal.Signals(signum).name
 
 
-_state = {"active": False, "held": None, "depth": 0}
+_state = {"active": False, "held": None, "depth": 0, "dropped": None}
 
 
 def _handler(signum, frame):
@@ -55,11 +60,22 @@ def stop_on_signals():
         yield
         return
     old = {s: signal.signal(s, _handler) for s in SIGNALS}
-    _state.update(active=True, held=None, depth=0)
+    old_hook = sys.unraisablehook
+
+    def unraisable(args):
+        if isinstance(args.exc_value, Interrupted):      # dropped by Python: keep it
+            if _state["dropped"] is None:
+                _state["dropped"] = args.exc_value.signum
+            return
+        old_hook(args)
+
+    sys.unraisablehook = unraisable
+    _state.update(active=True, held=None, depth=0, dropped=None)
     try:
         yield
     finally:
-        _state.update(active=False, held=None, depth=0)
+        _state.update(active=False, held=None, depth=0, dropped=None)
+        sys.unraisablehook = old_hook
         for s, h in old.items():
             signal.signal(s, h)
 
@@ -67,7 +83,11 @@ def stop_on_signals():
 @contextmanager
 def deferred():
     """Hold SIGINT and SIGTERM for the ``with`` block; one that came meanwhile raises
-    :class:`Interrupted` when the block ends (not if the block raised)."""
+    :class:`Interrupted` when the block ends (not if the block raised).  Outside the main
+    thread (where no signal handler runs) it does nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
     _state["depth"] += 1
     try:
         yield
@@ -77,11 +97,20 @@ def deferred():
         check()
 
 
+def _pending():
+    """The signal held by :func:`deferred` or dropped by Python (taken: it is acted on once)."""
+    signum = _state["held"] if _state["held"] is not None else _state["dropped"]
+    _state["held"] = _state["dropped"] = None
+    return signum
+
+
 def check() -> None:
-    """Raise :class:`Interrupted` for a signal held by :func:`deferred` (at a point where
-    stopping is safe)."""
-    signum, _state["held"] = _state["held"], None
-    if signum is not None and not _state["depth"]:
+    """Raise :class:`Interrupted` for a signal held by :func:`deferred` or dropped by Python (at
+    a point where stopping is safe)."""
+    if _state["depth"]:
+        return
+    signum = _pending()
+    if signum is not None:
         for s in SIGNALS:
             signal.signal(s, signal.SIG_IGN)
         raise Interrupted(signum)
@@ -90,7 +119,7 @@ def check() -> None:
 def checkpoint() -> None:
     """Inside :func:`deferred`: raise :class:`Interrupted` now for a signal held so far (the
     caller is at a point where stopping is safe, e.g. between two frames of a render)."""
-    signum, _state["held"] = _state["held"], None
+    signum = _pending()
     if signum is not None:
         for s in SIGNALS:
             signal.signal(s, signal.SIG_IGN)

@@ -176,6 +176,26 @@ def take_parameters(obj, curves) -> None:
         copy_fcurve(fc, bag)
 
 
+def keep_in_file(obj) -> str | None:
+    """Remove Figure's part, after Clear Bake: take a tweak layer that holds keys (parked on the
+    muted ``Turning: tweaks`` track, or unassigned) off the rig and keep its action in the file
+    with a fake user, so the animator's keys are not lost and the rig carries nothing of the
+    figure's; still tagged as the rig's tweaks, it plays again on Start Tweak Layer once the rig
+    is a figure again.  Returns the action's name, or ``None`` when there is none (or it became
+    the user's action: :func:`park_tweaks`)."""
+    action, strip = tweak_layer(obj)
+    if action is None or playing(obj, action):
+        return None
+    adt = obj.animation_data
+    if strip is not None:
+        _drop_track_of(adt, strip)
+    action.use_fake_user = True
+    if adt is not None and adt.action is None and len(adt.nla_tracks) == 0 and \
+            len(adt.drivers) == 0:
+        obj.animation_data_clear()        # the tweak track was all the figure left in it
+    return action.name
+
+
 def _drop_track_of(adt, strip) -> None:
     for track in adt.nla_tracks:
         if any(s == strip for s in track.strips):

@@ -30,11 +30,11 @@ import math
 import os
 import re
 import threading
-import time
 
 import bpy
 from bpy.props import BoolProperty, FloatProperty
 
+from ...core import signals
 from ...core.errors import WorkerLost
 from ...core.follow_problem import start_state
 from ...core.ranges import RANGES
@@ -198,19 +198,10 @@ class CrowdFollow:
         if self._pool is None:
             return
         self._executor.close()                    # the planning thread ends
-        processes = list((getattr(self._pool, "_processes", None) or {}).values())
-        self._pool.shutdown(wait=False, cancel_futures=True)
         # concurrent.futures cannot stop a running task before Python 3.14's
-        # terminate_workers(); a plan takes seconds to minutes: end its process.
-        for proc in processes:
-            if proc.is_alive():
-                proc.terminate()
-        # The pool's own management thread reaps its workers too: a join that loses that race
-        # returns before the exit status is known, so wait for the status itself (5 s at most).
-        end = time.monotonic() + 5.0
-        for proc in processes:
-            while proc.exitcode is None and time.monotonic() < end:
-                proc.join(0.05)
+        # terminate_workers(); a plan takes seconds to minutes: end its process (and wait
+        # until the pool has reaped every worker).
+        signals.stop_pool(self._pool)
         self._thread.join(5)
         self._pool = None
 

@@ -11,7 +11,7 @@ from ...core.params import PRESETS
 from ...core.errors import TurningError
 from ...mapping.stance import STANCES as RIG_STANCES
 from ...mapping.user_rig import fit_rig
-from ..anim import bake, export_ready, foot_track
+from ..anim import bake, bake_layers, export_ready, foot_track
 from ..scene import retarget_adapter as ra
 from ..registry_items import retargeted_sport_items
 from ..props.rig import BONE_MAPS, STANCES
@@ -116,22 +116,27 @@ class TURNING_OT_remove_figure(bpy.types.Operator):
 
     def execute(self, context):
         obj = context.active_object
-        remove_user_figure(obj)
-        self.report({"INFO"}, f"{obj.name} is your rig again")
+        tweaks = remove_user_figure(obj)
+        kept = (f"; your tweaks are kept in the action {tweaks!r} (fake user)" if tweaks
+                else "")
+        self.report({"INFO"}, f"{obj.name} is your rig again{kept}")
         return {"FINISHED"}
 
 
-def remove_user_figure(obj) -> None:
+def remove_user_figure(obj) -> str | None:
     """Clear the bake and the foot track, remove the equipment, restore the rig and drop the
-    figure settings."""
+    figure settings.  Returns the name of the action a tweak layer with keys is kept in (off
+    the rig, :func:`.bake_layers.keep_in_file`), or ``None``."""
     export_ready.clear_equipment(obj)
     bake.clear_bake(obj)
+    tweaks = bake_layers.keep_in_file(obj)
     foot_track.remove_foot_track(obj)
     ra.remove_equipment(obj)
     ra.restore_state(obj)
     for prop in [p for p in obj.keys() if p.startswith("turn_")]:    # ours (Make Figure
         del obj[prop]                                                 # refuses a rig with any)
     obj.property_unset("turning")
+    return tweaks
 
 
 classes = (TURNING_OT_make_figure, TURNING_OT_remove_figure)

@@ -6,7 +6,7 @@ import os
 from pathlib import Path
 
 from ...core import signals
-from ...core.files import WriteError, disk_reason, verify_file
+from ...core.files import WriteError, disk_reason, file_size_limit, verify_file
 
 
 def log(msg: str) -> None:
@@ -44,9 +44,11 @@ def save_blend(bpy, blend: Path) -> None:
             bpy.ops.wm.save_as_mainfile(filepath=str(staged), check_existing=False)
         except RuntimeError as exc:
             why = str(exc).strip().splitlines()[-1] if str(exc).strip() else ""
-            raise WriteError(f"the .blend {str(blend)!r} was not written: "
-                             f"{disk_reason(blend) or why or 'Blender could not save it'}") \
-                from None
+            why = disk_reason(blend) or why or "Blender could not save it"
+            limit = file_size_limit()          # Blender's own words may not say it hit it
+            if limit is not None and "too large" not in why:
+                why += f" (files are limited to {limit} bytes here: ulimit -f)"
+            raise WriteError(f"the .blend {str(blend)!r} was not written: {why}") from None
         _check_and_place(staged, blend, "the .blend")
     finally:
         staged.unlink(missing_ok=True)
