@@ -621,6 +621,36 @@ LIVE_MUTANTS = [
 ]
 MUTANTS += LIVE_MUTANTS
 
+KERNELS = [T + "test_crowd_kernels.py"]
+KEYS = [T + "test_mapping_keys.py", T + "test_blender_fewer_keys.py"]
+FEWER_KEYS = [T + "test_blender_fewer_keys.py"]
+# -- the crowd's kernels and Fewer Keys (crowd/kernels.py, mapping/keys.py, blender/anim/fewer_keys.py)
+MUTANTS += [
+    M("crowd_kernel_always_floats", "crowd/kernels.py",
+      'return "batch" if count >= BATCH_FROM else "floats"', 'return "floats"', KERNELS),
+    M("crowd_batch_falls_after_its_span", "crowd/kernels.py",
+      "if at is not None and at <= (n - 1) * dt + 1e-9:", "if at is not None:", KERNELS),
+    M("keys_no_float32_margin", "mapping/keys.py",
+      "    bound = bound - _float32_margin(values)\n", "", KEYS, "mapping"),
+    M("keys_extrema_not_kept", "mapping/keys.py",
+      "    keep[_extrema(values, bound)] = True\n", "", KEYS, "mapping"),
+    M("keys_pruning_loose", "mapping/keys.py",
+      "ok = worst[seg] <= bound", "ok = worst[seg] <= 2 * bound", KEYS, "mapping"),
+    M("keys_quaternion_bound_loose", "mapping/keys.py",
+      "return tol.angle / 4.0", "return tol.angle / 2.0", KEYS, "mapping"),
+    M("keys_corner_slopes_swapped", "mapping/keys.py",
+      "(u3 - 2 * u2 + u) * h * kd[j, 1]", "(u3 - 2 * u2 + u) * h * kd[j, 0]", KEYS, "mapping"),
+    M("keys_no_corners", "mapping/keys.py",
+      "return slopes(frames, values, bound / step)", "return slopes(frames, values)", KEYS,
+      "mapping"),
+    M("fewer_keys_aligned_at_corners", "blender/anim/fewer_keys.py",
+      "kind = np.where(d[:, 0] == d[:, 1], aligned, free).astype(np.int32)",
+      "kind = np.full(n, aligned, np.int32)", FEWER_KEYS, "bake"),
+    M("fewer_keys_fingerprint_stale", "blender/anim/fewer_keys.py",
+      "    bake_layers.fingerprint(action, bag)      # the bake's own keys", "    pass  #",
+      FEWER_KEYS, "bake"),
+]
+
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",
                                 "out", "dist", "*.egg-info", "build")
 

@@ -18,7 +18,7 @@ import bpy
 import numpy as np
 
 from .. import compat
-from . import bake_layers, user_action
+from . import bake_layers, unused_ids, user_action
 from .user_action import PROP_GROUP, REST, STASHED
 from ...mapping.base import PoseTrack
 
@@ -156,7 +156,8 @@ def _figure_action(obj):
     elif current is not None:
         params = _stash_users(obj, current)
     user_action.record_rest(obj)
-    for old in [a for a in bpy.data.actions if a.get(OWNER) == obj and a.users == 0]:
+    for old in [a for a in unused_ids.unused(bpy.data.actions) if a.get(OWNER) == obj
+                and a.users == 0]:
         bpy.data.actions.remove(old)          # an earlier bake the user unassigned: unused, ours
     action = compat.assign_new_action(obj, obj.name)
     action[BAKED_PATHS] = ""

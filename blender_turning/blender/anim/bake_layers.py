@@ -28,6 +28,7 @@ import bpy
 import numpy as np
 
 from .. import compat
+from . import unused_ids
 
 BAKE_TRACK = "Turning: bake"
 TWEAK_TRACK = "Turning: tweaks"
@@ -107,8 +108,8 @@ def is_tweaks(action, obj) -> bool:
 
 def tweak_layer(obj):
     """``(action, parked_strip)``: ``obj``'s tweak layer, playing or parked on the muted
-    ``Turning: tweaks`` track, or unassigned (the user played another action over it; strip
-    ``None``); ``(None, None)`` when it has none."""
+    ``Turning: tweaks`` track, or unassigned (the user played another action over it: nothing
+    plays it; strip ``None``); ``(None, None)`` when it has none."""
     adt = obj.animation_data
     if adt is None:
         return None, None
@@ -118,7 +119,8 @@ def tweak_layer(obj):
         for strip in track.strips:
             if is_tweaks(strip.action, obj):
                 return strip.action, strip
-    return next((a for a in bpy.data.actions if is_tweaks(a, obj)), None), None
+    return next((a for a in unused_ids.unused(bpy.data.actions) if is_tweaks(a, obj)),
+                None), None
 
 
 def playing(obj, action) -> bool:

@@ -68,7 +68,10 @@ def _find_layer(layer, coll):
 def _guide_collections(fig_obj):
     """``(shown, hidden)``: the guide collections, linked under every scene the figure is in,
     the hidden one excluded from each of their view layers."""
-    scenes = fig_obj.users_scene or (bpy.context.scene,)
+    # Object.users_scene lists every object of every scene, O(objects) a call and O(N^2) over a
+    # crowd's bake; with one scene the answer is that scene either way.
+    scenes = list(bpy.data.scenes) if len(bpy.data.scenes) == 1 else \
+        fig_obj.users_scene or (bpy.context.scene,)
     shown = _collection(GUIDES, None)
     hidden = _collection(HIDDEN, shown)
     for scene in scenes:
@@ -81,10 +84,11 @@ def _guide_collections(fig_obj):
     return shown, hidden
 
 
-def _place(fig_obj, obj) -> None:
+def _place(fig_obj, obj, new: bool = False) -> None:
     """Link the track into the guide collection its figure's Show Foot Track asks for (and
     glTF's skipped one), and out of every other (a track drawn by older versions sat in the
-    figure's collection)."""
+    figure's collection).  A ``new`` track is in no collection yet: nothing to look up (a
+    lookup in a collection, and ``Object.users_collection``, cost O(objects))."""
     shown, hidden = _guide_collections(fig_obj)
     home = shown if show_track(fig_obj) else hidden
     skipped = bpy.data.collections.get(GLTF_SKIPPED)
@@ -92,9 +96,9 @@ def _place(fig_obj, obj) -> None:
         skipped = bpy.data.collections.new(GLTF_SKIPPED)
         skipped.use_fake_user = True      # not in any scene: keep it on save
     for coll in (home, skipped):
-        if obj.name not in coll.objects:
+        if new or obj.name not in coll.objects:
             coll.objects.link(obj)
-    for coll in list(obj.users_collection):
+    for coll in [] if new else list(obj.users_collection):
         if coll not in (home, skipped):
             coll.objects.unlink(obj)
     obj.hide_viewport = False             # older versions hid it per object
@@ -124,10 +128,11 @@ def write_foot_track(fig_obj, x, y, z=None):
     ``z``: the ground's height under the foot on every point (default 0); the track is drawn
     :data:`LIFT` above it, on a Ground mesh on its surface."""
     obj = owned_track(fig_obj)
-    if obj is None or obj.type != "CURVE":
+    new = obj is None or obj.type != "CURVE"
+    if new:
         obj = _new_track(fig_obj)
         fig_obj.turning.foot_track = obj
-    _place(fig_obj, obj)
+    _place(fig_obj, obj, new)
     curve = obj.data
     curve.splines.clear()
     sp = curve.splines.new("POLY")

@@ -198,10 +198,12 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
             if FORMATIONS.lookup(v.formation.lower()).template == "leader":
                 coll.objects.link(template)          # the leader is one of the crowd
                 figs.append(template)
+            children = template.children_recursive
             for k, member in enumerate(members, start=1):
                 path_obj = self._path_object(template, lead, member, k, coll, v) \
                     if member.is_path else None
-                new = crowd_scene.duplicate_figure(template, f"{template.name} {k}", coll)
+                new = crowd_scene.duplicate_figure(template, f"{template.name} {k}", coll,
+                                                   children)
                 crowd_scene.place(new, member, template.turning.start, path_obj)
                 figs.append(new)
         except Exception as exc:                     # a bug: take back what was made

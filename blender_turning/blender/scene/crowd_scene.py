@@ -116,9 +116,11 @@ def _retarget(obj, made: dict) -> None:
                     t.id = made[t.id]
 
 
-def duplicate_figure(template, name: str, collection):
+def duplicate_figure(template, name: str, collection, children=None):
     """A linked duplicate of the figure ``template`` named ``name`` in ``collection``: its
-    children and (a user's rig) equipment with it; no bake, no foot track."""
+    children and (a user's rig) equipment with it; no bake, no foot track.  ``children``: the
+    template's ``children_recursive`` when the caller has it (it costs O(objects): a crowd
+    takes it once for all its members)."""
     made = {template: template.copy()}
     new = made[template]
     new.name = name
@@ -130,7 +132,7 @@ def duplicate_figure(template, name: str, collection):
             if key in new.keys():
                 del new[key]
     new.turning.foot_track = None
-    for child in template.children_recursive:
+    for child in template.children_recursive if children is None else children:
         if child.get(FOOT_TRACK_OWNER) is not None:
             continue
         made[child] = child.copy()
