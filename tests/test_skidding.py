@@ -118,7 +118,8 @@ def test_a_skidded_run_keeps_the_brake_inside_the_circle_and_the_skid_below_60_d
     st = tuple(getattr(traj, k) for k in model.STATE)
     _, _, _, V_f, N, fr = model.rhs(fig.body, Limits(), ground, traj.C_f, st,
                                     resistance=RESISTANCE["skier"])
-    F_lat = foot_lateral(fr, traj.V_cm, V_f, traj.C_f)
+    F_lat = foot_lateral(fig.body.l, fr, traj.V_cm, V_f, traj.C_f, traj.theta_v, traj.omega_v,
+                         traj.alpha_v)
     mu = SNOW["hard"].mu_at(traj.theta_v)
     assert np.all(traj.brake ** 2 + F_lat ** 2 <= (mu * N / fig.body.m) ** 2 * (1 + 1e-9)
                   + F_lat ** 2 * (traj.brake == 0))
@@ -132,8 +133,8 @@ def test_a_skidded_run_keeps_the_brake_inside_the_circle_and_the_skid_below_60_d
 @pytest.mark.parametrize("sport", ["skier", "snowboarder"])
 @pytest.mark.parametrize("slope_deg", [12, 18, 25])
 def test_skidding_holds_10_m_s_on_real_pistes(sport, slope_deg):
-    """Mean over the last 30 s of 60 s within 10 +- 1.5 m/s (measured 10.1-10.6), never more
-    than 30 m off the fall line through the start (measured 13-16 m), no fall."""
+    """Mean over the last 30 s of 60 s within 10 +- 1.5 m/s (measured 10.15-10.50), never more
+    than 30 m off the fall line through the start (measured 19-23 m), no fall."""
     traj, _ = run(sport, slope_deg, 10.0, style="skid")
     mean = float(traj.V_cm[traj.t >= 30.0].mean())
     assert 8.5 <= mean <= 11.5
@@ -142,12 +143,12 @@ def test_skidding_holds_10_m_s_on_real_pistes(sport, slope_deg):
 
 def test_turning_brakes_more_on_gentle_slopes_than_on_steep_ones():
     """The share of braking done by turning across the hill falls with the slope (measured
-    0.15 on 12 deg, 0.09 on 25 deg for the skier)."""
+    0.30 on 12 deg, 0.22 on 25 deg for the skier)."""
     share = {}
     for s in (12, 25):
         traj, ground = run("skier", s, 10.0, style="skid")
         share[s] = turning_share(traj, ground, 9.81)
-    assert share[12] > share[25] + 0.03
+    assert share[12] > share[25] + 0.05
 
 
 # -- stops, wedges, side-slips ----------------------------------------------------------------

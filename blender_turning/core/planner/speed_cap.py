@@ -61,7 +61,8 @@ class SpeedCap:
         over = V - self.cap(body.g)
         want = np.where(over > 0.0, np.maximum(d[5] + over / self.tau, 0.0), 0.0) / ratio
         mu = self.grip.mu_at(theta_v)
-        room = brake_limit(mu, N / body.m, foot_lateral(frame, V, V_f, cf), SKID_MAX_TURNING)
+        F_lat = foot_lateral(body.l, frame, V, V_f, cf, theta_v, d[3], d[4])
+        room = brake_limit(mu, N / body.m, F_lat, SKID_MAX_TURNING)
         return np.minimum(want, room)
 
 
