@@ -621,6 +621,51 @@ LIVE_MUTANTS = [
 ]
 MUTANTS += LIVE_MUTANTS
 
+# -- grip and skidding (core/grip.py, core/skidding.py, core/planner/speed_cap.py) ------------
+SKID = [T + "test_skidding.py", T + "test_grip_cyclist.py", T + "test_cli_skidding.py",
+        T + "test_planner_speed_cap.py"]
+SKID_MUTANTS = [
+    M("grip_circle_added", "core/grip.py",
+      "b = xp.maximum((mu_grip * N_m) ** 2 - F_lat * F_lat, 0.0) ** 0.5",
+      "b = xp.maximum((mu_grip * N_m) ** 2 + F_lat * F_lat, 0.0) ** 0.5", SKID),
+    M("grip_skid_uncapped_in_turns", "core/grip.py",
+      "if skid_max < SKID_MAX_STOP:", "if False:", SKID),
+    M("grip_edge_ignored", "core/grip.py",
+      "return min(math.tan(min(abs(edge) + self.shear_angle, 0.49 * math.pi)), self.mu)",
+      "return min(math.tan(min(self.shear_angle, 0.49 * math.pi)), self.mu)", SKID),
+    M("grip_lateral_no_lean_acceleration", "core/grip.py",
+      "return V * V_f * C_f + l * (alpha_v * c - omega_v * omega_v * s) - frame.g_lateral",
+      "return V * V_f * C_f - frame.g_lateral", SKID),
+    M("grip_skid_angle_unsigned", "core/grip.py",
+      "return s * xp.atan2(brake, xp.abs(F_lat))", "return xp.atan2(brake, xp.abs(F_lat))",
+      SKID),
+    M("model_brake_at_body_speed", "core/model.py",
+      "dV = dV - brake.bound(N / body.m, F_lat, th) * ratio",
+      "dV = dV - brake.bound(N / body.m, F_lat, th)", SKID),
+    M("fused_brake_dropped", "core/terrain_one_figure.py",
+      "dV -= b * ratio", "dV -= 0.0 * b * ratio", SKID),
+    M("fused_lateral_no_lean_acceleration", "core/terrain_one_figure.py",
+      "F_lat = V * V_f * cf + l * (alpha * cs - om * om * sn) - g_b",
+      "F_lat = V * V_f * cf - g_b", SKID),
+    M("skid_integral_never", "core/skidding.py",
+      "self.integral = max(0.0, self.integral + e * dt / (r.tau * r.reset_time))",
+      "self.integral = 0.0", SKID),
+    M("skid_stop_edge_flat", "core/skidding.py",
+      "0.0 if r.grip.kind == \"tyre\" else STOP_EDGE)", "0.0)", SKID),
+    M("skid_tyre_lean_uncapped", "core/skidding.py",
+      "Schedule.constant(min(const, cap))", "Schedule.constant(const)", SKID),
+    M("skid_no_standing", "core/terrain_sim.py",
+      "rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None",
+      "stop = None", SKID),
+    M("speed_cap_brakes_below", "core/planner/speed_cap.py",
+      "want = np.where(over > 0.0, np.maximum(d[5] + over / self.tau, 0.0), 0.0) / ratio",
+      "want = np.maximum(d[5] + over / self.tau, 0.0) / ratio", SKID),
+    M("speed_cap_no_lean_bound", "core/planner/speed_cap.py",
+      "lateral = min(self.grip.mu, math.tan(min(self.lean_bound, 1.5)))",
+      "lateral = self.grip.mu", SKID),
+]
+MUTANTS += SKID_MUTANTS
+
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",
                                 "out", "dist", "*.egg-info", "build")
 

@@ -157,9 +157,18 @@ def test_turning_brakes_more_on_gentle_slopes_than_on_steep_ones():
                                         ("snowboarder", "toe")])
 def test_a_stop_from_10_m_s_on_15_deg_within_15_m_then_standing(sport, side):
     """Measured 8.0-8.2 m in 1.5 s on hard snow; then the figure stands across the fall line."""
-    traj, _ = run(sport, 15, duration=5.0, V0=10.0, style="carve", stop_at=0.0, stop_side=side)
+    traj, ground = run(sport, 15, duration=5.0, V0=10.0, style="carve", stop_at=0.0,
+                       stop_side=side)
     i = int(np.argmax(traj.V_cm < 0.3))
     assert i > 0 and traj.s[i] <= 15.0
+    # upright at the start, yet edged at STOP_EDGE: hard snow's whole circle (mu 1) is used
+    fig = preset(sport)
+    st = tuple(getattr(traj, k)[:1] for k in model.STATE)
+    _, _, _, V_f, N, fr = model.rhs(fig.body, Limits(), ground, traj.C_f[:1], st,
+                                    resistance=RESISTANCE[sport])
+    F_lat = foot_lateral(fig.body.l, fr, traj.V_cm[:1], V_f, traj.C_f[:1], traj.theta_v[:1],
+                         traj.omega_v[:1], traj.alpha_v[:1])
+    assert math.hypot(traj.brake[0], F_lat[0]) == pytest.approx(N[0] / fig.body.m, rel=1e-6)
     assert np.all(traj.V_cm[i:] < 0.3) and np.all(traj.V_cm[i + 1:] == 0.0)
     assert np.ptp(traj.x[i:]) < 0.05 and np.ptp(traj.y[i:]) < 0.05
     # standing: the ski across the fall line (-y): along +-x
