@@ -190,3 +190,22 @@ def test_a_side_slip_keeps_the_board_across_on_one_edge():
     traj, _ = run("snowboarder", 20, 4.0, V0=4.0, style="slip")
     assert 3.0 <= float(traj.V_cm[traj.t >= 30.0].mean()) <= 5.5
     assert np.all(traj.skid >= 0.0) and traj.skid.max() > math.radians(80.0)
+
+
+def test_a_slalom_of_10_m_gates_on_19_deg_holds_12_m_s():
+    """Gates 10 m apart at 12 m/s: a half-turn every 0.83 s (period 1.67 s), lean 45 deg, on a
+    3 m wide course; snow friction 0.05 (<= 0.1).  The speed holds 12 +- 1 m/s (measured mean
+    12.53 over the last 20 s of 40 s, swinging 12.06-13.01 within each turn; carving alone
+    reaches 28 m/s)."""
+    fig = replace(preset("skier"), body=replace(preset("skier").body, V_cm=12.0))
+    ground = Plane(math.radians(19), FALL)
+    ctl = PhaseEllipse(fig.body, 2 * math.pi / 1.67, math.radians(45), heading=FALL)
+    ctl.begin_run(fig.limits)
+    s0 = slalom_start(fig.body, *ctl.target(0.0), FALL)
+    traj = simulate(fig, ctl, 40.0, 0.02, s0, ground=ground, resistance=RESISTANCE["skier"],
+                    target_speed=12.0, skidding=Skidding("skid", corridor=3.0))
+    late = traj.V_cm[traj.t >= 20.0]
+    assert RESISTANCE["skier"].mu <= 0.1
+    assert 11.0 <= late.mean() <= 13.0
+    assert 11.0 <= late.min() and late.max() <= 13.25
+    assert np.abs(traj.x).max() < 5.0
