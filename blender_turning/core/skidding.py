@@ -99,8 +99,9 @@ class Skidding:
 class _Skid:
     """:class:`Skidding` at run time for one figure (module docstring)."""
 
-    def __init__(self, rule: Skidding, controller, figure, target: float | None):
+    def __init__(self, rule: Skidding, controller, figure, target):
         self.rule, self.ctl, self.target = rule, controller, target
+        """The target speed at a time (m/s) or ``None``: brake only to stop."""
         self.stage = None
         """The :class:`.terrain_one_figure.TerrainStage` whose ``brake`` this sets."""
         self.g = figure.body.g
@@ -149,7 +150,7 @@ class _Skid:
         if self.target is None:
             self.stage.brake = FootBrake(0.0, r.grip, self.skid_max, self.edge)
             return
-        e = V - self.target
+        e = V - self.target(t)
         self.integral = max(0.0, self.integral + e * dt / (r.tau * r.reset_time))
         b = max(0.0, (e - r.dead_band) / r.tau + self.integral)
         if r.style == "wedge":
