@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib
 
-_MODULES = ("props_crowd", "props_rig", "props", "presets", "ops_figure", "ops_bake",
+_MODULES = ("props_crowd", "props_rig", "props_skid", "props", "presets", "ops_figure", "ops_bake",
             "ops_layers", "ops_path", "ops_live", "ops_rig", "ops_bone_map", "ops_crowd", "panel",
             "panel_rig", "panel_crowd")
 
