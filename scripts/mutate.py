@@ -664,7 +664,14 @@ SKID_MUTANTS = [
       "lateral = min(self.grip.mu, math.tan(min(self.lean_bound, 1.5)))",
       "lateral = self.grip.mu", SKID),
 ]
-MUTANTS += SKID_MUTANTS
+MUTANTS += SKID_MUTANTS + [
+    M("bake_skidding_dropped", "blender/pipeline.py",
+      "target_speed=target, skidding=skidding)", "target_speed=target)",
+      [T + "test_blender_skidding.py"], group="bake"),
+    M("follow_path_ignores_target", "blender/follow_ground.py",
+      "    if target > 0.0:                      # the planner brakes", "    if False:",
+      [T + "test_blender_skidding.py"], group="bake"),
+]
 
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",
                                 "out", "dist", "*.egg-info", "build")
