@@ -222,3 +222,12 @@ def test_a_keyed_target_speed_is_followed():
     assert abs(first - 12.0) < 1.0 and abs(second - 8.0) < 1.0
     with pytest.raises(ValueError, match="target speed at t = 0 s = -1"):
         run("skier", 18, Schedule(lambda t: -1.0 if t < 1 else 5.0), duration=2.0, style="skid")
+
+
+def test_a_style_without_a_target_or_a_stop_is_the_carved_flat_run():
+    """On flat ground a skid style with nothing to brake to keeps the paper's held speed."""
+    fig = preset("skier")
+    a = simulate(fig, PhaseEllipse(fig.body, W, TM), 5.0, 0.02, slalom_start(fig.body, W, TM))
+    b = simulate(fig, PhaseEllipse(fig.body, W, TM), 5.0, 0.02, slalom_start(fig.body, W, TM),
+                 skidding=Skidding("skid"))
+    assert np.array_equal(a.data, b.data)

@@ -79,10 +79,10 @@ class Skidding:
     reset_time: float = 20.0
     """The skid's integral time, s (twice the turning rule's: turning acts first)."""
 
-    @property
-    def brakes(self) -> bool:
-        """Whether the foot ever brakes (``carve`` without a stop: the paper's model)."""
-        return self.style != "carve" or self.stop_at is not None
+    def brakes(self, target) -> bool:
+        """Whether the foot ever brakes with the target speed ``target`` (``None``: none): a
+        stop, or a style other than ``carve`` with a target; otherwise the carved model."""
+        return self.stop_at is not None or (self.style != "carve" and target is not None)
 
     def __post_init__(self):
         if self.style not in STYLES:

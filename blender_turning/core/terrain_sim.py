@@ -90,7 +90,7 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         st = np.append(st, body.V_cm)
     check_range("V_cm (state0)", st[5], MIN_SPEED, 100.0)
     ground.derivatives(st[0], st[1])              # off the terrain: fail before stepping
-    if skidding is not None and not skidding.brakes:
+    if skidding is not None and not skidding.brakes(target_speed):
         skidding = None                          # the paper's carved model, unchanged
     brake = None
     schedule = None                          # a target speed that changes over time
