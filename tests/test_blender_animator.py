@@ -313,7 +313,7 @@ def test_settings_take_their_ranges_from_the_core_table():
 def test_sub_panels(scene):
     subs = [c for c in panel.classes if c is not panel.VIEW3D_PT_turning]
     assert {c.bl_label for c in subs} == {"Turns", "Bake", "Body", "Limits", "Ground",
-                                          "Follow Path", "Rig"}
+                                          "Speed Control", "Follow Path", "Rig"}
     assert all(c.bl_parent_id == panel.ROOT_PANEL for c in subs)
     fig = add("SKIER")
     drawn = {}
@@ -328,7 +328,9 @@ def test_sub_panels(scene):
     assert drawn["Body"] == ["mass", "com_height", "inertia"]
     assert drawn["Limits"] == ["curvature_max", "curvature_rate_max", "fall_angle"]
     assert drawn["Ground"] == ["start", "start_heading", "ground", "friction", "drag_area",
-                              "air_density", "target_speed"]
+                              "air_density"]
+    assert drawn["Speed Control"] == ["target_speed", "style", "snow", "grip", "use_stop",
+                                      "stop_frame"]
     assert drawn["Turns"] == ["period", "lean", "use_heading", "heading", "speed"]
     # Rig shows for an armature that is not a figure yet (Make Figure hangs under it).
     arm = bpy.data.objects.new("Rig", bpy.data.armatures.new("Rig"))

@@ -73,3 +73,12 @@ def test_bad_skidding_flags(tmp_path, capsys, args, names):
     for name in names:
         assert name in err, err
     assert not out.exists()
+
+
+def test_a_csv_from_before_the_ski_columns_reads_as_carved(tmp_path):
+    traj, out = _sim(tmp_path, "--duration", "1")
+    lines = out.read_text().splitlines()
+    old = tmp_path / "old.csv"
+    old.write_text("\n".join(",".join(ln.split(",")[:-3]) for ln in lines) + "\n")
+    back = Trajectory.from_csv(old)
+    np.testing.assert_array_equal(back.data, traj.data)

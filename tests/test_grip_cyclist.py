@@ -58,8 +58,8 @@ def test_the_presets_grip_is_dry_asphalt_and_the_cli_warns(tmp_path, capsys):
 @pytest.mark.parametrize("mu", [0.9, 0.5, 0.35])
 def test_braking_stops_within_the_distance_the_grip_allows(mu):
     """Straight at 10 m/s, full brake at t = 0: the distance is v^2 / (2 mu g) within 10%
-    (measured 5.7, 10.2, 14.5 m against 5.66, 10.19, 14.56: rolling resistance and drag add a
-    little, the last step below 0.5 m/s takes a little)."""
+    (measured 5.66, 10.17, 14.54 m against 5.66, 10.19, 14.56: rolling resistance and drag take
+    a little, the last step below 0.5 m/s adds a little)."""
     fig = preset("cyclist")
     body = fig.body
     traj = simulate(fig, Straight(body), 5.0, 0.02, (0.0, 0.0, 0.0, 0.0, 0.0, 10.0),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import importlib
 
-_MODULES = ("props.crowd", "props.rig", "props.figure", "ui.presets", "ops.figure", "ops.bake",
+_MODULES = ("props.crowd", "props.rig", "props.skid", "props.figure", "ui.presets", "ops.figure", "ops.bake",
             "ops.layers", "ops.path", "ops.live", "ops.rig", "ops.bone_map", "ops.crowd",
             "ui.panel", "ui.rig", "ui.crowd")
 

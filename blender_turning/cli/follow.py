@@ -97,11 +97,12 @@ def run(args) -> int:
     outputs.commit()
     tot = result.totals()
     st = scene.settings
+    free = scene.ground is not None or scene.speed_cap is not None
     print(f"follow: {scene.name}, {scene.figure.name}, N = {st.n_stages}, q = {st.q}, "
           f"{traj.duration:.2f} s, {tot['replans']} replans, {tot['expanded']} nodes expanded, "
           f"{tot['wall_time']:.2f} s planning; lean max "
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg"
-          f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if scene.ground or scene.speed_cap else ''}"
+          f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if free else ''}"
           f"{f', brake max {traj.brake.max():.1f} m/s^2' if scene.speed_cap else ''}"
           f"{'' if result.reached_end else ' (stopped at the given duration)'}"
           f"{f' -> {args.out}' if args.out else ''}")

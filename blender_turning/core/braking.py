@@ -81,8 +81,11 @@ def _wrap(a: float) -> float:
 class _Braking:
     """:class:`TargetSpeed` at run time: the heading schedule it gives the controller."""
 
-    def __init__(self, rule: TargetSpeed, controller, figure, ground, resistance, state0):
+    def __init__(self, rule: TargetSpeed, controller, figure, ground, resistance, state0,
+                 speed=None):
         self.rule, self.ctl, self.ground = rule, controller, ground
+        self.speed = (lambda t: rule.speed) if speed is None else speed
+        """The target speed at a time, m/s: the rule's, or a schedule (a keyed target)."""
         self.course = controller.heading
         # Turning across the hill moves the mean heading all the time: the room it steers in.
         controller.steer_betas = BRAKE_BETAS
@@ -134,7 +137,7 @@ class _Braking:
         tan_s = math.hypot(hx, hy)
         g_n = self.g / math.sqrt(1.0 + tan_s * tan_s)
         # 1. The along-track gravity the speed can take (Section 3's speed equation).
-        e = V - r.speed
+        e = V - self.speed(t)
         q = (self.mu * g_n + self.k * V * V - (e + self.integral) / r.tau) / self.g
         # 2. The angle from the fall line that gives it (the local plane).
         if tan_s < 1e-9:

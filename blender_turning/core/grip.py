@@ -93,11 +93,16 @@ SNOW = {"hard": Grip("snow", 1.0, math.radians(30.0), "hard"),
 TYRE = {"dry": tyre(0.9, "dry"), "wet": tyre(0.5, "wet"), "gravel": tyre(0.35, "gravel")}
 
 
-def foot_lateral(frame, V, V_f, C_f):
+def foot_lateral(l, frame, V, V_f, C_f, theta_v, omega_v, alpha_v):
     """``F_lat / m``: the tangential force across the travel the foot needs, m/s^2 (to the
-    left positive): the centre of mass's centripetal acceleration ``V V_f C_f`` (the paper's
-    ``k``) less the gravity to the left ``g_b`` (docs/skidding.md Section 1)."""
-    return V * V_f * C_f - frame.g_lateral
+    left positive; docs/skidding.md Section 1): the ground's reaction ``m (a_cm - g)`` across
+    the travel, the centre of mass's centripetal acceleration ``V V_f C_f`` (the paper's
+    ``k``) and its acceleration about the foot ``l (alpha_v cos theta_v - omega_v^2 sin
+    theta_v)``, less the gravity to the left ``g_b``; its normal part is :func:`.model.rhs`'s
+    ``N / m``."""
+    xp = backend(theta_v, omega_v, alpha_v)
+    s, c = xp.sin(theta_v), xp.cos(theta_v)
+    return V * V_f * C_f + l * (alpha_v * c - omega_v * omega_v * s) - frame.g_lateral
 
 
 def brake_limit(mu_grip, N_m, F_lat, skid_max):

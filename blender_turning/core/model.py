@@ -41,7 +41,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .dynamics import bound_cf
-from .grip import foot_lateral
 from .params import BodyParams, Limits
 from .terrain import FLAT, HeightField, LazyHeightField, Plane, surface_frame
 from .registry import SPORT_PRESETS, SPORTS, ChainView
@@ -172,7 +171,8 @@ def rhs(body: BodyParams, limits: Limits, ground, C_f, state, anchor=None, tau=0
         dV = (fr.g_along - resistance.mu * N / body.m * ratio
               - resistance.drag_k(body.m) * V * V + body.l * om * c * V_f * cf)
         if brake is not None:                                  # docs/skidding.md Section 2
-            dV = dV - brake.bound(N / body.m, foot_lateral(fr, V, V_f, cf), th) * ratio
+            F_lat = V * V_f * cf + body.l * (alpha * c - om * om * s) - fr.g_lateral
+            dV = dV - brake.bound(N / body.m, F_lat, th) * ratio       # grip.foot_lateral
     turn = V_f * (cf * fr.turn_gain + fr.kappa_n * fr.bend_gain)
     tx, ty = (fr.t[0], fr.t[1]) if xp is Numpy else fr.t[:2].tolist()
     deriv = (V_f * tx, V_f * ty, turn, om, alpha, dV)

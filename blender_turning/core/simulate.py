@@ -180,7 +180,7 @@ def _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, groun
     """:func:`simulate` with the lean as given."""
     ground = FLAT if ground is None else ground
     res = NO_RESISTANCE if resistance is None else resistance
-    brakes = skidding is not None and skidding.brakes
+    brakes = skidding is not None and skidding.brakes(target_speed)
     if target_speed is not None or brakes or not speed_held(ground, res):
         if speed is not None:
             raise ValueError("speed is a state on terrain (it follows the slope): give a "

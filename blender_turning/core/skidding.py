@@ -79,10 +79,10 @@ class Skidding:
     reset_time: float = 20.0
     """The skid's integral time, s (twice the turning rule's: turning acts first)."""
 
-    @property
-    def brakes(self) -> bool:
-        """Whether the foot ever brakes (``carve`` without a stop: the paper's model)."""
-        return self.style != "carve" or self.stop_at is not None
+    def brakes(self, target) -> bool:
+        """Whether the foot ever brakes with the target speed ``target`` (``None``: none): a
+        stop, or a style other than ``carve`` with a target; otherwise the carved model."""
+        return self.stop_at is not None or (self.style != "carve" and target is not None)
 
     def __post_init__(self):
         if self.style not in STYLES:
@@ -99,8 +99,9 @@ class Skidding:
 class _Skid:
     """:class:`Skidding` at run time for one figure (module docstring)."""
 
-    def __init__(self, rule: Skidding, controller, figure, target: float | None):
+    def __init__(self, rule: Skidding, controller, figure, target):
         self.rule, self.ctl, self.target = rule, controller, target
+        """The target speed at a time (m/s) or ``None``: brake only to stop."""
         self.stage = None
         """The :class:`.terrain_one_figure.TerrainStage` whose ``brake`` this sets."""
         self.g = figure.body.g
@@ -149,7 +150,7 @@ class _Skid:
         if self.target is None:
             self.stage.brake = FootBrake(0.0, r.grip, self.skid_max, self.edge)
             return
-        e = V - self.target
+        e = V - self.target(t)
         self.integral = max(0.0, self.integral + e * dt / (r.tau * r.reset_time))
         b = max(0.0, (e - r.dead_band) / r.tau + self.integral)
         if r.style == "wedge":

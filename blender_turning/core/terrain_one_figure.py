@@ -184,7 +184,7 @@ class TerrainStage:
             dV = -g * tz - mu * N_m * ratio - kd * VV + l * om * cs * V_f * cf
             fb = self.brake
             if fb is not None:                        # docs/skidding.md Section 2
-                F_lat = V * V_f * cf - g_b
+                F_lat = V * V_f * cf + l * (alpha * cs - om * om * sn) - g_b   # foot_lateral
                 b = fb.bound(N_m, F_lat, th)
                 dV -= b * ratio
                 foot[0], foot[1], foot[2] = b, F_lat, N_m

@@ -64,8 +64,9 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     whose ``z`` is the ground under the foot and ``V_cm`` the speed (a state).
 
     ``state0``: ``(x, y, theta_dir, theta_v, omega_v)`` (starting at ``figure.body.V_cm``) or
-    with a sixth entry ``V_cm``.  ``target_speed`` (m/s or a :class:`TargetSpeed`) needs a
-    controller with a heading (the course).  Raises :class:`.errors.FellOver` past
+    with a sixth entry ``V_cm``.  ``target_speed`` (m/s, a :class:`TargetSpeed` or a
+    :class:`.schedule.Schedule` of m/s: a keyed target) needs a controller with a heading (the
+    course).  Raises :class:`.errors.FellOver` past
     ``limits.theta_fall`` (the lean from the plumb lean: a skier leaning 20 deg uphill from the
     normal of a traverse stands upright) and :class:`.errors.Stopped` below
     :data:`MIN_SPEED` and :class:`.errors.LeftTerrain` at the edge of a height field, each with
@@ -89,9 +90,19 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         st = np.append(st, body.V_cm)
     check_range("V_cm (state0)", st[5], MIN_SPEED, 100.0)
     ground.derivatives(st[0], st[1])              # off the terrain: fail before stepping
-    if skidding is not None and not skidding.brakes:
+    if skidding is not None and not skidding.brakes(target_speed):
         skidding = None                          # the paper's carved model, unchanged
     brake = None
+    schedule = None                          # a target speed that changes over time
+    if isinstance(target_speed, Schedule):
+        schedule = target_speed
+        target_speed = schedule.constant_value
+        if target_speed is None:
+            target_speed = check_range("target speed at t = 0 s", float(schedule(0.0)), 0.0,
+                                       100.0, lo_open=True)
+            schedule = _checked(schedule)
+        else:
+            schedule = None
     if target_speed is not None:
         rule = target_speed if isinstance(target_speed, TargetSpeed) else \
             TargetSpeed(target_speed) if skidding is None else \
@@ -99,7 +110,7 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         if getattr(controller, "heading", None) is None:
             raise ValueError("target_speed steers the heading: the controller needs a heading "
                              "(the course, e.g. the fall line)")
-        brake = _Braking(rule, controller, figure, ground, resistance, st)
+        brake = _Braking(rule, controller, figure, ground, resistance, st, schedule)
     n = int(math.floor(duration / dt + 1e-9)) + 1
     info = {"preset": figure.name, "dt": dt, **body_meta(body), "ground": describe_ground(ground),
             **resistance_meta(resistance), **(meta or {})}
@@ -109,7 +120,7 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         info.update(skid_meta(skidding))
     course = getattr(controller, "heading", None)
     skid = None if skidding is None else _Skid(
-        skidding, controller, figure, None if brake is None else brake.rule.speed)
+        skidding, controller, figure, None if brake is None else brake.speed)
     try:
         if brake is not None:
             controller.heading = Schedule.of(brake)
@@ -134,6 +145,14 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     if stop == "left":
         raise LeftTerrain(float(traj.t[-1]), (traj.x[-1], traj.y[-1]), traj)
     return traj
+
+
+def _checked(schedule: Schedule):
+    """``schedule`` of a target speed, each value checked when read (m/s, (0, 100])."""
+    def at(t):
+        return check_range(f"target speed at t = {t:g} s", float(schedule(t)), 0.0, 100.0,
+                           lo_open=True)
+    return Schedule(at)
 
 
 def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid):

@@ -27,17 +27,19 @@ class FollowJob:
     a list of ``(name, polygon (k, 2))``, ``clearance`` the distance kept from them (m).  The
     problem, its run-out, time limit, start state and end test come from the core's one builder
     (:class:`~..core.follow_problem.FollowSetup`), as for a scene file; on terrain (``ground``, a
-    core surface, and ``resistance``; ``follow_ground.py``) it is the terrain problem.
+    core surface, and ``resistance``; ``follow_ground.py``) it is the terrain problem, braking to
+    ``speed_cap`` (:class:`~..core.planner.speed_cap.SpeedCap`) when given.
     """
 
     def __init__(self, figure, control, footprints, clearance: float = DEFAULT_CLEARANCE,
-                 settings: PlannerSettings | None = None, ground=None, resistance=None):
+                 settings: PlannerSettings | None = None, ground=None, resistance=None,
+                 speed_cap=None):
         self.figure = figure
         self.path = HermitePath.from_bezier(np.asarray(control, float))
         self.obstacles = Obstacles(polygons=[p for _, p in footprints], clearance=clearance)
         self.setup = FollowSetup(figure, self.path, self.obstacles,
                                  settings or PlannerSettings(), ground=ground,
-                                 resistance=resistance)
+                                 resistance=resistance, speed_cap=speed_cap)
         self.problem = self.setup.problem()
         self.length = self.path.length()
         self.duration = self.setup.time_limit()

@@ -396,9 +396,10 @@ def on_depsgraph_update(scene, depsgraph) -> None:
 
 def _subscribe() -> None:
     from ..props.figure import TurningFigureSettings, TurningTerrainSettings
+    from ..props.skid import TurningSkidSettings
     bpy.msgbus.clear_by_owner(_MSGBUS_OWNER)
     for struct in (TurningFigureSettings, TurningTerrainSettings, TurningCrowdSettings,
-                   TurningRigSettings):
+                   TurningRigSettings, TurningSkidSettings):
         bpy.msgbus.subscribe_rna(key=struct, owner=_MSGBUS_OWNER, args=(), notify=schedule,
                                  options={"PERSISTENT"})
 

@@ -22,8 +22,9 @@ from ...core import DEFAULT_DT, simulate
 from ...core.terrain import surface_frame
 from .model_notes import with_turn
 from ..scene.scene_adapters import (FrameRange, SceneInputError, controller_from_settings,
-                                    figure_from_settings, resistance_from_settings, speed_schedule,
-                                    start_state)
+                                    figure_from_settings, resistance_from_settings,
+                                    skidding_from_settings, speed_schedule, start_state,
+                                    target_schedule)
 
 
 def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None, normal=None,
@@ -122,21 +123,25 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
     controller = controller_from_settings(obj, figure, frames)
     state0 = start_state(obj, controller, start)
     duration = frames.duration - offset + 2 * DEFAULT_DT
+    skidding = skidding_from_settings(obj, frames)
     if ground is None:
+        if skidding is not None and speed.constant_value is None:
+            raise SceneInputError("a Stop or a Style other than Carve (turning.skid) brakes the "
+                                  "figure: the Speed cannot be keyed as well")
         traj = simulate(figure, controller, duration, state0=state0, meta={"figure": obj.name},
-                        speed=speed)
+                        speed=None if skidding is not None else speed, skidding=skidding)
         traj = with_turn(traj, controller)             # the lean reached, when not the asked
         traj = resampled(on_crowd_clock(traj, offset), shown, origin=frames.start)
         z0 = float(s.start[2]) if height is None else float(height)
         return _with_z(traj, np.full(len(traj), z0))
-    target = float(s.terrain.target_speed) or None
+    target = target_schedule(obj, frames)
     if target is not None and not s.use_heading:
         raise SceneInputError("Target Speed (turning.terrain.target_speed) steers the turns "
                               "across the hill about the Heading: turn on Hold Heading")
     traj = simulate(figure, controller, duration, state0=(*state0, speed(0.0)),
                     meta={"figure": obj.name, "ground_object": ground.name},
                     ground=ground.field, resistance=resistance_from_settings(s),
-                    target_speed=target)
+                    target_speed=target, skidding=skidding)
     traj = resampled(on_crowd_clock(with_turn(traj, controller), offset), shown, ground.field,
                      frames.start)
     return on_ground(traj, ground)

@@ -18,6 +18,7 @@ from ...core.ranges import RANGES
 from .. import compat
 from .crowd import TurningCrowdSettings
 from .rig import TurningRigSettings
+from .skid import TurningSkidSettings
 from ..registry_items import sport_items
 
 _STATIC = set()            # options: not animatable (the bake reads these once)
@@ -73,10 +74,11 @@ class TurningTerrainSettings(bpy.types.PropertyGroup):
                                            "1.007 at 2000 m)")
     target_speed: FloatProperty(name="Target Speed", default=0.0, min=RANGES["target_speed"].lo,
                                 max=RANGES["target_speed"].hi, soft_max=30.0, unit="VELOCITY",
-                                options=_STATIC,
-                                description="Brake by turning across the hill when faster than "
-                                            "this (m/s; needs Hold Heading, the course down the "
-                                            "hill); 0 lets the speed run")
+                                description="Brake when faster than this (m/s; needs Hold "
+                                            "Heading, the course down the hill), by turning "
+                                            "across the hill and as the Style says; animatable; "
+                                            "0 lets the speed run.  On Follow Path: the speed "
+                                            "the planned figure brakes to")
 
 
 class TurningEquipmentSettings(bpy.types.PropertyGroup):
@@ -194,6 +196,9 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
     equipment: PointerProperty(type=TurningEquipmentSettings, options=_STATIC,
                                description="The sport's preset whose equipment the figure "
                                            "shows")
+    skid: PointerProperty(type=TurningSkidSettings, options=_STATIC,
+                          description="How the figure brakes: style, snow, grip, a stop "
+                                      "(docs/skidding.md)")
 
 
 #: Settings name -> the ``BodyParams`` / ``Limits`` field it holds.

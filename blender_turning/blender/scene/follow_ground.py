@@ -28,6 +28,9 @@ from dataclasses import replace
 import numpy as np
 
 from ...core.errors import PlanInfeasible
+from ...core.grip import SNOW
+from ...core.planner.speed_cap import SpeedCap
+from ...core.sports import sport as sport_record
 from .ground import MeshGround, _world_triangles, read_ground
 from .scene_adapters import FrameRange, SceneInputError, resistance_from_settings, sampled_setting
 
@@ -113,8 +116,10 @@ def plan_inputs(context, fig, figure, depsgraph) -> tuple:
     """``(figure, ground, terrain)`` for planning: on flat ground ``(figure, None, {})``; on the
     figure's Ground mesh the mesh read and checked (:func:`read_follow_ground`), the figure
     starting at the Speed setting at the scene's first frame (the speed is a state from there),
-    and ``terrain`` the :class:`.follow_job.FollowJob` keywords: the mesh's height field and the
-    Slope Friction, Drag Area and Air Density of ``turning.terrain``."""
+    and ``terrain`` the :class:`.follow_job.FollowJob` keywords: the mesh's height field, the
+    Slope Friction, Drag Area and Air Density of ``turning.terrain`` and, with a Target Speed at
+    the first frame, the speed cap the planned figure brakes to (within the grip of
+    ``turning.skid``)."""
     ground = read_follow_ground(fig, depsgraph)
     if ground is None:
         return figure, None, {}
@@ -123,8 +128,16 @@ def plan_inputs(context, fig, figure, depsgraph) -> tuple:
                        scene.render.fps / scene.render.fps_base)
     V0 = float(sampled_setting(fig, "speed", first)[0])
     figure = replace(figure, body=replace(figure.body, V_cm=V0))
-    return figure, ground, {"ground": ground.field,
-                            "resistance": resistance_from_settings(fig.turning)}
+    terrain = {"ground": ground.field, "resistance": resistance_from_settings(fig.turning)}
+    target = float(sampled_setting(fig, "terrain.target_speed", first)[0])
+    if target > 0.0:                      # the planner brakes (docs/skidding.md Section 6)
+        k = fig.turning.skid
+        record = sport_record(fig.turning.sport)
+        grip = record.grip if record.grip is not None else SNOW[k.snow.lower()]
+        if k.grip > 0.0:
+            grip = replace(grip, mu=float(k.grip))
+        terrain["speed_cap"] = SpeedCap(target, grip)
+    return figure, ground, terrain
 
 
 def edge_note(exc, ground: MeshGround | None, reach: float) -> str:
@@ -148,5 +161,5 @@ def target_speed_note(fig) -> str:
     s = fig.turning
     if s.ground is None or not s.terrain.target_speed > 0:
         return ""
-    return (" (Target Speed is not used: it steers Bake Turns across the hill; on a path the "
-            "drawn line sets the speed)")
+    return (f" (braking to at most {s.terrain.target_speed:g} m/s at the first frame's Target "
+            "Speed, within the grip, docs/skidding.md)")

@@ -4,7 +4,7 @@ curve to path control points, obstacle objects to ground footprints.  Reads only
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import bpy
 import numpy as np
@@ -12,7 +12,11 @@ import numpy as np
 from ...core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
 from ...core.registry import SPORT_PRESETS, SPORTS
 from ...core.sports import sport as sport_record
+from ...core.grip import SNOW
 from ...core.model import Resistance
+from ...core.ranges import RANGES
+from ...core.skidding import Skidding
+from ...core.validate import check
 from .. import compat
 from ..anim import bake
 from ..anim.foot_track import OWNER as FOOT_TRACK_OWNER
@@ -146,7 +150,8 @@ def settings_from_preset(settings, sport: str) -> None:
 
 
 def sampled_setting(obj, name: str, frames: FrameRange) -> np.ndarray:
-    """``obj.turning.<name>`` at every frame: its F-curve where keyed, else the static value."""
+    """``obj.turning.<name>`` at every frame: its F-curve where keyed, else the static value
+    (``name`` may reach into a nested group: ``"terrain.target_speed"``)."""
     bag = compat.channels(obj)
     if bag is None:                       # the bake pushed down onto an NLA strip keeps the keys
         action, strip = bake.find_bake(obj)
@@ -155,12 +160,16 @@ def sampled_setting(obj, name: str, frames: FrameRange) -> np.ndarray:
     if bag is not None:
         fc = next((c for c in bag.fcurves if c.data_path == f"turning.{name}"), None)
     n = frames.end - frames.start + 1
+    group, _, leaf = ("." + name).rpartition(".")
+    owner = obj.turning
+    for part in group.split(".")[1:]:
+        owner = getattr(owner, part)
     if fc is None or fc.mute:
-        return np.full(n, float(getattr(obj.turning, name)))
+        return np.full(n, float(getattr(owner, leaf)))
     values = np.array([fc.evaluate(f) for f in range(frames.start, frames.end + 1)], float)
     bad = np.flatnonzero(~np.isfinite(values))
     if bad.size:
-        prop = obj.turning.bl_rna.properties[name]
+        prop = owner.bl_rna.properties[leaf]
         raise SceneInputError(f"{prop.name} (turning.{name}) is keyed to {values[bad[0]]:g} at "
                               f"frame {frames.start + bad[0]}, not a finite number; fix that key "
                               "in the Graph Editor")
@@ -177,6 +186,46 @@ def speed_schedule(obj, frames: FrameRange) -> Schedule:
         raise ValueError(f"speed = {v[bad[0]]:g} m/s at frame {frames.start + bad[0]} is outside "
                          f"the allowed range [{rna.hard_min:g}, {rna.hard_max:g}] m/s")
     return Schedule.constant(v[0]) if np.all(v == v[0]) else Schedule.sampled(frames.times(), v)
+
+
+def target_schedule(obj, frames: FrameRange):
+    """The Target Speed (``turning.terrain.target_speed``, keyable) over ``frames`` as a
+    schedule of the time since the first frame, or ``None`` when it is 0 throughout; a keyed
+    value of 0 or below within a run that brakes is refused, naming the frame."""
+    v = sampled_setting(obj, "terrain.target_speed", frames)
+    if np.all(v == 0.0):
+        return None
+    bad = np.flatnonzero(~(v > 0.0) | ~(v <= RANGES["target_speed"].hi))
+    if bad.size:
+        raise SceneInputError(f"Target Speed (turning.terrain.target_speed) is {v[bad[0]]:g} m/s "
+                              f"at frame {frames.start + bad[0]}: a keyed target must stay in "
+                              f"(0, {RANGES['target_speed'].hi:g}] m/s")
+    return Schedule.constant(v[0]) if np.all(v == v[0]) else Schedule.sampled(frames.times(), v)
+
+
+def skidding_from_settings(obj, frames: FrameRange):
+    """The core :class:`Skidding` of ``turning.skid`` (docs/skidding.md), or ``None`` for
+    Carve without a stop; the Stop Frame on the figure's clock (``frames.start`` is 0 s).  A
+    style the sport does not have is refused, naming it."""
+    s, k = obj.turning, obj.turning.skid
+    style = k.style.lower()
+    if style == "carve" and not k.use_stop:
+        return None
+    record = sport_record(s.sport)
+    if style not in record.styles:
+        raise SceneInputError(f"Style {k.style.title()} (turning.skid.style) is not one the "
+                              f"{record.name} has: {', '.join(x.title() for x in record.styles)}")
+    grip = record.grip if record.grip is not None else SNOW[k.snow.lower()]
+    if k.grip > 0.0:
+        grip = replace(grip, mu=float(check("Grip (turning.skid.grip)", k.grip, "grip")))
+    stop = None
+    if k.use_stop:
+        stop = (k.stop_frame - frames.start) / frames.fps
+        if not 0.0 <= stop <= frames.duration:
+            raise SceneInputError(f"Stop Frame (turning.skid.stop_frame) = {k.stop_frame} lies "
+                                  f"outside the frames {frames.start}-{frames.end}")
+    side = k.stop_side.lower() if "slip" in record.styles else None
+    return Skidding(style, grip, stop, side)
 
 
 def controller_from_settings(obj, figure: Figure, frames: FrameRange) -> PhaseEllipse:

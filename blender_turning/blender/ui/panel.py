@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import bpy
 
+from ...core.sports import sport as sport_record
 from ..anim import bake, bake_layers
 from ..jobs import live, model_notes
 from ..scene.figure_context import context_figure, selected_figures
@@ -164,8 +165,35 @@ class VIEW3D_PT_turning_ground(FigurePanel, bpy.types.Panel):
         s, col = self.draw_props(context, ("start", "start_heading", "ground"))
         sub = col.column()
         sub.active = s.ground is not None          # they act on a Ground mesh only
-        for name in ("friction", "drag_area", "air_density", "target_speed"):
+        for name in ("friction", "drag_area", "air_density"):
             sub.prop(s.terrain, name)
+
+
+class VIEW3D_PT_turning_speed(FigurePanel, bpy.types.Panel):
+    """Speed control (docs/skidding.md): the Target Speed, how the figure brakes, a stop."""
+
+    bl_label = "Speed Control"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    def draw(self, context):
+        s = self.settings(context)
+        col = self.layout.column()
+        row = col.row()
+        row.active = s.ground is not None         # a target needs a Ground mesh
+        row.prop(s.terrain, "target_speed")
+        k = s.skid
+        record = sport_record(s.sport)
+        col.prop(k, "style")
+        snow = col.row()
+        snow.active = record.grip is None          # a tyre has no snow
+        snow.prop(k, "snow")
+        col.prop(k, "grip")
+        col.prop(k, "use_stop")
+        sub = col.column()
+        sub.active = k.use_stop
+        sub.prop(k, "stop_frame")
+        if "slip" in record.styles:
+            col.prop(k, "stop_side")
 
 
 class VIEW3D_PT_turning_path(FigurePanel, bpy.types.Panel):
@@ -198,5 +226,5 @@ class VIEW3D_PT_turning_rig(FigurePanel, bpy.types.Panel):
 
 classes = (VIEW3D_PT_turning, VIEW3D_PT_turning_controller, VIEW3D_PT_turning_bake,
            VIEW3D_PT_turning_body, VIEW3D_PT_turning_limits, VIEW3D_PT_turning_ground,
-           VIEW3D_PT_turning_path, VIEW3D_PT_turning_rig)
+           VIEW3D_PT_turning_speed, VIEW3D_PT_turning_path, VIEW3D_PT_turning_rig)
 register, unregister = bpy.utils.register_classes_factory(classes)

@@ -3,9 +3,9 @@ foot, within the grip, while the search steers.
 
 A :class:`SpeedCap` makes the braking force a law of the state, part of the problem's model: above
 the cap ``V_c`` the braking force is the one that makes the speed decay to ``V_c`` with the time
-constant ``tau``, ``F_brake / m = max(0, dV_free / dt + (V - V_c) / tau) V_cm / V_f`` for ``V > V_c`` (``dV_free``
-the rate without it: gravity, friction, drag, the lean's share; the force works at the foot's
-speed, :func:`..model.rhs`), bounded by the friction circle it shares with the turn
+constant ``tau``, ``F_brake / m = max(0, dV_free / dt + (V - V_c) / tau) V_cm / V_f`` for
+``V > V_c`` (``dV_free`` the rate without it: gravity, friction, drag, the lean's share; the
+force works at the foot's speed, :func:`..model.rhs`), bounded by the friction circle it shares with the turn
 (:func:`..grip.brake_limit`, the skid at most :data:`..grip.SKID_MAX_TURNING`).  Below the cap it
 is 0, the carved model.  The cap is the speed the grip, the lean and the path allow:
 ``V_c = min(V_target, sqrt(a_max / kappa_max))``, ``kappa_max`` the path's largest curvature and
@@ -61,7 +61,8 @@ class SpeedCap:
         over = V - self.cap(body.g)
         want = np.where(over > 0.0, np.maximum(d[5] + over / self.tau, 0.0), 0.0) / ratio
         mu = self.grip.mu_at(theta_v)
-        room = brake_limit(mu, N / body.m, foot_lateral(frame, V, V_f, cf), SKID_MAX_TURNING)
+        F_lat = foot_lateral(body.l, frame, V, V_f, cf, theta_v, d[3], d[4])
+        room = brake_limit(mu, N / body.m, F_lat, SKID_MAX_TURNING)
         return np.minimum(want, room)
 
 

@@ -148,7 +148,8 @@ def columns(p, S, A, C, V) -> dict:
                                         resistance=p.resistance)
         b = p.speed_cap.brake(p.body, d, C, S[V_CM], V_f, N, fr, S[THETA_V])
         out["brake"] = b
-        out["skid"] = skid_angle(b, foot_lateral(fr, S[V_CM], V_f, C))
+        out["skid"] = skid_angle(b, foot_lateral(p.body.l, fr, S[V_CM], V_f, C, S[THETA_V],
+                                                 S[4], d[4]))
         out["ski_heading"] = S[2] + out["skid"]
     return out
 

@@ -1,0 +1,117 @@
+"""Speed control in Blender (docs/skidding.md): the Speed Control panel's settings (Target Speed,
+keyable; Style; Snow; Grip; Stop at a frame) reach the bake's simulation, Follow Path brakes to
+the Target Speed, a style the sport has not is refused; on the bpy wheel."""
+import os
+import tempfile
+
+import numpy as np
+import pytest
+
+os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
+bpy = pytest.importorskip("bpy")
+
+from blender_turning import blender as addon  # noqa: E402
+from blender_turning.blender import follow_ground, pipeline  # noqa: E402
+from blender_turning.blender.ground import mesh_from_height_field  # noqa: E402
+from blender_turning.blender.scene_adapters import (FrameRange, SceneInputError,  # noqa: E402
+                                                    figure_from_settings,
+                                                    skidding_from_settings)
+from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+
+pytestmark = pytest.mark.blender
+SECONDS, FPS = 8, 24
+
+
+@pytest.fixture(scope="module")
+def scene():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon.register()
+    sc = bpy.context.scene
+    sc.render.fps, sc.frame_start, sc.frame_end = FPS, 1, 1 + SECONDS * FPS
+    mountain = ski_slope(length=200, width=160, cell=1.0, seed=3)
+    obj = bpy.data.objects.new("Mountain", mesh_from_height_field(bpy, mountain, "Mountain"))
+    sc.collection.objects.link(obj)
+    yield sc, obj
+    addon.unregister()
+
+
+def _figure(scene, sport="SKIER"):
+    sc, mountain = scene
+    sc.cursor.location = (0.0, 80.0, 0.0)
+    sc.cursor.rotation_euler = (0.0, 0.0, np.radians(-180.0))      # heading -90 deg: downhill
+    bpy.ops.turning.add_figure(sport=sport)
+    fig = bpy.context.view_layer.objects.active
+    fig.turning.ground = mountain
+    fig.turning.use_heading = True
+    return fig
+
+
+def _run(fig):
+    return pipeline.simulate_figure(fig, FrameRange.of_scene(bpy.context.scene))
+
+
+def test_the_speed_control_panel_is_there(scene):
+    assert hasattr(bpy.types, "VIEW3D_PT_turning_speed")
+    fig = _figure(scene)
+    k = fig.turning.skid
+    assert (k.style, k.snow, k.use_stop) == ("CARVE", "HARD", False)
+    assert fig.turning.terrain.bl_rna.properties["target_speed"].is_animatable
+    assert skidding_from_settings(fig, FrameRange.of_scene(bpy.context.scene)) is None
+
+
+def test_skidding_brakes_where_carving_cannot(scene):
+    fig = _figure(scene)
+    fig.turning.terrain.target_speed = 8.0
+    carved = _run(fig)
+    fig.turning.skid.style = "SKID"
+    skidded = _run(fig)
+    assert np.all(carved.brake == 0.0)
+    assert skidded.brake.max() > 1.0 and np.abs(skidded.skid).max() > 0.2
+    late = skidded.t >= SECONDS / 2
+    assert skidded.V_cm[late].mean() < carved.V_cm[late].mean() - 0.5
+
+
+def test_a_keyed_target_speed_is_followed(scene):
+    fig = _figure(scene)
+    fig.turning.skid.style = "SKID"
+    t = fig.turning.terrain
+    t.target_speed = 12.0
+    t.keyframe_insert("target_speed", frame=1)
+    t.target_speed = 6.0
+    t.keyframe_insert("target_speed", frame=1 + 5 * FPS)
+    traj = _run(fig)
+    assert traj.V_cm[-1] < 8.0 < traj.V_cm[(traj.t > 3.0) & (traj.t < 5.0)].max()
+
+
+def test_a_stop_at_a_frame(scene):
+    fig = _figure(scene)
+    k = fig.turning.skid
+    k.use_stop, k.stop_frame = True, 1 + 3 * FPS
+    traj = _run(fig)
+    assert traj.V_cm[-1] == 0.0 and traj.V_cm[traj.t < 3.0].min() > 5.0
+    k.stop_frame = 10 ** 6
+    with pytest.raises(SceneInputError, match="Stop Frame"):
+        _run(fig)
+
+
+def test_a_style_the_sport_has_not_is_refused(scene):
+    fig = _figure(scene, "SNOWBOARDER")
+    fig.turning.skid.style = "WEDGE"
+    with pytest.raises(SceneInputError, match="Style Wedge.*snowboarder has: Carve, Skid, Slip"):
+        _run(fig)
+    with pytest.raises(RuntimeError, match="Style Wedge"):        # reported, cancelled
+        bpy.ops.turning.bake_turns()
+    assert not (fig.animation_data and fig.animation_data.action)
+
+
+def test_follow_path_brakes_to_the_target_speed(scene):
+    fig = _figure(scene)
+    fig.turning.terrain.target_speed = 9.0
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    figure = figure_from_settings(fig.turning)
+    _, ground, terrain = follow_ground.plan_inputs(bpy.context, fig, figure, depsgraph)
+    assert ground is not None and terrain["speed_cap"].speed == 9.0
+    assert terrain["speed_cap"].grip.name == "hard"
+    assert "braking to at most 9 m/s" in follow_ground.target_speed_note(fig)
+    fig.turning.terrain.target_speed = 0.0
+    assert "speed_cap" not in follow_ground.plan_inputs(bpy.context, fig, figure, depsgraph)[2]
