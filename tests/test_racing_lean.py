@@ -73,4 +73,4 @@ def test_a_cyclist_leans_forty_degrees_with_heading_control(capsys):
     assert main(["simulate", "--preset", "cyclist", "--lean-deg", "40", "--period", "4",
                  "--duration", "12"]) == 0
     out = capsys.readouterr().out
-    assert float(out.split("lean max ")[1].split(" deg")[0]) >= 0.95 * 40.0, out
+    assert float(out.split("lean max ")[1].split(" deg")[0]) >= 39.9, out     # all of it
