@@ -165,7 +165,7 @@ def schedule(tmp_path, text, raw=None):
     ("t,period,lean_deg,heading_deg\n0,2,20,0\n5,2\n", ["s.csv", "row 2 (line 3)", "2 values"]),
     ("t,period,lean_deg\n0,2,20\n5,fast,20\n", ["s.csv", "row 2 (line 3), column period",
                                                "'fast' is not a number"]),
-    ("t,period,lean_deg\n0,2,95\n", ["s.csv", "column lean_deg = 95.0", "[1, 60] deg"]),
+    ("t,period,lean_deg\n0,2,95\n", ["s.csv", "column lean_deg = 95.0", "[1, 77] deg"]),
     ("t,period,lean_deg\n0,2,20\n0,2,25\n", ["s.csv", "column t = 0.0", "does not come after"]),
     ("t,perod,lean_deg\n0,2,20\n", ["s.csv", "'perod'", "did you mean 'period'"]),
     ("t,period,lean_deg,heading_deg\n0,2,20,0\n5,2,20,\n", ["s.csv", "heading_deg is blank"]),
