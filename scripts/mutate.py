@@ -73,6 +73,8 @@ LIVE = [T + "test_blender_live.py", T + "test_mapping_cyclist.py"]
 LAYERS = [T + "test_blender_layers.py", T + "test_blender_robustness.py"]
 STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
 POLES = [T + "test_blender_poles.py"]
+RACING = [T + "test_racing_presets.py", T + "test_mapping_racing.py"]
+LEAN_ROOM = [T + "test_racing_lean.py", T + "test_feasible_turns.py"]
 
 
 @dataclass(frozen=True)
@@ -564,6 +566,41 @@ MUTANTS = [
       "off = np.flatnonzero(~over_mesh(ground, xy))", "off = np.flatnonzero(xy[:, 0] != xy[:, 0])",
       FOLLOW_GROUND, "bake"),
     # -- what the model changed, said (the bake's lean, Follow Path's distance from the path) --
+    # -- race-grade carving (core/equipment.py, the steering room, docs/racing.md) ------------
+    M("sidecut_edge_complement", "core/equipment.py",
+      "out = np.sign(c) * np.arccos(cos)", "out = np.sign(c) * (0.5 * np.pi - np.arccos(cos))",
+      RACING),
+    M("carving_limit_without_edge", "core/equipment.py",
+      "return 1.0 / (self.sidecut_radius * math.cos(self.edge_max))",
+      "return 1.0 / self.sidecut_radius", RACING),
+    M("racer_skis_linear_tilt", "mapping/skier.py",
+      "        edge = carving.edge_angle(traj.C_f)\n        return {s: edge for s, _ in SIDES}\n",
+      "        pass\n", RACING, "mapping"),
+    M("angulation_com_uncorrected", "mapping/skier.py",
+      "self._pose(b, traj, o, spec, back, th - np.arctan2(-com[:, 0], com[:, 2]))",
+      "self._pose(b, traj, o, spec, back)", RACING, "mapping"),
+    M("angulation_upper_body_leans", "mapping/skier.py",
+      "            add_local_rotation(b, B.SPINE, fwd, back + extra)\n", "            pass\n",
+      RACING, "mapping"),
+    M("carver_board_linear_tilt", "mapping/snowboarder.py",
+      'carving = carving_of(traj.meta.get("preset"))', "carving = None", RACING, "mapping"),
+    M("preset_resistance_not_its_sports", "core/model.py",
+      'RESISTANCE = ChainView(SPORTS.view("resistance"), SPORT_PRESETS.view("resistance"))',
+      'RESISTANCE = SPORTS.view("resistance")', RACING),
+    M("steer_room_fixed_share", "core/controllers/feasible.py",
+      "[self.max_lean(omega0 / b) / b for b in betas])", "[0.85 * self.max_lean(omega0)])",
+      LEAN_ROOM),
+    M("steer_room_ignores_modified_half_turns", "core/controllers/feasible.py",
+      "[self.max_lean(omega0 / b) / b for b in betas])", "[self.max_lean(omega0) for b in betas])",
+      LEAN_ROOM),
+    M("steerable_leans_frequency_inverted", "core/controllers/feasible.py",
+      "out = np.minimum(out, self.max_leans(w / b) / b)",
+      "out = np.minimum(out, self.max_leans(w * b) / b)", LEAN_ROOM),
+    M("braking_keeps_the_held_heading_room", "core/braking.py",
+      "        controller.steer_betas = BRAKE_BETAS\n", "", [T + "test_braking.py"]),
+    M("lean_input_stops_at_60", "core/ranges.py",
+      '"theta_max": Range(1 * _DEG, 77 * _DEG,', '"theta_max": Range(1 * _DEG, 60 * _DEG,',
+      [T + "test_racing_lean.py"]),
     M("commanded_turn_unlimited", "core/controllers/ellipse.py",
       "return self._turn(t, w, tm, self.feasible_lean(w, tm))", "return self._turn(t, w, tm, tm)",
       [T + "test_feasible_turns.py"]),

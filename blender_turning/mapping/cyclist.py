@@ -132,11 +132,13 @@ SPORT = register_sport(Sport(
     name="cyclist", label="Cyclist", description="Cyclist on a road bicycle", number=3,
     figure=Figure(
         "cyclist", BodyParams(m=85.0, l=1.0, I_v=15.0, V_cm=6.0),
-        Limits(C_f_max=0.5, dC_f_max=2.0, theta_fall=math.radians(50)),
+        Limits(C_f_max=0.5, dC_f_max=2.0, theta_fall=math.radians(55)),
         """Cyclist on a road bicycle.  Rider and bicycle 85 kg, centre of mass ~1.0 m, I_v 15 kg
         m^2 (the bicycle adds roll inertia); 6 m/s.  A 1.0 m wheelbase with ~27 deg of usable
         steer gives C_f = tan(27 deg) / 1.0 ~ 0.5; the bar goes lock to lock in ~0.5 s:
-        |dC_f/dt| <= 2.0.  A bicycle steers sharper and faster than a ski (Section 5.2)."""),
+        |dC_f/dt| <= 2.0.  A bicycle steers sharper and faster than a ski (Section 5.2).  The
+        bicycle lies on the road (pedal and bar down) past ~55 deg; dry asphalt's grip
+        (mu ~0.9) holds about 42 deg, which a cyclist reaches (docs/racing.md)."""),
     # Road tyres on smooth asphalt: rolling resistance 0.003-0.006; a rider on the hoods
     # 0.3-0.4 m^2 (Wilson & Papadopoulos 2004, "Bicycling Science", 3rd ed., Ch. 4-5); sea level.
     resistance=Resistance(mu=0.005, CdA=0.36, rho=1.225),

@@ -135,9 +135,20 @@ class PhaseEllipse(Controller):
         self._rates = {}            # mean_heading_rate at the nominal speed, per table and turn
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
-        self.steer_betas = STEER_BETAS
+        self._steer_betas = STEER_BETAS
+
+    @property
+    def steer_betas(self) -> tuple:
         """The modified half-turns directional control keeps feasible (:meth:`feasible_lean`);
-        the braking rule widens them (:data:`.feasible.BRAKE_BETAS`)."""
+        the braking rule widens them (:data:`.feasible.BRAKE_BETAS`).  Setting it forgets the
+        ellipses and heading rates made feasible with the old room."""
+        return self._steer_betas
+
+    @steer_betas.setter
+    def steer_betas(self, betas) -> None:
+        self._steer_betas = tuple(betas)
+        self._memo = {}
+        self._rates = {}
 
     def begin_run(self, limits: Limits) -> None:
         """A new run: forget the last run's half-turns; take the figure's limits unless given."""
@@ -171,8 +182,8 @@ class PhaseEllipse(Controller):
         """The lean followed for a commanded ``(omega0, theta_max)``: at most the largest the
         body's bounds allow at that period (:mod:`.feasible`), and with directional control at
         most what leaves it a half-turn to steer with (:meth:`.FeasibleTurns.steerable_lean`):
-        the commanded lean is skied whenever directional control can still flatten a half-turn
-        by ``steer_betas``, and only the turns at the bounds give up some."""
+        the commanded lean is skied whenever directional control can still flatten and sharpen
+        its half-turns by ``steer_betas``, and only the turns at the bounds give up some."""
         if self._feasible is None:
             return theta_max
         if np.ndim(omega0) or np.ndim(theta_max):                 # per-figure ellipses
@@ -193,7 +204,7 @@ class PhaseEllipse(Controller):
     def _turn(self, t, w, tm, tmf) -> FeasibleTurn:
         bound = None
         if self._feasible is not None and tmf < tm:
-            # The turn's own bound, or, when the steering room limits it, the flattened
+            # The turn's own bound, or, when the steering room limits it, the modified
             # half-turn's (:meth:`.FeasibleTurns.steerable_lean`).
             f = self._feasible
             steer = [b for b in self.steer_betas if self.heading is not None and
