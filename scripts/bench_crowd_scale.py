@@ -43,8 +43,9 @@ def one(count: int, seconds: float, fewer: bool) -> dict:
     import bpy
 
     from blender_turning import blender as addon
-    from blender_turning.blender import crowd_scene, fewer_keys, rig_builder
-    from blender_turning.blender.figure_bake import apply_bake
+    from blender_turning.blender.anim import fewer_keys
+    from blender_turning.blender.scene import crowd_scene, rig_builder
+    from blender_turning.blender.anim.figure_bake import apply_bake
     from blender_turning.core import preset
     from blender_turning.crowd import Crowd, CrowdFigure, Turns, run_crowd, synchronized
     from blender_turning.mapping import map_trajectory

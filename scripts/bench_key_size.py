@@ -25,7 +25,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import bake  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
 
 
 def keys_of(figs) -> int:

@@ -10,8 +10,8 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender.pipeline import figure_pose_track  # noqa: E402
-from blender_turning.blender.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
 from blender_turning.core.equipment import carving_of  # noqa: E402
 from blender_turning.mapping.kinematics import Skeleton  # noqa: E402
 from blender_turning.mapping.rig_spec import load_rig  # noqa: E402

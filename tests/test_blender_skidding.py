@@ -11,9 +11,10 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender import follow_ground, pipeline  # noqa: E402
-from blender_turning.blender.ground import mesh_from_height_field  # noqa: E402
-from blender_turning.blender.scene_adapters import (FrameRange, SceneInputError,  # noqa: E402
+from blender_turning.blender.jobs import pipeline  # noqa: E402
+from blender_turning.blender.scene import follow_ground  # noqa: E402
+from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import (FrameRange, SceneInputError,  # noqa: E402
                                                     figure_from_settings,
                                                     skidding_from_settings)
 from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
