@@ -13,7 +13,7 @@ from dataclasses import replace
 
 from blender_turning.core import preset, simulate
 from blender_turning.core.controllers import PhaseEllipse
-from blender_turning.mapping.anthropometry import posed_body
+from blender_turning.mapping.posed import posed_body
 
 #: The run the body is averaged over: a 2 s slalom of 23 deg leans (the telemark tests' run).
 OMEGA0, THETA_MAX, SECONDS = math.pi, math.radians(23.0), 6.0

@@ -57,7 +57,7 @@ def test_the_preset_body_is_the_telemark_lunge():
     built-in telemark figure in its lunge (Winter's segment data), averaged over the run, within
     the rounding of the preset (5 mm, 0.05 kg m^2); lower and lighter in roll than the skier's
     upright athletic stance measured the same way."""
-    from blender_turning.mapping.anthropometry import posed_body
+    from blender_turning.mapping.posed import posed_body
     averaged = {}
     for sport in ("telemark", "skier"):
         body = preset(sport).body

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["SEGMENTS", "segment_ends", "centre_and_roll_inertia", "posed_body"]
+__all__ = ["SEGMENTS", "segment_ends", "centre_and_roll_inertia"]
 
 #: Winter (2009) Table 4.1: segment -> (mass fraction, COM from the proximal end as a fraction
 #: of the segment length, radius of gyration about the COM as a fraction of the length).
@@ -74,16 +74,3 @@ def centre_and_roll_inertia(P, skel, mass: float, axis=(0.0, 1.0, 0.0)):
         d = c - com
         inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own
     return com, inertia
-
-
-def posed_body(sport: str, traj, mass: float):
-    """``(l (n,), I_v (n,))`` of the built-in ``sport`` figure posed by its Section 7 mapping of
-    ``traj`` (one sample per frame): the centre of mass's distance from the foot point across
-    the travel (the armature's XZ plane) and the roll inertia about it, for ``mass`` kg."""
-    from . import map_trajectory
-    from .kinematics import Skeleton
-    from .rig_spec import load_rig
-    skel = Skeleton.from_spec(load_rig(sport))
-    P = skel.fk(map_trajectory(sport, traj).bones, len(traj))
-    com, inertia = centre_and_roll_inertia(P, skel, mass)
-    return np.hypot(com[:, 0], com[:, 2]), inertia
