@@ -80,10 +80,10 @@ def posed_body(sport: str, traj, mass: float):
     """``(l (n,), I_v (n,))`` of the built-in ``sport`` figure posed by its Section 7 mapping of
     ``traj`` (one sample per frame): the centre of mass's distance from the foot point across
     the travel (the armature's XZ plane) and the roll inertia about it, for ``mass`` kg."""
-    from . import map_trajectory
+    from ..core.registry import SPORTS          # the sport's mapping (the package imports us)
     from .kinematics import Skeleton
     from .rig_spec import load_rig
     skel = Skeleton.from_spec(load_rig(sport))
-    P = skel.fk(map_trajectory(sport, traj).bones, len(traj))
+    P = skel.fk(SPORTS.lookup(sport).mapping.map(traj).bones, len(traj))
     com, inertia = centre_and_roll_inertia(P, skel, mass)
     return np.hypot(com[:, 0], com[:, 2]), inertia
