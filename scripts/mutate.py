@@ -667,6 +667,7 @@ PHASE_EST = TERMS + [T + "test_phase_estimate.py"]
 PAPER_LAW = TERMS + [T + "test_ellipse_law.py", T + "test_controllers.py"]
 FALL_TABLE = TERMS + [T + "test_planner_fall_table.py", T + "test_mutation_guards_planner.py"]
 FREE_PLAN = TERMS + [T + "test_planner_terrain.py"]
+ANTHRO = TERMS + [T + "test_telemark_body.py"]
 FREE_SIM = TERMS + [T + "test_terrain_sim.py", T + "test_energy.py", T + "test_speed_is_physics.py"]
 MUTANTS += [
     M("open_loop_phase_frozen_in_step", "core/controllers/open_loop.py",
@@ -719,7 +720,25 @@ MUTANTS += [
       "if abs(rel) > fall:", "if abs(x3) > fall:", FREE_SIM),
     M("terrain_law_lean_from_normal", "core/controllers/base.py",
       "rel = (st[0], st[1], st[2], float(st[3] - self.equilibrium_lean(fr, t)), st[4])",
-      "rel = (st[0], st[1], st[2], float(st[3]), st[4])", FREE_SIM),
+      "rel = (st[0], st[1], st[2], float(st[3]), st[4])",
+      [T + "test_terrain_fast.py", T + "test_terrain_smooth.py"]),
+    M("straight_run_turns", "core/controllers/straight.py",
+      "return lambda t, state: 0.0 * state[3]", "return lambda t, state: 0.0 * state[3] + 0.01",
+      FREE_SIM),
+    # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
+    M("segment_no_parallel_axis", "mapping/anthropometry.py",
+      "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",
+      ANTHRO, "mapping"),
+    M("segment_rod_axis_ignored", "mapping/anthropometry.py",
+      "own = (rg * length) ** 2 * (1.0 - (u @ e) ** 2)", "own = (rg * length) ** 2",
+      ANTHRO, "mapping"),
+    M("segment_com_from_distal", "mapping/anthropometry.py",
+      "parts.append((frac * mass, a + at * seg,", "parts.append((frac * mass, b - at * seg,",
+      ANTHRO, "mapping"),
+    M("two_bone_ik_lengths_swapped", "mapping/kinematics.py",
+      "a = (l1 * l1 - l2 * l2 + dist * dist) / (2.0 * dist)",
+      "a = (l2 * l2 - l1 * l1 + dist * dist) / (2.0 * dist)", [T + "test_kinematics.py"],
+      "mapping"),
 ]
 
 KERNELS = [T + "test_crowd_kernels.py"]

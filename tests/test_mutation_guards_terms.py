@@ -5,12 +5,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from blender_turning.core import OpenLoop, Schedule, preset, simulate
+from blender_turning.core import OpenLoop, PhaseEllipse, Schedule, preset, simulate, slalom_start
 from blender_turning.core.controllers.ellipse_paper import (SLOW_FACTOR, paper_alpha,
                                                              paper_alpha_one)
 from blender_turning.core.controllers.straight import Straight
 from blender_turning.core.dynamics import foot_speed
-from blender_turning.core.model import NO_RESISTANCE
+from blender_turning.core.model import NO_RESISTANCE, RESISTANCE
 from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem
@@ -150,3 +150,21 @@ def test_steepest_sine_of_a_plane_is_its_steepest_descent(slope_deg, downhill_de
     steepest = np.max(np.abs(fr.g_along)) / 9.81
     # The heading grid is 0.05 deg: the peak is missed by at most 1 - cos(0.025 deg) ~ 1e-7.
     assert steepest_sine(ground) == pytest.approx(steepest, rel=1e-6)
+
+
+# -- the free-speed stepper (core/terrain_sim.py) -------------------------------------------------
+
+def test_distance_travelled_is_the_foot_paths_length_on_a_plane():
+    """``s`` is the distance along the surface the foot covers: the integral of the foot's
+    speed ``V_f = V_cm / (1 - C_f l sin theta_v)`` (Eq. 21), so it equals the length of the foot
+    path ``(x, y, z)``.  Measured on a 10 s fall-line slalom on an 18 deg plane: within 2.8e-5
+    of the polyline through the samples (its chords are that much short at dt 0.02 s; 7e-6 at
+    0.01 s); the body's speed is 0.6% slower than the foot's here."""
+    fig = preset("skier")
+    w, tm, course = math.pi, math.radians(23), -math.pi / 2
+    ctl = PhaseEllipse(fig.body, w, tm, heading=course)
+    tr = simulate(fig, ctl, 10.0, 0.02, slalom_start(fig.body, w, tm, course, 0.0, 0.0),
+                  ground=Plane(math.radians(18), course), resistance=RESISTANCE["skier"])
+    chords = np.sqrt(np.diff(tr.x) ** 2 + np.diff(tr.y) ** 2 + np.diff(tr.z) ** 2)
+    path = np.concatenate([[0.0], np.cumsum(chords)])
+    assert np.max(np.abs(tr.s - path)) < 2e-4 * path[-1]
