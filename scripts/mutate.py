@@ -658,6 +658,89 @@ LIVE_MUTANTS = [
 ]
 MUTANTS += LIVE_MUTANTS
 
+# -- modules that had no mutant: the open-loop law (Section 4), the phase post-pass (Section 6.2),
+# the paper's phase-ellipse law (Section 5.1), the fall table's monotonicity (Eq. 2), the free-speed
+# planner's run-away bound (Eq. 21, docs/TERRAIN.md), the free-speed stepper -----------------
+TERMS = [T + "test_mutation_guards_terms.py"]
+OPEN_LOOP = TERMS + [T + "test_controllers.py", T + "test_one_figure.py"]
+PHASE_EST = TERMS + [T + "test_phase_estimate.py"]
+PAPER_LAW = TERMS + [T + "test_ellipse_law.py", T + "test_controllers.py"]
+FALL_TABLE = TERMS + [T + "test_planner_fall_table.py", T + "test_mutation_guards_planner.py"]
+FREE_PLAN = TERMS + [T + "test_planner_terrain.py"]
+ANTHRO = TERMS + [T + "test_telemark_body.py"]
+FREE_SIM = TERMS + [T + "test_terrain_sim.py", T + "test_energy.py", T + "test_speed_is_physics.py"]
+MUTANTS += [
+    M("open_loop_phase_frozen_in_step", "core/controllers/open_loop.py",
+      "phi = self._phi + 0.5 * (self.omega0(self._t) + w) * tau", "phi = self._phi", OPEN_LOOP),
+    M("open_loop_phase_left_rectangle", "core/controllers/open_loop.py",
+      "self._phi += 0.5 * (self.omega0(self._t) + self.omega0(t)) * (t - self._t)",
+      "self._phi += self.omega0(self._t) * (t - self._t)", OPEN_LOOP),
+    M("phase_estimate_omega0_is_rate_intercept", "core/phase_estimate.py",
+      "omega0 = wt / tm", "omega0 = wt", PHASE_EST),
+    M("phase_estimate_crossing_at_sample", "core/phase_estimate.py",
+      "w = y[i] / (y[i] - y[j])", "w = 0.0 * y[i]", PHASE_EST),
+    M("phase_estimate_intercepts_swapped", "core/phase_estimate.py",
+      "t_th, v_th = axis_crossings(t, om, th)", "t_th, v_th = axis_crossings(t, th, om)",
+      PHASE_EST),
+    M("paper_law_a13_sign", "core/controllers/ellipse_paper.py",
+      "    a13 = -w13_sq * th\n", "    a13 = w13_sq * th\n", PAPER_LAW),
+    M("paper_law_a24_no_ellipse_factor", "core/controllers/ellipse_paper.py",
+      "a24 = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / np.where",
+      "a24 = -(omega0 * theta_max) ** 2 / np.where", PAPER_LAW),
+    M("paper_law_one_a13_sign", "core/controllers/ellipse_paper.py",
+      "        a = -w13_sq * th\n    else:", "        a = w13_sq * th\n    else:", PAPER_LAW),
+    M("paper_law_one_a24_no_ellipse_factor", "core/controllers/ellipse_paper.py",
+      "a = -(omega0 * theta_max) ** 2 * (1.0 - x * x) / th",
+      "a = -(omega0 * theta_max) ** 2 / th", PAPER_LAW),
+    M("fall_table_cooperative_sign", "core/planner/fall_table.py",
+      "d = b.g * c - C * V * V * (C * b.l - s)", "d = b.g * c + C * V * V * (C * b.l - s)",
+      FALL_TABLE),
+    M("fall_table_cooperative_unsquared", "core/planner/fall_table.py",
+      "/ (1.0 - C * b.l * s) ** 2", "/ (1.0 - C * b.l * s)", FALL_TABLE),
+    M("fall_table_steers_the_other_way", "core/planner/fall_table.py",
+      "u = np.full(m, lim.dC_f_max)", "u = np.full(m, -lim.dC_f_max)", FALL_TABLE),
+    M("free_speed_limit_no_gravity", "core/planner/terrain_problem.py",
+      "return (V_root + p.body.g * p._sin_max * T) / (1.0 - p._slip)",
+      "return (V_root) / (1.0 - p._slip)", FREE_PLAN),
+    M("free_speed_limit_no_eq21", "core/planner/terrain_problem.py",
+      "return (V_root + p.body.g * p._sin_max * T) / (1.0 - p._slip)",
+      "return (V_root + p.body.g * p._sin_max * T)", FREE_PLAN),
+    M("free_steepest_plane_tangent", "core/planner/terrain_problem.py",
+      "return math.sin(ground.slope)", "return math.tan(ground.slope)", FREE_PLAN),
+    M("free_brake_at_body_speed", "core/planner/terrain_problem.py",
+      "d = d[:5] + (d[5] - b * V_f / x[V_CM],)", "d = d[:5] + (d[5] - b,)",
+      FREE_PLAN + [T + "test_planner_speed_cap.py"]),
+    M("free_sim_s_at_body_speed", "core/terrain_sim.py",
+      "ds = 0.5 * (V_f[1:] + V_f[:-1]) * dt", "ds = 0.5 * (V[1:] + V[:-1]) * dt", FREE_SIM),
+    M("free_sim_lean_euler", "core/terrain_sim.py",
+      "x3 += w6 * (a3 + 2.0 * (b3 + c3) + d3)", "x3 += dt * a3", FREE_SIM),
+    M("free_sim_speed_euler", "core/terrain_sim.py",
+      "x5 += w6 * (a5 + 2.0 * (b5 + c5) + d5)", "x5 += dt * a5", FREE_SIM),
+    M("free_sim_fall_from_normal", "core/terrain_sim.py",
+      "if abs(rel) > fall:", "if abs(x3) > fall:", FREE_SIM),
+    M("terrain_law_lean_from_normal", "core/controllers/base.py",
+      "rel = (st[0], st[1], st[2], float(st[3] - self.equilibrium_lean(fr, t)), st[4])",
+      "rel = (st[0], st[1], st[2], float(st[3]), st[4])",
+      [T + "test_terrain_fast.py", T + "test_terrain_smooth.py"]),
+    M("straight_run_turns", "core/controllers/straight.py",
+      "return lambda t, state: 0.0 * state[3]", "return lambda t, state: 0.0 * state[3] + 0.01",
+      FREE_SIM),
+    # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
+    M("segment_no_parallel_axis", "mapping/anthropometry.py",
+      "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",
+      ANTHRO, "mapping"),
+    M("segment_rod_axis_ignored", "mapping/anthropometry.py",
+      "own = (rg * length) ** 2 * (1.0 - (u @ e) ** 2)", "own = (rg * length) ** 2",
+      ANTHRO, "mapping"),
+    M("segment_com_from_distal", "mapping/anthropometry.py",
+      "parts.append((frac * mass, a + at * seg,", "parts.append((frac * mass, b - at * seg,",
+      ANTHRO, "mapping"),
+    M("two_bone_ik_lengths_swapped", "mapping/kinematics.py",
+      "a = (l1 * l1 - l2 * l2 + dist * dist) / (2.0 * dist)",
+      "a = (l2 * l2 - l1 * l1 + dist * dist) / (2.0 * dist)", [T + "test_kinematics.py"],
+      "mapping"),
+]
+
 KERNELS = [T + "test_crowd_kernels.py"]
 KEYS = [T + "test_mapping_keys.py", T + "test_blender_fewer_keys.py"]
 FEWER_KEYS = [T + "test_blender_fewer_keys.py"]

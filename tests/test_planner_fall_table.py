@@ -2,11 +2,14 @@
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from blender_turning.core import preset
+from blender_turning.core.dynamics import forward_alpha
 from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem
+from blender_turning.core.planner.fall_table import _cooperative
 
 
 def lean_problem(name="skier", V=7.0, N=4, q=5, dcf=0.3):
@@ -76,3 +79,19 @@ def test_not_used_where_the_lean_is_not_monotone():
     # The dead-end test at the horizon (search.py) still asks the table for it.
     p3 = Problem(p.figure, p.distance, p.obstacles, replace(p.settings, fall_table=False))
     assert p3.fall_table() is not None
+
+
+@pytest.mark.parametrize("name", ["skier", "snowboarder", "cyclist"])
+def test_monotonicity_check_is_the_derivative_of_eq2(name):
+    """The table rests on ``alpha_v`` (Eq. 2) growing with ``theta_v``; the check uses the closed
+    form ``d alpha / d theta = (g cos th - C V^2 (C l - sin th) / (1 - C l sin th)^2) / J``.  It
+    must say the same as Eq. 2 itself, differenced on a grid 3x finer, at every speed: the speed
+    where it stops holding is 5.0 m/s for the cyclist and 8.0 m/s for the snowboarder (a sign
+    error moves it to 7.9 and 9.0 m/s, a dropped square to 4.4 and 7.6 m/s: a 0.25 m/s grid of
+    speeds sees either)."""
+    for V in np.arange(2.0, 12.0, 0.25):
+        p = lean_problem(name, V=float(V))
+        th = np.linspace(-p._lean_checked, p._lean_checked, 2001)[:, None]
+        C = np.linspace(-p.limits.C_f_max, p.limits.C_f_max, 401)[None, :]
+        rising = bool(np.all(np.diff(forward_alpha(p.body, th, C), axis=0) > 0))
+        assert _cooperative(p) == rising, (name, V)
