@@ -169,3 +169,17 @@ def test_zero_skid_columns_leave_the_carved_pose(sport):
     a, b = map_trajectory(sport, bare), map_trajectory(sport, tagged)
     for name, ch in a.bones.items():
         assert np.array_equal(ch.rotation, b.bones[name].rotation) or ch.rotation is None
+
+
+def test_a_goofy_rider_turns_the_board_the_same_way():
+    """The goofy rider is the mirror image of a regular one on the mirrored run: its board too
+    yaws by the run's own skid (the mirrored run's skid is the negative)."""
+    from blender_turning.mapping.stance import goofy_track, mirrored_trajectory
+    traj = run("snowboarder", 15, 3.0, V0=10.0, stop_at=1.0, stop_side="heel")
+    mirrored = mirrored_trajectory(traj)
+    assert np.array_equal(mirrored.skid, -traj.skid)
+    track = goofy_track("snowboarder", map_trajectory("snowboarder", mirrored))
+    P = Skeleton.from_spec(load_rig("snowboarder")).fk(track.bones, len(track))
+    assert np.abs(traj.skid).max() > math.radians(60)
+    # Through quaternions and back (goofy_track's local channels): measured 2e-15 rad.
+    assert np.allclose(wrap(yaw_of(P, "board") - traj.skid), 0.0, atol=1e-9)
