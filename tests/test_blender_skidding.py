@@ -116,3 +116,16 @@ def test_follow_path_brakes_to_the_target_speed(scene):
     assert "braking to at most 9 m/s" in follow_ground.target_speed_note(fig)
     fig.turning.terrain.target_speed = 0.0
     assert "speed_cap" not in follow_ground.plan_inputs(bpy.context, fig, figure, depsgraph)[2]
+
+
+def test_the_beginner_preset_sets_its_wedge_and_speed(scene):
+    """The beginner's and the recreational skier's presets set the Speed Control's Style and
+    Target Speed (core/speed_habits.py); a sport's own preset leaves them."""
+    fig = _figure(scene)
+    assert bpy.ops.turning.apply_figure_preset(sport="BEGINNER") == {"FINISHED"}
+    assert (fig.turning.skid.style, fig.turning.terrain.target_speed) == ("WEDGE", 4.5)
+    assert fig.turning.equipment.preset == "beginner"
+    assert bpy.ops.turning.apply_figure_preset(sport="RECREATIONAL") == {"FINISHED"}
+    assert (fig.turning.skid.style, fig.turning.terrain.target_speed) == ("SKID", 10.5)
+    assert bpy.ops.turning.apply_figure_preset(sport="SKIER") == {"FINISHED"}
+    assert (fig.turning.skid.style, fig.turning.terrain.target_speed) == ("SKID", 10.5)

@@ -26,6 +26,7 @@ from ..core.grip import SNOW, snow
 from ..core.params import check_range
 from ..core.registry import SPORTS
 from ..core.skidding import STOP_SIDES, Skidding
+from ..core.speed_habits import habit_of
 from ..core.scene_terrain import read_terrain
 from ..core.terrain import Plane
 from ..core.model import RESISTANCE, Resistance
@@ -102,10 +103,13 @@ def terrain_options(args, sport: str) -> dict:
             out["ground"] = Plane(slope, down)
         if slope > 0.0 or given:
             out["resistance"] = replace(base, **given)
+    habit = habit_of(sport) if "ground" in out else None    # a preset's speed on a slope
     if args.target_speed is not None:
         out["target_speed"] = check_range("--target-speed", args.target_speed, 0.0, 100.0,
                                           lo_open=True)
-    skidding = skid_options(args, sport, args.target_speed is not None)
+    elif habit is not None:
+        out["target_speed"] = habit.target_speed
+    skidding = skid_options(args, sport, "target_speed" in out, habit)
     if skidding is not None:
         out["skidding"] = skidding
     return out
@@ -117,10 +121,11 @@ def _choice(flag: str, value, allowed) -> str:
     return value
 
 
-def skid_options(args, sport: str, target: bool):
+def skid_options(args, sport: str, target: bool, habit=None):
     """The :class:`..core.skidding.Skidding` of ``--style``, ``--snow``, ``--grip``,
     ``--stop-at`` and ``--stop-side`` (``None``: the carved run).  With ``--target-speed`` and
-    no ``--style`` the figure skids (``skid``)."""
+    no ``--style`` the figure skids (``skid``), or brakes in its preset's style (``habit``, a
+    :class:`..core.speed_habits.SpeedHabit`: the beginner's wedge)."""
     record = SPORTS[sport_of(sport)]          # a preset (slalom_racer) has its sport's grip
     if args.snow is not None:
         if record.grip is not None:
@@ -139,7 +144,7 @@ def skid_options(args, sport: str, target: bool):
             and args.stop_side is None and not target:
         return None
     if style is None:
-        style = "skid" if target else "carve"
+        style = habit.style if habit is not None else "skid" if target else "carve"
     grip = record.grip if record.grip is not None else snow(args.snow or "hard")
     if args.grip is not None:
         mu = check("--grip", args.grip, "grip")

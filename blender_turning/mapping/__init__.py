@@ -14,6 +14,7 @@ from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
 from .bones import MissingBoneError
 # The built-in sports register in this order (skier, snowboarder, telemark, cyclist).
 from .skier import SkierMapping, SkierOptions
+from . import skier_presets  # noqa: F401 - registers the beginner and recreational presets
 from .snowboarder import SnowboarderMapping, SnowboarderOptions
 from .telemark import TelemarkMapping, TelemarkOptions
 from .cyclist import CyclistMapping, CyclistOptions

@@ -24,6 +24,7 @@ from .anthropometry import centre_and_roll_inertia
 from .common import (add_local_rotation, carried, ik_limb, lean, leg_lengths, limb_frames,
                      phase_window, place_on_ground, rot_y, rot_z, smoothstep)
 from .kinematics import PoseBuilder, frame_from_yx, rigid_inverse, stack_dot
+from .skid_pose import SkidPose, knee_direction, ski_front
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
                    twist_upper_body)
@@ -143,23 +144,27 @@ class SkierMapping(Mapping):
         body ``back + extra`` rad back toward upright (angulation)."""
         skel = b.skel
         th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
+        skid = SkidPose(traj)       # the skis across the travel (docs/skidding.md Section 8)
+        skid.turn_hips(b, up)
         extra = np.broadcast_to(np.asarray(extra, float), th.shape)
         back = np.broadcast_to(np.asarray(back, float), th.shape)
         if np.any(extra) or np.any(back):
             lean(b, extra)
             th = th + extra
         ankle_z = float(skel.rest_of("foot.L")[2, 3])
-        tilts = ski_tilts(traj, o)
-        layout = self.ski_layout(traj, o)
+        tilts = skid.tilts(ski_tilts(traj, o))
+        layout = skid.layout(self.ski_layout(traj, o))
         drop = np.zeros(len(traj))
         for _ in range(3):      # the hips drop if a leg cannot reach its boot (Section 7 IK)
             set_pelvis(b, th, length, ankle_z, drop)
-            ankles = self.place_skis(b, spec, th, tilts, layout)
+            ankles = self.place_skis(b, spec, th, tilts, layout, skid)
             extra = hip_drop(b, ankles, 0.97)
             if not np.any(extra > 1e-9):
                 break
             drop = drop + extra
         knee_fwd = carry_vec(b, B.LEAN, fwd)
+        if skid.active:                                 # the knees point along the skis
+            knee_fwd = knee_direction(knee_fwd, skid.body_skid())
         # Leg twist: when the ski is on edge more than the body leans, the knee turns in.
         twist = {s: np.clip(-o.leg_twist_gain * (tilts[s] - th), -o.leg_twist_max,
                             o.leg_twist_max) for s, _ in SIDES}
@@ -171,11 +176,13 @@ class SkierMapping(Mapping):
             add_local_rotation(b, B.SPINE, fwd, back + extra)
         # Upper-body counter-twist in phase with the turn (phase 0..180 deg is a left turn).
         twist_upper_body(b, up, -o.twist_amp * np.sin(traj.phi + o.twist_phase))
+        skid.counter_rotate(b, up)
         level_head(b, th - back - extra, o.head_level)     # the upper body's own lean
         self.arms_and_poles(b, traj, o, right, fwd, up)
 
-    def place_skis(self, b, spec, th, tilts, layout) -> dict:
-        """Set both skis on the ground under the body axis; return the ankle targets."""
+    def place_skis(self, b, spec, th, tilts, layout, skid=None) -> dict:
+        """Set both skis on the ground under the body axis (a wedge's boots spread by
+        ``skid``, a :class:`.skid_pose.SkidPose`); return the ankle targets."""
         skel = b.skel
         ankles = {}
         for s, _ in SIDES:
@@ -185,6 +192,8 @@ class SkierMapping(Mapping):
             dy, yaw, _ = layout[s]
             # The foot goes where the leaned body axis through the hip meets the ankle height.
             xy = np.stack([hip[:, 0] + np.tan(th) * (hip[:, 2] - a_rest[2]), a_rest[1] + dy], 1)
+            if skid is not None and skid.active:
+                xy[:, 0] += skid.spread(ski_front(skel, spec, ski, a_rest), abs(a_rest[0]))[s]
             R = stack_dot(rot_z(yaw) @ rot_y(-tilts[s]), skel.rest_of(ski)[:3, :3])
             place_on_ground(b, spec, ski, R, a_rest, xy)
             ankles[s] = self.ankle_on_ski(b, s, layout)

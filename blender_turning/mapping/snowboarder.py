@@ -22,7 +22,8 @@ from ..core.sports import Retarget, Sport, register_sport
 from ..core.model import Resistance
 from . import bones as B
 from .base import Mapping
-from .common import add_local_rotation, carried, place_on_ground, rot_y
+from .common import add_local_rotation, carried, place_on_ground, rot_y, rot_z
+from .skid_pose import SkidPose, knee_direction
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
                    twist_upper_body)
@@ -67,12 +68,16 @@ class SnowboarderMapping(Mapping):
     def pose(self, b, traj, o, spec):
         skel = b.skel
         th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
+        skid = SkidPose(traj)       # the board across the travel (docs/skidding.md Section 8)
+        skid.turn_hips(b, up)
         ankle_rest = {s: skel.rest_of(B.side("foot", s))[:3, 3] for s in SIDES}
         anchor = 0.5 * (ankle_rest["L"] + ankle_rest["R"])
         carving = carving_of(traj.meta.get("preset"))    # a preset's board: the sidecut relation
         tilt = (carving.edge_angle(traj.C_f) if carving is not None else
                 np.clip(tilt_gain(traj, o.tilt_gain) * traj.C_f, -o.tilt_max, o.tilt_max))
-        R = rot_y(-tilt) @ skel.rest_of(B.BOARD)[:3, :3]
+        R = rot_y(-skid.tilt(tilt)) @ skel.rest_of(B.BOARD)[:3, :3]
+        if skid.active:
+            R = rot_z(skid.yaw()) @ R
         drop = np.zeros(len(traj))
         for _ in range(3):      # the hips drop if a leg cannot reach its boot
             set_pelvis(b, th, length, float(anchor[2]), drop)
@@ -86,11 +91,15 @@ class SnowboarderMapping(Mapping):
                 break
             drop = drop + extra
         # The boots are bound to the board: the ankles bend to tilt it (Section 7).
-        legs_to(b, ankles, carry_vec(b, B.LEAN, fwd), None, {s: B.BOARD for s in SIDES})
+        knee_fwd = carry_vec(b, B.LEAN, fwd)
+        if skid.active:
+            knee_fwd = knee_direction(knee_fwd, skid.body_skid())
+        legs_to(b, ankles, knee_fwd, None, {s: B.BOARD for s in SIDES})
         knee = 0.5 * (knee_flexion(b, "L") + knee_flexion(b, "R"))
         bend_waist(b, right, o.waist_ratio * knee)
         twist = np.clip(o.twist_gain * traj.C_f, -o.twist_max, o.twist_max)
         twist_upper_body(b, up, twist)
+        skid.counter_rotate(b, up)
         level_head(b, th, o.head_level)
         # Arms out to the sides, swinging ahead of the twist: the twist arm_lead seconds later.
         ahead = np.clip(o.twist_gain * np.interp(traj.t + o.arm_lead, traj.t, traj.C_f),

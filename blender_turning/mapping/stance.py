@@ -22,12 +22,13 @@ _S4 = np.diag([-1.0, 1.0, 1.0, 1.0])        # mirror across the travel line (x -
 
 def mirrored_trajectory(traj):
     """The mirror image of ``traj`` across its own line of travel: lean, its rate and
-    acceleration, and curvature change sign, the phase moves half a cycle; where the foot goes
-    (x, y, theta_dir) stays.  A goofy rider on ``traj`` is the mirror image, .L and .R swapped, of
+    acceleration, curvature and the skid change sign, the phase moves half a cycle; where the
+    foot goes (x, y, theta_dir) stays.  A goofy rider on ``traj`` is the mirror image, .L and .R swapped, of
     a regular rider on this (Section 7's snowboarder rides regular)."""
     cols = traj.columns()
-    for c in ("theta_v", "omega_v", "alpha_v", "C_f"):
+    for c in ("theta_v", "omega_v", "alpha_v", "C_f", "skid"):    # a ski turned left: right
         cols[c] = -np.asarray(cols[c])
+    cols["ski_heading"] = np.asarray(cols["theta_dir"]) + cols["skid"]
     cols["phi"] = np.mod(np.asarray(cols["phi"]) + np.pi, 2 * np.pi)
     return type(traj).from_columns(cols, traj.meta)
 

@@ -17,6 +17,7 @@ from bl_operators.presets import AddPresetBase
 from bpy.props import StringProperty
 
 from ...core.registry import SPORT_PRESETS, SPORTS
+from ...core.speed_habits import habit_of
 from ..registry_items import sport_label
 from ..scene.rig_builder import RIG_TAG
 
@@ -102,6 +103,10 @@ class TURNING_OT_apply_figure_preset(bpy.types.Operator):
             setattr(fig.turning, name, value)
         own = SPORT_PRESETS.get(self.sport.lower())
         fig.turning.equipment.preset = own.name if own is not None else ""
+        habit = habit_of(self.sport.lower())        # the beginner's wedge at 4.5 m/s ...
+        if habit is not None:
+            fig.turning.skid.style = habit.style.upper()
+            fig.turning.terrain.target_speed = habit.target_speed
         return {"FINISHED"}
 
 
