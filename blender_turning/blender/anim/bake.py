@@ -18,7 +18,7 @@ import bpy
 import numpy as np
 
 from .. import compat
-from . import bake_layers, unused_ids, user_action
+from . import bake_layers, user_action
 from .user_action import PROP_GROUP, REST, STASHED
 from ...mapping.base import PoseTrack
 
@@ -156,9 +156,11 @@ def _figure_action(obj):
     elif current is not None:
         params = _stash_users(obj, current)
     user_action.record_rest(obj)
-    for old in [a for a in unused_ids.unused(bpy.data.actions) if a.get(OWNER) == obj
-                and a.users == 0]:
-        bpy.data.actions.remove(old)          # an earlier bake the user unassigned: unused, ours
+    # An earlier bake the user unassigned (unused, ours), found by the name it was made with: a
+    # look at every action's properties costs O(actions) a figure, 30 ms at 20,000 actions.
+    old = bpy.data.actions.get(obj.name)
+    if old is not None and old.get(OWNER) == obj and old.users == 0:
+        bpy.data.actions.remove(old)
     action = compat.assign_new_action(obj, obj.name)
     action[BAKED_PATHS] = ""
     action[OWNER] = obj

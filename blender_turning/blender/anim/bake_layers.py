@@ -28,7 +28,6 @@ import bpy
 import numpy as np
 
 from .. import compat
-from . import unused_ids
 
 BAKE_TRACK = "Turning: bake"
 TWEAK_TRACK = "Turning: tweaks"
@@ -108,8 +107,8 @@ def is_tweaks(action, obj) -> bool:
 
 def tweak_layer(obj):
     """``(action, parked_strip)``: ``obj``'s tweak layer, playing or parked on the muted
-    ``Turning: tweaks`` track, or unassigned (the user played another action over it: nothing
-    plays it; strip ``None``); ``(None, None)`` when it has none."""
+    ``Turning: tweaks`` track, or unassigned (the user played another action over it; strip
+    ``None``; found by the name it was made with); ``(None, None)`` when it has none."""
     adt = obj.animation_data
     if adt is None:
         return None, None
@@ -119,8 +118,13 @@ def tweak_layer(obj):
         for strip in track.strips:
             if is_tweaks(strip.action, obj):
                 return strip.action, strip
-    return next((a for a in unused_ids.unused(bpy.data.actions) if is_tweaks(a, obj)),
-                None), None
+    # Unassigned: by the name it was made with (a look at every action costs O(actions) a figure).
+    old = bpy.data.actions.get(_tweaks_name(obj))
+    return (old if is_tweaks(old, obj) else None), None
+
+
+def _tweaks_name(obj) -> str:
+    return f"{obj.name} Tweaks"
 
 
 def playing(obj, action) -> bool:
@@ -146,7 +150,7 @@ def start_tweaks(obj):
     if BLEND_BEFORE not in obj:
         obj[BLEND_BEFORE] = adt.action_blend_type
     if action is None:
-        action = compat.assign_new_action(obj, f"{obj.name} Tweaks")
+        action = compat.assign_new_action(obj, _tweaks_name(obj))
         action[TWEAKS_OF] = obj
     else:
         if strip is not None:
