@@ -725,6 +725,10 @@ MUTANTS += [
     M("straight_run_turns", "core/controllers/straight.py",
       "return lambda t, state: 0.0 * state[3]", "return lambda t, state: 0.0 * state[3] + 0.01",
       FREE_SIM),
+    M("proof_backs_up_the_largest", "core/planner/proof.py",
+      "total[parent[ids], choice[ids]] = total[ids].min(axis=1)",
+      "total[parent[ids], choice[ids]] = total[ids].max(axis=1)",
+      [T + "test_planner_search.py"]),
     # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
     M("segment_no_parallel_axis", "mapping/anthropometry.py",
       "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",
