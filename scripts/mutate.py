@@ -729,6 +729,9 @@ MUTANTS += [
       "total[parent[ids], choice[ids]] = total[ids].min(axis=1)",
       "total[parent[ids], choice[ids]] = total[ids].max(axis=1)",
       [T + "test_planner_search.py"]),
+    M("demo_slope_sine_grade", "core/terrain_gen.py",
+      "h = math.tan(math.radians(slope_deg)) * Y", "h = math.sin(math.radians(slope_deg)) * Y",
+      TERMS),
     # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
     M("segment_no_parallel_axis", "mapping/anthropometry.py",
       "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",

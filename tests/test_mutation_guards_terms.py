@@ -1,4 +1,5 @@
-"""Guards for physics terms in modules the other tests leave loose (scripts/mutate.py, TESTING.md)."""
+"""Guards for physics terms in modules the other tests leave loose (scripts/mutate.py,
+TESTING.md)."""
 import math
 from dataclasses import replace
 
@@ -19,6 +20,7 @@ from blender_turning.core.planner import terrain_problem
 from blender_turning.core.planner.speed_cap import SpeedCap
 from blender_turning.core.planner.terrain_problem import steepest_sine
 from blender_turning.core.terrain import Plane, surface_frame
+from blender_turning.core.terrain_gen import ski_slope
 
 
 # -- the open-loop law (Section 4, Eq. 5: alpha_v = -omega0^2 theta_max sin(omega0 t)) ----------
@@ -206,3 +208,14 @@ def test_a_fall_is_the_lean_from_the_plumb_lean():
     assert tr.t[-1] == pytest.approx(3.0)
     # Held to round-off (an unstable equilibrium): measured within 1e-12 rad.
     assert np.max(np.abs(tr.theta_v - lean)) < 1e-9
+
+
+def test_the_demo_slope_falls_at_its_angle():
+    """``ski_slope(slope_deg=18)`` is an 18 deg plane under its rolls: over 1980 m of fall line
+    the mean grade is ``tan 18 deg`` = 0.3249 (a rise over a run), within what the two rolls
+    (each at most 2 m high) can add at the ends, 4 m / 1980 m = 2e-3 (measured 5.7e-4);
+    ``sin 18 deg`` would be 0.016 off."""
+    field = ski_slope(length=2000.0, width=20.0, cell=5.0, moguls=False)
+    top, bottom = (float(field.derivatives(np.zeros(1), np.array([y]))[0][0])
+                   for y in (990.0, -990.0))
+    assert abs((top - bottom) / 1980.0 - math.tan(math.radians(18.0))) < 4.0 / 1980.0
