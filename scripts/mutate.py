@@ -668,6 +668,7 @@ PAPER_LAW = TERMS + [T + "test_ellipse_law.py", T + "test_controllers.py"]
 FALL_TABLE = TERMS + [T + "test_planner_fall_table.py", T + "test_mutation_guards_planner.py"]
 FREE_PLAN = TERMS + [T + "test_planner_terrain.py"]
 ANTHRO = TERMS + [T + "test_telemark_body.py"]
+TELEMARK = [T + "test_mapping_telemark.py", T + "test_telemark_body.py"]
 FREE_SIM = TERMS + [T + "test_terrain_sim.py", T + "test_energy.py", T + "test_speed_is_physics.py"]
 MUTANTS += [
     M("open_loop_phase_frozen_in_step", "core/controllers/open_loop.py",
@@ -742,6 +743,12 @@ MUTANTS += [
     M("segment_com_from_distal", "mapping/anthropometry.py",
       "parts.append((frac * mass, a + at * seg,", "parts.append((frac * mass, b - at * seg,",
       ANTHRO, "mapping"),
+    # -- the telemark turn (mapping/telemark.py, Section 7: the skis at an angle) -------------
+    M("telemark_skis_parallel", "mapping/telemark.py",
+      "yaw = traj.C_f * dy", "yaw = 0.0 * dy", TELEMARK, "mapping"),
+    M("telemark_inside_ski_leads", "mapping/telemark.py",
+      'for s, sign in (("L", -1.0), ("R", 1.0)):', 'for s, sign in (("L", 1.0), ("R", -1.0)):',
+      TELEMARK, "mapping"),
     M("two_bone_ik_lengths_swapped", "mapping/kinematics.py",
       "a = (l1 * l1 - l2 * l2 + dist * dist) / (2.0 * dist)",
       "a = (l2 * l2 - l1 * l1 + dist * dist) / (2.0 * dist)", [T + "test_kinematics.py"],
