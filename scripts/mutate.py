@@ -733,6 +733,10 @@ MUTANTS += [
     M("demo_slope_sine_grade", "core/terrain_gen.py",
       "h = math.tan(math.radians(slope_deg)) * Y", "h = math.sin(math.radians(slope_deg)) * Y",
       TERMS),
+    M("schedule_samples_held", "core/schedule.py",
+      "return cls(lambda tt: float(np.interp(tt, t, v)))",
+      "return cls(lambda tt: float(v[max(np.searchsorted(t, tt, side='right') - 1, 0)]))",
+      TERMS + [T + "test_speed_schedule.py"]),
     # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
     M("segment_no_parallel_axis", "mapping/anthropometry.py",
       "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",
