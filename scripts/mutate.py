@@ -668,6 +668,7 @@ PAPER_LAW = TERMS + [T + "test_ellipse_law.py", T + "test_controllers.py"]
 FALL_TABLE = TERMS + [T + "test_planner_fall_table.py", T + "test_mutation_guards_planner.py"]
 FREE_PLAN = TERMS + [T + "test_planner_terrain.py"]
 ANTHRO = TERMS + [T + "test_telemark_body.py"]
+TELEMARK = [T + "test_mapping_telemark.py", T + "test_telemark_body.py"]
 FREE_SIM = TERMS + [T + "test_terrain_sim.py", T + "test_energy.py", T + "test_speed_is_physics.py"]
 MUTANTS += [
     M("open_loop_phase_frozen_in_step", "core/controllers/open_loop.py",
@@ -725,6 +726,17 @@ MUTANTS += [
     M("straight_run_turns", "core/controllers/straight.py",
       "return lambda t, state: 0.0 * state[3]", "return lambda t, state: 0.0 * state[3] + 0.01",
       FREE_SIM),
+    M("proof_backs_up_the_largest", "core/planner/proof.py",
+      "total[parent[ids], choice[ids]] = total[ids].min(axis=1)",
+      "total[parent[ids], choice[ids]] = total[ids].max(axis=1)",
+      [T + "test_planner_search.py"]),
+    M("demo_slope_sine_grade", "core/terrain_gen.py",
+      "h = math.tan(math.radians(slope_deg)) * Y", "h = math.sin(math.radians(slope_deg)) * Y",
+      TERMS),
+    M("schedule_samples_held", "core/schedule.py",
+      "return cls(lambda tt: float(np.interp(tt, t, v)))",
+      "return cls(lambda tt: float(v[max(np.searchsorted(t, tt, side='right') - 1, 0)]))",
+      TERMS + [T + "test_speed_schedule.py"]),
     # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
     M("segment_no_parallel_axis", "mapping/anthropometry.py",
       "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",
@@ -735,6 +747,12 @@ MUTANTS += [
     M("segment_com_from_distal", "mapping/anthropometry.py",
       "parts.append((frac * mass, a + at * seg,", "parts.append((frac * mass, b - at * seg,",
       ANTHRO, "mapping"),
+    # -- the telemark turn (mapping/telemark.py, Section 7: the skis at an angle) -------------
+    M("telemark_skis_parallel", "mapping/telemark.py",
+      "yaw = traj.C_f * dy", "yaw = 0.0 * dy", TELEMARK, "mapping"),
+    M("telemark_inside_ski_leads", "mapping/telemark.py",
+      'for s, sign in (("L", -1.0), ("R", 1.0)):', 'for s, sign in (("L", 1.0), ("R", -1.0)):',
+      TELEMARK, "mapping"),
     M("two_bone_ik_lengths_swapped", "mapping/kinematics.py",
       "a = (l1 * l1 - l2 * l2 + dist * dist) / (2.0 * dist)",
       "a = (l2 * l2 - l1 * l1 + dist * dist) / (2.0 * dist)", [T + "test_kinematics.py"],

@@ -1,4 +1,5 @@
-"""Guards for physics terms in modules the other tests leave loose (scripts/mutate.py, TESTING.md)."""
+"""Guards for physics terms in modules the other tests leave loose (scripts/mutate.py,
+TESTING.md)."""
 import math
 from dataclasses import replace
 
@@ -10,12 +11,16 @@ from blender_turning.core.controllers.ellipse_paper import (SLOW_FACTOR, paper_a
                                                              paper_alpha_one)
 from blender_turning.core.controllers.straight import Straight
 from blender_turning.core.dynamics import foot_speed
-from blender_turning.core.model import NO_RESISTANCE, RESISTANCE
+from blender_turning.core.grip import SNOW
+from blender_turning.core.model import NO_RESISTANCE, RESISTANCE, plumb_lean
 from blender_turning.core.obstacles import Obstacles
 from blender_turning.core.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem
+from blender_turning.core.planner import terrain_problem
+from blender_turning.core.planner.speed_cap import SpeedCap
 from blender_turning.core.planner.terrain_problem import steepest_sine
 from blender_turning.core.terrain import Plane, surface_frame
+from blender_turning.core.terrain_gen import ski_slope
 
 
 # -- the open-loop law (Section 4, Eq. 5: alpha_v = -omega0^2 theta_max sin(omega0 t)) ----------
@@ -105,13 +110,14 @@ def test_paper_law_follows_the_ellipse_through_the_state(r):
 
 # -- the free-speed planner's run-away limit (planner/terrain_problem.py, Eq. 21) ---------------
 
-def _free_problem(slope_deg):
+def _free_problem(slope_deg, resistance=NO_RESISTANCE, speed_cap=None):
     fig = preset("skier", V_cm=8.0)
     fig = replace(fig, limits=replace(fig.limits, dC_f_max=0.3))
     path = PathDistance(HermitePath.from_polyline([[0, 0], [40, 0]]), 12)
     st = PlannerSettings(n_stages=4, q=4, theta_bound=math.radians(40))
     ground = Plane(math.radians(slope_deg))
-    return Problem(fig, path, Obstacles(), st, ground=ground, resistance=NO_RESISTANCE), ground
+    return Problem(fig, path, Obstacles(), st, ground=ground, resistance=resistance,
+                   speed_cap=speed_cap), ground
 
 
 def test_run_away_limit_bounds_a_straight_run_down_the_fall_line():
@@ -152,6 +158,23 @@ def test_steepest_sine_of_a_plane_is_its_steepest_descent(slope_deg, downhill_de
     assert steepest_sine(ground) == pytest.approx(steepest, rel=1e-6)
 
 
+def test_planner_brake_at_the_foot_pulls_the_speed_to_the_cap_at_its_rate():
+    """Above the cap the planner brakes at the foot for ``dV/dt = -(V - cap) / tau`` where the
+    grip allows (docs/skidding.md): the brake ``b`` (a force over the mass at the foot) does
+    work at the foot's speed, ``m V dV = -m b V_f dt``, so it slows the body by ``b V_f / V``.
+    Turning states (``V_f / V`` = 1.03-1.06 here) just over the cap: the rate is exact to
+    round-off; charged at the body's speed it would be 3-6% off."""
+    cap = SpeedCap(9.0, SNOW["hard"])
+    p, _ = _free_problem(19.0, RESISTANCE["skier"], cap)
+    x = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.3, -0.2], [0.3, 0.4, -0.35],
+                  [0.2, 0.0, -0.1], [9.2, 9.5, 9.1]])
+    out = np.zeros((6, 3))
+    _, _, V_f = terrain_problem.rhs(p, x, 0.0, np.array([0.1, 0.15, -0.12]), np.zeros(3), None,
+                                    0.0, out)
+    assert np.all(V_f / x[5] > 1.02)
+    np.testing.assert_allclose(out[5], -(x[5] - 9.0) / cap.tau, rtol=1e-9)
+
+
 # -- the free-speed stepper (core/terrain_sim.py) -------------------------------------------------
 
 def test_distance_travelled_is_the_foot_paths_length_on_a_plane():
@@ -168,3 +191,31 @@ def test_distance_travelled_is_the_foot_paths_length_on_a_plane():
     chords = np.sqrt(np.diff(tr.x) ** 2 + np.diff(tr.y) ** 2 + np.diff(tr.z) ** 2)
     path = np.concatenate([[0.0], np.cumsum(chords)])
     assert np.max(np.abs(tr.s - path)) < 2e-4 * path[-1]
+
+
+def test_a_fall_is_the_lean_from_the_plumb_lean():
+    """The fall bound is on the lean from the plumb lean (the balance of a straight run, docs/
+    TERRAIN.md Section 2), not from the surface normal: a straight traverse of a 30 deg plane
+    stands at its plumb lean of ~30 deg uphill, so with ``theta_fall`` 20 deg it runs on,
+    balanced, for the whole run."""
+    fig = preset("skier")
+    fig = replace(fig, limits=replace(fig.limits, theta_fall=math.radians(20)))
+    plane = Plane(math.radians(30), -math.pi / 2)
+    lean = plumb_lean(surface_frame(plane, 0.0, 0.0, 0.0, fig.body.g))
+    assert lean > math.radians(25)
+    tr = simulate(fig, Straight(fig.body), 3.0, 0.01, state0=(0, 0, 0, lean, 0, 10.0),
+                  ground=plane, resistance=NO_RESISTANCE)
+    assert tr.t[-1] == pytest.approx(3.0)
+    # Held to round-off (an unstable equilibrium): measured within 1e-12 rad.
+    assert np.max(np.abs(tr.theta_v - lean)) < 1e-9
+
+
+def test_the_demo_slope_falls_at_its_angle():
+    """``ski_slope(slope_deg=18)`` is an 18 deg plane under its rolls: over 1980 m of fall line
+    the mean grade is ``tan 18 deg`` = 0.3249 (a rise over a run), within what the two rolls
+    (each at most 2 m high) can add at the ends, 4 m / 1980 m = 2e-3 (measured 5.7e-4);
+    ``sin 18 deg`` would be 0.016 off."""
+    field = ski_slope(length=2000.0, width=20.0, cell=5.0, moguls=False)
+    top, bottom = (float(field.derivatives(np.zeros(1), np.array([y]))[0][0])
+                   for y in (990.0, -990.0))
+    assert abs((top - bottom) / 1980.0 - math.tan(math.radians(18.0))) < 4.0 / 1980.0
