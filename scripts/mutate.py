@@ -839,6 +839,37 @@ MUTANTS += SKID_MUTANTS + [
       "    if target > 0.0:                      # the planner brakes", "    if False:",
       [T + "test_blender_skidding.py"], group="bake"),
 ]
+# The skid on the rig, the beginner's and the recreational skier's habits, the brushed tracks
+# (docs/skidding.md Section 8).
+SKID_POSE = [T + "test_mapping_skid.py"]
+MUTANTS += [
+    M("skid_pose_skis_not_turned", "mapping/skid_pose.py",
+      "return {s: (dy, yaw + self.yaw(s), heel)", "return {s: (dy, yaw, heel)", SKID_POSE,
+      group="mapping"),
+    M("skid_pose_wedge_tips_apart", "mapping/skid_pose.py",
+      'half = np.abs(self.skid) * (1.0 if s == "R" else -1.0)',
+      'half = np.abs(self.skid) * (1.0 if s == "L" else -1.0)', SKID_POSE, group="mapping"),
+    M("skid_pose_stop_downhill_edge", "mapping/skid_pose.py",
+      "side = 1.0 if np.sum(self.skid[self.stopping]) >= 0.0 else -1.0",
+      "side = -1.0 if np.sum(self.skid[self.stopping]) >= 0.0 else 1.0", SKID_POSE,
+      group="mapping"),
+    M("skid_pose_no_counter_rotation", "mapping/skid_pose.py",
+      "(CHEST_SHARE - HIP_SHARE) / 3.0 * self.body_skid()", "0.0 * self.body_skid()",
+      SKID_POSE, group="mapping"),
+    M("skid_pose_board_not_turned", "mapping/snowboarder.py",
+      "R = rot_z(skid.yaw()) @ R", "R = R", SKID_POSE, group="mapping"),
+    M("skid_pose_goofy_skid_unmirrored", "mapping/stance.py",
+      '"C_f", "skid"):', '"C_f"):', SKID_POSE, group="mapping"),
+    M("brushed_band_groove_only", "mapping/skid_pose.py",
+      "0.5 * length * np.abs(np.sin(np.asarray(skid, float)))", "0.0 * length", SKID_POSE,
+      group="mapping"),
+    M("habit_style_ignored", "cli/terrain_flags.py",
+      "style = habit.style if habit is not None else", 'style = "skid" if False else',
+      [T + "test_skier_presets.py"]),
+    M("track_ignores_skid", "blender/render/terrain.py",
+      "half = brushed_half_width(half, equipment_length(load_rig(record.name)), skid)",
+      "half = half + 0.0 * skid", [T + "test_blender_skidding.py"], group="bake"),
+]
 
 IGNORE = shutil.ignore_patterns(".git", ".venv*", "__pycache__", ".hypothesis", ".pytest_cache",
                                 "out", "dist", "*.egg-info", "build")

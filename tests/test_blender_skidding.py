@@ -129,3 +129,32 @@ def test_the_beginner_preset_sets_its_wedge_and_speed(scene):
     assert (fig.turning.skid.style, fig.turning.terrain.target_speed) == ("SKID", 10.5)
     assert bpy.ops.turning.apply_figure_preset(sport="SKIER") == {"FINISHED"}
     assert (fig.turning.skid.style, fig.turning.terrain.target_speed) == ("SKID", 10.5)
+
+
+def test_a_skidded_track_is_a_brushed_band(scene):
+    """The render job's snow track (blender/render/terrain.py) follows the baked turn_skid:
+    a band ``ski length |sin skid|`` wide where the figure skids, two grooves where it carves."""
+    from blender_turning.blender.anim import bake
+    from blender_turning.blender.render import build, terrain
+    sc, mountain = scene
+    widths = {}
+    for style in ("CARVE", "SKID"):
+        fig = _figure(scene)
+        fig.turning.terrain.target_speed = 8.0
+        fig.turning.skid.style = style
+        assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+        frames = range(sc.frame_start, sc.frame_end + 1)
+        track = terrain.make_tracks(bpy, fig, mountain, build._material, frames)
+        v = np.array([vert.co[:] for vert in track.data.vertices])
+        n = len(frames)
+        # The ribbons' outer edges: the first offset's left edge, the last one's right edge.
+        widths[style] = np.linalg.norm(v[3 * n:4 * n, :2] - v[:n, :2], axis=1)
+        fc = next(fc for fc in bake.baked_channels(fig).fcurves
+                  if fc.data_path == '["turn_skid"]')
+        widths[style + " skid"] = np.array([fc.evaluate(f) for f in frames])
+    assert widths["CARVE"].max() < 0.35                          # 2 x 0.11 + 2 x 0.045
+    big = np.abs(widths["SKID skid"]) > np.radians(20)
+    assert big.sum() > 5
+    # Both skis' bands: 0.22 m apart, each 1.65 |sin skid| wide (the draping adds round-off).
+    want = 0.22 + 1.65 * np.abs(np.sin(widths["SKID skid"][big]))
+    np.testing.assert_allclose(widths["SKID"][big], want, rtol=0.02)

@@ -93,7 +93,8 @@ def test_read_outs_are_held_to_their_range_and_the_lean_to_the_angle():
     assert keys.channel_tolerance("readout", tol, [700.0, 650.0, 760.0]) == pytest.approx(0.22)
     assert keys.channel_tolerance("readout", tol, [10.0, 10.0]) == pytest.approx(0.02)
     assert keys.channel_tolerance("angle", tol) == tol.angle
-    assert set(keys.READOUTS) == {"turn_lean", "turn_curvature", "turn_leg_force", "turn_speed"}
+    assert set(keys.READOUTS) == {"turn_lean", "turn_curvature", "turn_leg_force", "turn_speed",
+                                  "turn_skid"}
 
 
 def test_a_constant_channel_with_round_off_keeps_two_keys():

@@ -183,3 +183,18 @@ def test_a_goofy_rider_turns_the_board_the_same_way():
     assert np.abs(traj.skid).max() > math.radians(60)
     # Through quaternions and back (goofy_track's local channels): measured 2e-15 rad.
     assert np.allclose(wrap(yaw_of(P, "board") - traj.skid), 0.0, atol=1e-9)
+
+
+def test_the_skid_is_baked_as_a_state_property(skidded):
+    traj, track, _ = skidded
+    assert np.array_equal(track.props["turn_skid"], traj.skid)
+
+
+def test_a_skidding_ski_brushes_a_band_its_length_times_sin_skid():
+    from blender_turning.mapping.skid_pose import brushed_half_width, equipment_length
+    assert equipment_length(load_rig("skier")) == pytest.approx(1.65)
+    assert equipment_length(load_rig("cyclist")) == 0.0
+    skid = np.radians([0.0, 1.0, 30.0, -90.0])
+    half = brushed_half_width(0.045, 1.65, skid)
+    # Carved and barely skidded: the groove; 30 deg: half of 1.65 sin 30; across: the length.
+    np.testing.assert_allclose(half, [0.045, 0.045, 0.4125, 0.825], rtol=1e-12)

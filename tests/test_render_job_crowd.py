@@ -101,6 +101,22 @@ def test_the_demo_has_a_ski_school_of_eight_with_a_shot(tmp_path):
     assert school["shot"] and len(school["members"]) >= 9
     alone = [f["name"] for f in cfg["figures"] if f["crowd"] is None]
     assert alone == ["Skier", "Snowboarder", "Telemark", "Cyclist"]
+    # Beginners in a wedge behind their instructor at a ski school's speed, a stop at the end,
+    # on the mountain's 18 deg (docs/skidding.md).
+    school = [f for f in cfg["figures"] if f["crowd"] is not None]
+    assert {(f["style"], f["target_speed"], f["stop_s"]) for f in school} == {("wedge", 5.0, 3.0)}
+    assert cfg["terrain"][school[0]["ground"]]["slope_deg"] > 15.0
+
+
+@pytest.mark.parametrize("old, new, words", [
+    ('style = "wedge"', 'style = "slip"', ["style = 'slip'", "wedge"]),
+    ("stop_s = 3.0", "stop_s = -1", ["stop_s = -1"])])
+def test_a_bad_style_or_stop_is_named(tmp_path, old, new, words):
+    text = (ROOT / "scripts" / "configs" / "demo.toml").read_text().replace(old, new)
+    with pytest.raises(Exception) as err:
+        load(tmp_path, text)
+    for w in words:
+        assert w in str(err.value)
 
 
 @pytest.mark.parametrize("extra, leader, names", [

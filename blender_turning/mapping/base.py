@@ -18,7 +18,7 @@ import numpy as np
 #: Custom properties baked onto the armature object (animated), with the trajectory column each
 #: comes from.  Users drive their own extras from these.
 STATE_PROPS = {"turn_phase": "phi", "turn_lean": "theta_v", "turn_curvature": "C_f",
-               "turn_leg_force": "F_leg", "turn_speed": "V_f"}
+               "turn_leg_force": "F_leg", "turn_speed": "V_f", "turn_skid": "skid"}
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,7 @@ __all__ = ["KeyTolerance", "DEFAULT_TOLERANCE", "KINDS", "READOUTS", "channel_to
 KINDS = ("location", "euler", "quaternion", "angle", "readout")
 #: The kind of each state read-out that is thinned (``turn_phase`` is not: it wraps).
 READOUTS = {"turn_lean": "angle", "turn_curvature": "readout", "turn_leg_force": "readout",
-            "turn_speed": "readout"}
+            "turn_speed": "readout", "turn_skid": "angle"}
 assert set(READOUTS) | {"turn_phase"} == set(STATE_PROPS)
 
 

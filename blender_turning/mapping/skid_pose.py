@@ -29,7 +29,7 @@ from . import bones as B
 from .common import add_local_rotation, mesh_points, smoothstep
 
 __all__ = ["SkidPose", "HIP_SHARE", "CHEST_SHARE", "TIP_GAP", "STOP_RAMP", "knee_direction",
-           "ski_front"]
+           "ski_front", "equipment_length", "brushed_half_width"]
 
 HIP_SHARE = 0.5
 """The share of the skid the pelvis turns with the skis."""
@@ -123,3 +123,20 @@ def ski_front(skel, spec, ski: str, anchor_rest) -> float:
     rest = skel.rest_of(ski)
     tips = mesh_points(spec, ski) @ rest[:3, :3].T + rest[:3, 3]
     return float(tips[:, 1].max() - float(anchor_rest[1]))
+
+
+def equipment_length(spec) -> float:
+    """The length of the rig ``spec``'s ski (its left one) or board, tip to tail, m; 0 for a rig
+    with neither (a bicycle does not skid)."""
+    for bone in ("ski.L", B.BOARD):
+        if bone in spec.bone_names:
+            y = mesh_points(spec, bone)[:, 1]
+            return float(y.max() - y.min())
+    return 0.0
+
+
+def brushed_half_width(groove_half: float, length: float, skid) -> np.ndarray:
+    """Half the width (n,) of the track a ski (board) of ``length`` m leaves at the skid angle
+    ``skid`` (n,) rad: a carved ski cuts a groove ``2 groove_half`` wide; a skidding one sweeps
+    the snow across the travel over ``length |sin skid|`` and brushes a band that wide."""
+    return np.maximum(groove_half, 0.5 * length * np.abs(np.sin(np.asarray(skid, float))))

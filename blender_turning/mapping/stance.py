@@ -36,7 +36,7 @@ def mirrored_trajectory(traj):
 def unmirror_props(props: dict) -> dict:
     """State properties of a mirrored run (``STATE_PROPS``) back to the run itself."""
     out = dict(props)
-    for p in ("turn_lean", "turn_curvature"):
+    for p in ("turn_lean", "turn_curvature", "turn_skid"):
         if p in out:
             out[p] = -np.asarray(out[p])
     if "turn_phase" in out:

@@ -86,6 +86,12 @@ def add_figure(bpy, fig, cfg, paths, groups, grounds):
     if fig["ground"] is not None:                    # rides on that terrain's mesh
         s.ground = grounds[fig["ground"]]
         s.terrain.target_speed = fig["target_speed"]
+        s.skid.style = fig["style"].upper()          # docs/skidding.md: how it brakes
+        scene = bpy.context.scene
+        stop = None if fig["stop_s"] is None else \
+            scene.frame_start + round(fig["stop_s"] * scene.render.fps)
+        if stop is not None and stop <= scene.frame_end:  # a stop after the job's end: none
+            s.skid.use_stop, s.skid.stop_frame = True, stop
     if fig["control"] == "path":
         s.path = paths[fig["path"]]
         s.obstacles = groups.get(fig["obstacles"]) if fig["obstacles"] else None

@@ -42,7 +42,7 @@ _KNOWN = {
     "obstacle": {"group", "kind", "at", "size", "height"},
     "figure": {"sport", "control", "name", "start", "direction_deg", "period", "lean_deg",
                "heading_deg", "path", "obstacles", "plan_curvature_rate", "ground", "speed",
-               "target_speed", "tracks"},
+               "target_speed", "tracks", "style", "stop_s"},
     "terrain": {"kind", "surface", "length", "width", "slope_deg", "cell", "seed", "moguls",
                 "at", "height", "spread", "road"},
 }
@@ -160,6 +160,8 @@ def read_figure(f, earlier, paths, obstacles, terrains) -> dict:
            "speed": f.number("speed", "V_cm", None),
            "target_speed": f.number("target_speed", "target_speed", 0.0),
            "tracks": f.boolean("tracks", True),
+           "style": f.string("style", "carve", choices=SPORTS[sport].styles),
+           "stop_s": f.number("stop_s", "stop_at", None),
            "body": None, "crowd": None, "time_offset": 0.0}
     if fig["ground"] is not None and fig["ground"] not in terrains:
         f.fail("ground", f"= {fig['ground']!r} is not a [terrain.<name>] of the config")

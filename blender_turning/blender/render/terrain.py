@@ -11,6 +11,8 @@ import numpy as np
 from ...core.sports import sport
 from ...core.terrain import HeightField
 from ...core.terrain_gen import ski_slope
+from ...mapping.rig_spec import load_rig
+from ...mapping.skid_pose import brushed_half_width, equipment_length
 
 #: Stops of exposure (see :func:`light_the_snow`); the colours below are before it.
 EXPOSURE = 1.6
@@ -57,7 +59,7 @@ def make_terrain(bpy, name, spec, material):
 
 def _draped_strip(bpy, name, ground_obj, x, y, half_width, lift, material, rgba, offsets=(0.0,)):
     """Ribbons of quads along ``(x, y)`` (n,), each ``offsets`` metres to the left of it and
-    ``half_width`` either side of that, every vertex a ray cast onto ``ground_obj`` lifted by
+    ``half_width`` (a number or (n,)) either side of that, every vertex a ray cast onto ``ground_obj`` lifted by
     ``lift``: they lie on the surface, not on a plane.  One mesh; faces in order along the path
     (all ribbons' k-th quads together)."""
     from mathutils.bvhtree import BVHTree
@@ -67,10 +69,11 @@ def _draped_strip(bpy, name, ground_obj, x, y, half_width, lift, material, rgba,
     d = np.gradient(p, axis=0)
     d /= np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)
     side = np.stack([-d[:, 1], d[:, 0]], 1)
+    half = np.broadcast_to(np.asarray(half_width, float), (len(p),))[:, None]
     verts = []
     for off in offsets:
         for sgn in (-1.0, 1.0):
-            for q in p + (off + sgn * half_width) * side:
+            for q in p + (off + sgn * half) * side:
                 hit = bvh.ray_cast((float(q[0]), float(q[1]), 1e3), (0.0, 0.0, -1.0))[0]
                 verts.append((q[0], q[1], (hit[2] if hit is not None else 0.0) + lift))
     n = len(p)
@@ -95,12 +98,17 @@ def make_road(bpy, hill_obj, field, spec, material):
 def make_tracks(bpy, fig_obj, ground_obj, material, frames):
     """The figure's tracks in the snow: a shaded groove ribbon along the baked foot point (a ski
     pair's width, a board's), growing behind the figure (a Build modifier reveals its faces in
-    order, one a frame)."""
+    order, one a frame).  Where the figure skids (its baked ``turn_skid``) each ski or the
+    board brushes a band ``length |sin skid|`` wide instead (docs/skidding.md Section 8)."""
     from ..anim import bake
     bag = bake.baked_channels(fig_obj)
     fcs = {fc.array_index: fc for fc in bag.fcurves if fc.data_path == "location"}
     xy = np.array([[fcs[i].evaluate(f) for i in range(2)] for f in frames])
-    half, offsets = sport(fig_obj.turning.sport).snow_tracks
+    skid_fc = next((fc for fc in bag.fcurves if fc.data_path == '["turn_skid"]'), None)
+    skid = np.array([skid_fc.evaluate(f) for f in frames]) if skid_fc else np.zeros(len(xy))
+    record = sport(fig_obj.turning.sport)
+    half, offsets = record.snow_tracks
+    half = brushed_half_width(half, equipment_length(load_rig(record.name)), skid)
     obj = _draped_strip(bpy, f"Track {fig_obj.name}", ground_obj, xy[:, 0], xy[:, 1], half,
                         0.03, material, TRACK, offsets)
     build = obj.modifiers.new("Grow", "BUILD")
