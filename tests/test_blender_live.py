@@ -260,6 +260,21 @@ def test_a_live_rebake_gives_keyed_equipment_back_to_its_constraints(scene):
     assert not any(KEYED in o for o in gear)
     assert off_its_bone(gear, rig, rigid) < 1e-5
 
+
+def test_a_key_of_the_users_in_the_bake_layer_stops_a_drag_step_before_it_writes(scene):
+    scene.frame_end = 240
+    fig = live_figure()
+    scene.frame_set(100)
+    fc = next(f for f in bake.baked_channels(fig).fcurves
+              if f.data_path.endswith(".rotation_quaternion"))
+    fc.keyframe_points[180].co.y += 0.2            # outside the window: only its fingerprint tells
+    fc.update()
+    before = baked(fig)
+    fig.turning.lean = math.radians(30)
+    live.schedule()                                # a drag step
+    assert_same(baked(fig), before)
+    assert "holds keys of yours on " + fc.data_path in live.FAILURES[fig.name].message
+
 class LayoutStub:
     """Stands in for ``UILayout`` (no windows in background mode): records the labels."""
 

@@ -296,9 +296,10 @@ def _rebake_window(fig, frames: FrameRange, grounds) -> bool:
     track = map_track(s.sport, part, FrameRange(mlo, mhi, frames.fps), options, fig,
                       surface_normals(part, ground))
     track = export_ready.with_take(fig, _track_rows(track, lo - mlo, hi - mlo + 1))
-    bake.check_track(fig, track)
+    if bake.rewrite_pose_track(fig, track) is None:       # checks the track first
+        return False
     export_ready.clear_equipment(fig)
-    return bake.rewrite_pose_track(fig, track) is not None
+    return True
 
 
 def _rebake_path(fig) -> None:
