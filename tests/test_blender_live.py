@@ -212,6 +212,69 @@ def test_a_drag_step_rebakes_the_window_on_screen_and_the_rest_when_it_stops(sce
     assert any(not np.array_equal(step[k][w], before[k][w]) for k in step)
 
 
+
+def bone_frames(gear, rig) -> list:
+    """The world matrix of each equipment object's bone (its Child Of target), now."""
+    cons = [next(c for c in o.constraints if c.type == "CHILD_OF") for o in gear]
+    return [rig.matrix_world @ rig.pose.bones[c.subtarget].matrix for c in cons]
+
+
+def on_its_bone(gear, rig) -> list:
+    """Each equipment object's world matrix in its bone's frame, now: a constant while the piece
+    rides rigid with the bone."""
+    return [b.inverted() @ o.matrix_world for b, o in zip(bone_frames(gear, rig), gear)]
+
+
+def off_its_bone(gear, rig, rigid) -> float:
+    """How far (world m, or the rotation's entries) each object is from where its bone puts it
+    with ``rigid`` (:func:`on_its_bone`), at most."""
+    want = [b @ r for b, r in zip(bone_frames(gear, rig), rigid)]
+    return max(float(np.abs(np.array(w) - np.array(o.matrix_world)).max())
+               for w, o in zip(want, gear))
+
+
+def test_a_live_rebake_gives_keyed_equipment_back_to_its_constraints(scene):
+    from rig_fixtures import activate, mixamo_skeleton
+    from blender_turning.blender.anim.export_ready import KEYED
+    scene.frame_end = 120
+    rig = mixamo_skeleton("Ann")
+    activate(rig)
+    assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
+    gear = list(rig.turning.rig.equipment.objects)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}        # export-ready: the gear keyed
+    assert gear and all(KEYED in o for o in gear)
+    scene.frame_set(60)
+    rigid = on_its_bone(gear, rig)
+    rig.turning.live = True
+    rig.turning.lean = math.radians(35)
+    live.schedule()                                # a drag step: the window only
+    scene.frame_set(60)
+    # On screen the gear is where the new motion puts its bones (measured 3.8e-6: float32
+    # world coordinates; the keys of the old motion left it 3.2 off).
+    assert off_its_bone(gear, rig, rigid) < 1e-5
+    assert not any(KEYED in o for o in gear)
+    assert all(c.enabled for o in gear for c in o.constraints)
+    live._state["last_change"] -= live.SETTLE                        # the drag ended
+    assert live._tick() is None and not live.is_pending(rig)
+    scene.frame_set(90)
+    assert not any(KEYED in o for o in gear)
+    assert off_its_bone(gear, rig, rigid) < 1e-5
+
+
+def test_a_key_of_the_users_in_the_bake_layer_stops_a_drag_step_before_it_writes(scene):
+    scene.frame_end = 240
+    fig = live_figure()
+    scene.frame_set(100)
+    fc = next(f for f in bake.baked_channels(fig).fcurves
+              if f.data_path.endswith(".rotation_quaternion"))
+    fc.keyframe_points[180].co.y += 0.2            # outside the window: only its fingerprint tells
+    fc.update()
+    before = baked(fig)
+    fig.turning.lean = math.radians(30)
+    live.schedule()                                # a drag step
+    assert_same(baked(fig), before)
+    assert "holds keys of yours on " + fc.data_path in live.FAILURES[fig.name].message
+
 class LayoutStub:
     """Stands in for ``UILayout`` (no windows in background mode): records the labels."""
 

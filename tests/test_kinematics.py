@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from blender_turning.mapping.base import BoneChannels
-from blender_turning.mapping.kinematics import (PoseBuilder, Skeleton, quat_continuous,
+from blender_turning.mapping.kinematics import (PoseBuilder, Skeleton, cross, quat_continuous,
                                                 quat_from_axis_angle, quat_from_matrix,
                                                 quat_mul, quat_to_matrix, rest_matrix,
                                                 rigid_inverse, two_bone_ik, vec_roll_to_mat3)
@@ -185,3 +185,12 @@ def test_rest_matrix_matches_blender(bone, want):
     m = rest_matrix(head, tail, roll)
     assert np.allclose(m[:3, :3], want, atol=2e-6)     # Blender stores float32
     assert np.allclose(m[:3, 3], head)
+
+
+def test_cross_is_numpys_cross_to_the_last_bit():
+    rng = np.random.default_rng(7)
+    a, b = rng.normal(size=(73, 3)), rng.normal(size=(73, 3))
+    np.testing.assert_array_equal(cross(a, b), np.cross(a, b))
+    np.testing.assert_array_equal(cross(a, b[0]), np.cross(a, b[0]))        # broadcast
+    np.testing.assert_array_equal(cross([0.0, 0.0, 1.0], a), np.cross([0.0, 0.0, 1.0], a))
+    np.testing.assert_array_equal(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0])

@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from . import bones as B
-from .kinematics import (PoseBuilder, frame_from_yx, quat_from_axis_angle, quat_mul, quat_to_matrix,
-                         rigid_inverse, stack_dot, two_bone_ik)
+from .kinematics import (PoseBuilder, cross, frame_from_yx, quat_from_axis_angle, quat_mul,
+                         quat_to_matrix, rigid_inverse, stack_dot, two_bone_ik)
 
 __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "static_force",
            "add_local_rotation", "lean", "carried", "limb_frames", "ik_limb", "place_on_ground",
@@ -40,7 +40,7 @@ def rotate_about(v, axis, angle):
     """Rodrigues: rotate vectors ``v`` (n, 3) about unit ``axis`` (n, 3) by ``angle`` (n,)."""
     k = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
     a = np.asarray(angle, float)[..., None]
-    return (v * np.cos(a) + np.cross(k, v) * np.sin(a)
+    return (v * np.cos(a) + cross(k, v) * np.sin(a)
             + k * np.sum(k * v, axis=-1, keepdims=True) * (1.0 - np.cos(a)))
 
 
@@ -69,7 +69,7 @@ def body_axes(skel):
     right[2] = 0.0
     right /= np.linalg.norm(right)
     up = np.array([0.0, 0.0, 1.0])
-    return right, np.cross(up, right), up
+    return right, cross(up, right), up
 
 
 def add_local_rotation(b: PoseBuilder, bone: str, axis_rest, angle):
@@ -121,7 +121,7 @@ def limb_frames(root, hinge_x, target, pole, l1: float, l2: float, twist=None, r
     if twist is not None:
         pole = rotate_about(pole, target - root, twist)
     mid, end = two_bone_ik(root, target, l1, l2, pole, reach)
-    n = np.cross(end - root, pole)
+    n = cross(end - root, pole)
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     n *= np.where(np.sum(n * hinge_x, axis=-1) < 0, -1.0, 1.0)[:, None]
     return frame_from_yx(mid - root, n), frame_from_yx(end - mid, n), end

@@ -52,7 +52,7 @@ from . import bones as B
 from .base import BoneChannels, PoseTrack
 from .bone_map import JOINT_PARENT, JOINTS, BoneMap
 from .common import rot_z
-from .kinematics import quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
+from .kinematics import cross, quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
 from ..core.registry import SPORTS
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
 from .surface import euler_xyz
@@ -100,7 +100,7 @@ def _unit(v):
 def swing(a, b) -> np.ndarray:
     """(..., 3, 3) the smallest rotation taking direction ``a`` onto ``b`` (Rodrigues)."""
     a, b = np.broadcast_arrays(_unit(a), _unit(b))
-    v = np.cross(a, b)
+    v = cross(a, b)
     c = np.sum(a * b, axis=-1)
     vx = np.zeros(a.shape + (3,))
     vx[..., 0, 1], vx[..., 0, 2], vx[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
@@ -233,7 +233,7 @@ def _heel_for_knee(bi, hip, ball, ankle, d, s):
     v, w = ankle - ball, hip - ball
     aw, av = np.sum(a * w, -1), np.sum(a * v, -1)
     P = np.sum(w * v, -1) - aw * av
-    Q = np.sum(w * np.cross(a, v), -1)
+    Q = np.sum(w * cross(a, v), -1)
     r = 0.5 * (np.sum(w * w, -1) + np.sum(v * v, -1) - d * d) - aw * av
     amp = np.hypot(P, Q)
     base = np.arctan2(Q, P)

@@ -70,10 +70,25 @@ def _channel_list(obj, track: PoseTrack):
 
 
 def check_track(obj, track: PoseTrack) -> None:
-    """Raise :class:`BakeError` if ``track`` names a bone ``obj`` lacks or holds a non-finite value.
+    """Raise :class:`BakeError` if ``track`` names a bone ``obj`` lacks or holds a non-finite value,
+    or ``obj``'s bake layer holds keys of the user's (:func:`.bake_layers.check_unedited`).
 
     Called before anything is written, so a bad track leaves the scene untouched.
     """
+    _check_values(obj, track)
+    action, strip = find_bake(obj)
+    if action is not None:
+        _check_unedited(obj, action, _bag(obj, action, strip))
+
+
+def _check_unedited(obj, action, bag, keys=None) -> None:
+    try:
+        bake_layers.check_unedited(obj, action, bag, keys)
+    except bake_layers.EditedBakeError as exc:
+        raise BakeError(str(exc)) from None
+
+
+def _check_values(obj, track: PoseTrack) -> None:
     if obj is None or obj.type != "ARMATURE":
         raise BakeError("the figure must be an armature object")
     missing = [b for b in track.bones if b not in obj.pose.bones]
@@ -86,12 +101,6 @@ def check_track(obj, track: PoseTrack) -> None:
         arrays += [a for a in (ch.location, ch.rotation) if a is not None]
     if not all(np.all(np.isfinite(a)) for a in arrays):
         raise BakeError("the pose track holds a value that is not a finite number")
-    action, strip = find_bake(obj)
-    if action is not None:
-        try:
-            bake_layers.check_unedited(obj, action, _bag(obj, action, strip))
-        except bake_layers.EditedBakeError as exc:
-            raise BakeError(str(exc)) from None
 
 
 def _is_ours(action, obj) -> bool:
@@ -241,7 +250,7 @@ def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
     Removing and adding F-curves makes Blender rebuild the depsgraph's relations (27 ms next to
     a Rigify rig, measured); writing the keys' values costs a few ms and only tags the action.
     """
-    check_track(obj, track)
+    _check_values(obj, track)
     action, strip = find_bake(obj)
     bag = None if action is None else _bag(obj, action, strip)
     if bag is None:
@@ -256,34 +265,32 @@ def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
     total = len(todo[0][0].keyframe_points)
     if any(len(fc.keyframe_points) != total for fc, _, _ in todo):
         return None
-    co = np.empty(2 * total, np.float32)
-    todo[0][0].keyframe_points.foreach_get("co", co)
+    # Each curve's keys are read once: the user's edits are checked on them, the window goes
+    # into them and their fingerprint is taken from what is written.
+    keys = {}
+    for fc, _, _ in todo:
+        buf = np.empty(2 * total, np.float32)
+        fc.keyframe_points.foreach_get("co", buf)
+        keys[(fc.data_path, fc.array_index)] = buf
+    co = keys[(todo[0][0].data_path, todo[0][0].array_index)]
     frames, n = np.asarray(track.frames, np.float32), len(track)
     i0 = int(np.searchsorted(co[0::2], frames[0]))
     if i0 + n > total or not np.array_equal(co[0::2][i0:i0 + n], frames):
         return None
-    if n == total:
-        for fc, _, values in todo:      # frames stay; LINEAR keys ignore their handles
-            co[1::2] = values
-            fc.keyframe_points.foreach_set("co", co)
-    else:
-        old = {}
-        for fc, _, _ in todo:
-            buf = np.empty(2 * total, np.float32)
-            fc.keyframe_points.foreach_get("co", buf)
-            old[fc] = buf
-        signs = {}
-        for fc, path, values in todo:   # w, x, y, z of one bone: the dot with the keys replaced
-            if path.endswith(".rotation_quaternion"):
-                signs[path] = signs.get(path, 0.0) + float(old[fc][2 * i0 + 1]) * float(values[0])
-        for fc, path, values in todo:
-            buf = old[fc]
-            buf[2 * i0 + 1:2 * (i0 + n):2] = -values if signs.get(path, 0.0) < 0 else values
-            fc.keyframe_points.foreach_set("co", buf)
+    _check_unedited(obj, action, bag, keys)
+    old = {fc: keys[(fc.data_path, fc.array_index)] for fc, _, _ in todo}
+    signs = {}
+    for fc, path, values in todo:   # w, x, y, z of one bone: the dot with the keys replaced
+        if n < total and path.endswith(".rotation_quaternion"):
+            signs[path] = signs.get(path, 0.0) + float(old[fc][2 * i0 + 1]) * float(values[0])
+    for fc, path, values in todo:       # frames stay; LINEAR keys ignore their handles
+        buf = old[fc]
+        buf[2 * i0 + 1:2 * (i0 + n):2] = -values if signs.get(path, 0.0) < 0 else values
+        fc.keyframe_points.foreach_set("co", buf)
     for prop, values in track.props.items():
         if prop not in obj.keys():
             obj[prop] = float(values[0])
-    bake_layers.fingerprint(action, bag)    # the bake's own keys now: not the user's edits
+    bake_layers.fingerprint(action, bag, keys)  # the bake's own keys now: not the user's edits
     action.update_tag()                 # re-evaluate the animation, relations unchanged
     return BakeResult(action, len(todo), n)
 

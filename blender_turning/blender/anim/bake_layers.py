@@ -58,23 +58,29 @@ def push_bake(obj, action):
     return strip
 
 
-def _key_crc(fc) -> int:
-    co = np.empty(2 * len(fc.keyframe_points), np.float32)
-    fc.keyframe_points.foreach_get("co", co)
+def _key_crc(fc, keys=None) -> int:
+    """The fingerprint of ``fc``'s key positions; ``keys``: ``{(data_path, index): co}`` of
+    curves already read (float32, as ``foreach_get`` gives them), taken from there."""
+    co = None if keys is None else keys.get((fc.data_path, fc.array_index))
+    if co is None:
+        co = np.empty(2 * len(fc.keyframe_points), np.float32)
+        fc.keyframe_points.foreach_get("co", co)
     return zlib.crc32(co.tobytes())
 
 
-def fingerprint(action, bag) -> None:
+def fingerprint(action, bag, keys=None) -> None:
     """Remember the keys of every curve the bake wrote (positions only: a stepped bake sets the
-    handles afterwards, and a user's key always moves or adds a position)."""
+    handles afterwards, and a user's key always moves or adds a position); ``keys`` as in
+    :func:`_key_crc`."""
     paths = set(action.get("turning_baked_paths", "").splitlines())
-    action[FINGERPRINTS] = "\n".join(f"{fc.data_path}|{fc.array_index}|{_key_crc(fc)}"
+    action[FINGERPRINTS] = "\n".join(f"{fc.data_path}|{fc.array_index}|{_key_crc(fc, keys)}"
                                      for fc in bag.fcurves if fc.data_path in paths)
 
 
-def edited_curves(action, bag) -> list:
+def edited_curves(action, bag, keys=None) -> list:
     """``[(data_path, index)]`` of the baked curves whose keys changed since the bake wrote them
-    (``[]`` for a bake written before fingerprints were kept: nothing to compare with)."""
+    (``[]`` for a bake written before fingerprints were kept: nothing to compare with);
+    ``keys`` as in :func:`_key_crc`."""
     known = {}
     for line in action.get(FINGERPRINTS, "").splitlines():
         path, index, crc = line.rsplit("|", 2)
@@ -83,13 +89,14 @@ def edited_curves(action, bag) -> list:
         return []
     have = {(fc.data_path, fc.array_index): fc for fc in bag.fcurves}
     return [key for key, crc in known.items()
-            if key not in have or _key_crc(have[key]) != crc]
+            if key not in have or _key_crc(have[key], keys) != crc]
 
 
-def check_unedited(obj, action, bag) -> None:
+def check_unedited(obj, action, bag, keys=None) -> None:
     """Raise :class:`EditedBakeError` if the user keyed (or deleted) a baked curve of ``obj``'s
-    bake layer since the bake: a rebake or Clear Bake would delete those keys."""
-    edited = edited_curves(action, bag)
+    bake layer since the bake: a rebake or Clear Bake would delete those keys (``keys`` as in
+    :func:`_key_crc`)."""
+    edited = edited_curves(action, bag, keys)
     if edited:
         path, index = edited[0]
         more = f" (and {len(edited) - 1} more channels)" if len(edited) > 1 else ""

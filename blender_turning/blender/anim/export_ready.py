@@ -11,7 +11,7 @@ is no closed form of it here: this is the one place the add-on steps the scene t
 frames), writes whole F-curves of it (``foreach_set``, one action per object, owned by it as the
 figure's action is by the figure), and turns the constraints and drivers off, so the keys alone
 move the equipment, the same at every frame as before.  :func:`clear_equipment` undoes all of
-it (Clear Bake, a re-bake, Remove Figure).
+it (Clear Bake, a re-bake, a Live Preview re-bake, Remove Figure).
 
 A built-in figure needs none of this: its equipment is part of its skinned mesh and moves with
 the bones the bake keys.

@@ -11,7 +11,10 @@ Preview is on and its digest differs from the stored one (and from the one that 
 
 :func:`refresh` re-bakes every pending figure: computed first, written only when that succeeded,
 into the existing F-curves in place where the channels and frames are the same
-(:func:`.bake.rewrite_pose_track`).  A failure (a fall, a setting out of range) leaves the last
+(:func:`.bake.rewrite_pose_track`).  A user rig's equipment keyed for export
+(:mod:`..anim.export_ready`) is given back to its constraints and drivers: it follows every
+re-bake at once, where keying it again steps the scene through every frame (about 30 ms a frame
+on a Rigify rig); Bake Turns keys it again.  A failure (a fall, a setting out of range) leaves the last
 good bake, and is shown in the panel, beside the figure in the viewport and, for a fall, as a
 timeline marker at the frame where the figure falls.
 
@@ -241,10 +244,9 @@ def _rebake_turns(fig, frames, grounds, with_track: bool) -> None:
     if start is not None:                 # as Bake Turns: the height where the user put it stays
         fig.turning.start = (start[0], start[1], float(fig.location[2]))
         fig.turning.start_heading = start[2]
+    export_ready.clear_equipment(fig)
     if bake.rewrite_pose_track(fig, track) is None:
         bake.bake_pose_track(fig, track)
-    if with_track and any(export_ready.KEYED in e for e in export_ready.equipment(fig)):
-        export_ready.bake_equipment(fig, track.frames)  # keyed gear follows the new motion
     if with_track or fig.turning.foot_track is None:
         foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z)
     else:
@@ -294,8 +296,10 @@ def _rebake_window(fig, frames: FrameRange, grounds) -> bool:
     track = map_track(s.sport, part, FrameRange(mlo, mhi, frames.fps), options, fig,
                       surface_normals(part, ground))
     track = export_ready.with_take(fig, _track_rows(track, lo - mlo, hi - mlo + 1))
-    bake.check_track(fig, track)
-    return bake.rewrite_pose_track(fig, track) is not None
+    if bake.rewrite_pose_track(fig, track) is None:       # checks the track first
+        return False
+    export_ready.clear_equipment(fig)
+    return True
 
 
 def _rebake_path(fig) -> None:

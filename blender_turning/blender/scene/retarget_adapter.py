@@ -91,12 +91,18 @@ def check_transform(obj) -> None:
 
 
 def user_rig(obj) -> UserRig:
+    """``obj``'s armature at rest (read at every bake and every Live Preview step: the matrices
+    in one ``foreach_get``, Blender's column-major floats turned row-major)."""
     bones = obj.data.bones
+    n = len(bones)
+    rest = np.empty(16 * n, np.float32)
+    bones.foreach_get("matrix_local", rest)
+    local = np.empty(n, bool)
+    bones.foreach_get("use_local_location", local)
     return UserRig(tuple(b.name for b in bones),
                    tuple(b.parent.name if b.parent else None for b in bones),
-                   np.array([np.array(b.matrix_local) for b in bones]),
-                   tuple(bool(b.use_local_location) for b in bones),
-                   float(obj.scale[0]), obj.name)
+                   rest.reshape(n, 4, 4).transpose(0, 2, 1).astype(float),
+                   tuple(bool(v) for v in local), float(obj.scale[0]), obj.name)
 
 
 def resolve_bone_map(obj, choice: str) -> BoneMap:
