@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
-from blender_turning.core.model import RESISTANCE
-from blender_turning.core.skidding import STOP_EDGE, WEDGE_EDGE, Skidding
-from blender_turning.core.terrain import Plane
-from blender_turning.core.trajectory import Trajectory
+from blender_turning.core.physics.model import RESISTANCE
+from blender_turning.core.physics.skidding import STOP_EDGE, WEDGE_EDGE, Skidding
+from blender_turning.core.ground.terrain import Plane
+from blender_turning.core.physics.trajectory import Trajectory
 from blender_turning.mapping import map_trajectory
 from blender_turning.mapping import skid_pose
 from blender_turning.mapping.kinematics import Skeleton

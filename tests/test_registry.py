@@ -12,12 +12,12 @@ import pytest
 import registry_fixtures as fx
 from blender_turning.core import preset, simulate, slalom_start
 from blender_turning.core.controllers import CONTROLLERS
-from blender_turning.core.params import PRESETS, BodyParams, Figure, Limits
+from blender_turning.core.physics.params import PRESETS, BodyParams, Figure, Limits
 from blender_turning.core.registry import SPORTS, Registry
-from blender_turning.core.scene import scene_from_dict
-from blender_turning.core.scene_terrain import read_terrain
+from blender_turning.core.course.scene import scene_from_dict
+from blender_turning.core.ground.scene_terrain import read_terrain
 from blender_turning.core.sports import Retarget, Sport, register_sport, sport
-from blender_turning.core.model import RESISTANCE, Resistance
+from blender_turning.core.physics.model import RESISTANCE, Resistance
 from blender_turning.core.validate import FieldError, Fields
 from blender_turning.crowd import crowd_from_dict
 from blender_turning.crowd.formations import FORMATIONS

@@ -16,11 +16,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .grip import Grip
-from .params import Figure
-from .skidding import STYLES
+from .physics.grip import Grip
+from .physics.params import Figure
+from .physics.skidding import STYLES
 from .registry import SPORTS
-from .model import Resistance
+from .physics.model import Resistance
 from .validate import check
 
 __all__ = ["Sport", "Retarget", "SPORTS", "register_sport", "unregister_sport", "sport"]
@@ -124,7 +124,7 @@ class Sport:
         if self.retarget is not None and not isinstance(self.retarget, Retarget):
             raise ValueError(f"sport {self.name!r}: retarget must be a Retarget or None")
         if self.grip is not None and not isinstance(self.grip, Grip):
-            raise ValueError(f"sport {self.name!r}: grip must be a core.grip.Grip or None")
+            raise ValueError(f"sport {self.name!r}: grip must be a core.physics.grip.Grip or None")
         if "carve" not in self.styles or not set(self.styles) <= set(STYLES):
             raise ValueError(f"sport {self.name!r}: styles = {self.styles!r} must hold 'carve' "
                              f"and only {', '.join(STYLES)}")

@@ -10,12 +10,12 @@ legs follow the skis, as a skier's does in a skidded turn and a hockey stop.
 
 - **Wedge** (``meta["style"] == "wedge"``): the ``skid`` column is the wedge's half-angle; the
   left ski yaws by ``-|skid|``, the right by ``+|skid|`` (tips together), both edged inward by
-  :data:`..core.skidding.WEDGE_EDGE` on top of the turn's tilt (the knees turn in by the leg
+  :data:`..core.physics.skidding.WEDGE_EDGE` on top of the turn's tilt (the knees turn in by the leg
   twist the skier's mapping gives a ski edged more than the body leans); the boots spread so
   that the tips stay :data:`TIP_GAP` apart.
 - **Stop** (from ``meta["stop_at"]``): both skis (the board) yaw by ``skid`` (up to 90 deg, and
   across the fall line when the figure stands), edged uphill by
-  :data:`..core.skidding.STOP_EDGE`, ramped in over :data:`STOP_RAMP`.
+  :data:`..core.physics.skidding.STOP_EDGE`, ramped in over :data:`STOP_RAMP`.
 
 A carved run (``skid`` 0 on every frame, no wedge, no stop) is left exactly as it was: every
 function returns its input (tested bit for bit).
@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.skidding import STOP_EDGE, WEDGE_EDGE
+from ..core.physics.skidding import STOP_EDGE, WEDGE_EDGE
 from . import bones as B
 from .common import add_local_rotation, mesh_points, smoothstep
 

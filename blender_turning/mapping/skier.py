@@ -13,11 +13,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.params import BodyParams, Figure, Limits, check_range
+from ..core.physics.params import BodyParams, Figure, Limits, check_range
 from ..core.equipment import (Carving, SportPreset, carving_limits, carving_of,
                               register_preset)
 from ..core.sports import Retarget, Sport, register_sport
-from ..core.model import Resistance
+from ..core.physics.model import Resistance
 from . import bones as B
 from .base import Mapping
 from .anthropometry import centre_and_roll_inertia

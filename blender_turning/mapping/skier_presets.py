@@ -1,6 +1,6 @@
 """The skier's everyday presets (docs/skidding.md Section 8): a beginner in a wedge and a
 recreational skier who skids its turns, each with its skis (the sidecut relation,
-core/equipment.py) and its speed habit on a slope (core/speed_habits.py).
+core/equipment.py) and its speed habit on a slope (core/controllers/speed_habits.py).
 
 Skis: a beginner's ski is short and soft, 150 cm with a sidecut radius of about 11 m; a
 recreational all-mountain ski is about head height, 165 cm, radius about 15 m (manufacturers'
@@ -18,8 +18,8 @@ from __future__ import annotations
 import math
 
 from ..core.equipment import Carving, SportPreset, carving_limits, register_preset
-from ..core.params import BodyParams, Figure
-from ..core.speed_habits import HABITS, SpeedHabit
+from ..core.physics.params import BodyParams, Figure
+from ..core.controllers.speed_habits import HABITS, SpeedHabit
 
 BEGINNER_SKI = Carving(length=1.50, sidecut_radius=11.0, edge_max=math.radians(30.0))
 RECREATIONAL_SKI = Carving(length=1.65, sidecut_radius=15.0, edge_max=math.radians(55.0))

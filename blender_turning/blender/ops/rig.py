@@ -7,7 +7,7 @@ import math
 import bpy
 from bpy.props import EnumProperty
 
-from ...core.params import PRESETS
+from ...core.physics.params import PRESETS
 from ...core.errors import TurningError
 from ...mapping.stance import STANCES as RIG_STANCES
 from ...mapping.user_rig import fit_rig

@@ -32,7 +32,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .params import BodyParams
+from ..physics.params import BodyParams
 
 #: beta is kept in this range: a half-turn 5x shallower or 3x sharper than planned is the most the
 #: controller asks for (the body's own bounds are usually tighter: :mod:`.controllers.feasible`);

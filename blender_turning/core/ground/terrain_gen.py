@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from .params import check_range
+from ..physics.params import check_range
 from .terrain import HeightField
 
 __all__ = ["ski_slope"]

@@ -9,8 +9,8 @@ from typing import Callable
 
 import numpy as np
 
-from .ranges import RANGES
-from .validate import FieldError, check, nearest, read_text
+from ..ranges import RANGES
+from ..validate import FieldError, check, nearest, read_text
 
 
 class Schedule:

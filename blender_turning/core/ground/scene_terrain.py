@@ -21,10 +21,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .ranges import RANGES
+from ..ranges import RANGES
 from .terrain import HeightField, Plane
-from .model import RESISTANCE, Resistance
-from .validate import Fields, check
+from ..physics.model import RESISTANCE, Resistance
+from ..validate import Fields, check
 
 __all__ = ["read_terrain"]
 

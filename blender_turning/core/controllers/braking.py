@@ -40,8 +40,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .validate import check
-from .controllers.feasible import BRAKE_BETAS
+from ..validate import check
+from .feasible import BRAKE_BETAS
 
 __all__ = ["TargetSpeed"]
 

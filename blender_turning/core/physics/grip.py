@@ -26,7 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .validate import check
+from ..validate import check
 
 from .xp import Scalar, backend
 

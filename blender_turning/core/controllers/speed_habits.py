@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .skidding import STYLES
-from .validate import check_range
+from ..physics.skidding import STYLES
+from ..validate import check_range
 
 __all__ = ["SpeedHabit", "HABITS", "habit_of"]
 

@@ -25,7 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .validate import check
+from ..validate import check
 
 __all__ = ["Plane", "HeightField", "LazyHeightField", "FLAT", "SurfaceFrame", "surface_frame",
            "OffTerrain"]

@@ -24,10 +24,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .obstacles import Obstacles
-from .params import Figure
+from ..physics.params import Figure
 from .path import HermitePath, PathDistance, PathProgress
-from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile, follow
-from .planner.speed_cap import path_curvature_max
+from ..planner import FollowResult, PlannerSettings, Problem, SpeedProfile, follow
+from ..planner.speed_cap import path_curvature_max
 
 __all__ = ["FollowSetup", "DEFAULT_CLEARANCE", "TIME_LIMIT_FACTOR", "start_state"]
 

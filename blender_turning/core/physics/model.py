@@ -42,9 +42,9 @@ import numpy as np
 
 from .dynamics import bound_cf
 from .params import BodyParams, Limits
-from .terrain import FLAT, HeightField, LazyHeightField, Plane, surface_frame
-from .registry import SPORT_PRESETS, SPORTS, ChainView
-from .validate import check
+from ..ground.terrain import FLAT, HeightField, LazyHeightField, Plane, surface_frame
+from ..registry import SPORT_PRESETS, SPORTS, ChainView
+from ..validate import check
 from .xp import Numpy, Scalar, backend
 
 __all__ = ["STATE", "V_CM", "Flat", "Plane", "HeightField", "LazyHeightField", "FLAT",

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .xp import backend
+from ..physics.xp import backend
 
 TWO_PI = 2.0 * np.pi
 

@@ -12,18 +12,18 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .controllers import Controller
-from .controllers.feasible import fall_cause
+from ..controllers import Controller
+from ..controllers.feasible import fall_cause
 from .dynamics import THETA_V, leg_force, rk4_step, stage
-from .errors import FellOver
-from .heading_table import heading_table
+from ..errors import FellOver
+from ..controllers.heading_table import heading_table
 from .one_figure import integrate
 from .params import BodyParams, Figure, Limits, check_range
-from .phase import phase
-from .schedule import Schedule
-from .terrain import FLAT
+from ..controllers.phase import phase
+from ..controllers.schedule import Schedule
+from ..ground.terrain import FLAT
 from .model import NO_RESISTANCE, Resistance, speed_held
-from .registry import SPORTS
+from ..registry import SPORTS
 from .skidding import lean_within_grip
 from .terrain_sim import simulate_free
 from .trajectory import COLUMNS, Trajectory, body_meta

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .phase import phase
+from ..controllers.phase import phase
 
 __all__ = ["PhaseEstimate", "estimate_phase", "axis_crossings"]
 

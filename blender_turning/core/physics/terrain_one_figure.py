@@ -36,10 +36,10 @@ from __future__ import annotations
 
 import math
 
-from .controllers.base import Controller
+from ..controllers.base import Controller
 from .dynamics import PHYSICAL_MARGIN
 from .params import BodyParams, Limits
-from .terrain import surface_frame
+from ..ground.terrain import surface_frame
 from .model import Resistance
 
 __all__ = ["TerrainStage"]

@@ -17,12 +17,12 @@ import numpy as np
 from .moving import around
 from .obstacles import Obstacles
 from .follow_problem import DEFAULT_CLEARANCE, FollowSetup, start_state
-from .params import PRESETS, Figure, preset
+from ..physics.params import PRESETS, Figure, preset
 from .path import HermitePath
-from .planner import FollowResult, PlannerSettings, Problem, SpeedProfile
-from .ranges import RANGES
-from .scene_terrain import read_terrain
-from .validate import FieldError, Fields, read_text
+from ..planner import FollowResult, PlannerSettings, Problem, SpeedProfile
+from ..ranges import RANGES
+from ..ground.scene_terrain import read_terrain
+from ..validate import FieldError, Fields, read_text
 
 __all__ = ["Scene", "load_scene", "scene_from_dict"]
 

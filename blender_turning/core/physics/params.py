@@ -12,9 +12,9 @@ import math
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
-from .ranges import RANGES
-from .registry import SPORT_PRESETS, SPORTS, ChainView
-from .validate import check, check_range
+from ..ranges import RANGES
+from ..registry import SPORT_PRESETS, SPORTS, ChainView
+from ..validate import check, check_range
 
 __all__ = ["BodyParams", "Limits", "Figure", "PRESETS", "preset", "check_range"]
 

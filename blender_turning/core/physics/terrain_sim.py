@@ -19,15 +19,15 @@ import math
 
 import numpy as np
 
-from .braking import TargetSpeed, _Braking
+from ..controllers.braking import TargetSpeed, _Braking
 from .skidding import Skidding, _Skid, skid_meta, stand_rows
-from .controllers import Controller
-from .controllers.feasible import fall_cause
-from .errors import FellOver, LeftTerrain, Stopped
+from ..controllers import Controller
+from ..controllers.feasible import fall_cause
+from ..errors import FellOver, LeftTerrain, Stopped
 from .params import Figure, check_range
-from .phase import phase
-from .schedule import Schedule
-from .terrain import FLAT, HeightField, OffTerrain, Plane, surface_frame
+from ..controllers.phase import phase
+from ..controllers.schedule import Schedule
+from ..ground.terrain import FLAT, HeightField, OffTerrain, Plane, surface_frame
 from . import model
 from .model import NO_RESISTANCE, Resistance
 from .terrain_one_figure import TerrainStage

@@ -20,10 +20,10 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from .dynamics import foot_speed, forward_alpha, leg_force
-from .files import atomic_write_text
+from ..files import atomic_write_text
 from .params import BodyParams, Limits
-from .terrain import FLAT
-from .phase import phase
+from ..ground.terrain import FLAT
+from ..controllers.phase import phase
 
 COLUMNS = ("t", "x", "y", "theta_dir", "theta_v", "omega_v", "alpha_v", "C_f", "F_leg", "phi",
            "V_f", "s", "z", "V_cm", "skid", "ski_heading", "brake")

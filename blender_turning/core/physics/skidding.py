@@ -34,9 +34,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .grip import SKID_MAX_STOP, SKID_MAX_TURNING, SNOW, FootBrake, Grip, skid_angle
-from .schedule import Schedule
-from .terrain import surface_frame
-from .validate import check
+from ..controllers.schedule import Schedule
+from ..ground.terrain import surface_frame
+from ..validate import check
 
 __all__ = ["Skidding", "STYLES", "STOP_SIDES", "STOP_EDGE", "WEDGE_MAX", "turning_share",
            "lean_within_grip", "skid_meta", "stand_rows"]
@@ -93,7 +93,7 @@ class Skidding:
         if self.stop_at is not None:
             check("stop_at", self.stop_at, "stop_at")
         if not isinstance(self.grip, Grip):
-            raise ValueError(f"grip = {self.grip!r} is not a core.grip.Grip")
+            raise ValueError(f"grip = {self.grip!r} is not a core.physics.grip.Grip")
 
 
 class _Skid:
