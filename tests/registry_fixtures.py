@@ -22,7 +22,7 @@ SPORT_MODULE = textwrap.dedent('''
     from blender_turning.core.sports import Retarget, Sport, register_sport
     from blender_turning.core.physics.model import Resistance
     from blender_turning.mapping import bones as B
-    from blender_turning.mapping.skier import SkierMapping
+    from blender_turning.mapping.sports.skier import SkierMapping
 
 
     class SkiBikeMapping(SkierMapping):

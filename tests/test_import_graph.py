@@ -211,7 +211,7 @@ FOLDER_MODULES = 12
 
 
 @pytest.mark.parametrize("part, least_folders, least_modules", [
-    ("blender", 7, 30), ("core", 6, 40),
+    ("blender", 7, 30), ("core", 6, 40), ("mapping", 3, 20),
 ])
 def test_folders_hold_a_dozen_modules_at_most(part, least_folders, least_modules):
     """Each folder of ``blender/``, ``core/`` and ``mapping/`` holds the modules of one part, at

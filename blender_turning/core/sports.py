@@ -28,7 +28,7 @@ __all__ = ["Sport", "Retarget", "SPORTS", "register_sport", "unregister_sport", 
 
 @dataclass(frozen=True, eq=False)
 class Retarget:
-    """How the sport's motion goes onto a user's own armature (:mod:`..mapping.retarget`)."""
+    """How the sport's motion goes onto a user's own armature (:mod:`..mapping.retarget.retarget`)."""
 
     attach: dict
     """Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig."""
@@ -86,7 +86,7 @@ class Sport:
     """How it goes onto a user's rig; ``None``: Make Figure does not offer the sport."""
     stances: tuple = ()
     """``("regular", "goofy")`` for a sport ridden either way round (the goofy rider is the
-    regular one's mirror image, :mod:`..mapping.stance`); ``()``: one way only."""
+    regular one's mirror image, :mod:`..mapping.retarget.stance`); ``()``: one way only."""
     snow_tracks: tuple = (0.045, (-0.11, 0.11))
     """The grooves the equipment cuts in snow, as the render job draws them: ``(half width,
     lateral offsets)``, m (skis: two narrow ones a hip's width apart)."""

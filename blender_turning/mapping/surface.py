@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .common import rot_z
+from .sports.common import rot_z
 
 __all__ = ["Placement", "surface_axes", "euler_xyz"]
 

@@ -24,8 +24,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.physics.skidding import STOP_EDGE, WEDGE_EDGE
-from . import bones as B
+from ...core.physics.skidding import STOP_EDGE, WEDGE_EDGE
+from .. import bones as B
 from .common import add_local_rotation, mesh_points, smoothstep
 
 __all__ = ["SkidPose", "HIP_SHARE", "CHEST_SHARE", "TIP_GAP", "STOP_RAMP", "knee_direction",

@@ -16,12 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.physics.params import BodyParams, Figure, Limits, check_range
-from ..core.sports import Retarget, Sport, register_sport
-from ..core.physics.grip import TYRE
-from ..core.physics.model import Resistance
-from . import bones as B
-from .base import Mapping
+from ...core.physics.params import BodyParams, Figure, Limits, check_range
+from ...core.sports import Retarget, Sport, register_sport
+from ...core.physics.grip import TYRE
+from ...core.physics.model import Resistance
+from .. import bones as B
+from ..base import Mapping
 from .common import add_local_rotation, carried, ik_limb, lean, tyre_radius
 from .snow import carry_vec
 

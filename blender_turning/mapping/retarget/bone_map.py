@@ -32,9 +32,9 @@ import json
 from dataclasses import dataclass
 from functools import lru_cache
 
-from . import bones as B
-from .bones import MissingBoneError
-from .rig_spec import RIGS_DIR
+from .. import bones as B
+from ..bones import MissingBoneError
+from ..rig_spec import RIGS_DIR
 
 __all__ = ["JOINTS", "REQUIRED_JOINTS", "JOINT_PARENT", "BONE_MAPS", "BoneMap", "Control",
            "parse_bone_map", "load_bone_map", "missing_joints", "require_joints", "auto_bone_map"]

@@ -13,17 +13,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.physics.params import BodyParams, Figure, Limits, check_range
-from ..core.equipment import (Carving, SportPreset, carving_limits, carving_of,
+from ...core.physics.params import BodyParams, Figure, Limits, check_range
+from ...core.equipment import (Carving, SportPreset, carving_limits, carving_of,
                               register_preset)
-from ..core.sports import Retarget, Sport, register_sport
-from ..core.physics.model import Resistance
-from . import bones as B
-from .base import Mapping
-from .anthropometry import centre_and_roll_inertia
+from ...core.sports import Retarget, Sport, register_sport
+from ...core.physics.model import Resistance
+from .. import bones as B
+from ..base import Mapping
+from ..anthropometry import centre_and_roll_inertia
 from .common import (add_local_rotation, carried, ik_limb, lean, leg_lengths, limb_frames,
                      phase_window, place_on_ground, rot_y, rot_z, smoothstep)
-from .kinematics import PoseBuilder, frame_from_yx, rigid_inverse, stack_dot
+from ..kinematics import PoseBuilder, frame_from_yx, rigid_inverse, stack_dot
 from .skid_pose import SkidPose, knee_direction, ski_front
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,

@@ -7,11 +7,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import bones as B
+from .. import bones as B
 from .bone_map import BoneMap
-from .common import tyre_radius
+from ..sports.common import tyre_radius
 from .retarget import ATTACH, SLIDE, SPIN, TRACKS, _rest_difference
-from .rig_spec import load_rig
+from ..rig_spec import load_rig
 from .stance import builtin_skeleton
 from .user_rig import RigFit, UserRig, fit_rig
 

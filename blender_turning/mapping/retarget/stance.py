@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.registry import SPORTS
-from . import bones as B
-from .base import BoneChannels, PoseTrack
-from .kinematics import Skeleton, quat_continuous, quat_from_matrix, rigid_inverse
-from .rig_spec import load_rig
+from ...core.registry import SPORTS
+from .. import bones as B
+from ..base import BoneChannels, PoseTrack
+from ..kinematics import Skeleton, quat_continuous, quat_from_matrix, rigid_inverse
+from ..rig_spec import load_rig
 
 __all__ = ["STANCES", "mirrored_trajectory", "unmirror_props", "MirroredSkeleton",
            "builtin_skeleton", "mirror_poses", "goofy_track"]

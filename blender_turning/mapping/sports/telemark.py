@@ -16,10 +16,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.physics.params import BodyParams, Figure, Limits, check_range
-from ..core.sports import Retarget, Sport, register_sport
-from ..core.physics.model import Resistance
-from . import bones as B
+from ...core.physics.params import BodyParams, Figure, Limits, check_range
+from ...core.sports import Retarget, Sport, register_sport
+from ...core.physics.model import Resistance
+from .. import bones as B
 from .common import carried, rotate_about
 from .skier import SkierMapping, SkierOptions
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .bone_map import BoneMap, require_joints
-from .common import rot_z
+from ..sports.common import rot_z
 from .stance import builtin_skeleton
 
 __all__ = ["UserRig", "RigFit", "fit_rig"]
@@ -45,7 +45,7 @@ class UserRig:
         object.__setattr__(self, "_index", {n: i for i, n in enumerate(self.names)})
 
     def i(self, name: str) -> int:
-        from .bones import MissingBoneError
+        from ..bones import MissingBoneError
         try:
             return self._index[name]
         except KeyError:

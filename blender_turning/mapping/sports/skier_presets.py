@@ -17,9 +17,9 @@ from __future__ import annotations
 
 import math
 
-from ..core.equipment import Carving, SportPreset, carving_limits, register_preset
-from ..core.physics.params import BodyParams, Figure
-from ..core.controllers.speed_habits import HABITS, SpeedHabit
+from ...core.equipment import Carving, SportPreset, carving_limits, register_preset
+from ...core.physics.params import BodyParams, Figure
+from ...core.controllers.speed_habits import HABITS, SpeedHabit
 
 BEGINNER_SKI = Carving(length=1.50, sidecut_radius=11.0, edge_max=math.radians(30.0))
 RECREATIONAL_SKI = Carving(length=1.65, sidecut_radius=15.0, edge_max=math.radians(55.0))

@@ -15,13 +15,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.physics.params import BodyParams, Figure, Limits, check_range
-from ..core.equipment import (Carving, SportPreset, carving_limits, carving_of,
+from ...core.physics.params import BodyParams, Figure, Limits, check_range
+from ...core.equipment import (Carving, SportPreset, carving_limits, carving_of,
                               register_preset)
-from ..core.sports import Retarget, Sport, register_sport
-from ..core.physics.model import Resistance
-from . import bones as B
-from .base import Mapping
+from ...core.sports import Retarget, Sport, register_sport
+from ...core.physics.model import Resistance
+from .. import bones as B
+from ..base import Mapping
 from .common import add_local_rotation, carried, place_on_ground, rot_y, rot_z
 from .skid_pose import SkidPose, knee_direction
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.physics.params import check_range
-from . import bones as B
+from ...core.physics.params import check_range
+from .. import bones as B
 from .common import (add_local_rotation, body_axes, carried, ik_limb, lean, leg_lengths,
                      static_force)
 

@@ -48,14 +48,14 @@ import math
 
 import numpy as np
 
-from . import bones as B
-from .base import BoneChannels, PoseTrack
+from .. import bones as B
+from ..base import BoneChannels, PoseTrack
 from .bone_map import JOINT_PARENT, JOINTS, BoneMap
-from .common import rot_z
-from .kinematics import quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
-from ..core.registry import SPORTS
+from ..sports.common import rot_z
+from ..kinematics import quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
+from ...core.registry import SPORTS
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
-from .surface import euler_xyz
+from ..surface import euler_xyz
 from .user_rig import RigFit, UserRig, fit_rig
 
 __all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SLIDE", "SEATED",
