@@ -199,7 +199,7 @@ MUTANTS = [
       'rows += [",".join(f"{v:.6g}" for v in row) for row in self.data.T.tolist()]', TRAJ),
     M("resample_heading_rate_C_f", "core/physics/trajectory.py",
       '"theta_dir": V_f * C_f,', '"theta_dir": C_f,', TRAJ),
-    # -- the model on any ground (core/physics/model.py; docs/TERRAIN.md) -----------------------------
+    # -- the model on any ground (core/physics/model.py; docs/TERRAIN.md) --------------------------
     M("terrain_lateral_gravity_sign", "core/physics/model.py",
       "(fr.g_lateral - V * V_f * cf) * c", "(-fr.g_lateral - V * V_f * cf) * c", MODEL),
     M("terrain_no_normal_acceleration", "core/physics/model.py",
@@ -266,7 +266,7 @@ MUTANTS = [
     M("terrain_left_flipped", "core/ground/terrain.py",
       "bx, by, bz = ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx",
       "bx, by, bz = nz * ty - ny * tz, nx * tz - nz * tx, ny * tx - nx * ty", TERRAIN),
-    # -- the height field's biquintic (core/ground/terrain.py, docs/TERRAIN.md Section 1) -----------
+    # -- the height field's biquintic (core/ground/terrain.py, docs/TERRAIN.md Section 1) ----------
     M("heightfield_weight_typo", "core/ground/terrain.py",
       "[0.0, -1.0, 1.0, 3.0, -5.0, 2.0],", "[0.0, -1.0, 1.0, 3.0, -5.0, 2.5],", SURFACE),
     M("heightfield_float_hyy_factor", "core/ground/terrain.py",
@@ -291,7 +291,7 @@ MUTANTS = [
     M("cli_ground_start_ignored", "cli/simulate.py",
       "slalom_start(fig.body, w0, tm0, heading(0.0), x0, y0)",
       "slalom_start(fig.body, w0, tm0, heading(0.0))", CLI_GROUND),
-    # -- the half-turn's heading change (core/controllers/heading_table.py, Section 5.2) ------------------
+    # -- the half-turn's heading change (core/controllers/heading_table.py, Section 5.2) -----------
     M("heading_table_no_inertia_term", "core/controllers/heading_table.py",
       "return th * (self._gv * A / w + self._jv * w * B)", "return th * (self._gv * A / w)",
       HEADING),
@@ -327,7 +327,7 @@ MUTANTS = [
     M("receding_end_rates_stale", "core/planner/receding.py",
       "A[-1], V[-1] = float(np.ravel(a_end)[0]), float(np.ravel(v_end)[0])",
       "A[-1], V[-1] = A[-2], V[-2]", RECEDING),
-    # -- terrain, the fused float stepper of one figure (core/physics/terrain_one_figure.py) ----------
+    # -- terrain, the fused float stepper of one figure (core/physics/terrain_one_figure.py) -------
     M("fused_lateral_gravity_sign", "core/physics/terrain_one_figure.py",
       "(g_b - V * V_f * cf) * cs", "(-g_b - V * V_f * cf) * cs", TERRAIN),
     M("fused_no_normal_acceleration", "core/physics/terrain_one_figure.py",
@@ -770,7 +770,7 @@ MUTANTS += [
       "    bake_layers.fingerprint(action, bag)      # the bake's own keys", "    pass  #",
       FEWER_KEYS, "bake"),
 ]
-# -- grip and skidding (core/physics/grip.py, core/physics/skidding.py, core/planner/speed_cap.py) ------------
+# -- grip and skidding (core/physics/grip.py, core/physics/skidding.py, core/planner/speed_cap.py) -
 SKID = [T + "test_skidding.py", T + "test_grip_cyclist.py", T + "test_cli_skidding.py",
         T + "test_planner_speed_cap.py"]
 SKID_MUTANTS = [

@@ -152,7 +152,7 @@ def test_steepest_sine_of_a_plane_is_its_steepest_descent(slope_deg, downhill_de
     assert steepest_sine(ground) == pytest.approx(steepest, rel=1e-6)
 
 
-# -- the free-speed stepper (core/physics/terrain_sim.py) -------------------------------------------------
+# -- the free-speed stepper (core/physics/terrain_sim.py) ------------------------------------------
 
 def test_distance_travelled_is_the_foot_paths_length_on_a_plane():
     """``s`` is the distance along the surface the foot covers: the integral of the foot's

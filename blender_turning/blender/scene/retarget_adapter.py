@@ -15,7 +15,8 @@ import numpy as np
 from mathutils import Matrix, Quaternion
 
 from ...mapping import MAPPINGS, map_trajectory
-from ...mapping.retarget.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map, parse_bone_map,
+from ...mapping.retarget.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map,
+                                          parse_bone_map,
                                  require_joints)
 from ...mapping.retarget.equipment import equipment_rest
 from ...mapping.retarget.retarget import retarget

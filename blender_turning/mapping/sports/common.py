@@ -12,7 +12,8 @@ import math
 import numpy as np
 
 from .. import bones as B
-from ..kinematics import (PoseBuilder, frame_from_yx, quat_from_axis_angle, quat_mul, quat_to_matrix,
+from ..kinematics import (PoseBuilder, frame_from_yx, quat_from_axis_angle, quat_mul,
+                          quat_to_matrix,
                          rigid_inverse, stack_dot, two_bone_ik)
 
 __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "static_force",
