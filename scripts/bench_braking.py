@@ -1,4 +1,4 @@
-"""Cost of speed control by turning (core/braking.py): a 60 s braking run (skier, 18 deg plane,
+"""Cost of speed control by turning (core/controllers/braking.py): a 60 s braking run (skier, 18 deg plane,
 target 12 m/s) against the same slalom without a target, best of N wall time.  Run it with
 PYTHONPATH set to the tree to measure (for a baseline, a copy of main's tree).
 
@@ -11,8 +11,8 @@ from bench_common import best
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.errors import TurningError
-from blender_turning.core.terrain import Plane
-from blender_turning.core.model import RESISTANCE
+from blender_turning.core.ground.terrain import Plane
+from blender_turning.core.physics.model import RESISTANCE
 
 
 def run(target):

@@ -29,8 +29,8 @@ import time
 import numpy as np
 
 from blender_turning.core import OpenLoop, PhaseEllipse, preset, run
-from blender_turning.core.heading_table import heading_table
-from blender_turning.core.simulate import DEFAULT_DT
+from blender_turning.core.controllers.heading_table import heading_table
+from blender_turning.core.physics.simulate import DEFAULT_DT
 from bench_common import best  # noqa: E402  (scripts/)
 
 
@@ -74,11 +74,11 @@ def numpy_floor(n, repeat, dt=DEFAULT_DT):
 def terrain(repeat):
     """The ``--terrain`` table."""
     from blender_turning.core import simulate, slalom_start
-    from blender_turning.core.terrain import FLAT, Plane
-    from blender_turning.core.model import RESISTANCE
-    from blender_turning.core.terrain_gen import ski_slope
-    from blender_turning.core.model import NO_RESISTANCE
-    from blender_turning.core.terrain_sim import simulate_free
+    from blender_turning.core.ground.terrain import FLAT, Plane
+    from blender_turning.core.physics.model import RESISTANCE
+    from blender_turning.core.ground.terrain_gen import ski_slope
+    from blender_turning.core.physics.model import NO_RESISTANCE
+    from blender_turning.core.physics.terrain_sim import simulate_free
 
     fig = preset("skier")
     w, tm = 2 * math.pi / 2.0, math.radians(23)

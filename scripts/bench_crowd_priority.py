@@ -24,7 +24,7 @@ import platform
 import time
 from pathlib import Path
 
-from blender_turning.core.moving import MovingBodies, closest_approach
+from blender_turning.core.course.moving import MovingBodies, closest_approach
 from blender_turning.crowd import crowd_from_dict, run_crowd
 
 ROOT = Path(__file__).resolve().parent.parent

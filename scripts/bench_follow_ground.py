@@ -32,7 +32,7 @@ from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender.scene import follow_scene  # noqa: E402
 from blender_turning.blender.scene.follow_ground import check_height_field  # noqa: E402
 from blender_turning.blender.scene.ground import mesh_from_height_field, read_ground  # noqa: E402
-from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
 
 
 def make_path(x0: float, name: str):

@@ -1,5 +1,5 @@
-"""Benchmark: the height field's evaluation on floats (core/terrain.py), against the
-``core/terrain.py`` of an earlier revision in the same run.  Prints a Markdown table.
+"""Benchmark: the height field's evaluation on floats (core/ground/terrain.py), against the
+``core/ground/terrain.py`` of an earlier revision in the same run.  Prints a Markdown table.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_heightfield.py --baseline f34ecfa~1 [--repeat 5]
 
@@ -10,8 +10,8 @@
 - a 60 s slalom down the mogul slope with the skier's friction and drag (``simulate``), the
   case of ``bench_core.py --terrain``.
 
-The baseline module is the file ``git show REV:blender_turning/core/terrain.py`` loaded as a
-sibling of ``core/terrain.py`` (its relative imports resolve in this checkout).
+The baseline module is the file ``git show REV:blender_turning/core/ground/terrain.py`` loaded as a
+sibling of ``core/ground/terrain.py`` (its relative imports resolve in this checkout).
 """
 from __future__ import annotations
 
@@ -30,17 +30,17 @@ from pathlib import Path
 import numpy as np
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
-from blender_turning.core import terrain as current
-from blender_turning.core.model import RESISTANCE
-from blender_turning.core.terrain_gen import ski_slope
+from blender_turning.core.ground import terrain as current
+from blender_turning.core.physics.model import RESISTANCE
+from blender_turning.core.ground.terrain_gen import ski_slope
 from bench_common import best  # noqa: E402  (scripts/)
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def baseline_module(rev: str):
-    """``core/terrain.py`` at ``rev``, imported as ``blender_turning.core._terrain_baseline``."""
-    text = subprocess.run(["git", "show", f"{rev}:blender_turning/core/terrain.py"], cwd=ROOT,
+    """``core/ground/terrain.py`` at ``rev``, imported as ``blender_turning.core._terrain_baseline``."""
+    text = subprocess.run(["git", "show", f"{rev}:blender_turning/core/ground/terrain.py"], cwd=ROOT,
                           capture_output=True, text=True, check=True).stdout
     folder = Path(tempfile.mkdtemp(prefix="bench-heightfield-"))
     path = folder / "terrain_baseline.py"

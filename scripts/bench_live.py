@@ -55,7 +55,7 @@ def select(fig):
 def build():
     """The three figures (live off), by kind."""
     from blender_turning.blender.scene.ground import mesh_from_height_field
-    from blender_turning.core.terrain_gen import ski_slope
+    from blender_turning.core.ground.terrain_gen import ski_slope
     from rig_fixtures import rigify_rig
     scene = bpy.context.scene
     scene.render.fps, scene.frame_start = 24, 1

@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from blender_turning.core.planner import Problem, branch_and_bound  # noqa: E402
-from blender_turning.core.scene import load_scene  # noqa: E402
+from blender_turning.core.course.scene import load_scene  # noqa: E402
 
 CASES = [  # scene, N, q, baseline samples
     ("slalom", 12, 7, 7),
@@ -116,8 +116,8 @@ def doomed_share(name="slalom", N=12, q=7, fall_table=False):
     """Of the nodes our search expands at the first replanning, how many can never reach depth N
     without falling (whatever the obstacles and the path): a depth-first probe of the lean
     alone (theta_v, omega_v, C_f evolve independently of position at constant speed)."""
-    from blender_turning.core.obstacles import Obstacles
-    from blender_turning.core.path import HermitePath, PathDistance
+    from blender_turning.core.course.obstacles import Obstacles
+    from blender_turning.core.course.path import HermitePath, PathDistance
     from blender_turning.core.planner import search
 
     scene = load_scene(ROOT / "scenes" / f"{name}.json").with_settings(n_stages=N, q=q,

@@ -30,14 +30,14 @@ CASES = {"slalom_trees": [("slalom", 12, 7), ("tree_skiing", 10, 5), ("tree_skii
 
 
 def import_revision(rev: str, where: Path):
-    """The ``core.scene`` module of ``blender_turning`` at ``rev``, as package ``bt_before``
+    """The ``core.course.scene`` module of ``blender_turning`` at ``rev``, as package ``bt_before``
     (the core imports itself relatively, so a renamed copy is a separate module tree)."""
     tar = subprocess.run(["git", "-C", str(ROOT), "archive", rev, "blender_turning"],
                          check=True, capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(where)], input=tar, check=True)
     (where / "blender_turning").rename(where / "bt_before")
     sys.path.insert(0, str(where))
-    import bt_before.core.scene as before
+    import bt_before.core.course.scene as before
     return before
 
 
@@ -86,7 +86,7 @@ def main(argv=None):
                     help="which scenes and settings (default: the slalom and tree scenes)")
     ap.add_argument("--json", help="write the results here")
     args = ap.parse_args(argv)
-    import blender_turning.core.scene as after
+    import blender_turning.core.course.scene as after
     out = []
     with tempfile.TemporaryDirectory() as tmp:
         before = import_revision(args.before, Path(tmp))

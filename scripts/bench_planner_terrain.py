@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from blender_turning.core.planner import Problem  # noqa: E402
-from blender_turning.core.scene import load_scene  # noqa: E402
+from blender_turning.core.course.scene import load_scene  # noqa: E402
 
 SCENES = ("slalom", "slope_slalom")
 
@@ -50,7 +50,7 @@ def main() -> None:
 
 def stage_costs(repeat: int, m: int = 640) -> None:
     """One stage for ``m`` nodes (a batch of 128 nodes' 5 children): flat, plane, height field."""
-    from blender_turning.core.terrain_gen import ski_slope
+    from blender_turning.core.ground.terrain_gen import ski_slope
     flat = load_scene(ROOT / "scenes" / "slalom.json").problem()
     sc = load_scene(ROOT / "scenes" / "slope_slalom.json")
     plane = sc.problem()

@@ -30,7 +30,7 @@ from blender_turning.blender.anim import bake  # noqa: E402
 from blender_turning.blender.scene import retarget_adapter  # noqa: E402
 from blender_turning.blender.jobs.pipeline import map_track, simulate_figure  # noqa: E402
 from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
-from blender_turning.mapping.retarget import retarget  # noqa: E402
+from blender_turning.mapping.retarget.retarget import retarget  # noqa: E402
 from rig_fixtures import rigify_rig  # noqa: E402
 
 

@@ -22,15 +22,16 @@ from pathlib import Path
 
 import numpy as np
 
-from blender_turning.core import PhaseEllipse, model, preset, simulate, slalom_start
-from blender_turning.core.braking import TargetSpeed
+from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
+from blender_turning.core.controllers.braking import TargetSpeed
 from blender_turning.core.controllers.straight import Straight
 from blender_turning.core.errors import RunEnded
-from blender_turning.core.grip import tyre
-from blender_turning.core.model import RESISTANCE
-from blender_turning.core.params import Limits
-from blender_turning.core.skidding import Skidding, turning_share
-from blender_turning.core.terrain import Plane
+from blender_turning.core.physics.grip import tyre
+from blender_turning.core.physics import model
+from blender_turning.core.physics.model import RESISTANCE
+from blender_turning.core.physics.params import Limits
+from blender_turning.core.physics.skidding import Skidding, turning_share
+from blender_turning.core.ground.terrain import Plane
 
 ROOT = Path(__file__).resolve().parent.parent
 FALL = -math.pi / 2
@@ -70,7 +71,7 @@ def stops():
     print("\nstop from 10 m/s on 15 deg: distance to < 0.3 m/s, m (time, s)")
     for sport, side in (("skier", None), ("snowboarder", "heel"), ("snowboarder", "toe")):
         for snow in ("hard", "soft"):
-            from blender_turning.core.grip import SNOW
+            from blender_turning.core.physics.grip import SNOW
             traj, _, _ = run(sport, 15, None, Skidding("carve", SNOW[snow], 0.0, side), V0=10.0,
                              duration=6.0)
             i = int(np.argmax(traj.V_cm < 0.3))

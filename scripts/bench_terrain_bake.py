@@ -36,7 +36,7 @@ from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa:
 from blender_turning.blender.jobs.pipeline import simulate_figure  # noqa: E402
 from blender_turning.blender.jobs.bake_job import BakeJob  # noqa: E402
 from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
-from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
 from bench_common import best  # noqa: E402  (scripts/)
 
 

@@ -16,9 +16,9 @@ import numpy as np
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.errors import TurningError
 from blender_turning.core.registry import SPORTS
-from blender_turning.core.terrain import Plane
-from blender_turning.core.model import RESISTANCE
-from blender_turning.core.terrain_gen import ski_slope
+from blender_turning.core.ground.terrain import Plane
+from blender_turning.core.physics.model import RESISTANCE
+from blender_turning.core.ground.terrain_gen import ski_slope
 
 W, TM = math.pi, math.radians(23)
 _SLOPE = {}

@@ -22,7 +22,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from blender_turning.core.equipment import carving_of  # noqa: E402
-from blender_turning.core.scene import scene_from_dict  # noqa: E402
+from blender_turning.core.course.scene import scene_from_dict  # noqa: E402
 
 REID = {10.0: (3.96, 0.23, 65.7, 1.7), 13.0: (4.94, 0.59, 71.0, 1.9)}
 

@@ -1,7 +1,7 @@
 """The telemark skier's body: centre-of-mass height ``l`` and roll inertia ``I_v`` of
 the built-in telemark figure in its own lunge, from Winter's segment data
 (:mod:`blender_turning.mapping.anthropometry`), iterated to a fixed point (the body sets the
-run, the run sets the lunge).  Prints what the telemark's record (``mapping/telemark.py``) holds.
+run, the run sets the lunge).  Prints what the telemark's record (``mapping/sports/telemark.py``) holds.
 
     PYTHONPATH=$PWD .venv/bin/python scripts/telemark_body.py [--sport telemark]
 """

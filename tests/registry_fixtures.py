@@ -18,11 +18,11 @@ SPORT_MODULE = textwrap.dedent('''
     import math
     from pathlib import Path
 
-    from blender_turning.core.params import BodyParams, Figure, Limits
+    from blender_turning.core.physics.params import BodyParams, Figure, Limits
     from blender_turning.core.sports import Retarget, Sport, register_sport
-    from blender_turning.core.model import Resistance
+    from blender_turning.core.physics.model import Resistance
     from blender_turning.mapping import bones as B
-    from blender_turning.mapping.skier import SkierMapping
+    from blender_turning.mapping.sports.skier import SkierMapping
 
 
     class SkiBikeMapping(SkierMapping):

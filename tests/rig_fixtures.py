@@ -149,7 +149,7 @@ def sample(scene, frames, bindings, ground=None):
     from blender_turning.mapping.bones import mirror
     ground_names = set(bindings if ground is None else ground)
     from blender_turning.mapping.kinematics import Skeleton
-    from blender_turning.mapping.user_rig import fit_rig
+    from blender_turning.mapping.retarget.user_rig import fit_rig
     from blender_turning.mapping.rig_spec import load_rig
     sc = bpy.context.scene
     out = {k: {"p": [], "heading": []} for k in scene}
@@ -177,7 +177,7 @@ def sample(scene, frames, bindings, ground=None):
                 p = np.linalg.inv(rest_of(piece)) @ np.append(point, 1.0)
                 binding[o.name, joint, s] = Vector(fit.k / fit.scale * p[:3])
     low, gap, deform = ({k: [] for k in users} for _ in range(3))
-    from blender_turning.mapping.cyclist import tyre_radius
+    from blender_turning.mapping.sports.cyclist import tyre_radius
     tyre = {w: tyre_radius(load_rig("cyclist")) for w in ("wheel.F", "wheel.R")}
     for f in range(frames[0], frames[1] + 1):
         sc.frame_set(f)

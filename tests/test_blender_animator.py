@@ -17,7 +17,7 @@ from blender_turning.blender.anim import bake  # noqa: E402
 from blender_turning.blender.ops import figure as ops_figure  # noqa: E402
 from blender_turning.blender.ui import panel  # noqa: E402
 from blender_turning.blender.props.figure import TurningFigureSettings  # noqa: E402
-from blender_turning.core.params import PRESETS  # noqa: E402
+from blender_turning.core.physics.params import PRESETS  # noqa: E402
 from modal_stand_ins import Context, WindowManager  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]

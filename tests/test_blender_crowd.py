@@ -442,7 +442,7 @@ def road_figure():
 
 
 def path_of(fig):
-    from blender_turning.core.path import HermitePath
+    from blender_turning.core.course.path import HermitePath
     return HermitePath.from_bezier(scene_adapters.bezier_control_points(fig.turning.path))
 
 

@@ -21,7 +21,7 @@ from test_blender_operators import add, make_path  # noqa: E402
 
 from blender_turning.blender.jobs import crowd_job  # noqa: E402
 from blender_turning.blender.scene import follow_scene, scene_adapters  # noqa: E402
-from blender_turning.core.moving import MovingBodies, closest_approach  # noqa: E402
+from blender_turning.core.course.moving import MovingBodies, closest_approach  # noqa: E402
 from blender_turning.crowd import Crowd, CrowdFigure, FollowPath, run_crowd  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
@@ -60,7 +60,7 @@ def planned(figs, avoid, clearance=CLEARANCE) -> list:
 def closest(figs, results) -> tuple:
     """(distance m, other figure) of the second figure's closest approach to the first's body
     (foot to CM ground point), sampled every 5 ms (the planner's rule holds between its steps:
-    core/moving.py)."""
+    core/course/moving.py)."""
     tracks = [(f.name, r.trajectory, f.turning.com_height) for f, r in zip(figs, results)]
     return closest_approach(MovingBodies.from_tracks(tracks, dt=0.005))[figs[1].name][:2]
 
@@ -143,7 +143,7 @@ def test_avoiding_equals_the_cli_crowd_of_the_same_scene(scene, tmp_path):
     import json
     import subprocess
     import sys
-    from blender_turning.core.trajectory import Trajectory
+    from blender_turning.core.physics.trajectory import Trajectory
     figs = crossing()
     figs[0].turning.crowd.priority = 2
     got = planned(figs, avoid=True, clearance=1.25)

@@ -21,10 +21,10 @@ from blender_turning.blender.anim import bake  # noqa: E402
 from blender_turning.blender.scene import follow_scene, scene_adapters  # noqa: E402
 from blender_turning.blender.scene.ground import (height_field_of,  # noqa: E402
                                                   mesh_from_height_field)
-from blender_turning.core.follow_problem import DEFAULT_CLEARANCE  # noqa: E402
-from blender_turning.core.obstacles import Obstacles  # noqa: E402
-from blender_turning.core.path import HermitePath  # noqa: E402
-from blender_turning.core.terrain import HeightField, surface_frame  # noqa: E402
+from blender_turning.core.course.follow_problem import DEFAULT_CLEARANCE  # noqa: E402
+from blender_turning.core.course.obstacles import Obstacles  # noqa: E402
+from blender_turning.core.course.path import HermitePath  # noqa: E402
+from blender_turning.core.ground.terrain import HeightField, surface_frame  # noqa: E402
 from modal_stand_ins import Context, WindowManager  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]

@@ -12,8 +12,8 @@ bpy = pytest.importorskip("bpy")
 
 from blender_turning.blender.scene.ground import (height_field_of,  # noqa: E402
                                                   mesh_from_height_field)
-from blender_turning.core.terrain import Plane  # noqa: E402
-from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+from blender_turning.core.ground.terrain import Plane  # noqa: E402
+from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
 
 pytestmark = pytest.mark.blender
 

@@ -12,7 +12,7 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 bpy = pytest.importorskip("bpy")
 
 from blender_turning.blender.scene import ground  # noqa: E402
-from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
 
 pytestmark = pytest.mark.blender
 
@@ -221,7 +221,7 @@ def test_quads_are_split_as_blender_splits_them(monkeypatch):
 def test_a_grid_mesh_is_sampled_where_the_run_goes():
     """A grid mesh's height field is sampled as a run visits it (a few tiles of the grid for a
     point), and is the field of all its lattice heights, bit for bit."""
-    from blender_turning.core.terrain import HeightField, LazyHeightField
+    from blender_turning.core.ground.terrain import HeightField, LazyHeightField
     obj = _mountain(location=(3.0, -2.0, 1.0))
     read = ground.read_ground(obj, bpy.context.evaluated_depsgraph_get())
     field = read.field

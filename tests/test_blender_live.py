@@ -326,7 +326,7 @@ def ground_figure():
     """A skier on a 20 deg slope traversing 30 deg below +x: lean 5 deg every 2 s carves; every
     6 s it falls at t = 9.00 s (measured), frame 217 at 24 fps, as Bake Turns says."""
     from blender_turning.blender.scene.ground import mesh_from_height_field
-    from blender_turning.core.terrain_gen import ski_slope
+    from blender_turning.core.ground.terrain_gen import ski_slope
     scene = bpy.context.scene
     scene.frame_end = 240
     slope = ski_slope(length=200.0, width=200.0, slope_deg=20, cell=2.0, moguls=False)

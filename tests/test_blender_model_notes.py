@@ -19,7 +19,7 @@ from blender_turning.blender import compat  # noqa: E402
 from blender_turning.blender.anim import bake  # noqa: E402
 from blender_turning.blender.ui import panel  # noqa: E402
 from blender_turning.blender.scene import scene_adapters  # noqa: E402
-from blender_turning.core.path import HermitePath  # noqa: E402
+from blender_turning.core.course.path import HermitePath  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 

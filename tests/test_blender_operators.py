@@ -21,7 +21,7 @@ from blender_turning.blender.jobs.follow_job import Cancelled  # noqa: E402
 from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E402
 from blender_turning.blender.scene.scene_adapters import (PLAN_CURVATURE_RATE,  # noqa: E402
                                                           FrameRange)
-from blender_turning.core.params import PRESETS  # noqa: E402
+from blender_turning.core.physics.params import PRESETS  # noqa: E402
 from blender_turning.core.registry import SPORT_PRESETS  # noqa: E402
 from modal_stand_ins import Context, WindowManager  # noqa: E402
 
@@ -253,7 +253,7 @@ def test_follow_path_bakes_and_fits_the_frame_range(scene, sport):
     track.foreach_get("co", co)
     xy = co.reshape(-1, 4)[:, :2]
     curve = scene_adapters.bezier_control_points(obj.turning.path)
-    from blender_turning.core.path import HermitePath
+    from blender_turning.core.course.path import HermitePath
     samples = HermitePath.from_bezier(curve).sample(64)
     dist = np.min(np.linalg.norm(xy[:, None, :] - samples[None, :, :], axis=2), axis=1)
     assert dist.max() < 3.0, dist.max()

@@ -15,7 +15,7 @@ from rig_fixtures import activate, mixamo_skeleton, rigify_rig  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
-from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
 
 pytestmark = pytest.mark.blender
 SECONDS, FPS = 8, 24

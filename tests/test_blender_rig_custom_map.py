@@ -11,7 +11,7 @@ bpy = pytest.importorskip("bpy")
 from blender_turning.blender import compat  # noqa: E402
 from blender_turning.blender.anim import bake  # noqa: E402
 from blender_turning.blender.ops import bone_map as ops_bone_map  # noqa: E402
-from blender_turning.core.params import PRESETS  # noqa: E402
+from blender_turning.core.physics.params import PRESETS  # noqa: E402
 from rig_fixtures import PREFIX, activate, mixamo_skeleton  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]

@@ -17,7 +17,7 @@ from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa:
 from blender_turning.blender.scene.scene_adapters import (FrameRange, SceneInputError,  # noqa: E402
                                                     figure_from_settings,
                                                     skidding_from_settings)
-from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
 
 pytestmark = pytest.mark.blender
 SECONDS, FPS = 8, 24
@@ -120,7 +120,7 @@ def test_follow_path_brakes_to_the_target_speed(scene):
 
 def test_the_beginner_preset_sets_its_wedge_and_speed(scene):
     """The beginner's and the recreational skier's presets set the Speed Control's Style and
-    Target Speed (core/speed_habits.py); a sport's own preset leaves them."""
+    Target Speed (core/controllers/speed_habits.py); a sport's own preset leaves them."""
     fig = _figure(scene)
     assert bpy.ops.turning.apply_figure_preset(sport="BEGINNER") == {"FINISHED"}
     assert (fig.turning.skid.style, fig.turning.terrain.target_speed) == ("WEDGE", 4.5)

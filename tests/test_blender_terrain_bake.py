@@ -15,7 +15,7 @@ from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat  # noqa: E402
 from blender_turning.blender.anim import bake  # noqa: E402
 from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
-from blender_turning.core.terrain_gen import ski_slope  # noqa: E402
+from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
 
 pytestmark = pytest.mark.blender
 SECONDS, FPS = 8, 24
@@ -85,7 +85,7 @@ def test_the_figure_rides_on_the_ground_mesh(scene, sport):
     # The foot on the mesh on every frame (measured: the ray casts themselves, float32 keys).
     assert np.abs(z - _ray(mountain, x, y)).max() < 0.01
     # The object's +Z is the surface normal: the skis / wheels lie in the local surface.
-    from blender_turning.core.terrain import surface_frame
+    from blender_turning.core.ground.terrain import surface_frame
     from blender_turning.blender.scene.ground import height_field_of
     field = height_field_of(mountain, bpy.context.evaluated_depsgraph_get())
     R = _object_matrices(fig, cv)

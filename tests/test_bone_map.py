@@ -3,7 +3,8 @@ rig lacking a required joint is refused with the whole list of what is missing."
 import pytest
 
 from blender_turning.mapping import bones as B
-from blender_turning.mapping.bone_map import (BONE_MAPS, JOINT_PARENT, JOINTS, REQUIRED_JOINTS,
+from blender_turning.mapping.retarget.bone_map import (BONE_MAPS, JOINT_PARENT, JOINTS,
+                                                       REQUIRED_JOINTS,
                                               MissingBoneError, auto_bone_map, load_bone_map,
                                               parse_bone_map, require_joints)
 

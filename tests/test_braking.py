@@ -1,4 +1,4 @@
-"""Speed control by turning across the hill (core/braking.py, docs/TERRAIN.md Section
+"""Speed control by turning across the hill (core/controllers/braking.py, docs/TERRAIN.md Section
 6): over a grid of sports, slopes and target speeds the figures run 60 s without falling, hold
 the target where carving can, keep the turn shape, lean about the plumb lean and stay on a
 terrain of finite width.  Tolerances are the measured values (scripts/braking_grid.py) with
@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
-from blender_turning.core.braking import TargetSpeed
+from blender_turning.core.controllers.braking import TargetSpeed
 from blender_turning.core.controllers.feasible import feasible_turns
-from blender_turning.core.terrain import HeightField, Plane, surface_frame
-from blender_turning.core.model import RESISTANCE, plumb_lean
+from blender_turning.core.ground.terrain import HeightField, Plane, surface_frame
+from blender_turning.core.physics.model import RESISTANCE, plumb_lean
 
 W, TM = math.pi, math.radians(23)               # the 2 s / 23 deg turn
 FALL = -math.pi / 2

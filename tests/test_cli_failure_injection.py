@@ -13,7 +13,7 @@ import blender_turning.cli.common as common
 import blender_turning.cli.simulate as sim
 from blender_turning.cli import main
 from blender_turning.core import files
-from blender_turning.core.trajectory import Trajectory
+from blender_turning.core.physics.trajectory import Trajectory
 from cli_helpers import snapshot
 
 

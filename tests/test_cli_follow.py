@@ -7,7 +7,7 @@ import sys
 import pytest
 
 from blender_turning.cli import main
-from blender_turning.core.trajectory import COLUMNS
+from blender_turning.core.physics.trajectory import COLUMNS
 
 
 def small_scene(tmp_path, wall=False, **extra):

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from blender_turning.core import Trajectory, preset
-from blender_turning.core.terrain import HeightField
-from blender_turning.core.terrain_gen import ski_slope
+from blender_turning.core.ground.terrain import HeightField
+from blender_turning.core.ground.terrain_gen import ski_slope
 from cli_helpers import one_line_error, run
 
 SLOPE = ski_slope(length=160.0, width=80.0, cell=2.0)     # x in [-40, 40], y in [-80, 80]

@@ -7,7 +7,7 @@ import pytest
 
 from blender_turning.cli import main
 from blender_turning.core import COLUMNS, Trajectory, preset
-from blender_turning.core.model import RESISTANCE
+from blender_turning.core.physics.model import RESISTANCE
 
 
 def test_flat_runs_are_unchanged_and_carry_z_and_speed(tmp_path):

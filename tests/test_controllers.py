@@ -7,10 +7,10 @@ import pytest
 
 from blender_turning.core import (Limits, OpenLoop, PhaseEllipse, Schedule, preset, run,
                                   simulate, slalom_start)
-from blender_turning.core.dynamics import THETA_DIR, inverse_cf, rk4_step
-from blender_turning.core.heading_table import heading_table
-from blender_turning.core.phase import open_loop_alpha
-from blender_turning.core.phase import ellipse_radius
+from blender_turning.core.physics.dynamics import THETA_DIR, inverse_cf, rk4_step
+from blender_turning.core.controllers.heading_table import heading_table
+from blender_turning.core.controllers.phase import open_loop_alpha
+from blender_turning.core.controllers.phase import ellipse_radius
 
 TWO_PI = 2 * math.pi
 FIG6 = [(2.0, 23.0), (3.0, 23.0), (2.0, 7.0)]        # the three ellipses of Fig. 6
@@ -121,7 +121,7 @@ def test_unreachable_heading_change_is_spread_over_turns(skier):
 
 def simulate_half_turns(body, theta_max, omega0, steps=400):
     """Heading change over one half-turn (phase 0 -> 180 deg) of the open-loop law, simulated
-    (RK4, no bounds): the independent check of the closed form in core/heading_table.py."""
+    (RK4, no bounds): the independent check of the closed form in core/controllers/heading_table.py."""
     th, w = np.broadcast_arrays(np.asarray(theta_max, float), np.asarray(omega0, float))
     state = np.zeros((5, th.size))
     state[4] = w * th

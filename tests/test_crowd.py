@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
-from blender_turning.core.path import HermitePath
+from blender_turning.core.course.path import HermitePath
 from blender_turning.crowd import (Crowd, CrowdFigure, Turns, crowd_from_dict, follow_leader,
                                    offset_path, peloton, run_crowd, synchronized)
 from blender_turning.crowd.formations import point_at_distance
@@ -267,7 +267,7 @@ def test_the_documented_crowd_example_is_a_valid_crowd_file():
 
 def test_a_path_figure_that_fails_is_reported_not_raised(monkeypatch):
     from blender_turning.core.errors import PathNotFinished
-    from blender_turning.core.scene import Scene
+    from blender_turning.core.course.scene import Scene
 
     def unfinished(self):
         raise PathNotFinished(9.0, 12.0, 30.0)

@@ -5,8 +5,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from blender_turning.core.trajectory import COLUMNS, Trajectory
-from blender_turning.core.moving import MovingBodies, closest_approach
+from blender_turning.core.physics.trajectory import COLUMNS, Trajectory
+from blender_turning.core.course.moving import MovingBodies, closest_approach
 
 
 def track(t, x, y, theta_dir=0.0, theta_v=0.0):
@@ -65,7 +65,7 @@ def test_a_body_of_one_sample_is_there_for_no_step():
 
 def test_bodies_that_cross_between_the_samples_collide():
     """At both ends of the step they are 0.78 m apart, half way through on top of each other:
-    the rule holds in continuous time (core/moving.py), not only at the samples."""
+    the rule holds in continuous time (core/course/moving.py), not only at the samples."""
     t = np.round(np.arange(0, 21) * 0.1, 12)
     runner = track(t, 10.0 * (t - 1.0), 0.0)                     # along x at 10 m/s
     b = MovingBodies.from_tracks([("runner", runner, 1.0)], dt=0.1, clearance=0.3)
@@ -109,7 +109,7 @@ def test_the_grid_closest_approach_is_the_all_pairs_one(seed):
     """closest_approach's grid (near-linear) gives the all-pairs answers exactly: distances,
     the other body and the time, ties included (rounded positions make many), on crowds from
     packed to sparse, with bodies absent from some samples."""
-    from blender_turning.core.moving import _closest_brute
+    from blender_turning.core.course.moving import _closest_brute
     rng = np.random.default_rng(seed)
     for _ in range(40):
         n, S = int(rng.integers(1, 40)), int(rng.integers(1, 25))

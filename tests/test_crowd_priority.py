@@ -1,5 +1,5 @@
 """Priority planning: each figure plans around the bodies of the figures before it
-(moving obstacles, core/moving.py); the search stays exact; groups and workers change nothing."""
+(moving obstacles, core/course/moving.py); the search stays exact; groups and workers change nothing."""
 import json
 import math
 import subprocess
@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
-from blender_turning.core.moving import MovingBodies, around, closest_approach
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.course.moving import MovingBodies, around, closest_approach
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
-from blender_turning.core.trajectory import COLUMNS, Trajectory
+from blender_turning.core.physics.trajectory import COLUMNS, Trajectory
 from blender_turning.core.validate import FieldError
 from blender_turning.crowd import crowd_from_dict, run_crowd
 from blender_turning.crowd import priority as priority_
@@ -41,7 +41,7 @@ TWO_CROSSINGS = {**CROSSING, "figures": CROSSING["figures"] + [
 
 def closest(crowd, result, dt=0.005):
     """Closest approach of the foot-CM segments of ``result``'s figures, sampled finely (the
-    planner's rule holds between its 0.05 s steps too: core/moving.py)."""
+    planner's rule holds between its 0.05 s steps too: core/course/moving.py)."""
     tracks = [(f.name, r.trajectory, f.figure.body.l) for f, r in zip(crowd.figures,
                                                                     result.figures)]
     return closest_approach(MovingBodies.from_tracks(tracks, dt=dt))

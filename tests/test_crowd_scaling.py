@@ -1,5 +1,5 @@
 """A crowd of 10,000 followers (the most the crowd file's ranges allow) without quadratic work:
-the summary's closest approaches (:func:`~blender_turning.core.moving.closest_approach`) and the
+the summary's closest approaches (:func:`~blender_turning.core.course.moving.closest_approach`) and the
 reservation of every output (``Outputs.reserve``) counted in operations, not timed.  A
 quadratic step would compare every body with every other (10,000 x 9,999 pairs per sample) or
 resolve every earlier path again for each new one."""
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from blender_turning.cli.common import Outputs
-from blender_turning.core import moving
-from blender_turning.core.moving import MovingBodies, closest_approach
+from blender_turning.core.course import moving
+from blender_turning.core.course.moving import MovingBodies, closest_approach
 from blender_turning.core.ranges import CROWD_RANGES
 
 LANES, SAMPLES = 50, 10

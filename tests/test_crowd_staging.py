@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from blender_turning.core.params import preset
+from blender_turning.core.physics.params import preset
 from blender_turning.crowd import CrowdFigure, Turns, follow_leader, shot_length, stage
 from blender_turning.crowd.staging import waiting_span
 

@@ -109,7 +109,7 @@ def test_python_example_runs(block):
 def test_file_example_reads(block):
     doc = json.loads(block.text)
     if block.arg == "scene":
-        from blender_turning.core.scene import scene_from_dict
+        from blender_turning.core.course.scene import scene_from_dict
         scene_from_dict(doc, source=block.where)
     else:
         from blender_turning.crowd.reader import crowd_from_dict

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core import BodyParams, Limits, preset
-from blender_turning.core.dynamics import (bound_cf, forward_alpha, foot_speed, inverse_cf,
+from blender_turning.core.physics.dynamics import (bound_cf, forward_alpha, foot_speed, inverse_cf,
                                            leg_force, PHYSICAL_MARGIN)
 
 BODIES = [preset(n).body for n in ("skier", "snowboarder", "telemark", "cyclist")]

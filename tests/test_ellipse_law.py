@@ -11,8 +11,8 @@ import pytest
 from blender_turning.core import (PRESETS, OpenLoop, PhaseEllipse, preset, simulate,
                                   slalom_start)
 from blender_turning.core.controllers.ellipse import ellipse_alpha
-from blender_turning.core.dynamics import forward_alpha
-from blender_turning.core.phase import ellipse_radius
+from blender_turning.core.physics.dynamics import forward_alpha
+from blender_turning.core.controllers.phase import ellipse_radius
 
 TWO_PI = 2 * math.pi
 CASES = [("skier", 2.0, 23.0), ("skier", 3.0, 23.0), ("skier", 2.0, 7.0)] + [

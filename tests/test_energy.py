@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
-from blender_turning.core.model import NO_RESISTANCE, RESISTANCE, Resistance, Flat, Plane
+from blender_turning.core.physics.model import NO_RESISTANCE, RESISTANCE, Resistance, Flat, Plane
 
 SKIER = preset("skier")
 BODY = SKIER.body
@@ -73,7 +73,7 @@ def test_on_flat_ground_without_resistance_energy_is_conserved():
     not hold it: :func:`.model.rhs` with ``held=False``): the slalom trades speed for lean and
     back, and ``m V^2 / 2 + (I_v + m l^2) omega^2 / 2 + m g l cos th`` stays what it was.
     Measured: 1.3e-7 of the kinetic energy over 20 s at dt 0.01 s (the speed swings by 0.28 m/s)."""
-    from blender_turning.core import model
+    from blender_turning.core.physics import model
     w, tm = math.pi, math.radians(30)
     ctl = PhaseEllipse(BODY, w, tm)
     ctl.begin_run(SKIER.limits)
@@ -99,7 +99,7 @@ def test_on_flat_ground_without_resistance_energy_is_conserved():
 
 def test_held_speed_is_the_papers_constant_speed():
     """``held``: the paper's implicit forward force keeps ``V_cm`` whatever the ground."""
-    from blender_turning.core import model
+    from blender_turning.core.physics import model
     st = (0.0, 0.0, 0.3, 0.2, 0.5, 12.0)
     for ground in (Flat(), Plane(math.radians(20), 1.0)):
         d = model.rhs(BODY, SKIER.limits, ground, 0.05, st, held=True,

@@ -1,5 +1,5 @@
 """Heading control (the heading table) and commands the body cannot
-follow never make the figure fall (core/controllers/feasible.py, core/heading_table.py)."""
+follow never make the figure fall (core/controllers/feasible.py, core/controllers/heading_table.py)."""
 import math
 import warnings
 from dataclasses import replace
@@ -10,7 +10,7 @@ import pytest
 from blender_turning.core import (PRESETS, FellOver, OpenLoop, PhaseEllipse, Schedule, preset,
                                   simulate, slalom_start)
 from blender_turning.core.controllers.feasible import ellipse_needs, feasible_turns
-from blender_turning.core.heading_table import heading_table
+from blender_turning.core.controllers.heading_table import heading_table
 
 TWO_PI = 2 * math.pi
 SPEEDS = [0.5, 1.0, 2.0, 4.0, 6.0, 8.0, 10.0, 15.0, 20.0, 30.0]

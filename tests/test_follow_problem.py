@@ -1,4 +1,4 @@
-"""One builder of the path-following problem (core/follow_problem.py) for scene files and
+"""One builder of the path-following problem (core/course/follow_problem.py) for scene files and
 Blender's Follow Path: the same run-out, time limit, clearance, settings and start."""
 import math
 
@@ -8,12 +8,12 @@ import pytest
 from blender_turning.blender.jobs.follow_job import FollowJob
 from blender_turning.core import preset
 from blender_turning.core.errors import PathNotFinished
-from blender_turning.core.follow_problem import (DEFAULT_CLEARANCE, TIME_LIMIT_FACTOR,
+from blender_turning.core.course.follow_problem import (DEFAULT_CLEARANCE, TIME_LIMIT_FACTOR,
                                                  FollowSetup, start_state)
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.path import HermitePath
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.course.path import HermitePath
 from blender_turning.core.planner import PlannerSettings
-from blender_turning.core.scene import scene_from_dict
+from blender_turning.core.course.scene import scene_from_dict
 
 BEZIER = [[0, 0], [4, 0], [8, -12], [12, -12], [16, -12], [20, 0], [24, 0]]
 

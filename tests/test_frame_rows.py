@@ -9,8 +9,8 @@ import pytest
 
 from blender_turning.cli import main
 from blender_turning.core import OpenLoop, PhaseEllipse, Trajectory, preset, simulate, slalom_start
-from blender_turning.core.dynamics import foot_speed, forward_alpha, leg_force
-from blender_turning.core.phase import phase
+from blender_turning.core.physics.dynamics import foot_speed, forward_alpha, leg_force
+from blender_turning.core.controllers.phase import phase
 
 FIG = preset("skier")
 BODY = FIG.body
@@ -168,7 +168,7 @@ def test_a_planned_run_with_varying_speed_resamples_to_states_of_the_model():
     """The path follower's trajectory (Section 6, phase from Section 6.2's estimate) records its
     body too; with a speed that varies along the path, each row's ``V_cm`` is the one Eq. (21)
     gives its own ``V_f``, and Eq. (2) and Appendix A hold with it."""
-    from blender_turning.core.scene import scene_from_dict
+    from blender_turning.core.course.scene import scene_from_dict
     scene = scene_from_dict({
         "name": "corridor", "figure": {"preset": "cyclist", "limits": {"dC_f_max": 0.4}},
         "path": {"polyline": [[0, 0], [40, 0]]}, "clearance": 0.3,

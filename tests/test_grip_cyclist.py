@@ -1,4 +1,4 @@
-"""The cyclist's tyre grip (core/grip.py, core/skidding.py, docs/skidding.md Section 5): a
+"""The cyclist's tyre grip (core/physics/grip.py, core/physics/skidding.py, docs/skidding.md Section 5): a
 lean asked beyond what the tyre holds is limited to ``atan(mu)`` with a report, and braking
 within the friction circle stops in the distance the grip allows, ``v^2 / (2 mu g)``."""
 import math
@@ -9,9 +9,9 @@ import pytest
 from blender_turning.cli import main
 from blender_turning.core import PhaseEllipse, Trajectory, preset, simulate, slalom_start
 from blender_turning.core.controllers.straight import Straight
-from blender_turning.core.grip import TYRE, tyre
-from blender_turning.core.params import Limits
-from blender_turning.core.skidding import Skidding
+from blender_turning.core.physics.grip import TYRE, tyre
+from blender_turning.core.physics.params import Limits
+from blender_turning.core.physics.skidding import Skidding
 
 
 def _lean_run(mu, lean_deg=48.0):

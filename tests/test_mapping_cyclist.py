@@ -6,7 +6,7 @@ import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate
 from blender_turning.mapping import map_trajectory
-from blender_turning.mapping.cyclist import CyclistOptions, steer_angle
+from blender_turning.mapping.sports.cyclist import CyclistOptions, steer_angle
 from blender_turning.mapping.kinematics import Skeleton
 from blender_turning.mapping.rig_spec import load_rig
 

@@ -1,14 +1,14 @@
 """The mapping's fast paths give the numbers of the slow ones they replace: the arm's aiming
-solver (mapping/skier.py ``_Arm``) against the pose builder's IK, and ``stack_dot`` against
+solver (mapping/sports/skier.py ``_Arm``) against the pose builder's IK, and ``stack_dot`` against
 numpy's matmul."""
 import numpy as np
 import pytest
 
 from blender_turning.mapping import bones as B
-from blender_turning.mapping.common import ik_limb
+from blender_turning.mapping.sports.common import ik_limb
 from blender_turning.mapping.kinematics import PoseBuilder, Skeleton, quat_from_axis_angle, stack_dot
 from blender_turning.mapping.rig_spec import load_rig
-from blender_turning.mapping.skier import _Arm
+from blender_turning.mapping.sports.skier import _Arm
 
 
 def _builder(n, rng):
@@ -62,7 +62,7 @@ def test_settled_arms_leaving_the_aiming_loop_change_nothing(monkeypatch):
 
     from blender_turning.core import PhaseEllipse, preset, simulate
     from blender_turning.mapping import map_trajectory
-    from blender_turning.mapping import skier
+    from blender_turning.mapping.sports import skier
 
     fig = preset("skier")
     traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(23),

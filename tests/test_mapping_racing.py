@@ -11,7 +11,7 @@ from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.equipment import carving_of, sport_of
 from blender_turning.mapping import bones as B
 from blender_turning.mapping.anthropometry import centre_and_roll_inertia
-from blender_turning.mapping.skier import SkierOptions
+from blender_turning.mapping.sports.skier import SkierOptions
 
 from test_mapping_skier import posed
 from test_mutation_guards_mapping import ski_roll

@@ -1,4 +1,4 @@
-"""Skidding on the rig (mapping/skid_pose.py, docs/skidding.md Section 8): the skis and board
+"""Skidding on the rig (mapping/sports/skid_pose.py, docs/skidding.md Section 8): the skis and board
 yaw from the travel by the skid angle, the chest faces down the travel, a wedge's tips come
 together with the skis edged inward, a hockey stop's skis go across on their uphill edges, and a
 carved run maps bit for bit as a run without skidding."""
@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
-from blender_turning.core.model import RESISTANCE
-from blender_turning.core.skidding import STOP_EDGE, WEDGE_EDGE, Skidding
-from blender_turning.core.terrain import Plane
-from blender_turning.core.trajectory import Trajectory
+from blender_turning.core.physics.model import RESISTANCE
+from blender_turning.core.physics.skidding import STOP_EDGE, WEDGE_EDGE, Skidding
+from blender_turning.core.ground.terrain import Plane
+from blender_turning.core.physics.trajectory import Trajectory
 from blender_turning.mapping import map_trajectory
-from blender_turning.mapping import skid_pose
+from blender_turning.mapping.sports import skid_pose
 from blender_turning.mapping.kinematics import Skeleton
 from blender_turning.mapping.rig_spec import load_rig
 
@@ -114,7 +114,7 @@ def test_a_wedge_points_the_tips_together_edged_inward():
     assert np.all(tilt_of(P, "ski.R")[wide] - tilt_of(P, "ski.L")[wide] > WEDGE_EDGE)
     # The tips stay apart by the gap (not crossed); the tails are wider.
     spec = load_rig("skier")
-    from blender_turning.mapping.common import mesh_points
+    from blender_turning.mapping.sports.common import mesh_points
     c = mesh_points(spec, "ski.L")
     tip = np.array([0.0, c[:, 1].max(), 0.0])
     tail = np.array([0.0, c[:, 1].min(), 0.0])
@@ -174,7 +174,7 @@ def test_zero_skid_columns_leave_the_carved_pose(sport):
 def test_a_goofy_rider_turns_the_board_the_same_way():
     """The goofy rider is the mirror image of a regular one on the mirrored run: its board too
     yaws by the run's own skid (the mirrored run's skid is the negative)."""
-    from blender_turning.mapping.stance import goofy_track, mirrored_trajectory
+    from blender_turning.mapping.retarget.stance import goofy_track, mirrored_trajectory
     traj = run("snowboarder", 15, 3.0, V0=10.0, stop_at=1.0, stop_side="heel")
     mirrored = mirrored_trajectory(traj)
     assert np.array_equal(mirrored.skid, -traj.skid)
@@ -191,7 +191,7 @@ def test_the_skid_is_baked_as_a_state_property(skidded):
 
 
 def test_a_skidding_ski_brushes_a_band_its_length_times_sin_skid():
-    from blender_turning.mapping.skid_pose import brushed_half_width, equipment_length
+    from blender_turning.mapping.sports.skid_pose import brushed_half_width, equipment_length
     assert equipment_length(load_rig("skier")) == pytest.approx(1.65)
     assert equipment_length(load_rig("cyclist")) == 0.0
     skid = np.radians([0.0, 1.0, 30.0, -90.0])

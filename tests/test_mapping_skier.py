@@ -6,10 +6,10 @@ import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate
 from blender_turning.mapping import MAPPINGS, STATE_PROPS, map_trajectory
-from blender_turning.mapping.common import mesh_points
+from blender_turning.mapping.sports.common import mesh_points
 from blender_turning.mapping.kinematics import Skeleton
 from blender_turning.mapping.rig_spec import load_rig
-from blender_turning.mapping.skier import SkierOptions
+from blender_turning.mapping.sports.skier import SkierOptions
 
 
 def run(sport, seconds=10.0, theta_max=23.0, period=2.0):

@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from blender_turning.mapping.snowboarder import SnowboarderOptions
+from blender_turning.mapping.sports.snowboarder import SnowboarderOptions
 from test_mapping_skier import knee, lowest_box_z, posed, run
 
 

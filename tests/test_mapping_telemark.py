@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from blender_turning.mapping.telemark import TelemarkOptions
+from blender_turning.mapping.sports.telemark import TelemarkOptions
 from test_mapping_skier import knee, lowest_box_z, posed, run
 
 

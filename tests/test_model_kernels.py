@@ -1,7 +1,7 @@
-"""The model's reference right-hand side (core/model.py) against geometry, and the fast kernels
+"""The model's reference right-hand side (core/physics/model.py) against geometry, and the fast kernels
 behind it against the reference (not against each other): the numpy batch and the float stepper
-on flat ground at the paper's held speed (core/dynamics.py, core/one_figure.py), the float
-stepper on any ground (core/terrain_one_figure.py) and the planner's fused flat stage
+on flat ground at the paper's held speed (core/physics/dynamics.py, core/physics/one_figure.py), the float
+stepper on any ground (core/physics/terrain_one_figure.py) and the planner's fused flat stage
 (core/planner/flat_stage.py), on Flat, a Plane and curved ground, the curved-surface terms
 included."""
 import math
@@ -11,16 +11,16 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, preset
-from blender_turning.core import model
+from blender_turning.core.physics import model
 from blender_turning.core.controllers import Straight
-from blender_turning.core.dynamics import PHYSICAL_MARGIN, steer
-from blender_turning.core.model import RESISTANCE, Flat, HeightField, Plane
-from blender_turning.core.one_figure import rhs as float_rhs
-from blender_turning.core.params import Limits
+from blender_turning.core.physics.dynamics import PHYSICAL_MARGIN, steer
+from blender_turning.core.physics.model import RESISTANCE, Flat, HeightField, Plane
+from blender_turning.core.physics.one_figure import rhs as float_rhs
+from blender_turning.core.physics.params import Limits
 from blender_turning.core.planner import flat_stage
-from blender_turning.core.terrain import surface_frame
-from blender_turning.core.terrain_gen import ski_slope
-from blender_turning.core.terrain_one_figure import TerrainStage
+from blender_turning.core.ground.terrain import surface_frame
+from blender_turning.core.ground.terrain_gen import ski_slope
+from blender_turning.core.physics.terrain_one_figure import TerrainStage
 
 SKIER = preset("skier")
 BODY = SKIER.body

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core import FellOver, Limits, OpenLoop, Trajectory, preset, run, simulate
-from blender_turning.core.dynamics import bound_cf, foot_speed, leg_force
+from blender_turning.core.physics.dynamics import bound_cf, foot_speed, leg_force
 
 TWO_PI = 2 * math.pi
 

@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from blender_turning.mapping.skier import SkierOptions, ski_tilts
+from blender_turning.mapping.sports.skier import SkierOptions, ski_tilts
 
 from test_mapping_skier import posed, run
 

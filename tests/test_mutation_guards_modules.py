@@ -1,4 +1,4 @@
-"""Guards for the half-turn's heading change (core/heading_table.py), the feasible turns
+"""Guards for the half-turn's heading change (core/controllers/heading_table.py), the feasible turns
 (core/controllers/feasible.py) and receding-horizon following (core/planner/receding.py): each
 checks a property against an independent computation, so that the mutants of scripts/mutate.py
 (a dropped term, a flipped bracket, a loosened bound, the wrong stage applied) go red."""
@@ -12,10 +12,10 @@ from blender_turning.core import preset
 from blender_turning.core.controllers.feasible import (BOUNDS, CF_SHARE, LEAN_MARGIN,
                                                        RATE_SHARE, ellipse_needs,
                                                        feasible_turns)
-from blender_turning.core.dynamics import inverse_cf
-from blender_turning.core.heading_table import BETA_MAX, BETA_MIN, heading_table
-from blender_turning.core.params import Limits
-from blender_turning.core.scene import load_scene
+from blender_turning.core.physics.dynamics import inverse_cf
+from blender_turning.core.controllers.heading_table import BETA_MAX, BETA_MIN, heading_table
+from blender_turning.core.physics.params import Limits
+from blender_turning.core.course.scene import load_scene
 
 SKIER = preset("skier")
 ROOT = Path(__file__).resolve().parents[1]

@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, exhaustive
 
 
@@ -116,7 +116,7 @@ def test_clearance_is_kept_from_every_kind_of_obstacle(kind, side):
 def test_collinear_segments_apart_are_not_crossing():
     """Segments on one line do not cross: their distance is the gap between them (exactly 0 only
     when they touch or overlap), so a track running along a road edge short of it is clear."""
-    from blender_turning.core.obstacles import segment_distance
+    from blender_turning.core.course.obstacles import segment_distance
     p = lambda x, y: np.array([x, y], float)                     # noqa: E731
     assert segment_distance(p(0, 0), p(1, 0), p(2.5, 0), p(3, 0)) == pytest.approx(1.5, abs=1e-15)
     assert segment_distance(p(0, 0), p(1, 1), p(3, 3), p(2, 2)) == pytest.approx(math.sqrt(2),
@@ -128,7 +128,7 @@ def test_collinear_segments_apart_are_not_crossing():
 
 
 def test_scene_clearance_reaches_the_planner():
-    from blender_turning.core.scene import scene_from_dict
+    from blender_turning.core.course.scene import scene_from_dict
     doc = {"figure": {"preset": "skier"},
            "path": {"polyline": [[0, 0], [30, 0]]}, "clearance": 0.6,
            "obstacles": [{"type": "circle", "center": [10, 1.0], "radius": 0.5}]}

@@ -10,17 +10,17 @@ from blender_turning.core import OpenLoop, PhaseEllipse, Schedule, preset, simul
 from blender_turning.core.controllers.ellipse_paper import (SLOW_FACTOR, paper_alpha,
                                                              paper_alpha_one)
 from blender_turning.core.controllers.straight import Straight
-from blender_turning.core.dynamics import foot_speed
-from blender_turning.core.grip import SNOW
-from blender_turning.core.model import NO_RESISTANCE, RESISTANCE, plumb_lean
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.physics.dynamics import foot_speed
+from blender_turning.core.physics.grip import SNOW
+from blender_turning.core.physics.model import NO_RESISTANCE, RESISTANCE, plumb_lean
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem
 from blender_turning.core.planner import terrain_problem
 from blender_turning.core.planner.speed_cap import SpeedCap
 from blender_turning.core.planner.terrain_problem import steepest_sine
-from blender_turning.core.terrain import Plane, surface_frame
-from blender_turning.core.terrain_gen import ski_slope
+from blender_turning.core.ground.terrain import Plane, surface_frame
+from blender_turning.core.ground.terrain_gen import ski_slope
 
 
 # -- the open-loop law (Section 4, Eq. 5: alpha_v = -omega0^2 theta_max sin(omega0 t)) ----------
@@ -175,7 +175,7 @@ def test_planner_brake_at_the_foot_pulls_the_speed_to_the_cap_at_its_rate():
     np.testing.assert_allclose(out[5], -(x[5] - 9.0) / cap.tau, rtol=1e-9)
 
 
-# -- the free-speed stepper (core/terrain_sim.py) -------------------------------------------------
+# -- the free-speed stepper (core/physics/terrain_sim.py) ------------------------------------------
 
 def test_distance_travelled_is_the_foot_paths_length_on_a_plane():
     """``s`` is the distance along the surface the foot covers: the integral of the foot's

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from blender_turning.core.obstacles import Obstacles, segment_distance
+from blender_turning.core.course.obstacles import Obstacles, segment_distance
 
 
 def dense_distance(a, b, c, d, n=801):
@@ -83,7 +83,7 @@ def test_validation():
 def test_circle_box_prefilter_is_exact():
     """Segments against many circles: the same as every segment's distance to every centre,
     touching included (rims at exactly representable distances, reached from either side)."""
-    from blender_turning.core.obstacles import point_segment_distance
+    from blender_turning.core.course.obstacles import point_segment_distance
     rng = np.random.default_rng(3)
     circles = np.column_stack([rng.integers(-20, 20, (40, 2)), 0.25 * rng.integers(1, 8, 40)])
     obs = Obstacles(circles=circles, clearance=0.25)

@@ -1,4 +1,4 @@
-"""The one-figure fast path's controller laws and heading table on floats (core/one_figure.py,
+"""The one-figure fast path's controller laws and heading table on floats (core/physics/one_figure.py,
 the controllers' float laws) against the array formulas they must equal (the right-hand side
 itself against the model: tests/test_model_kernels.py).  Both evaluate the same expressions in
 the same order, so they agree to round-off; 1e-12 relative leaves room for libm differences
@@ -10,9 +10,9 @@ import pytest
 
 from blender_turning.core import preset
 from blender_turning.core.controllers.ellipse import LAWS
-from blender_turning.core.heading_table import heading_table
-from blender_turning.core.one_figure import scalar_inverse_cf
-from blender_turning.core.dynamics import inverse_cf
+from blender_turning.core.controllers.heading_table import heading_table
+from blender_turning.core.physics.one_figure import scalar_inverse_cf
+from blender_turning.core.physics.dynamics import inverse_cf
 
 TWO_PI = 2 * math.pi
 

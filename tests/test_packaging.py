@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from blender_turning.mapping.bone_map import BONE_MAPS
+from blender_turning.mapping.retarget.bone_map import BONE_MAPS
 from blender_turning.mapping.rig_spec import RIG_NAMES
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -47,7 +47,7 @@ def test_the_wheel_carries_the_rigs_and_the_mapping_finds_them(tmp_path):
     assert {f"blender_turning/rigs/bone_maps/{n}.json" for n in BONE_MAPS} <= names
     assert not any(n.startswith(("tests/", "scripts/", "rigs/")) for n in names)
     # From the unpacked wheel alone (not the repository): the mapping loads every rig.
-    code = ("import blender_turning.mapping.rig_spec as r, blender_turning.mapping.bone_map as b; "
+    code = ("import blender_turning.mapping.rig_spec as r, blender_turning.mapping.retarget.bone_map as b; "
             "[r.load_rig(n) for n in r.RIG_NAMES]; [b.load_bone_map(n) for n in b.BONE_MAPS]; "
             "print(r.RIGS_DIR)")
     out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,

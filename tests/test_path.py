@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.course.path import HermitePath, PathDistance
 
 coord = st.floats(-50, 50, allow_nan=False)
 pts4 = st.lists(st.tuples(coord, coord), min_size=4, max_size=4)
@@ -133,14 +133,14 @@ def test_start_direction_skips_coincident_first_points():
 def test_scene_start_heading_follows_the_path_not_plus_x():
     """A scene path (Bezier) whose first handle sits on its first point starts along the path,
     not along +x.  (Scene files refuse repeated consecutive points; the core handles them.)"""
-    from blender_turning.core.scene import scene_from_dict
+    from blender_turning.core.course.scene import scene_from_dict
     sc = scene_from_dict({"figure": {"preset": "skier"},
                           "path": {"bezier": [[0, 0], [0, 0], [0, 20], [0, 30]]}})
     assert sc.state0[2] == pytest.approx(np.pi / 2, abs=1e-12)
 
 
 def progress_along(path, track, window):
-    from blender_turning.core.path import PathProgress
+    from blender_turning.core.course.path import PathProgress
     pr = PathProgress(path, window)
     p, out, prev = 0.0, [], None
     for xy in np.asarray(track, float):
@@ -188,7 +188,7 @@ def test_path_deviation_is_the_largest_distance_when_and_how_far_along():
     """Round a quarter circle of radius 20 m (a Bezier's quarter-circle, within 0.03% of it) on a
     track whose distance from it is 0.5 + 3 sin(pi s^2) over s in [0, 1]: at most 3.5 m, at
     s = 1/sqrt(2), 22.2 m along the 31.4 m arc."""
-    from blender_turning.core.path import path_deviation
+    from blender_turning.core.course.path import path_deviation
     R, k = 20.0, 0.5522847498                          # the cubic Bezier's quarter circle
     path = HermitePath.from_bezier(np.array([[R, 0], [R, k * R], [k * R, R], [0, R]]))
     s = np.linspace(0.0, 1.0, 2001)

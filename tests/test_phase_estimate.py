@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate
-from blender_turning.core.phase import phase
-from blender_turning.core.phase_estimate import axis_crossings, estimate_phase
+from blender_turning.core.controllers.phase import phase
+from blender_turning.core.course.phase_estimate import axis_crossings, estimate_phase
 
 
 @pytest.mark.parametrize("period, lean_deg", [(2.0, 23.0), (3.0, 12.0), (1.6, 30.0)])

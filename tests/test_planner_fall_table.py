@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
-from blender_turning.core.dynamics import forward_alpha
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.physics.dynamics import forward_alpha
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem
 from blender_turning.core.planner.fall_table import _cooperative
 

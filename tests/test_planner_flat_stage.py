@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, SpeedProfile, flat_stage
 from blender_turning.core.planner.fall_table import FallTable
-from blender_turning.core.terrain import Plane
-from blender_turning.core.model import Resistance
+from blender_turning.core.ground.terrain import Plane
+from blender_turning.core.physics.model import Resistance
 
 FIELDS = ("state", "C_f", "s", "cost", "d_last", "collided", "fell")
 

@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from blender_turning.core.dynamics import rk4_step
+from blender_turning.core.physics.dynamics import rk4_step
 from blender_turning.core.errors import PlanInfeasible
-from blender_turning.core.scene import load_scene, scene_from_dict
+from blender_turning.core.course.scene import load_scene, scene_from_dict
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 NAMES = ["tree_skiing", "slalom", "cyclist_corner", "potholes",

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
 from blender_turning.core.planner.viable import dead_end, doomed_nodes
 from blender_turning.core.planner.spacing import PairFloor

@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 
 from blender_turning.cli import main
-from blender_turning.core.grip import SNOW
-from blender_turning.core.model import RESISTANCE
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.params import preset
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.physics.grip import SNOW
+from blender_turning.core.physics.model import RESISTANCE
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.physics.params import preset
+from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
 from blender_turning.core.planner.speed_cap import SpeedCap, path_curvature_max
-from blender_turning.core.terrain import Plane
-from blender_turning.core.trajectory import Trajectory
+from blender_turning.core.ground.terrain import Plane
+from blender_turning.core.physics.trajectory import Trajectory
 
 ROOT = Path(__file__).resolve().parents[1]
 

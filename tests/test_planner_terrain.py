@@ -10,17 +10,17 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from blender_turning.core.follow_problem import FollowSetup, start_state
-from blender_turning.core.obstacles import Obstacles
-from blender_turning.core.params import preset
-from blender_turning.core.path import HermitePath, PathDistance
+from blender_turning.core.course.follow_problem import FollowSetup, start_state
+from blender_turning.core.course.obstacles import Obstacles
+from blender_turning.core.physics.params import preset
+from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.planner import (PlannerSettings, Problem, SpeedProfile,
                                           branch_and_bound, exhaustive)
 from blender_turning.core.planner.terrain_problem import steepest_sine
-from blender_turning.core.scene import load_scene
-from blender_turning.core.terrain import HeightField, Plane, surface_frame
-from blender_turning.core import model
-from blender_turning.core.model import RESISTANCE, Resistance, plumb_lean
+from blender_turning.core.course.scene import load_scene
+from blender_turning.core.ground.terrain import HeightField, Plane, surface_frame
+from blender_turning.core.physics import model
+from blender_turning.core.physics.model import RESISTANCE, Resistance, plumb_lean
 
 ROOT = Path(__file__).resolve().parents[1]
 SKIER = RESISTANCE["skier"]

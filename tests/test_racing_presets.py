@@ -10,10 +10,10 @@ from cli_helpers import one_line_error, run
 from blender_turning.core import PRESETS, RESISTANCE, preset
 from blender_turning.core.equipment import (Carving, SportPreset, carving_of, register_preset,
                                             sport_of)
-from blender_turning.core.params import Figure
+from blender_turning.core.physics.params import Figure
 from blender_turning.core.registry import SPORT_PRESETS, SPORTS
-from blender_turning.core.scene import scene_from_dict
-from blender_turning.core.trajectory import Trajectory
+from blender_turning.core.course.scene import scene_from_dict
+from blender_turning.core.physics.trajectory import Trajectory
 
 RACERS = {"slalom_racer": ("skier", 1.65, 12.5), "gs_racer": ("skier", 1.93, 30.0),
           "carver": ("snowboarder", 1.63, 10.0)}

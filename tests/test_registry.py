@@ -12,21 +12,21 @@ import pytest
 import registry_fixtures as fx
 from blender_turning.core import preset, simulate, slalom_start
 from blender_turning.core.controllers import CONTROLLERS
-from blender_turning.core.params import PRESETS, BodyParams, Figure, Limits
+from blender_turning.core.physics.params import PRESETS, BodyParams, Figure, Limits
 from blender_turning.core.registry import SPORTS, Registry
-from blender_turning.core.scene import scene_from_dict
-from blender_turning.core.scene_terrain import read_terrain
+from blender_turning.core.course.scene import scene_from_dict
+from blender_turning.core.ground.scene_terrain import read_terrain
 from blender_turning.core.sports import Retarget, Sport, register_sport, sport
-from blender_turning.core.model import RESISTANCE, Resistance
+from blender_turning.core.physics.model import RESISTANCE, Resistance
 from blender_turning.core.validate import FieldError, Fields
 from blender_turning.crowd import crowd_from_dict
 from blender_turning.crowd.formations import FORMATIONS
 from blender_turning.mapping import MAPPINGS, map_trajectory
 from blender_turning.mapping.bones import REQUIRED
-from blender_turning.mapping.retarget import ATTACH
+from blender_turning.mapping.retarget.retarget import ATTACH
 from blender_turning.mapping.rig_spec import RIG_NAMES, load_rig
-from blender_turning.mapping.skier import SkierMapping
-from blender_turning.mapping.stance import STANCES
+from blender_turning.mapping.sports.skier import SkierMapping
+from blender_turning.mapping.retarget.stance import STANCES
 
 ROOT = fx.ROOT
 SCENE = {"figure": {"preset": fx.SPORT},
@@ -57,7 +57,7 @@ def test_the_builtins_are_registered_in_their_blender_order_with_their_stored_nu
 def test_the_partial_views_list_only_the_sports_that_have_the_part():
     """A view of a part some sports lack (a stance, a seat, an anchor) lists only those that
     have it: ``sport in STANCES`` is how the panel and the retargeting decide."""
-    from blender_turning.mapping.retarget import ANCHOR, SEATED, SLIDE, SPIN, TRACKS
+    from blender_turning.mapping.retarget.retarget import ANCHOR, SEATED, SLIDE, SPIN, TRACKS
     assert list(STANCES) == ["snowboarder"] and list(ANCHOR) == ["telemark"]
     assert list(SEATED) == list(SPIN) == list(SLIDE) == list(TRACKS) == ["cyclist"]
     assert len(STANCES) == 1 and "skier" not in STANCES
@@ -220,7 +220,7 @@ def _touched(sport_name: str) -> set:
     lists them), the package that imports its module, and any file naming the sport as a
     literal (a per-sport table, an enum item, a special case)."""
     literal = re.compile(rf"""["']({sport_name}|{sport_name.upper()})["']""")
-    imports = re.compile(rf"^from \.{sport_name} import", re.M)
+    imports = re.compile(rf"^from \.sports\.{sport_name} import", re.M)
     out = {f"rigs/{sport_name}.json"}
     for p in _ADDON:
         text = p.read_text()
@@ -236,7 +236,7 @@ def test_a_built_in_sport_touches_its_module_its_rig_and_one_import(name):
     the module (the explicit list of built-ins).  Nothing else in the add-on names it, not even
     the manifest (its exclude patterns ship every module and rig).  (The skier is left out: it is
     the default sport, named as such by the CLI and the enums.)"""
-    assert _touched(name) == {f"blender_turning/mapping/{name}.py", f"rigs/{name}.json",
+    assert _touched(name) == {f"blender_turning/mapping/sports/{name}.py", f"rigs/{name}.json",
                               "blender_turning/mapping/__init__.py"}
 
 

@@ -13,7 +13,7 @@ from cli_helpers import ROOT, one_line_error
 
 JOB = ROOT / "scripts" / "render_job.py"
 from blender_turning.blender.render.config import load_config
-from blender_turning.core.params import PRESETS
+from blender_turning.core.physics.params import PRESETS
 
 CROWD = """
 [terrain.mountain]

@@ -8,13 +8,13 @@ import pytest
 from blender_turning.core import preset, simulate
 from blender_turning.core.controllers import PhaseEllipse
 from blender_turning.mapping import map_trajectory
-from blender_turning.mapping.bone_map import load_bone_map, parse_bone_map
-from blender_turning.mapping.common import rot_y, rot_z
+from blender_turning.mapping.retarget.bone_map import load_bone_map, parse_bone_map
+from blender_turning.mapping.sports.common import rot_y, rot_z
 from blender_turning.mapping.kinematics import Skeleton, rest_matrix
-from blender_turning.mapping.equipment import equipment_rest
-from blender_turning.mapping.retarget import retarget, swing
-from blender_turning.mapping.stance import mirrored_trajectory
-from blender_turning.mapping.user_rig import UserRig, fit_rig
+from blender_turning.mapping.retarget.equipment import equipment_rest
+from blender_turning.mapping.retarget.retarget import retarget, swing
+from blender_turning.mapping.retarget.stance import mirrored_trajectory
+from blender_turning.mapping.retarget.user_rig import UserRig, fit_rig
 from blender_turning.mapping.rig_spec import load_rig
 
 PREFIX = "u_"
@@ -363,7 +363,7 @@ def test_a_goofy_builtin_snowboarder_is_the_mirror_of_regular():
     """The built-in rig keyed goofy: forward kinematics of its channels gives every bone the
     pose of its mirror image on the mirrored run (so the right boot leads), the connected
     chains stay connected, the state properties are the run's own."""
-    from blender_turning.mapping.stance import goofy_track
+    from blender_turning.mapping.retarget.stance import goofy_track
     fig = preset("snowboarder")
     traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(20),
                                       heading=0.3), duration=4.0).resample(24)

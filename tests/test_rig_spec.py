@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from blender_turning.mapping import bones as B
-from blender_turning.mapping.common import mesh_points
+from blender_turning.mapping.sports.common import mesh_points
 from blender_turning.mapping.kinematics import Skeleton, quat_to_matrix
 from blender_turning.mapping.rig_spec import RIG_NAMES, RIGS_DIR, load_rig, parse_rig
 

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from blender_turning.cli import main
-from blender_turning.core.scene import load_scene, scene_from_dict
-from blender_turning.core.terrain import HeightField, Plane
-from blender_turning.core.model import RESISTANCE
+from blender_turning.core.course.scene import load_scene, scene_from_dict
+from blender_turning.core.ground.terrain import HeightField, Plane
+from blender_turning.core.physics.model import RESISTANCE
 from blender_turning.core.validate import FieldError
 
 

@@ -1,4 +1,4 @@
-"""Grip and skidding (core/grip.py, core/skidding.py, docs/skidding.md): the carved model is
+"""Grip and skidding (core/physics/grip.py, core/physics/skidding.py, docs/skidding.md): the carved model is
 the zero-skid case bit for bit, the braking force stays inside the friction circle, skidded
 speed control holds the target on real pistes, stops, wedges and side-slips.  Tolerances are
 the measured values (BENCHMARKS.md, "Grip and skidding") with the margin stated at each."""
@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
-from blender_turning.core import model
-from blender_turning.core.grip import (SKID_MAX_TURNING, SNOW, FootBrake, Grip, brake_limit,
+from blender_turning.core.physics import model
+from blender_turning.core.physics.grip import (SKID_MAX_TURNING, SNOW, FootBrake, Grip, brake_limit,
                                        foot_lateral, skid_angle, tyre)
-from blender_turning.core.model import RESISTANCE
-from blender_turning.core.params import Limits
-from blender_turning.core.skidding import Skidding, turning_share
-from blender_turning.core.terrain import Plane
-from blender_turning.core.terrain_one_figure import TerrainStage
+from blender_turning.core.physics.model import RESISTANCE
+from blender_turning.core.physics.params import Limits
+from blender_turning.core.physics.skidding import Skidding, turning_share
+from blender_turning.core.ground.terrain import Plane
+from blender_turning.core.physics.terrain_one_figure import TerrainStage
 
 W, TM = math.pi, math.radians(23)               # the 2 s / 23 deg turn
 FALL = -math.pi / 2
@@ -214,7 +214,7 @@ def test_a_slalom_of_10_m_gates_on_19_deg_holds_12_m_s():
 def test_a_keyed_target_speed_is_followed():
     """A target of 12 m/s for 30 s, then 8 m/s (a keyed Target Speed): the speed follows
     (measured means 12.2 and 8.2 m/s over the last 15 s of each)."""
-    from blender_turning.core.schedule import Schedule
+    from blender_turning.core.controllers.schedule import Schedule
     target = Schedule(lambda t: 12.0 if t < 30.0 else 8.0)
     traj, _ = run("skier", 18, target, duration=60.0, style="skid")
     first = traj.V_cm[(traj.t >= 15) & (traj.t < 30)].mean()

@@ -1,4 +1,4 @@
-"""The beginner and the recreational skier (mapping/skier_presets.py, core/speed_habits.py,
+"""The beginner and the recreational skier (mapping/sports/skier_presets.py, core/controllers/speed_habits.py,
 docs/skidding.md Section 8): presets of the skier with their skis, and the speed habit they
 ski at on a slope unless told otherwise (a wedge at 4.5 m/s; skidded turns at 10.5 m/s, the
 recreational speeds Stepan et al. 2023 measured, 9.0-12.4 m/s)."""
@@ -10,7 +10,7 @@ import pytest
 from blender_turning.cli import main
 from blender_turning.core import PRESETS, Trajectory, preset
 from blender_turning.core.equipment import carving_of, sport_of
-from blender_turning.core.speed_habits import SpeedHabit, habit_of
+from blender_turning.core.controllers.speed_habits import SpeedHabit, habit_of
 
 
 def _sim(tmp_path, *args):

@@ -10,7 +10,7 @@ from blender_turning.cli import main
 from blender_turning.core import Trajectory, preset, simulate
 from blender_turning.core.controllers import Straight
 from blender_turning.core.errors import FellOver, LeftTerrain, RunEnded, Stopped
-from blender_turning.core.model import HeightField, Plane, Resistance
+from blender_turning.core.physics.model import HeightField, Plane, Resistance
 
 TUCK = Resistance(mu=0.03, CdA=0.15, rho=1.007)   # a speed skier's tuck, air at ~2000 m
 PITCH = math.radians(44)

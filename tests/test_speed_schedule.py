@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, Schedule, preset, run, simulate
-from blender_turning.core.dynamics import leg_force
-from blender_turning.core.heading_table import heading_table
+from blender_turning.core.physics.dynamics import leg_force
+from blender_turning.core.controllers.heading_table import heading_table
 
 W, TM = 2 * math.pi / 2.0, math.radians(23)
 #: Accelerate 10 -> 14 m/s, hold, brake to 8 m/s, back to 10.

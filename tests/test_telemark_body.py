@@ -9,7 +9,7 @@ import pytest
 from blender_turning.core import preset, simulate
 from blender_turning.core.controllers import PhaseEllipse
 from blender_turning.mapping import map_trajectory
-from blender_turning.mapping.common import mesh_points
+from blender_turning.mapping.sports.common import mesh_points
 from blender_turning.mapping.kinematics import Skeleton
 from blender_turning.mapping.rig_spec import load_rig
 

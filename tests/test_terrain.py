@@ -7,11 +7,11 @@ import pytest
 
 from blender_turning.core import preset
 from blender_turning.core.controllers.open_loop import open_loop_alpha
-from blender_turning.core.dynamics import inverse_cf, leg_force, rk4_step, steer
-from blender_turning.core.params import Limits
-from blender_turning.core.terrain import FLAT, HeightField, Plane, surface_frame
-from blender_turning.core import model
-from blender_turning.core.model import RESISTANCE, Resistance
+from blender_turning.core.physics.dynamics import inverse_cf, leg_force, rk4_step, steer
+from blender_turning.core.physics.params import Limits
+from blender_turning.core.ground.terrain import FLAT, HeightField, Plane, surface_frame
+from blender_turning.core.physics import model
+from blender_turning.core.physics.model import RESISTANCE, Resistance
 
 SKIER = preset("skier")
 FREE = Limits(theta_fall=math.radians(80))       # no C_f bounds: the closed forms assume none
@@ -19,7 +19,7 @@ NONE = Resistance()
 
 
 def _run(ground, res, state0, law, duration, dt, body=SKIER.body, limits=FREE, held=False):
-    """RK4 on the model's state as ``core.simulate`` steps: the curvature at the start of each
+    """RK4 on the model's state as ``core.physics.simulate`` steps: the curvature at the start of each
     step is bounded against the previous step's and anchors the step's stages."""
     states = [np.asarray(state0, float)]
     anchor = None

@@ -1,6 +1,6 @@
-"""The float stepper on any ground (core/terrain_one_figure.py, behind ``simulate``): the height
+"""The float stepper on any ground (core/physics/terrain_one_figure.py, behind ``simulate``): the height
 field on floats, whole runs against the reference model's loop (``model.rhs`` and
-``model.rk4_step``, core/model.py) to round-off, and the controller's part in it (one stage
+``model.rk4_step``, core/physics/model.py) to round-off, and the controller's part in it (one stage
 against the model: tests/test_model_kernels.py)."""
 import math
 
@@ -11,11 +11,11 @@ from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.controllers import Straight
 from blender_turning.core.controllers.feasible import feasible_turns
 from blender_turning.core.errors import LeftTerrain
-from blender_turning.core.terrain import HeightField, Plane, surface_frame
-from blender_turning.core import model
-from blender_turning.core.model import RESISTANCE, plumb_lean
-from blender_turning.core.terrain_gen import ski_slope
-from blender_turning.core.terrain_one_figure import TerrainStage
+from blender_turning.core.ground.terrain import HeightField, Plane, surface_frame
+from blender_turning.core.physics import model
+from blender_turning.core.physics.model import RESISTANCE, plumb_lean
+from blender_turning.core.ground.terrain_gen import ski_slope
+from blender_turning.core.physics.terrain_one_figure import TerrainStage
 
 SKIER = preset("skier")
 BODY = SKIER.body

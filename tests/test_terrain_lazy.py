@@ -1,4 +1,4 @@
-"""A height field sampled as it is visited (core/terrain.py ``LazyHeightField``, so "the
+"""A height field sampled as it is visited (core/ground/terrain.py ``LazyHeightField``, so "the
 bake stays fast"): the same field, bit for bit, as the one of all samples, on floats and arrays,
 at the grid's edges (its linear extension) and after pickling; only the tiles a query touches
 are sampled."""
@@ -7,7 +7,7 @@ import pickle
 import numpy as np
 import pytest
 
-from blender_turning.core.terrain import HeightField, LazyHeightField
+from blender_turning.core.ground.terrain import HeightField, LazyHeightField
 
 NY, NX = 150, 171                        # not multiples of the tile: partial tiles at the edges
 HEIGHTS = np.random.default_rng(11).normal(0.0, 0.5, (NY, NX))

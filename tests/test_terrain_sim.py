@@ -9,11 +9,11 @@ import pytest
 from blender_turning.core import PhaseEllipse, Trajectory, preset, simulate, slalom_start
 from blender_turning.core.controllers import Straight
 from blender_turning.core.errors import FellOver, LeftTerrain, Stopped
-from blender_turning.core.terrain import FLAT, HeightField, Plane, surface_frame
-from blender_turning.core.model import RESISTANCE, Resistance, plumb_lean
-from blender_turning.core.terrain_gen import ski_slope
-from blender_turning.core.braking import TargetSpeed
-from blender_turning.core.model import NO_RESISTANCE
+from blender_turning.core.ground.terrain import FLAT, HeightField, Plane, surface_frame
+from blender_turning.core.physics.model import RESISTANCE, Resistance, plumb_lean
+from blender_turning.core.ground.terrain_gen import ski_slope
+from blender_turning.core.controllers.braking import TargetSpeed
+from blender_turning.core.physics.model import NO_RESISTANCE
 
 SKIER = preset("skier")
 BODY = SKIER.body
@@ -164,7 +164,7 @@ def test_target_speed_brakes_by_turning_across_the_hill():
                     target_speed=12.0)
     late = held.t >= 20.0
     assert free.V_cm[late].mean() > 25.0
-    assert 10.0 < held.V_cm[late].mean() < 15.5          # measured 13.2 (14.1 before core/braking.py)
+    assert 10.0 < held.V_cm[late].mean() < 15.5          # measured 13.2 (14.1 before core/controllers/braking.py)
     assert held.V_cm[late].max() < 20.0                  # measured 18.0
     # It went down the hill, zig-zagging within the corridor (and a turn radius).
     assert held.y[-1] < -300.0

@@ -1,4 +1,4 @@
-"""A height field smooth enough to integrate (core/terrain.py, docs/TERRAIN.md Section 1): the
+"""A height field smooth enough to integrate (core/ground/terrain.py, docs/TERRAIN.md Section 1): the
 surface is C2, so its curvature, and with it the right-hand side of the turning model, is
 continuous across cell edges, and a run on it converges as the step shrinks, to the solution an
 adaptive solver finds from the model's right-hand side."""
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
-from blender_turning.core.params import Limits
-from blender_turning.core.terrain import HeightField
-from blender_turning.core.model import RESISTANCE, rhs as model_rhs
+from blender_turning.core.physics.params import Limits
+from blender_turning.core.ground.terrain import HeightField
+from blender_turning.core.physics.model import RESISTANCE, rhs as model_rhs
 
 ROUGH = HeightField(np.random.default_rng(11).normal(0.0, 0.4, (9, 12)), -3.0, 1.0, 0.7)
 
@@ -128,7 +128,7 @@ def test_a_run_on_a_height_field_converges_as_the_step_shrinks(fine):
 
 def test_the_fine_run_is_the_adaptive_solution_of_the_model(fine):
     """The same 40 s by scipy's DOP853 at rtol = atol = 1e-10 from the model's right-hand side
-    (:func:`..core.model.rhs` under the controller's terrain law, the reference the fused stepper
+    (:func:`..core.physics.model.rhs` under the controller's terrain law, the reference the fused stepper
     is held to): the dt = 0.00125 s run's lean is within 0.005 deg of it at every 0.02 s.
     Measured: 1.8e-4 deg (the dt = 0.02 s run: 0.024 deg); the reference itself moves 4.9e-4
     deg from rtol 1e-9 to 1e-10, so the bound is 10 times what the reference can resolve and

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import sympy as sp                     # a pinned test-only dependency (requirements.txt)
 
-from blender_turning.core.terrain import HeightField, Plane, surface_frame
+from blender_turning.core.ground.terrain import HeightField, Plane, surface_frame
 
 
 def _num(expr, subs):

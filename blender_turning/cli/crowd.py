@@ -18,11 +18,11 @@ from pathlib import Path
 
 from ..core.errors import WorkerLost
 from ..core.files import OutputLock
-from ..core.params import check_range
+from ..core.physics.params import check_range
 from ..core.ranges import MAX_SAMPLES
 from ..crowd import load_crowd, run_crowd
 from ..crowd.runner import check_scheduler_address
-from ..core.moving import MovingBodies, closest_approach
+from ..core.course.moving import MovingBodies, closest_approach
 from .common import Outputs
 from .progress import Progress
 
@@ -114,7 +114,7 @@ def _write(args, crowd, out: Path, outputs: Outputs) -> int:
             csv = f"{f.name}.csv"
             outputs.write(f"--out {csv}", traj.to_csv)
         rows.append(_row(f, r, traj, csv))
-        if f.name in near:           # foot-CM segments sampled every 0.1 s (core/moving.py)
+        if f.name in near:           # foot-CM segments sampled every 0.1 s (core/course/moving.py)
             d, other, t = near[f.name]
             rows[-1]["closest"] = {"distance_m": d if math.isfinite(d) else None,
                                    "to": other, "t": t}

@@ -16,11 +16,11 @@ from dataclasses import replace
 
 from ..core.equipment import sport_of
 from ..core.errors import PathNotFinished, PlanInfeasible
-from ..core.grip import SNOW
-from ..core.params import check_range
+from ..core.physics.grip import SNOW
+from ..core.physics.params import check_range
 from ..core.planner.speed_cap import SpeedCap
 from ..core.registry import SPORTS
-from ..core.scene import check_horizon, load_scene
+from ..core.course.scene import check_horizon, load_scene
 from ..core.validate import check
 from .common import Outputs, require_matplotlib
 from .progress import Progress

@@ -6,8 +6,8 @@ import sys
 
 from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, slalom_start
 from ..core.ranges import RANGES
-from ..core.schedule import Schedule
-from ..core.simulate import DEFAULT_DT
+from ..core.controllers.schedule import Schedule
+from ..core.physics.simulate import DEFAULT_DT
 from ..core.validate import check
 from .common import Outputs, check_steps, require_matplotlib
 from .terrain_flags import add_terrain_flags, start_point, terrain_options

@@ -2,7 +2,7 @@
 
 ``--slope-deg S --downhill-deg D`` is the plane (``D`` the direction of steepest descent, deg
 CCW from +x); ``--ground FILE`` any ground from a file instead (docs/TERRAIN.md, "The ground
-from a file"): a scene's ``terrain`` table as JSON (:mod:`..core.scene_terrain`; a whole scene
+from a file"): a scene's ``terrain`` table as JSON (:mod:`..core.ground.scene_terrain`; a whole scene
 file gives its ``terrain``) or a ``.npy`` height grid with ``--ground-cell`` and
 ``--ground-origin``; ``--start X Y`` where the foot starts.
 ``--friction MU --drag-area CDA --air-density RHO`` what slows the figure;
@@ -22,14 +22,14 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..core.equipment import sport_of
-from ..core.grip import SNOW, snow
-from ..core.params import check_range
+from ..core.physics.grip import SNOW, snow
+from ..core.physics.params import check_range
 from ..core.registry import SPORTS
-from ..core.skidding import STOP_SIDES, Skidding
-from ..core.speed_habits import habit_of
-from ..core.scene_terrain import read_terrain
-from ..core.terrain import Plane
-from ..core.model import RESISTANCE, Resistance
+from ..core.physics.skidding import STOP_SIDES, Skidding
+from ..core.controllers.speed_habits import habit_of
+from ..core.ground.scene_terrain import read_terrain
+from ..core.ground.terrain import Plane
+from ..core.physics.model import RESISTANCE, Resistance
 from ..core.validate import FieldError, Fields, check, read_text
 
 # flag -> (Resistance field, allowed range)
@@ -122,10 +122,10 @@ def _choice(flag: str, value, allowed) -> str:
 
 
 def skid_options(args, sport: str, target: bool, habit=None):
-    """The :class:`..core.skidding.Skidding` of ``--style``, ``--snow``, ``--grip``,
+    """The :class:`..core.physics.skidding.Skidding` of ``--style``, ``--snow``, ``--grip``,
     ``--stop-at`` and ``--stop-side`` (``None``: the carved run).  With ``--target-speed`` and
     no ``--style`` the figure skids (``skid``), or brakes in its preset's style (``habit``, a
-    :class:`..core.speed_habits.SpeedHabit`: the beginner's wedge)."""
+    :class:`..core.controllers.speed_habits.SpeedHabit`: the beginner's wedge)."""
     record = SPORTS[sport_of(sport)]          # a preset (slalom_racer) has its sport's grip
     if args.snow is not None:
         if record.grip is not None:
@@ -166,7 +166,7 @@ def start_point(args, ground) -> tuple:
 
 def read_ground(args, sport: str):
     """``(ground, resistance)`` of ``--ground FILE``: a ``.json`` file holding a ``terrain``
-    table (or a scene with one), read as a scene's (:func:`..core.scene_terrain.read_terrain`:
+    table (or a scene with one), read as a scene's (:func:`..core.ground.scene_terrain.read_terrain`:
     the same fields, ranges and messages; a ``file`` is relative to the JSON file), or a
     ``.npy`` grid of heights at ``--ground-cell`` spacing from ``--ground-origin``.  Every
     problem is a one-line ``ValueError`` naming ``--ground`` (or the flag at fault)."""

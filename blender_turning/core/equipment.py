@@ -32,7 +32,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from .params import Figure, Limits
+from .physics.params import Figure, Limits
 from .registry import SPORT_PRESETS, SPORTS
 from .validate import check_range
 

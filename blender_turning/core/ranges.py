@@ -163,13 +163,14 @@ RANGES: dict[str, Range] = {
     "object_height": Range(0.01, 1000.0, "m", "an obstacle object's height"),
     "plan_curvature_rate": Range(0.0, 100.0, "1/(m s)", "the planner's dC_f/dt (0: the sport "
                                  "preset's); as dC_f_max"),
-    # -- terrain (docs/TERRAIN.md Section 3; as core.model.Resistance checks them) ----
+    # -- terrain (docs/TERRAIN.md Section 3; as core.physics.model.Resistance checks them) ----
     "mu": Range(0.0, 1.0, "", "snow or rolling friction coefficient: waxed ski 0.02-0.1, tyre "
                 "0.003-0.006; 1 is rubber on dry rock"),
     "CdA": Range(0.0, 10.0, "m^2", "drag area: a tucked skier 0.15, an upright rider 0.6; 10 m^2 "
                  "is a parachute"),
     "rho": Range(0.0, 2.0, "kg/m^3", "air density: 1.225 at sea level, ~1.0 at 2000 m"),
-    "terrain_size": Range(10.0, 5000.0, "m", "a generated terrain's side (core.terrain_gen)"),
+    "terrain_size": Range(10.0, 5000.0, "m",
+                          "a generated terrain's side (core.ground.terrain_gen)"),
     "terrain_cell": Range(0.05, 50.0, "m", "a generated terrain's grid spacing"),
     "terrain_slope": Range(0.0, 45.0, "deg", "a generated ski slope's mean slope; 45 deg is a "
                            "black run's steepest"),
@@ -192,7 +193,7 @@ RANGES: dict[str, Range] = {
     "brake_reach": Range(0.0, math.pi, "rad", "how far the command may lead the mean heading",
                          lo_open=True),
     "brake_slope_time": Range(0.0, 1e3, "s", "the low-pass time of the slope read"),
-    # -- grip and skidding (docs/skidding.md; core/grip.py, core/skidding.py) --------
+    # -- grip and skidding (docs/skidding.md; core/physics/grip.py, core/physics/skidding.py) ------
     "grip": Range(0.01, 2.0, "", "the friction circle's mu at the foot: tyre on dry asphalt 0.9, "
                   "wet 0.5, gravel 0.35; snow up to ~1; 2 is a racing slick"),
     "grip_shear_angle": Range(0.0, math.radians(60.0), "rad", "how far from the ski base's "

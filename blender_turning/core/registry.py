@@ -145,7 +145,7 @@ class ChainView(Mapping):
         return f"{{{', '.join(f'{k!r}: {v!r}' for k, v in self.items())}}}"
 
 
-#: The sports (:class:`.sports.Sport`), registered by their modules (``mapping/<sport>.py``);
+#: The sports (:class:`.sports.Sport`), registered by their modules (``mapping/sports/<sport>.py``);
 #: ``number`` is the value a Blender file stores for the sport's enum item.
 SPORTS = Registry("sport", unique=("number",))
 

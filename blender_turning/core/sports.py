@@ -16,11 +16,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .grip import Grip
-from .params import Figure
-from .skidding import STYLES
+from .physics.grip import Grip
+from .physics.params import Figure
+from .physics.skidding import STYLES
 from .registry import SPORTS
-from .model import Resistance
+from .physics.model import Resistance
 from .validate import check
 
 __all__ = ["Sport", "Retarget", "SPORTS", "register_sport", "unregister_sport", "sport"]
@@ -28,7 +28,7 @@ __all__ = ["Sport", "Retarget", "SPORTS", "register_sport", "unregister_sport", 
 
 @dataclass(frozen=True, eq=False)
 class Retarget:
-    """How the sport's motion goes onto a user's own armature (:mod:`..mapping.retarget`)."""
+    """How the sport's motion goes onto a user's own armature (:mod:`..mapping.retarget.retarget`)."""
 
     attach: dict
     """Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig."""
@@ -86,7 +86,7 @@ class Sport:
     """How it goes onto a user's rig; ``None``: Make Figure does not offer the sport."""
     stances: tuple = ()
     """``("regular", "goofy")`` for a sport ridden either way round (the goofy rider is the
-    regular one's mirror image, :mod:`..mapping.stance`); ``()``: one way only."""
+    regular one's mirror image, :mod:`..mapping.retarget.stance`); ``()``: one way only."""
     snow_tracks: tuple = (0.045, (-0.11, 0.11))
     """The grooves the equipment cuts in snow, as the render job draws them: ``(half width,
     lateral offsets)``, m (skis: two narrow ones a hip's width apart)."""
@@ -124,7 +124,7 @@ class Sport:
         if self.retarget is not None and not isinstance(self.retarget, Retarget):
             raise ValueError(f"sport {self.name!r}: retarget must be a Retarget or None")
         if self.grip is not None and not isinstance(self.grip, Grip):
-            raise ValueError(f"sport {self.name!r}: grip must be a core.grip.Grip or None")
+            raise ValueError(f"sport {self.name!r}: grip must be a core.physics.grip.Grip or None")
         if "carve" not in self.styles or not set(self.styles) <= set(STYLES):
             raise ValueError(f"sport {self.name!r}: styles = {self.styles!r} must hold 'carve' "
                              f"and only {', '.join(STYLES)}")

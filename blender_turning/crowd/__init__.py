@@ -3,7 +3,7 @@ seed; a runner that batches the parametric figures and fans path planning out pe
 local processes or a Dask cluster.  numpy and the standard library only (Dask is optional)."""
 from .formations import follow_leader, offset_path, peloton, point_at_distance, synchronized
 from .model import Crowd, CrowdFigure, FollowPath, Turns
-from ..core.moving import MovingBodies, closest_approach
+from ..core.course.moving import MovingBodies, closest_approach
 from .poses import map_crowd
 from .reader import crowd_from_dict, load_crowd
 from .runner import CrowdResult, FigureResult, crowd_tasks, run_crowd, run_task

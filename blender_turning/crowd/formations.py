@@ -18,10 +18,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..core.params import check_range
+from ..core.physics.params import check_range
 from ..core.ranges import CROWD_RANGES
 from ..core.validate import check
-from ..core.path import HermitePath
+from ..core.course.path import HermitePath
 from .model import CrowdFigure, FollowPath, Turns
 from .registry import FORMATIONS, Formation, FormationRefused, register_formation
 

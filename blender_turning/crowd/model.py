@@ -7,14 +7,14 @@ them from a template and a seed, the reader (:mod:`.reader`) from a crowd scene 
 - :class:`Turns`: the parametric controller of Section 5 (phase ellipse with directional
   control), one turn period, lean and heading per figure.  All such figures of a crowd that share
   a body run as one task (:mod:`.kernels`: each on floats, or one numpy batch when many).
-- :class:`FollowPath`: path following (Section 6) of a core :class:`~..core.scene.Scene` (its
+- :class:`FollowPath`: path following (Section 6) of a core :class:`~..core.course.scene.Scene` (its
   path, obstacles, start, speed profile and planner settings); planned one task per figure.
 
 Every figure has its own clock: it starts at ``time_offset`` seconds of the crowd's clock, and
 its trajectory is reported on the crowd's clock (``t = time_offset + own t``).
 
 Priority planning: the figures a crowd's ``priority`` names plan in that order, each
-path figure around the bodies of those before it (:mod:`..core.moving`), keeping ``clearance``.
+path figure around the bodies of those before it (:mod:`..core.course.moving`), keeping ``clearance``.
 """
 from __future__ import annotations
 
@@ -23,18 +23,18 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.follow_problem import DEFAULT_CLEARANCE
-from ..core.params import Figure, check_range
+from ..core.course.follow_problem import DEFAULT_CLEARANCE
+from ..core.physics.params import Figure, check_range
 from ..core.ranges import MAX_STEPS
 from ..core.validate import check
-from ..core.simulate import slalom_start
+from ..core.physics.simulate import slalom_start
 
 __all__ = ["Turns", "FollowPath", "CrowdFigure", "Crowd", "FIRST_TURNS", "BODY_CLEARANCE"]
 
 FIRST_TURNS = ("left", "right")
 
 #: Distance kept between two figures' foot-CM segments in priority planning, m: each figure's
-#: half width with its equipment (the obstacles' :data:`..core.follow_problem.DEFAULT_CLEARANCE`)
+#: half width with its equipment (the obstacles' :data:`..core.course.follow_problem.DEFAULT_CLEARANCE`)
 #: on either side of the gap.
 BODY_CLEARANCE = 2.0 * DEFAULT_CLEARANCE
 
@@ -65,7 +65,7 @@ class Turns:
 @dataclass(frozen=True)
 class FollowPath:
     """Path following (Section 6): the figure plans its way along ``scene`` (a core
-    :class:`~..core.scene.Scene`: path, obstacles, start state, speed profile, planner)."""
+    :class:`~..core.course.scene.Scene`: path, obstacles, start state, speed profile, planner)."""
 
     scene: object
 

@@ -1,5 +1,5 @@
 """Priority planning: the path figures a crowd's ``priority`` names plan in that
-order, each around the bodies of those before it (moving obstacles: :mod:`..core.moving`), and
+order, each around the bodies of those before it (moving obstacles: :mod:`..core.course.moving`), and
 groups of figures that cannot see each other plan in parallel.
 
 The result is defined as planning one figure after another, each with every body before it;
@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.moving import MovingBodies
+from ..core.course.moving import MovingBodies
 
 __all__ = ["bodies_for", "initial_groups", "conflicts", "merge"]
 

@@ -13,7 +13,7 @@ import math
 from pathlib import Path
 
 from ..core.ranges import CROWD_RANGES, RANGES
-from ..core.scene import read_figure, scene_from_dict
+from ..core.course.scene import read_figure, scene_from_dict
 from ..core.validate import FieldError, Fields, read_text
 from .formations import FORMATIONS
 from .registry import FormationRefused

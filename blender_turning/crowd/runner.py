@@ -26,7 +26,7 @@ import numpy as np
 
 from ..core import signals
 from ..core.errors import PlanInfeasible, TurningError, WorkerLost
-from ..core.trajectory import Trajectory, body_meta
+from ..core.physics.trajectory import Trajectory, body_meta
 from . import priority as priority_
 from .kernels import run_turns
 from .model import Crowd, CrowdFigure

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core.scene import Scene, load_scene
+from ..core.course.scene import Scene, load_scene
 from .plots import pyplot, save_figure
 
 SCENES = Path(__file__).resolve().parents[2] / "scenes"

@@ -13,11 +13,11 @@ from ..core.registry import SPORTS
 from .base import STATE_PROPS, BoneChannels, Mapping, PoseTrack
 from .bones import MissingBoneError
 # The built-in sports register in this order (skier, snowboarder, telemark, cyclist).
-from .skier import SkierMapping, SkierOptions
-from . import skier_presets  # noqa: F401 - registers the beginner and recreational presets
-from .snowboarder import SnowboarderMapping, SnowboarderOptions
-from .telemark import TelemarkMapping, TelemarkOptions
-from .cyclist import CyclistMapping, CyclistOptions
+from .sports.skier import SkierMapping, SkierOptions
+from .sports import skier_presets  # noqa: F401 - registers the beginner and recreational presets
+from .sports.snowboarder import SnowboarderMapping, SnowboarderOptions
+from .sports.telemark import TelemarkMapping, TelemarkOptions
+from .sports.cyclist import CyclistMapping, CyclistOptions
 
 #: ``sport -> Mapping``, a live view of the sport registry.
 MAPPINGS = SPORTS.view("mapping")

@@ -2,7 +2,7 @@
 processes.
 
 Each figure is read as the single-figure Follow Path reads it (:func:`.follow_scene.prepare`: its
-path, obstacles, settings), made a core path-following :class:`~..core.scene.Scene` with the
+path, obstacles, settings), made a core path-following :class:`~..core.course.scene.Scene` with the
 same start, planner settings and problem, and the whole selection a :class:`~..crowd.Crowd`,
 planned by :func:`~..crowd.runner.run_crowd`, the CLI's ``crowd`` planner:
 
@@ -36,9 +36,9 @@ from bpy.props import BoolProperty, FloatProperty
 
 from ...core import signals
 from ...core.errors import WorkerLost
-from ...core.follow_problem import start_state
+from ...core.course.follow_problem import start_state
 from ...core.ranges import RANGES
-from ...core.scene import Scene
+from ...core.course.scene import Scene
 from ...core.validate import check
 from ...crowd import Crowd, CrowdFigure, FollowPath
 from ...crowd.model import BODY_CLEARANCE
@@ -55,7 +55,7 @@ from .workers import PumpedExecutor, worker_pool
 
 def figure_scene(name: str, job) -> Scene:
     """The core scene of a prepared Follow Path job (:func:`.follow_scene.prepare`): the same
-    figure, path, obstacles, planner settings, start (:func:`~..core.follow_problem.start_state`
+    figure, path, obstacles, planner settings, start (:func:`~..core.course.follow_problem.start_state`
     of the path) and problem, so its plan is the one :meth:`.follow_job.FollowJob.run` makes."""
     setup = job.setup
     return Scene(name, setup.figure, setup.path, setup.obstacles, start_state(setup.path), 0.0,

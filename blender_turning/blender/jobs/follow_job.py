@@ -10,9 +10,9 @@ import threading
 
 import numpy as np
 
-from ...core.follow_problem import DEFAULT_CLEARANCE, FollowSetup
-from ...core.obstacles import Obstacles
-from ...core.path import HermitePath
+from ...core.course.follow_problem import DEFAULT_CLEARANCE, FollowSetup
+from ...core.course.obstacles import Obstacles
+from ...core.course.path import HermitePath
 from ...core.planner import PlannerSettings
 
 
@@ -26,7 +26,7 @@ class FollowJob:
     ``control`` are the path's Bezier control points (3 k + 1, 2) in world metres, ``footprints``
     a list of ``(name, polygon (k, 2))``, ``clearance`` the distance kept from them (m).  The
     problem, its run-out, time limit, start state and end test come from the core's one builder
-    (:class:`~..core.follow_problem.FollowSetup`), as for a scene file; on terrain (``ground``, a
+    (:class:`~..core.course.follow_problem.FollowSetup`), as for a scene file; on terrain (``ground``, a
     core surface, and ``resistance``; ``follow_ground.py``) it is the terrain problem, braking to
     ``speed_cap`` (:class:`~..core.planner.speed_cap.SpeedCap`) when given.
     """

@@ -40,7 +40,7 @@ from bpy.app.handlers import persistent
 from ...core.controllers.feasible import nearby_tables
 from ...core.errors import FellOver, TurningError
 from ...mapping import MAPPINGS
-from ...mapping.snow import tilt_gain
+from ...mapping.sports.snow import tilt_gain
 from .. import compat
 from ..anim import bake, export_ready, foot_track
 from ..props import figure as props

@@ -1,7 +1,7 @@
 """What the model changed, said to the user: the lean a bake reached when the figure's bounds
 kept it below the asked one (the core's :class:`~..core.controllers.feasible.FeasibleTurn`
 report), and how far a Follow Path run strayed from its drawn path (the core's
-:func:`~..core.path.path_deviation`).  Bake Turns, Follow Path (one figure and several) and the
+:func:`~..core.course.path.path_deviation`).  Bake Turns, Follow Path (one figure and several) and the
 Turns panel all take their words from here; nothing is recomputed in an operator.
 """
 from __future__ import annotations
@@ -10,7 +10,7 @@ import math
 from dataclasses import asdict
 
 from ...core.controllers.feasible import FeasibleTurn
-from ...core.path import path_deviation
+from ...core.course.path import path_deviation
 from ..scene.scene_adapters import FrameRange, controller_from_settings, figure_from_settings
 
 #: The trajectory ``meta`` key of a run's limited turn (``asdict`` of its FeasibleTurn).

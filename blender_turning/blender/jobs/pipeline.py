@@ -19,7 +19,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...core import DEFAULT_DT, simulate
-from ...core.terrain import surface_frame
+from ...core.ground.terrain import surface_frame
 from .model_notes import with_turn
 from ..scene.scene_adapters import (FrameRange, SceneInputError, controller_from_settings,
                                     figure_from_settings, resistance_from_settings,

@@ -8,7 +8,7 @@ from pathlib import Path
 import bpy
 from bpy.props import EnumProperty, StringProperty
 
-from ...mapping.bone_map import load_bone_map, parse_bone_map
+from ...mapping.retarget.bone_map import load_bone_map, parse_bone_map
 from ..scene import retarget_adapter as ra
 
 PRESET_DIR = "presets/turning_bone_maps"

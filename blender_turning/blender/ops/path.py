@@ -7,7 +7,7 @@ import bpy
 from bpy.props import FloatProperty
 
 from ...core.errors import PlanInfeasible
-from ...core.obstacles import Obstacles
+from ...core.course.obstacles import Obstacles
 from ..jobs import crowd_job
 from ..scene import follow_ground
 from ..scene.figure_context import check_figure, end_modal, poll_figure, report_error

@@ -7,10 +7,10 @@ import math
 import bpy
 from bpy.props import EnumProperty
 
-from ...core.params import PRESETS
+from ...core.physics.params import PRESETS
 from ...core.errors import TurningError
-from ...mapping.stance import STANCES as RIG_STANCES
-from ...mapping.user_rig import fit_rig
+from ...mapping.retarget.stance import STANCES as RIG_STANCES
+from ...mapping.retarget.user_rig import fit_rig
 from ..anim import bake, bake_layers, export_ready, foot_track
 from ..scene import retarget_adapter as ra
 from ..registry_items import retargeted_sport_items

@@ -49,7 +49,7 @@ _KNOWN = {
 
 
 def _terrains(top) -> dict:
-    """``[terrain.<name>]`` tables: a ``ski_slope`` mountain (core.terrain_gen) or a ``hill``
+    """``[terrain.<name>]`` tables: a ``ski_slope`` mountain (core.ground.terrain_gen) or a ``hill``
     with an optional road; each becomes a Ground mesh figures can ride on."""
     out = {}
     tt = top.table("terrain")

@@ -24,7 +24,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...core.params import preset
+from ...core.physics.params import preset
 from ...crowd import STAGINGS, CrowdFigure, Turns, stage
 from ...crowd.formations import FORMATIONS
 from ...crowd.registry import FormationRefused

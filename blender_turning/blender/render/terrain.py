@@ -1,4 +1,4 @@
-"""The render job's terrain: a snowy mountain from ``core.terrain_gen.ski_slope``, a
+"""The render job's terrain: a snowy mountain from ``core.ground.terrain_gen.ski_slope``, a
 hill with a road for the cyclist, the tracks the figures leave in the snow, one follow camera per
 figure and a sheet of their shots.  Used by ``scripts/render_job.py`` (``[terrain.<name>]``
 tables, a figure's ``ground``, ``camera.follow = "each"``)."""
@@ -9,10 +9,10 @@ import math
 import numpy as np
 
 from ...core.sports import sport
-from ...core.terrain import HeightField
-from ...core.terrain_gen import ski_slope
+from ...core.ground.terrain import HeightField
+from ...core.ground.terrain_gen import ski_slope
 from ...mapping.rig_spec import load_rig
-from ...mapping.skid_pose import brushed_half_width, equipment_length
+from ...mapping.sports.skid_pose import brushed_half_width, equipment_length
 
 #: Stops of exposure (see :func:`light_the_snow`); the colours below are before it.
 EXPOSURE = 1.6

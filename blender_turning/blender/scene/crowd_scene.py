@@ -19,7 +19,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from ...core.path import HermitePath
+from ...core.course.path import HermitePath
 from ...crowd import CrowdFigure, FollowPath, Turns, point_at_distance
 from ..anim import bake
 from . import retarget_adapter
@@ -78,7 +78,7 @@ def path_from(path: HermitePath, s_along: float = 0.0) -> HermitePath:
 def curve_object(path: HermitePath, name: str, z: float, collection):
     """A Bezier curve object through ``path`` (world coordinates, at height ``z``): the knots
     with handles a third of the Hermite tangents away, which is exactly the same curve
-    (:meth:`~..core.path.HermitePath.from_bezier` reads it back)."""
+    (:meth:`~..core.course.path.HermitePath.from_bezier` reads it back)."""
     curve = bpy.data.curves.new(name, "CURVE")
     curve.dimensions = "3D"
     sp = curve.splines.new("BEZIER")

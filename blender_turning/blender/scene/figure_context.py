@@ -101,7 +101,7 @@ def check_figure(obj) -> None:
             f"Add Figure > {sport_label(sport)}")
     from . import retarget_adapter                   # a user's rig: its bone map's joints
     if retarget_adapter.is_user_rig(obj):
-        from ...mapping.bone_map import require_joints
+        from ...mapping.retarget.bone_map import require_joints
         try:
             require_joints(retarget_adapter.figure_bone_map(obj), obj.data.bones.keys(),
                            f"armature {obj.data.name!r}")

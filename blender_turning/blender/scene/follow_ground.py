@@ -28,7 +28,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...core.errors import PlanInfeasible
-from ...core.grip import SNOW
+from ...core.physics.grip import SNOW
 from ...core.planner.speed_cap import SpeedCap
 from ...core.sports import sport as sport_record
 from .ground import MeshGround, _world_triangles, read_ground
@@ -93,7 +93,7 @@ def over_mesh(ground: MeshGround, xy) -> np.ndarray:
 
 
 def check_path_on_ground(path_obj, path, ground: MeshGround | None) -> None:
-    """Raise :class:`SceneInputError` if the path (a :class:`..core.path.HermitePath`, the
+    """Raise :class:`SceneInputError` if the path (a :class:`..core.course.path.HermitePath`, the
     curve's ground projection) leaves the Ground mesh, naming where and how far along (``ground
     = None``, flat: it cannot)."""
     if ground is None:

@@ -7,8 +7,8 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
-from ...core.follow_problem import DEFAULT_CLEARANCE
-from ...core.obstacles import Obstacles
+from ...core.course.follow_problem import DEFAULT_CLEARANCE
+from ...core.course.obstacles import Obstacles
 from ..anim import bake
 from . import follow_ground
 from ..anim.figure_bake import apply_bake

@@ -1,5 +1,5 @@
 """Ground mesh <-> the core's height field (docs/TERRAIN.md).  The core stays bpy-free: a mesh
-object the user picks as ground is read once into a :class:`..core.terrain.HeightField` (what
+object the user picks as ground is read once into a :class:`..core.ground.terrain.HeightField` (what
 ray casts from above on a regular grid return, rasterized in numpy, or for a grid mesh sampled
 from its lattice where a run goes; kept while the mesh does not change); the demo's mountain goes
 the other way."""
@@ -11,7 +11,7 @@ import math
 import numpy as np
 
 from ...core.ranges import RANGES
-from ...core.terrain import HeightField, LazyHeightField
+from ...core.ground.terrain import HeightField, LazyHeightField
 
 #: Most grid points a ground is sampled at (a 200 m x 200 m terrain at 0.25 m is 641,601).
 MAX_SAMPLES = 1_000_000
@@ -171,7 +171,7 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     (:func:`_default_cell`).  A Ground not in the scene, part of a figure, animated, with a
     vertex that is not finite or strays far from the rest, or reaching past 100 km from the
     origin is refused, naming the object (and the vertex).  A grid mesh's samples are computed as a run visits them
-    (:class:`..core.terrain.LazyHeightField`); any other mesh is rasterized whole.  Grid
+    (:class:`..core.ground.terrain.LazyHeightField`); any other mesh is rasterized whole.  Grid
     points the mesh does not cover take the height of the nearest covered point in their row
     (then column); raises ``ValueError`` naming the object when it has no faces."""
     if obj is None or obj.type != 'MESH':

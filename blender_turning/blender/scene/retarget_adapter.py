@@ -2,7 +2,7 @@
 retargeting, build the sport's equipment tied to it, and keep what it was before.
 
 Reads ``bone.matrix_local``, parents and ``use_local_location`` into a
-:class:`~..mapping.user_rig.UserRig`; everything numerical happens in the mapping layer.
+:class:`~..mapping.retarget.user_rig.UserRig`; everything numerical happens in the mapping layer.
 """
 from __future__ import annotations
 
@@ -15,13 +15,14 @@ import numpy as np
 from mathutils import Matrix, Quaternion
 
 from ...mapping import MAPPINGS, map_trajectory
-from ...mapping.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map, parse_bone_map,
+from ...mapping.retarget.bone_map import (JOINTS, BoneMap, auto_bone_map, load_bone_map,
+                                          parse_bone_map,
                                  require_joints)
-from ...mapping.equipment import equipment_rest
-from ...mapping.retarget import retarget
+from ...mapping.retarget.equipment import equipment_rest
+from ...mapping.retarget.retarget import retarget
 from ...mapping.rig_spec import load_rig
-from ...mapping.stance import STANCES, goofy_track, mirrored_trajectory
-from ...mapping.user_rig import UserRig, fit_rig
+from ...mapping.retarget.stance import STANCES, goofy_track, mirrored_trajectory
+from ...mapping.retarget.user_rig import UserRig, fit_rig
 from .. import compat
 from .rig_builder import material, primitive
 
@@ -186,7 +187,7 @@ def plants_for(sport: str, options, k: float, reach: float = 1.0):
 
 def arm_ratio(rig: UserRig, bm: BoneMap, sport: str, fit) -> float:
     """The user's arm (shoulder to wrist, world metres) over ``k`` times the built-in's."""
-    from ...mapping.stance import builtin_skeleton
+    from ...mapping.retarget.stance import builtin_skeleton
     skel = builtin_skeleton(sport)
     joints = [bm.bone(j) for j in ("upper_arm.L", "forearm.L", "hand.L")]
     if any(b is None or b not in rig.names for b in joints):

@@ -12,10 +12,10 @@ import numpy as np
 from ...core import BodyParams, Figure, Limits, PhaseEllipse, Schedule
 from ...core.registry import SPORT_PRESETS, SPORTS
 from ...core.sports import sport as sport_record
-from ...core.grip import SNOW
-from ...core.model import Resistance
+from ...core.physics.grip import SNOW
+from ...core.physics.model import Resistance
 from ...core.ranges import RANGES
-from ...core.skidding import Skidding
+from ...core.physics.skidding import Skidding
 from ...core.validate import check
 from .. import compat
 from ..anim import bake

@@ -17,7 +17,7 @@ from bl_operators.presets import AddPresetBase
 from bpy.props import StringProperty
 
 from ...core.registry import SPORT_PRESETS, SPORTS
-from ...core.speed_habits import habit_of
+from ...core.controllers.speed_habits import habit_of
 from ..registry_items import sport_label
 from ..scene.rig_builder import RIG_TAG
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import bpy
 
-from ...mapping.stance import STANCES
+from ...mapping.retarget.stance import STANCES
 from ..scene import retarget_adapter as ra
 from .panel import RIG_PANEL, TurningPanel
 

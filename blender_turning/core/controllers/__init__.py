@@ -1,5 +1,7 @@
 """Steering controllers, by the names the CLI and the add-on use: ``CONTROLLERS`` is the registry
-of their records (:mod:`.registry`), each registered at the end of its own module."""
+of their records (:mod:`.registry`), each registered at the end of its own module.  The folder
+also holds what they steer by: the phase and the lean law, the heading table, schedules over
+time, braking by turning and the presets' speed habits."""
 from .base import Controller
 from .ellipse import PhaseEllipse, ellipse_alpha
 from .feasible import FeasibleTurn

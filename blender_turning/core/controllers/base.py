@@ -1,6 +1,6 @@
 """The contract every steering controller meets.
 
-A controller is stepped by :func:`blender_turning.core.simulate.simulate`: once before the first
+A controller is stepped by :func:`blender_turning.core.physics.simulate.simulate`: once before the first
 step it is given the figure's limits (``begin_run``), once per accepted
 step it is told the time and state (``begin_step``, where it may update its memory), and during
 the step's integrator stages it is asked for the demanded foot curvature (``desired_cf``, pure:
@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics import THETA_V, inverse_cf
-from ..one_figure import scalar_inverse_cf
-from ..params import BodyParams
-from ..terrain import surface_frame
-from .. import model
-from ..model import plumb_lean, plumb_lean_along
+from ..physics.dynamics import THETA_V, inverse_cf
+from ..physics.one_figure import scalar_inverse_cf
+from ..physics.params import BodyParams
+from ..ground.terrain import surface_frame
+from ..physics import model
+from ..physics.model import plumb_lean, plumb_lean_along
 
 
 class Controller:

@@ -51,12 +51,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..dynamics import OMEGA_V, THETA_DIR, THETA_V
-from ..heading_table import BETA_MAX, BETA_MIN, heading_table, linear_beta
-from ..one_figure import scalar_inverse_cf
-from ..params import BodyParams, Limits
-from ..schedule import Schedule
-from ..xp import Scalar, backend
+from ..physics.dynamics import OMEGA_V, THETA_DIR, THETA_V
+from .heading_table import BETA_MAX, BETA_MIN, heading_table, linear_beta
+from ..physics.one_figure import scalar_inverse_cf
+from ..physics.params import BodyParams, Limits
+from .schedule import Schedule
+from ..physics.xp import Scalar, backend
 from .base import Controller
 from .registry import ControllerType, register_controller
 from .ellipse_paper import paper_alpha, paper_alpha_one

@@ -37,7 +37,7 @@ import math
 
 import numpy as np
 
-from ..xp import Scalar, backend
+from ..physics.xp import Scalar, backend
 
 SLOW_FACTOR = 3.0
 NEAR = 1.1

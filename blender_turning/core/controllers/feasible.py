@@ -36,9 +36,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..dynamics import PHYSICAL_MARGIN
-from ..heading_table import BETA_MAX, BETA_MIN
-from ..params import BodyParams, Limits
+from ..physics.dynamics import PHYSICAL_MARGIN
+from .heading_table import BETA_MAX, BETA_MIN
+from ..physics.params import BodyParams, Limits
 
 CF_SHARE = 0.9
 RATE_SHARE = 0.9

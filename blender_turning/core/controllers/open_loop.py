@@ -1,9 +1,9 @@
 """Open-loop periodic turning (Section 4, Fig. 4): ``alpha_v = -omega0^2 theta_max sin(omega0 t)``."""
 from __future__ import annotations
 
-from ..params import BodyParams
-from ..phase import open_loop_alpha
-from ..schedule import Schedule
+from ..physics.params import BodyParams
+from .phase import open_loop_alpha
+from .schedule import Schedule
 from .base import Controller
 from .registry import ControllerType, register_controller
 

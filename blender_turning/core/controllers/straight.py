@@ -6,7 +6,7 @@ equilibrium, held to round-off), on a traverse started at the plumb lean it stay
 """
 from __future__ import annotations
 
-from ..schedule import Schedule
+from .schedule import Schedule
 from .base import Controller
 from .registry import ControllerType, register_controller
 

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from ..dynamics import THETA_V
+from ..physics.dynamics import THETA_V
 from . import flat_stage
 
 __all__ = ["FallTable"]

@@ -25,12 +25,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..dynamics import PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, leg_force, steer
-from ..model import V_CM, speed_held
-from ..terrain import FLAT
-from ..obstacles import Obstacles
-from ..params import Figure
-from ..path import PathDistance
+from ..physics.dynamics import PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, leg_force, steer
+from ..physics.model import V_CM, speed_held
+from ..ground.terrain import FLAT
+from ..course.obstacles import Obstacles
+from ..physics.params import Figure
+from ..course.path import PathDistance
 from . import flat_stage, terrain_problem as free_speed
 from .settings import PlannerSettings, SpeedProfile
 
@@ -73,7 +73,7 @@ class Problem:
     def __init__(self, figure: Figure, distance: PathDistance, obstacles: Obstacles,
                  settings: PlannerSettings, speed: SpeedProfile | None = None, ground=FLAT,
                  resistance=None, V0: float | None = None, speed_cap=None):
-        from ..model import NO_RESISTANCE
+        from ..physics.model import NO_RESISTANCE
         self.ground = FLAT if ground is None else ground
         self.resistance = NO_RESISTANCE if resistance is None else resistance
         #: The speed is a state (a sixth row), not held.
@@ -376,7 +376,7 @@ class Problem:
                 b = np.concatenate([foot[:, 1:], body[:, 1:]], axis=1)
                 hit = self.obstacles.collides(a.reshape(2, -1).T, b.reshape(2, -1).T)
                 collided = hit.reshape(-1, m).any(axis=0)
-            if self.movers is not None:   # the same steps, at their times (core/moving.py)
+            if self.movers is not None:   # the same steps, at their times (core/course/moving.py)
                 collided |= self.movers.collides(foot, body, t0, st.dt)
         return StageResult(P[-1].copy(), np.asarray(cf_end, float) * np.ones(m), s, cost, D[-1],
                            collided, fell, rec)

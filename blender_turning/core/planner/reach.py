@@ -33,7 +33,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..dynamics import THETA_DIR, X, Y
+from ..physics.dynamics import THETA_DIR, X, Y
 
 __all__ = ["ReachBound"]
 

@@ -14,9 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import PathNotFinished, PlanInfeasible
-from ..path import PathProgress
-from ..phase_estimate import estimate_phase
-from ..trajectory import Trajectory, body_meta
+from ..course.path import PathProgress
+from ..course.phase_estimate import estimate_phase
+from ..physics.trajectory import Trajectory, body_meta
 from .problem import Problem
 from .search import SearchStats, branch_and_bound
 from .viable import dead_end

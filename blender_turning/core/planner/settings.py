@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..params import check_range
+from ..physics.params import check_range
 
 __all__ = ["PlannerSettings", "SpeedProfile"]
 

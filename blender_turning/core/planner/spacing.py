@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from ..dynamics import PHYSICAL_MARGIN, THETA_DIR, X, Y
+from ..physics.dynamics import PHYSICAL_MARGIN, THETA_DIR, X, Y
 
 __all__ = ["PairFloor"]
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..grip import SKID_MAX_TURNING, Grip, brake_limit, foot_lateral
+from ..physics.grip import SKID_MAX_TURNING, Grip, brake_limit, foot_lateral
 from ..validate import check
 
 __all__ = ["SpeedCap", "path_curvature_max"]

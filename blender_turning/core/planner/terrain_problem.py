@@ -47,14 +47,14 @@ import math
 
 import numpy as np
 
-from .. import model
-from ..grip import foot_lateral, skid_angle
-from ..params import Limits
-from ..dynamics import PHYSICAL_MARGIN, THETA_V, X, Y
-from ..model import V_CM
-from ..terrain import HeightField, Plane, surface_frame
-from ..terrain_sim import MIN_SPEED, describe_ground
-from ..trajectory import resistance_meta
+from ..physics import model
+from ..physics.grip import foot_lateral, skid_angle
+from ..physics.params import Limits
+from ..physics.dynamics import PHYSICAL_MARGIN, THETA_V, X, Y
+from ..physics.model import V_CM
+from ..ground.terrain import HeightField, Plane, surface_frame
+from ..physics.terrain_sim import MIN_SPEED, describe_ground
+from ..physics.trajectory import resistance_meta
 
 __all__ = ["steepest_sine"]
 

@@ -1,0 +1,240 @@
+"""The loop of Fig. 4 with the speed a state: one figure on any ground, behind
+:func:`.simulate.simulate`.
+
+:func:`simulate_free` steps one figure on a surface (:mod:`.terrain`) with friction and drag
+(:class:`.model.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
+``C_f`` bounded at every stage as on flat ground, as :func:`.model.rk4_step`).
+Each step the controller is re-targeted to the current speed
+(:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from the local plumb lean
+(:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1) on terrain
+(:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes by turning
+across the hill (docs/TERRAIN.md Section 6).
+
+:func:`.simulate.simulate` sends a run here unless the speed is held
+(:func:`.model.speed_held`: flat ground with nothing slowing the figure, the paper's model).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..controllers.braking import TargetSpeed, _Braking
+from .skidding import Skidding, _Skid, skid_meta, stand_rows
+from ..controllers import Controller
+from ..controllers.feasible import fall_cause
+from ..errors import FellOver, LeftTerrain, Stopped
+from .params import Figure, check_range
+from ..controllers.phase import phase
+from ..controllers.schedule import Schedule
+from ..ground.terrain import FLAT, HeightField, OffTerrain, Plane, surface_frame
+from . import model
+from .model import NO_RESISTANCE, Resistance
+from .terrain_one_figure import TerrainStage
+from .trajectory import Trajectory, body_meta, resistance_meta
+
+__all__ = ["simulate_free", "describe_ground", "MIN_SPEED"]
+
+MIN_SPEED = 0.5
+"""m/s: below it the run stops (:class:`.errors.Stopped`).  The turning model is a body carried
+by its speed (Eq. 1 needs ``V^2 cos th`` to balance gravity); near rest it asks for curvatures no
+ski or wheel has."""
+
+
+
+
+def describe_ground(ground) -> str:
+    """The ``meta["ground"]`` entry of a trajectory: ``"flat"`` or what the surface was."""
+    if isinstance(ground, Plane):
+        if ground.flat:
+            return "flat"
+        return (f"plane (slope {math.degrees(ground.slope):g} deg, downhill "
+                f"{math.degrees(ground.downhill):g} deg)")
+    if isinstance(ground, HeightField):
+        return f"height field ({ground.nx} x {ground.ny}, cell {ground.cell:g} m)"
+    return type(ground).__name__
+
+
+def simulate_free(figure: Figure, controller: Controller, duration: float, dt: float,
+                  state0=None, ground=FLAT, resistance: Resistance = NO_RESISTANCE,
+                  C_f0=None, meta: dict | None = None,
+                  target_speed: TargetSpeed | float | None = None,
+                  skidding: Skidding | None = None) -> Trajectory:
+    """Simulate one figure on ``ground`` with ``resistance``; returns a :class:`Trajectory`
+    whose ``z`` is the ground under the foot and ``V_cm`` the speed (a state).
+
+    ``state0``: ``(x, y, theta_dir, theta_v, omega_v)`` (starting at ``figure.body.V_cm``) or
+    with a sixth entry ``V_cm``.  ``target_speed`` (m/s, a :class:`TargetSpeed` or a
+    :class:`.schedule.Schedule` of m/s: a keyed target) needs a controller with a heading (the
+    course).  Raises :class:`.errors.FellOver` past
+    ``limits.theta_fall`` (the lean from the plumb lean: a skier leaning 20 deg uphill from the
+    normal of a traverse stands upright) and :class:`.errors.Stopped` below
+    :data:`MIN_SPEED` and :class:`.errors.LeftTerrain` at the edge of a height field, each with
+    the trajectory so far.
+
+    ``skidding`` (:class:`.skidding.Skidding`, docs/skidding.md) brakes at the foot within the
+    grip: a style other than ``carve`` skids for what turning across the hill leaves of
+    ``target_speed``; a stop skids to rest, and the figure then stands still across the fall line
+    to the end of ``duration`` (no :class:`.errors.Stopped`)."""
+    body, limits = figure.body, figure.limits
+    check_range("duration", duration, 0.0, 1e6, lo_open=True)
+    check_range("dt", dt, 1e-5, 1.0)
+    if state0 is None:
+        w, tm = controller.target(0.0)
+        state0 = (0.0, 0.0, 0.0, 0.0, w * tm)
+    st = np.array(state0, float).ravel()
+    if st.shape not in ((5,), (6,)) or not np.all(np.isfinite(st)):
+        raise ValueError("state0 must be 5 or 6 finite numbers (x, y, theta_dir, theta_v, "
+                         "omega_v[, V_cm])")
+    if st.shape == (5,):
+        st = np.append(st, body.V_cm)
+    check_range("V_cm (state0)", st[5], MIN_SPEED, 100.0)
+    ground.derivatives(st[0], st[1])              # off the terrain: fail before stepping
+    if skidding is not None and not skidding.brakes(target_speed):
+        skidding = None                          # the paper's carved model, unchanged
+    brake = None
+    schedule = None                          # a target speed that changes over time
+    if isinstance(target_speed, Schedule):
+        schedule = target_speed
+        target_speed = schedule.constant_value
+        if target_speed is None:
+            target_speed = check_range("target speed at t = 0 s", float(schedule(0.0)), 0.0,
+                                       100.0, lo_open=True)
+            schedule = _checked(schedule)
+        else:
+            schedule = None
+    if target_speed is not None:
+        rule = target_speed if isinstance(target_speed, TargetSpeed) else \
+            TargetSpeed(target_speed) if skidding is None else \
+            TargetSpeed(target_speed, corridor=skidding.corridor)
+        if getattr(controller, "heading", None) is None:
+            raise ValueError("target_speed steers the heading: the controller needs a heading "
+                             "(the course, e.g. the fall line)")
+        brake = _Braking(rule, controller, figure, ground, resistance, st, schedule)
+    n = int(math.floor(duration / dt + 1e-9)) + 1
+    info = {"preset": figure.name, "dt": dt, **body_meta(body), "ground": describe_ground(ground),
+            **resistance_meta(resistance), **(meta or {})}
+    if brake is not None:
+        info["target_speed"] = brake.rule.speed
+    if skidding is not None:
+        info.update(skid_meta(skidding))
+    course = getattr(controller, "heading", None)
+    skid = None if skidding is None else _Skid(
+        skidding, controller, figure, None if brake is None else brake.speed)
+    try:
+        if brake is not None:
+            controller.heading = Schedule.of(brake)
+        stage = TerrainStage(body, limits, resistance, ground, controller)
+        if skid is not None:
+            skid.stage = stage
+        rows, stop = _loop(body, limits, controller, ground, st, n, dt, C_f0, brake, stage,
+                           skid)
+    finally:
+        if brake is not None:
+            controller.heading = course
+        if skid is not None:
+            skid.restore()
+    if stop == "halted":
+        rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None
+    traj = _trajectory(body, ground, np.array(rows, float), dt, info)
+    if stop == "fell":
+        raise FellOver(float(traj.t[-1]), float(rows[-1][11]), traj,
+                       fall_cause(limits, traj.C_f, traj.t))
+    if stop == "stopped":
+        raise Stopped(float(traj.t[-1]), float(traj.V_cm[-1]), traj)
+    if stop == "left":
+        raise LeftTerrain(float(traj.t[-1]), (traj.x[-1], traj.y[-1]), traj)
+    return traj
+
+
+def _checked(schedule: Schedule):
+    """``schedule`` of a target speed, each value checked when read (m/s, (0, 100])."""
+    def at(t):
+        return check_range(f"target speed at t = {t:g} s", float(schedule(t)), 0.0, 100.0,
+                           lo_open=True)
+    return Schedule(at)
+
+
+def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid):
+    """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean from
+    the controller's equilibrium lean, F_brake / m, skid)``.  Classical RK4 on Python floats,
+    written out (``rhs``, a :class:`.terrain_one_figure.TerrainStage`, for the stages), ``C_f``
+    bounded at every stage relative to the curvature at the step's start, as
+    :func:`.model.rk4_step` does; ``skid`` (:class:`.skidding._Skid`) sets the braking
+    command of each step.  Returns ``(rows, None | "fell" | "stopped" | "halted" | "left")``
+    (``halted``: a commanded stop came to rest)."""
+    controller.begin_run(limits)
+    foot = rhs.foot
+    derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
+    begin, target, fall = controller.begin_step, controller.target, limits.theta_fall
+    anchor = None if anchor is None else float(anchor)
+    x0, x1, x2, x3, x4, x5 = (float(v) for v in st)
+    h, w6 = 0.5 * dt, dt / 6.0
+    rows = []
+    append = rows.append
+    V_now = body.V_cm
+    for i in range(n):
+        t = i * dt
+        if x5 != V_now:
+            # Below MIN_SPEED the run stops at this row (a body slower than the table of ranges
+            # allows is never made): the last row is steered at the minimum speed.
+            controller.follow_speed(max(x5, MIN_SPEED))
+            V_now = x5
+        if brake is not None and not (skid is not None and skid.stopping):
+            brake.update(t, (x0, x1, x2, x3, x4, x5))
+        if skid is not None:
+            skid.update(t, (x0, x1, x2, x3, x4, x5), foot[1])
+        try:
+            dv = derivatives(x0, x1)
+        except OffTerrain:                      # the step ended past the edge
+            return rows, "left"
+        rel = lean(t, x0, x1, x2, x3, dv)
+        begin(t, (x0, x1, x2, rel, x4))
+        a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, dt,
+                                                       dv)
+        skid_b = skid_a = 0.0
+        if skid is not None:
+            skid_b = foot[0]
+            skid_a = skid.skid(skid_b, foot[1], foot[2], x3)
+        append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel, skid_b, skid_a))
+        if abs(rel) > fall:
+            return rows, "fell"
+        if x5 < MIN_SPEED:
+            return rows, "halted" if skid is not None and skid.stopping else "stopped"
+        if i + 1 == n:
+            break
+        try:
+            b0, b1, b2, b3, b4, b5, _, _, _ = stage(
+                t + h, x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4,
+                x5 + h * a5, cf, h)
+            c0, c1, c2, c3, c4, c5, _, _, _ = stage(
+                t + h, x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4,
+                x5 + h * b5, cf, h)
+            d0, d1, d2, d3, d4, d5, _, _, _ = stage(
+                t + dt, x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
+                x5 + dt * c5, cf, dt)
+        except OffTerrain:
+            return rows, "left"
+        x0 += w6 * (a0 + 2.0 * (b0 + c0) + d0)
+        x1 += w6 * (a1 + 2.0 * (b1 + c1) + d1)
+        x2 += w6 * (a2 + 2.0 * (b2 + c2) + d2)
+        x3 += w6 * (a3 + 2.0 * (b3 + c3) + d3)
+        x4 += w6 * (a4 + 2.0 * (b4 + c4) + d4)
+        x5 += w6 * (a5 + 2.0 * (b5 + c5) + d5)
+        anchor = cf
+    return rows, None
+
+
+def _trajectory(body, ground, rec, dt, info) -> Trajectory:
+    """The trajectory columns (docs/ARCHITECTURE.md Section 3) from the per-sample rows."""
+    n = len(rec)
+    x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel, brake, skid = rec.T
+    fr = surface_frame(ground, x, y, d, body.g)
+    ds = 0.5 * (V_f[1:] + V_f[:-1]) * dt                 # along the surface (the foot's speed)
+    cols = {"t": np.arange(n) * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
+            "omega_v": om, "alpha_v": alpha, "C_f": cf, "V_f": V_f, "z": fr.z, "V_cm": V,
+            "F_leg": model.leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
+            "phi": phase(rel, om, tm, w),
+            "s": np.concatenate([[0.0], np.cumsum(ds)]), "brake": brake, "skid": skid,
+            "ski_heading": d + skid}
+    return Trajectory.from_columns(cols, info)

@@ -1,0 +1,475 @@
+"""The alpine skier (Section 7, Fig. 5 and Fig. 20 for the inputs).
+
+Section 7: the legs act as a spring driven by ``F_leg`` (stiffness ``k_s``), the knee bend comes
+from two-bone IK on the resulting leg length and the waist bend is tied to the knee bend; the
+ski tilt is linear in ``C_f`` with the outside (weight-bearing) ski tilted slightly more; when
+``theta_v`` and the ski tilt disagree the leg is twisted in or out; the poles are planted at
+``phi`` = 30 and 210 deg, just before each turn; the upper body twists in phase with the turn.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.physics.params import BodyParams, Figure, Limits, check_range
+from ...core.equipment import (Carving, SportPreset, carving_limits, carving_of,
+                              register_preset)
+from ...core.sports import Retarget, Sport, register_sport
+from ...core.physics.model import Resistance
+from .. import bones as B
+from ..base import Mapping
+from ..anthropometry import centre_and_roll_inertia
+from .common import (add_local_rotation, carried, ik_limb, lean, leg_lengths, limb_frames,
+                     phase_window, place_on_ground, rot_y, rot_z, smoothstep)
+from ..kinematics import PoseBuilder, frame_from_yx, rigid_inverse, stack_dot
+from .skid_pose import SkidPose, knee_direction, ski_front
+from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
+                   lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
+                   twist_upper_body)
+
+SIDES = (("L", -1.0), ("R", 1.0))
+
+# Hand (wrist) targets from the shoulder in the chest's axes (outwards, forwards, up), m: held in
+# front of the hips, reaching forwards and down for the plant.  The pole's tip points 15 deg out
+# from straight ahead when planted and 150 deg (behind, outwards) when trailing.
+HAND_NEUTRAL = (0.06, 0.30, -0.36)
+HAND_PLANT = (0.10, 0.40, -0.33)
+POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
+#: An arm whose grip offset moved less than this (m) in an aiming pass has settled: another pass
+#: would give the same numbers to rounding, so it leaves the loop.
+SETTLED = 1e-12
+
+
+@dataclass(frozen=True)
+class SkierOptions(SpringLegOptions):
+    """Parameters of the skier mapping (SI units, angles in radians)."""
+
+    outside_extra: float = 0.15
+    """Extra tilt of the outside (weight-bearing) ski, fraction of the tilt."""
+    leg_twist_gain: float = 0.8
+    """Leg twist per radian of (ski tilt - theta_v), rad/rad (knee towards the turn)."""
+    leg_twist_max: float = math.radians(25.0)
+    """Largest leg twist, rad."""
+    pole_plant_L: float = math.radians(30.0)
+    """Phase of the left pole plant (before the left turn), rad."""
+    pole_plant_R: float = math.radians(210.0)
+    """Phase of the right pole plant (before the right turn), rad."""
+    pole_hold: float = math.radians(20.0)
+    """Half-width in phase of the pole's plant, rad: the tip touches down before the plant phase
+    and stays in its hole (world space) within this of it, for as long as the arm can follow."""
+    pole_swing: float = math.radians(70.0)
+    """Phase over which the pole swings between planted and trailing, rad."""
+    pole_lift: float = 0.35
+    """Height of the pole tip when trailing, m."""
+    plant_scale: float = 1.0
+    """Size of the figure shown relative to the built-in rig (retargeting's ``k``, which scales
+    the pose about the foot point): the pole holes are planned to stay put in that figure's
+    world."""
+    plant_reach: float = 1.0
+    """The shown figure's arm length over ``plant_scale`` times the built-in's: a plant lasts
+    only as long as that arm can follow the figure past its hole."""
+    twist_amp: float = math.radians(12.0)
+    """Amplitude of the upper-body counter-twist (against the turn), rad."""
+    twist_phase: float = 0.0
+    """Phase offset of the upper-body twist relative to phi, rad."""
+    angulation: float = 0.5
+    """On a preset's carving skis: the share of the skis' edge angle over the lean that the
+    upper body takes back toward upright (the hips and knees angulate inside; 0: none)."""
+
+    def __post_init__(self):
+        super().__post_init__()
+        check_range("outside_extra", self.outside_extra, 0.0, 1.0)
+        check_range("leg_twist_gain", self.leg_twist_gain, 0.0, 5.0)
+        check_range("leg_twist_max", self.leg_twist_max, 0.0, math.pi / 2)
+        check_range("pole_plant_L", self.pole_plant_L, 0.0, 2 * math.pi)
+        check_range("pole_plant_R", self.pole_plant_R, 0.0, 2 * math.pi)
+        check_range("pole_hold", self.pole_hold, 0.0, math.pi / 2)
+        check_range("pole_swing", self.pole_swing, 0.0, math.pi, lo_open=True)
+        check_range("pole_lift", self.pole_lift, 0.0, 1.0)
+        check_range("plant_scale", self.plant_scale, 0.1, 10.0)
+        check_range("plant_reach", self.plant_reach, 0.1, 10.0)
+        check_range("twist_amp", self.twist_amp, -math.pi / 2, math.pi / 2)
+        check_range("twist_phase", self.twist_phase, -2 * math.pi, 2 * math.pi)
+        check_range("angulation", self.angulation, 0.0, 1.0)
+
+
+def ski_tilts(traj, o) -> dict:
+    """Tilt (n,) of each ski, rad: linear in C_f, the outside ski (R in a left turn) more
+    (Section 7); on a preset's carving skis (core/equipment.py) the edge angle that carves
+    C_f by the sidecut relation, R_sc cos(edge) = 1 / |C_f|, both skis alike, unclipped."""
+    carving = carving_of(traj.meta.get("preset"))
+    if carving is not None:
+        edge = carving.edge_angle(traj.C_f)
+        return {s: edge for s, _ in SIDES}
+    base = tilt_gain(traj, o.tilt_gain) * traj.C_f
+    outside_is_right = traj.C_f > 0
+    return {s: np.clip(base * (1.0 + o.outside_extra * np.where(outside_is_right == (s == "R"),
+                                                                  1.0, 0.0)),
+                       -o.tilt_max, o.tilt_max) for s, _ in SIDES}
+
+
+class SkierMapping(Mapping):
+    sport = "skier"
+    Options = SkierOptions
+
+    def ski_layout(self, traj, o):
+        """Fore-aft offset (m), yaw (rad) and heel lift (rad) of each ski/boot: all zero here;
+        the telemark skier overrides it."""
+        z = np.zeros(len(traj))
+        return {s: (z, z, z) for s, _ in SIDES}
+
+    def pose(self, b, traj, o, spec):
+        """Section 7's pose; on a preset's carving skis with angulation: the upper body takes
+        back ``angulation`` of the skis' edge over the lean toward upright, the legs and hips
+        lean further by the amount that keeps the centre of mass of the posed figure (Winter's
+        segments, :mod:`.anthropometry`) leaning ``theta_v`` (one correction from a first pose:
+        the centre's lean is linear in the hips' to within 0.05 deg, measured)."""
+        carving = carving_of(traj.meta.get("preset"))
+        if carving is None or o.angulation == 0.0:
+            return self._pose(b, traj, o, spec)
+        th = np.asarray(traj.theta_v, float)
+        edge = carving.edge_angle(traj.C_f)
+        back = o.angulation * np.sign(th) * np.maximum(np.abs(edge) - np.abs(th), 0.0)
+        first = PoseBuilder(b.skel, b.n)
+        first.placement = b.placement
+        self._pose(first, traj, o, spec, back)
+        P = {name: first.pose(name) for name in b.skel.names}
+        com, _ = centre_and_roll_inertia(P, b.skel, 1.0)
+        self._pose(b, traj, o, spec, back, th - np.arctan2(-com[:, 0], com[:, 2]))
+
+    def _pose(self, b, traj, o, spec, back=0.0, extra=0.0):
+        """The pose with the hips leaning ``extra`` (n,) rad beyond ``theta_v`` and the upper
+        body ``back + extra`` rad back toward upright (angulation)."""
+        skel = b.skel
+        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
+        skid = SkidPose(traj)       # the skis across the travel (docs/skidding.md Section 8)
+        skid.turn_hips(b, up)
+        extra = np.broadcast_to(np.asarray(extra, float), th.shape)
+        back = np.broadcast_to(np.asarray(back, float), th.shape)
+        if np.any(extra) or np.any(back):
+            lean(b, extra)
+            th = th + extra
+        ankle_z = float(skel.rest_of("foot.L")[2, 3])
+        tilts = skid.tilts(ski_tilts(traj, o))
+        layout = skid.layout(self.ski_layout(traj, o))
+        drop = np.zeros(len(traj))
+        for _ in range(3):      # the hips drop if a leg cannot reach its boot (Section 7 IK)
+            set_pelvis(b, th, length, ankle_z, drop)
+            ankles = self.place_skis(b, spec, th, tilts, layout, skid)
+            extra = hip_drop(b, ankles, 0.97)
+            if not np.any(extra > 1e-9):
+                break
+            drop = drop + extra
+        knee_fwd = carry_vec(b, B.LEAN, fwd)
+        if skid.active:                                 # the knees point along the skis
+            knee_fwd = knee_direction(knee_fwd, skid.body_skid())
+        # Leg twist: when the ski is on edge more than the body leans, the knee turns in.
+        twist = {s: np.clip(-o.leg_twist_gain * (tilts[s] - th), -o.leg_twist_max,
+                            o.leg_twist_max) for s, _ in SIDES}
+        legs_to(b, ankles, knee_fwd, twist, {s: B.side("ski", s) for s, _ in SIDES})
+        self.feet(b, layout)
+        knee = 0.5 * (knee_flexion(b, "L") + knee_flexion(b, "R"))
+        bend_waist(b, right, o.waist_ratio * knee)
+        if np.any(extra) or np.any(back):           # angulation: the upper body more upright
+            add_local_rotation(b, B.SPINE, fwd, back + extra)
+        # Upper-body counter-twist in phase with the turn (phase 0..180 deg is a left turn).
+        twist_upper_body(b, up, -o.twist_amp * np.sin(traj.phi + o.twist_phase))
+        skid.counter_rotate(b, up)
+        level_head(b, th - back - extra, o.head_level)     # the upper body's own lean
+        self.arms_and_poles(b, traj, o, right, fwd, up)
+
+    def place_skis(self, b, spec, th, tilts, layout, skid=None) -> dict:
+        """Set both skis on the ground under the body axis (a wedge's boots spread by
+        ``skid``, a :class:`.skid_pose.SkidPose`); return the ankle targets."""
+        skel = b.skel
+        ankles = {}
+        for s, _ in SIDES:
+            ski, foot = B.side("ski", s), B.side("foot", s)
+            hip = b.unposed(B.side("thigh", s))[:, :3, 3]
+            a_rest = skel.rest_of(foot)[:3, 3]
+            dy, yaw, _ = layout[s]
+            # The foot goes where the leaned body axis through the hip meets the ankle height.
+            xy = np.stack([hip[:, 0] + np.tan(th) * (hip[:, 2] - a_rest[2]), a_rest[1] + dy], 1)
+            if skid is not None and skid.active:
+                xy[:, 0] += skid.spread(ski_front(skel, spec, ski, a_rest), abs(a_rest[0]))[s]
+            R = stack_dot(rot_z(yaw) @ rot_y(-tilts[s]), skel.rest_of(ski)[:3, :3])
+            place_on_ground(b, spec, ski, R, a_rest, xy)
+            ankles[s] = self.ankle_on_ski(b, s, layout)
+        return ankles
+
+    def ankle_on_ski(self, b, s, layout):
+        return carried(b, B.side("foot", s), B.side("ski", s))[:, :3, 3]
+
+    def feet(self, b, layout):
+        """The boots are already glued to the skis (toes follow the feet)."""
+
+    def arms_and_poles(self, b, traj, o, right, fwd, up):
+        """Arm IK to a hand target that swings forward for the plant; the pole aims from the
+        grip to a tip that touches the ground within ``pole_hold`` of the plant phase.
+
+        Once planted the tip stays where it went in on the snow (world space) while the figure
+        moves past it: the pole pivots about its tip and the hand follows, on the sphere of the
+        pole's length about the tip, for as long as the arm reaches; then the pole lifts and
+        swings back to trailing over ``pole_swing`` of phase.
+        """
+        skel = b.skel
+        chest = stack_dot(b.pose(B.CHEST)[:, :3, :3], skel.rest_of(B.CHEST)[:3, :3].T)
+        reach = 0.98 * o.plant_reach * (skel.length(B.side("upper_arm", "L"))
+                                        + skel.length(B.side("forearm", "L")))
+        place = b.placement
+        for s, sx in SIDES:
+            plant = o.pole_plant_L if s == "L" else o.pole_plant_R
+            d = (traj.phi - plant + math.pi) % (2.0 * math.pi) - math.pi   # signed, wrapped
+            w = phase_window(traj.phi, plant, o.pole_hold, o.pole_swing)
+            neutral = sx * HAND_NEUTRAL[0] * right + HAND_NEUTRAL[1] * fwd + HAND_NEUTRAL[2] * up
+            planted = sx * HAND_PLANT[0] * right + HAND_PLANT[1] * fwd + HAND_PLANT[2] * up
+            shoulder = b.unposed(B.side("upper_arm", s))[:, :3, 3]
+            hand = shoulder + np.einsum("nij,nj->ni", chest,
+                                        (1 - w)[:, None] * neutral + w[:, None] * planted)
+            elbow_dir = stack_dot(chest, sx * 0.4 * right - fwd - 0.3 * up)  # elbows back, out
+            pole = B.side("pole", s)
+            length = skel.length(pole)
+            arm = _Arm(b, B.side("upper_arm", s), B.side("forearm", s), elbow_dir, pole)
+
+            # The free pole swings forward (and down) for the plant only: after the plant it
+            # trails, as a pole dragged out of its hole does, until the swing to the next one.
+            w_aim = np.where(d > 0.0, 0.0, w)
+
+            def free_axis(grip):
+                beta = POLE_AIM_TRAIL + w_aim * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
+                horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
+                dz = o.pole_lift * (1.0 - w_aim) - grip[:, 2]
+                rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
+                return (rho[:, None] * horiz + dz[:, None] * up) / length
+
+            # Free swing first; its grip sits `offset` from the wrist the IK aims.
+            grip, wrist = arm.reach(hand)
+            offset = grip - wrist
+            free = hand + offset
+            plan = _plan_plants(place, d, o.pole_hold, o.pole_swing, grip + length * free_axis(grip),
+                                free, shoulder + offset, length, reach, o.plant_scale)
+            lift = plan.u[plan.after, None]
+            target = free.copy()
+            target[plan.held] = plan.grip_at[plan.held]
+            target[plan.after] = (1 - lift) * plan.grip_at[plan.after] + lift * free[plan.after]
+            # ... never nearer the hole than the pole is long, or the tip would go into the snow.
+            out = target[plan.after] - plan.tip_at[plan.after]
+            r = np.linalg.norm(out, axis=1, keepdims=True)
+            target[plan.after] = plan.tip_at[plan.after] + out * np.maximum(r, length) / r
+            # The offset turns with the hand: aim again with the new one.  Each frame is solved on
+            # its own, so a frame whose offset no longer moves (a free swing, after one pass)
+            # would only give the same numbers again: it leaves the loop, the rest go on.
+            moving_aim = np.arange(len(target))
+            aim_wrist = target - offset
+            for _ in range(12):
+                aim_wrist[moving_aim] = target[moving_aim] - offset[moving_aim]
+                g, wr = arm.reach(aim_wrist[moving_aim], moving_aim)
+                step = np.max(np.abs(g - wr - offset[moving_aim]), axis=1, initial=0.0)
+                grip[moving_aim], offset[moving_aim] = g, g - wr
+                if np.max(np.abs(grip - target), initial=0.0) < 2e-4:    # ~10x per two passes
+                    break
+                moving_aim = moving_aim[step > SETTLED]
+            ik_limb(b, arm.upper, arm.lower, aim_wrist, elbow_dir)     # the arm's pose, once
+            axis = free_axis(grip)
+            # Held: aim at the hole.  Lifting off: at a point moving from the hole to the free
+            # swing's tip (both on or above the snow, so the tip stays out of it).
+            aim = plan.tip_at.copy()
+            aim[plan.after] = (1 - lift) * aim[plan.after] + lift * (grip + length * axis)[plan.after]
+            moving = plan.held | plan.after
+            to = aim[moving] - grip[moving]
+            axis[moving] = to / np.linalg.norm(to, axis=1, keepdims=True)
+            # Where that would still dip the tip into the snow, it stays on the line to the hole.
+            dip = plan.after & (grip[:, 2] + length * axis[:, 2] < 0.0)
+            to = plan.tip_at[dip] - grip[dip]
+            axis[dip] = to / np.linalg.norm(to, axis=1, keepdims=True)
+            b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
+
+
+class _Arm:
+    """The arm's two-bone IK (``common.ik_limb``) solved without writing the pose, for the
+    aiming loop of ``arms_and_poles``: only the arm moves while it aims (the chest, and the
+    hand's and the pole's rest offsets from the forearm, stay put), so where a wrist target puts
+    the wrist and the pole's grip follows from the two limb rotations alone, not through the
+    builder's quaternions and pose chain (the same values to rounding)."""
+
+    def __init__(self, b, upper, lower, elbow_dir, pole):
+        skel = b.skel
+        base = b.unposed(upper)
+        self.upper, self.lower = upper, lower
+        self.root, self.hinge, self.elbow = base[:, :3, 3], base[:, :3, 0], elbow_dir
+        self.lengths = leg_lengths(skel, upper, lower)
+        self.lower_head = skel.rest_relative(lower)[:3, 3]       # in the upper bone's frame
+        self.fore = skel.length(lower)
+        # The grip in the lower bone's frame (through the hand, posed or not).
+        self.grip = (rigid_inverse(b.pose(lower)) @ b.unposed(pole))[:, :3, 3]
+
+    def reach(self, wrist, idx=slice(None)):
+        """Aim the wrist (the forearm's tail) of frames ``idx`` at ``wrist`` (k, 3); return
+        ``(grip, wrist)``, where the pole's grip and the wrist then are (armature space)."""
+        r_up, r_low, _ = limb_frames(self.root[idx], self.hinge[idx], wrist, self.elbow[idx],
+                                     *self.lengths)
+        head = self.root[idx] + stack_dot(r_up, self.lower_head)
+        return (head + np.einsum("nij,nj->ni", r_low, self.grip[idx]),
+                head + self.fore * r_low[:, :, 1])
+
+
+#: The last part of the swing to a plant, as a fraction of ``pole_swing``: the tip comes to rest
+#: in its hole over it (world space), instead of landing at the figure's speed and sliding.
+APPROACH = 0.5
+
+
+def _world(place, p, idx, k):
+    """Armature-space points ``p`` (m, 3) of frames ``idx`` in the world of the figure ``k``
+    times the built-in's size (scaled about the foot point, as retargeting scales the pose)."""
+    return place.origin[idx] + k * np.einsum("nij,nj->ni", place.R[idx], p)
+
+
+def _local(place, P, idx, k):
+    """World points ``P`` (m, 3) of the figure ``k`` times the size, in the built-in's armature
+    space of frames ``idx`` (the inverse of :func:`_world`)."""
+    P = np.broadcast_to(P, (len(idx), 3))
+    return place.to_local(place.origin[idx] + (P - place.origin[idx]) / k, idx)
+
+
+def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at,
+              k=1.0) -> None:
+    """The frames before the plant at ``i0`` within ``phase`` of it: the tip goes from the free
+    swing's to the hole ``P`` (world) along a smoothstep, so that it arrives at rest; the grip is
+    the pole's length from it towards the free swing's grip.  Frames of an earlier plant stay."""
+    j = i0 - 1
+    while j >= 0 and d[i0] - phase < d[j] <= d[j + 1] and not (held[j] or after[j]):
+        j -= 1
+    idx = np.arange(j + 1, i0)
+    if not len(idx):
+        return
+    s = smoothstep((d[idx] - (d[i0] - phase)) / phase)[:, None]
+    world = (1.0 - s) * _world(place, tips[idx], idx, k) + s * P
+    local = _local(place, world, idx, k)
+    local[:, 2] = np.maximum(local[:, 2], 0.0)      # on or above the snow under the foot
+    if place.surface is not None:                   # ... and the Ground mesh under the tip
+        world = _world(place, local, idx, k)
+        world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1]))
+        local = _local(place, world, idx, k)
+    away = free[idx] - local
+    held[idx], tip_at[idx] = True, local
+    grip_at[idx] = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
+
+
+def on_snow(place, p):
+    """The world point ``p`` moved onto the ground (vertically; the plane under the foot when
+    there is no Ground mesh, where it already is)."""
+    if place.surface is None:
+        return p
+    return np.array([p[0], p[1], float(place.surface(np.array([p[0]]), np.array([p[1]]))[0])])
+
+
+@dataclass
+class _Plants:
+    held: np.ndarray      # (n,) bool: the tip is in the snow
+    after: np.ndarray     # (n,) bool: lifting off after a plant
+    u: np.ndarray         # (n,) 0 at lift-off -> 1 when the pole swings free again
+    tip_at: np.ndarray    # (n, 3) armature-space hole in the snow while held and lifting off
+    grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
+
+
+def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
+                 scale: float = 1.0) -> _Plants:
+    """Where each plant goes into the snow and how long it can stay (see arms_and_poles); the
+    holes stay put in the world of the figure ``scale`` times the built-in's size.
+
+    ``d`` is the signed phase from the plant, ``tips`` and ``free`` the free swing's tip and grip
+    (armature space), ``shoulder`` the shoulder shifted by the grip's offset from the wrist, so
+    that ``|grip - shoulder| <= reach`` says the arm reaches."""
+    n = len(d)
+    held, after = np.zeros(n, bool), np.zeros(n, bool)
+    u = np.ones(n)
+    tip_at, grip_at = tips.copy(), free.copy()
+    # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
+    inside = (np.abs(d) <= hold) | ((d < 0) & (d > -hold - swing) & (tips[:, 2] < 1e-3))
+    edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
+    for i0, i1 in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):   # runs [i0, i1)
+        idx = np.arange(i0, i1)
+        # The hole: where the swinging tip meets the snow.
+        P = on_snow(place, _world(place, np.array([[tips[i0, 0], tips[i0, 1], 0.0]]), [i0], scale)[0])
+        _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
+                  grip_at, scale)
+        local = _local(place, P, idx, scale)
+        away = free[idx] - local
+        grip = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
+        ok = np.linalg.norm(grip - shoulder[idx], axis=1) <= reach
+        k = len(idx) if ok.all() else max(int(np.argmin(ok)), 1)
+        idx, local, grip = idx[:k], local[:k], grip[:k]
+        held[idx], tip_at[idx], grip_at[idx] = True, local, grip
+        # Lift off: from the last held pose to the free swing over `swing` of phase.
+        r = idx[-1]
+        dd = d[r + 1:] - d[r]
+        stop = np.nonzero(~((dd >= 0.0) & (dd < swing)))[0]
+        j = r + 1 + (int(stop[0]) if len(stop) else len(dd))
+        u[r + 1:j] = smoothstep(dd[:j - r - 1] / swing)
+        after[r + 1:j], grip_at[r + 1:j] = True, grip[-1]
+        # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
+        # rises off the snow along that line) while it swings free.
+        tip_at[r + 1:j] = _local(place, P, np.arange(r + 1, j), scale)
+    return _Plants(held, after, u, tip_at, grip_at)
+
+
+#: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
+SPORT = register_sport(Sport(
+    name="skier", label="Skier", description="Alpine skier on slalom skis", number=0,
+    figure=Figure(
+        "skier", BodyParams(m=75.0, l=1.0, I_v=12.0, V_cm=10.0),
+        Limits(C_f_max=1 / 6, dC_f_max=0.67, theta_fall=math.radians(60)),
+        """Alpine skier on slalom skis.  75 kg adult; centre of mass ~1.0 m above the skis in an
+        athletic stance; roll inertia about the centre of mass of a 1.75 m adult ~12 kg m^2
+        (m (0.4 m)^2); 10 m/s, a brisk recreational slalom.  A slalom ski has a ~12 m sidecut
+        radius; edged and bent it carves ~R cos(edge angle), about 6 m at 60 deg, so
+        |C_f| <= 1/6 1/m.  Edge to edge takes ~0.5 s: |dC_f/dt| <= 2 (1/6) / 0.5 ~ 0.67."""),
+    # Waxed skis on groomed snow: kinetic friction 0.02-0.1 (Colbeck 1992, "A review of the
+    # processes that control snow friction", CRREL Monograph 92-2); 0.05 for a ski carving
+    # at speed.  Drag area of an alpine skier turning in a giant-slalom stance 0.4-0.6 m^2
+    # (Meyer, Le Pelley & Borrani 2012, Med. Sci. Sports Exerc. 44(6)); air at ~2000 m, the
+    # ISA density there (1.007 kg/m^3).
+    resistance=Resistance(mu=0.05, CdA=0.5, rho=1.007),
+    plan_curvature_rate=0.2,
+    styles=("carve", "skid", "wedge"),
+    mapping=SkierMapping(),
+    bones=(B.ROOT, B.LEAN) + B.HUMAN + B.SKI + B.POLE,
+    retarget=Retarget(attach={"ski.L": "foot.L", "ski.R": "foot.R", "pole.L": "hand.L",
+                              "pole.R": "hand.R"}),
+))
+
+
+# -- the sport's own presets with race equipment (core/equipment.py, docs/racing.md) ---------
+# Slalom: FIS, Specifications for Alpine Competition Equipment (edition 2023/24), men's SL ski
+# at least 165 cm; the FIS sets no SL radius, and men's SL race skis of 165 cm have sidecut
+# radii of 12.5-13 m.  Reid et al. 2020 (Front. Sports Act. Living 2:25) measured edge angles
+# up to 71.0 +- 1.9 deg in slalom: edge_max 75 deg.  Edge to edge in ~0.3 s (Reid's 10 m
+# gates at 12 m/s take 0.9 s a turn; the edge change is a third of it).
+SL_SKI = Carving(length=1.65, sidecut_radius=12.5, edge_max=math.radians(75.0))
+register_preset(SportPreset(
+    name="slalom_racer", sport="skier", label="Slalom Racer", carving=SL_SKI,
+    figure=Figure(
+        "slalom_racer", BodyParams(m=85.0, l=0.95, I_v=13.6, V_cm=12.0),
+        carving_limits(SL_SKI, 0.3, math.radians(85)),
+        """A World Cup slalom racer on FIS slalom skis (165 cm, sidecut radius 12.5 m).  85 kg
+        (men's technical racers are 80-95 kg); centre of mass 0.95 m above the skis in a
+        racing stance; roll inertia scaled from the skier's by the mass (12 kg m^2 x 85 / 75);
+        12 m/s, Reid et al.'s slalom speed.  |C_f| <= 1 / (12.5 m cos 75 deg) = 0.309 1/m;
+        edge to edge in 0.3 s; the hip touches the snow from ~80 deg and the racer has fallen
+        past 85 deg."""),
+))
+
+# Giant slalom: FIS (from 2017/18), men's GS ski at least 193 cm, sidecut radius at least
+# 30 m.  Edge to edge in ~0.5 s.
+GS_SKI = Carving(length=1.93, sidecut_radius=30.0, edge_max=math.radians(75.0))
+register_preset(SportPreset(
+    name="gs_racer", sport="skier", label="GS Racer", carving=GS_SKI,
+    figure=Figure(
+        "gs_racer", BodyParams(m=85.0, l=1.0, I_v=13.6, V_cm=18.0),
+        carving_limits(GS_SKI, 0.5, math.radians(85)),
+        """A giant slalom racer on FIS GS skis (193 cm, sidecut radius 30 m).  85 kg, centre of
+        mass 1.0 m, roll inertia 13.6 kg m^2; 18 m/s, a GS speed.  |C_f| <= 1 / (30 m cos
+        75 deg) = 0.129 1/m; edge to edge in 0.5 s; fallen past 85 deg."""),
+))

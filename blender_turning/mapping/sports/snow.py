@@ -1,0 +1,158 @@
+"""Pieces shared by the snow sports (skier, telemark skier, snowboarder; Section 7).
+
+* The legs act as a spring driven by ``F_leg``: the hip-to-ankle length along the body is
+  ``L = L_static - (F_leg - m g) / k_s`` (Section 7: "Given the force at any instant and k_s,
+  the leg length is determined and inverse kinematics is used to calculate the bend of the
+  knees"); Fig. 5 shows ``F_leg`` swinging about +-30 % around ``m g``.
+* The pelvis is carried by the lean and slides along the leaned body axis to give that length.
+* The equipment (skis, board) is tilted on edge linearly in ``C_f`` and set on the ground;
+  the boots are glued to it and the legs reach them by two-bone IK.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...core.physics.params import check_range
+from .. import bones as B
+from .common import (add_local_rotation, body_axes, carried, ik_limb, lean, leg_lengths,
+                     static_force)
+
+__all__ = ["SpringLegOptions", "lean_on_spring_legs", "spring_length", "tilt_gain", "set_pelvis", "hip_drop",
+           "knee_flexion",
+           "carry_vec", "bend_waist", "twist_upper_body", "level_head"]
+
+
+@dataclass(frozen=True)
+class SpringLegOptions:
+    """Options every snow sport shares: spring legs, edge tilt, waist and head (SI, radians)."""
+
+    k_s: float = 3000.0
+    """Leg spring stiffness, N/m: the legs shorten by (F_leg - m g) / k_s."""
+    stance: float = 0.94
+    """Hip-to-ankle length at the static force m g, as a fraction of the full leg length."""
+    leg_min: float = 0.62
+    """Shortest hip-to-ankle length, fraction of the full leg length."""
+    leg_max: float = 0.985
+    """Longest hip-to-ankle length, fraction of the full leg length."""
+    tilt_gain: float | None = None
+    """Edge tilt per unit curvature, rad m (tilt = tilt_gain C_f); None fits theta_v ~ C_f."""
+    tilt_max: float = math.radians(70.0)
+    """Largest edge tilt, rad."""
+    waist_ratio: float = 0.6
+    """Forward bend at the waist per radian of knee bend, rad/rad."""
+    head_level: float = 0.5
+    """Fraction of the lean the neck takes back to keep the eyes level."""
+
+    def __post_init__(self):
+        check_range("k_s", self.k_s, 0.0, 1e7, lo_open=True)
+        check_range("leg_min", self.leg_min, 0.2, 1.0)
+        check_range("leg_max", self.leg_max, self.leg_min, 0.999)
+        check_range("stance", self.stance, self.leg_min, self.leg_max)
+        if self.tilt_gain is not None:
+            check_range("tilt_gain", self.tilt_gain, 0.0, 1e3)
+        check_range("tilt_max", self.tilt_max, 0.0, math.pi / 2, hi_open=True)
+        check_range("waist_ratio", self.waist_ratio, 0.0, 3.0)
+        check_range("head_level", self.head_level, 0.0, 1.0)
+
+
+def spring_length(traj, k_s: float, static: float, lo: float, hi: float) -> np.ndarray:
+    """Hip-to-ankle length (n,), m: a spring of stiffness ``k_s`` (N/m) about ``static``."""
+    return np.clip(static - (traj.F_leg - static_force(traj)) / k_s, lo, hi)
+
+
+
+def lean_on_spring_legs(b, traj, o):
+    """Lean the body by ``theta_v`` and size the spring legs (Section 7).
+
+    Returns ``(theta_v, (right, fwd, up) body axes, full leg length, hip-to-ankle length (n,))``.
+    """
+    skel = b.skel
+    th = np.asarray(traj.theta_v, float)
+    axes = body_axes(skel)
+    lean(b, th)
+    full = sum(leg_lengths(skel, "thigh.L", "shin.L"))
+    length = spring_length(traj, o.k_s, o.stance * full, o.leg_min * full, o.leg_max * full)
+    return th, axes, full, length
+
+def tilt_gain(traj, gain) -> float:
+    """``gain`` or, if None, the least-squares slope of ``theta_v`` on ``C_f`` (rad m).
+
+    Section 7: "A linear relationship is assumed between the curvature of the ski and the angle
+    at which the ski is tilted.  The constant to use is easily estimated from a plot like the
+    one in Fig. 5" -- this is that estimate, made from the trajectory itself.
+    """
+    if gain is not None:
+        return float(gain)
+    c = traj.C_f
+    den = float(np.dot(c, c))
+    return float(np.dot(traj.theta_v, c) / den) if den > 0 else 0.0
+
+
+def carry_vec(b, bone: str, v) -> np.ndarray:
+    """The armature-space rest direction ``v`` as carried by ``bone``'s current pose, (n, 3)."""
+    p = b.pose(bone)[:, :3, :3] @ b.skel.rest_of(bone)[:3, :3].T
+    return p @ np.asarray(v, float)
+
+
+def set_pelvis(b, theta_v, length, ankle_z: float, drop=0.0):
+    """Slide the hips along the leaned body axis so the hip joints sit ``length`` above the
+    ankles measured along the body (ankles at height ``ankle_z``), lowered by ``drop`` (n,)."""
+    skel = b.skel
+    hip_z = 0.5 * (skel.rest_of("thigh.L")[2, 3] + skel.rest_of("thigh.R")[2, 3])
+    h = length + ankle_z / np.cos(theta_v) - drop
+    up_local = skel.rest_of(B.HIPS)[:3, :3].T @ np.array([0.0, 0.0, 1.0])
+    b.set_local(B.HIPS, location=(h - hip_z)[:, None] * up_local)
+
+
+def hip_drop(b, ankles: dict, reach: float) -> np.ndarray:
+    """How far (n,) the hips must slide down the body axis for every leg to reach its ankle
+    with at most ``reach`` of its full length."""
+    up = carry_vec(b, B.LEAN, (0.0, 0.0, 1.0))
+    drop = np.zeros(b.n)
+    for s, ankle in ankles.items():
+        l1, l2 = leg_lengths(b.skel, B.side("thigh", s), B.side("shin", s))
+        v = b.unposed(B.side("thigh", s))[:, :3, 3] - ankle
+        vu = np.sum(v * up, axis=1)
+        target = reach * (l1 + l2)
+        disc = target * target - np.sum(v * v, axis=1) + vu * vu
+        need = vu - np.sqrt(np.maximum(disc, 0.0))
+        drop = np.maximum(drop, np.where(np.linalg.norm(v, axis=1) > target, need, 0.0))
+    return drop
+
+
+def knee_flexion(b, s: str) -> np.ndarray:
+    """Angle (n,) between thigh and shin, rad (0 = straight leg)."""
+    y1 = b.pose(B.side("thigh", s))[:, :3, 1]
+    y2 = b.pose(B.side("shin", s))[:, :3, 1]
+    return np.arccos(np.clip(np.sum(y1 * y2, axis=1), -1.0, 1.0))
+
+
+def legs_to(b, ankles: dict, pole, twist: dict | None = None, carriers: dict | None = None):
+    """IK both legs to their ankles and glue each foot to its carrier (ski, board)."""
+    for s, ankle in ankles.items():
+        ik_limb(b, B.side("thigh", s), B.side("shin", s), ankle, pole,
+                None if twist is None else twist[s])
+        if carriers:
+            foot = B.side("foot", s)
+            p = carried(b, foot, carriers[s])
+            b.set_pose(foot, p[:, :3, :3])
+
+
+def bend_waist(b, right, angle):
+    """Bend forward at the waist by ``angle`` (n,) rad (Section 7: tied to the knee bend)."""
+    add_local_rotation(b, B.SPINE, right, -np.asarray(angle))
+
+
+def twist_upper_body(b, up, angle):
+    """Twist the upper body about the body's up axis by ``angle`` (n,) rad (left positive),
+    spread over the three spine segments above the hips."""
+    for bone in (B.SPINE, B.SPINE_2, B.CHEST):
+        add_local_rotation(b, bone, up, np.asarray(angle) / 3.0)
+
+
+def level_head(b, theta_v, amount: float):
+    """Turn the neck against the lean by ``amount * theta_v``, as people keep their eyes level."""
+    add_local_rotation(b, B.NECK, (0.0, 1.0, 0.0), amount * np.asarray(theta_v))
