@@ -737,6 +737,12 @@ MUTANTS += [
       "return cls(lambda tt: float(np.interp(tt, t, v)))",
       "return cls(lambda tt: float(v[max(np.searchsorted(t, tt, side='right') - 1, 0)]))",
       TERMS + [T + "test_speed_schedule.py"]),
+    M("follow_cap_without_path_curvature", "core/follow_problem.py",
+      "cap = replace(cap, curvature=path_curvature_max(self.path),", "cap = replace(cap,",
+      [T + "test_follow_problem.py", T + "test_planner_speed_cap.py"]),
+    M("follow_start_heading_reversed", "core/follow_problem.py",
+      "heading = math.atan2(d[1], d[0])", "heading = math.atan2(-d[1], -d[0])",
+      [T + "test_follow_problem.py"]),
     # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
     M("segment_no_parallel_axis", "mapping/anthropometry.py",
       "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",
