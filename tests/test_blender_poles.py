@@ -13,9 +13,8 @@ bpy = pytest.importorskip("bpy")
 
 from rig_fixtures import activate, mixamo_skeleton, rigify_rig  # noqa: E402
 
-from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
-from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
+
+from mountain_scene import mountain_scene  # noqa: E402
 
 pytestmark = pytest.mark.blender
 SECONDS, FPS = 8, 24
@@ -28,15 +27,7 @@ ALONG = np.linspace(0.0, 1.0, 12)
 
 @pytest.fixture(scope="module")
 def scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    addon.register()
-    sc = bpy.context.scene
-    sc.render.fps, sc.frame_start, sc.frame_end = FPS, 1, 1 + SECONDS * FPS
-    mountain = ski_slope(length=160, width=160, cell=1.0, seed=3)
-    obj = bpy.data.objects.new("Mountain", mesh_from_height_field(bpy, mountain, "Mountain"))
-    sc.collection.objects.link(obj)
-    yield sc, obj
-    addon.unregister()
+    yield from mountain_scene(SECONDS, FPS)
 
 
 def add(sport, location, heading_deg):

@@ -10,14 +10,13 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender.jobs import pipeline  # noqa: E402
 from blender_turning.blender.scene import follow_ground  # noqa: E402
-from blender_turning.blender.scene.ground import mesh_from_height_field  # noqa: E402
 from blender_turning.blender.scene.scene_adapters import (FrameRange, SceneInputError,  # noqa: E402
                                                     figure_from_settings,
                                                     skidding_from_settings)
-from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
+
+from mountain_scene import mountain_scene  # noqa: E402
 
 pytestmark = pytest.mark.blender
 SECONDS, FPS = 8, 24
@@ -25,15 +24,7 @@ SECONDS, FPS = 8, 24
 
 @pytest.fixture(scope="module")
 def scene():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    addon.register()
-    sc = bpy.context.scene
-    sc.render.fps, sc.frame_start, sc.frame_end = FPS, 1, 1 + SECONDS * FPS
-    mountain = ski_slope(length=200, width=160, cell=1.0, seed=3)
-    obj = bpy.data.objects.new("Mountain", mesh_from_height_field(bpy, mountain, "Mountain"))
-    sc.collection.objects.link(obj)
-    yield sc, obj
-    addon.unregister()
+    yield from mountain_scene(SECONDS, FPS, length=200)
 
 
 def _figure(scene, sport="SKIER"):
