@@ -13,18 +13,10 @@ bpy = pytest.importorskip("bpy")
 
 from modal_stand_ins import Context, WindowManager  # noqa: E402
 from scene_snapshot import diff, snapshot  # noqa: E402
-from test_blender_crowd import TIMER, modal_crowd, path_figures, started_workers  # noqa: E402
+from test_blender_crowd import (TIMER, modal_crowd, path_figures, scene,  # noqa: E402,F401
+                                started_workers)  # (scene: the same 96-frame scene)
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
-
-
-@pytest.fixture
-def scene(registered):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.frame_start, sc.frame_end = 1, 96
-    sc.render.fps = 24
-    return sc
 
 
 @pytest.mark.parametrize("avoid", [False, True])
