@@ -42,3 +42,28 @@ def test_the_racer_bakes_its_lean_and_carving_skis(racer):
     np.testing.assert_allclose(roll, carving_of("slalom_racer").edge_angle(traj.C_f), atol=1e-9)
     assert math.degrees(np.abs(roll).max()) > 65.0
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+
+
+def test_a_saved_preset_stores_and_restores_the_equipment(racer):
+    """The "+" button's preset stores the racer's equipment with its body; applying it to a
+    figure showing the sport's own skis brings the racer's back, and a saved preset of the
+    sport's own figure takes them off again."""
+    from blender_turning.blender.ui import presets
+    assert racer.turning.equipment.preset == "slalom_racer"
+    folder = os.path.join(bpy.utils.user_resource("SCRIPTS", path="presets"),
+                          presets.PRESET_SUBDIR)
+    assert bpy.ops.turning.figure_preset_add(name="My racer") == {"FINISHED"}
+    saved = os.path.join(folder, "My_racer.py")
+    assert bpy.ops.turning.apply_figure_preset(sport="SKIER") == {"FINISHED"}
+    assert racer.turning.equipment.preset == ""
+    assert bpy.ops.turning.figure_preset_add(name="My skier") == {"FINISHED"}
+    own = os.path.join(folder, "My_skier.py")
+    assert bpy.ops.turning.apply_figure_preset(filepath=saved) == {"FINISHED"}
+    assert racer.turning.equipment.preset == "slalom_racer"
+    assert racer.turning.mass == pytest.approx(85.0)
+    traj, _ = figure_pose_track(racer, FrameRange.of_scene(bpy.context.scene))
+    assert traj.meta["preset"] == "slalom_racer"
+    assert bpy.ops.turning.apply_figure_preset(filepath=own) == {"FINISHED"}
+    assert racer.turning.equipment.preset == ""
+    for path in (saved, own):
+        os.remove(path)

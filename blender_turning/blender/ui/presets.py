@@ -24,7 +24,10 @@ from ..scene.rig_builder import RIG_TAG
 PRESET_SUBDIR = "turning_figure"
 PRESET_VALUES = ["settings.sport", "settings.mass", "settings.com_height", "settings.inertia",
                  "settings.speed", "settings.curvature_max", "settings.curvature_rate_max",
-                 "settings.fall_angle", "settings.plan_curvature_rate"]
+                 "settings.fall_angle", "settings.plan_curvature_rate",
+                 "settings.equipment.preset"]
+"""What a saved preset stores: the sport, the body, the limits, the planner's rate and the
+equipment (a racer's skis: ``settings.equipment.preset``, '' for the sport's own)."""
 
 
 def _poll_figure_object(cls, context) -> bool:
@@ -40,12 +43,13 @@ _SPORT_LINE = re.compile(r"""^settings\.sport\s*=\s*['"](\w+)['"]""", re.MULTILI
 
 def sport_preset_values(sport: str) -> dict:
     """``PRESET_VALUES`` (without ``settings.``) of the sport's own preset, from its record, or
-    of a sport's preset (``SLALOM_RACER``: core/equipment.py), with its sport."""
+    of a sport's preset (``SLALOM_RACER``: core/equipment.py), with its sport and equipment."""
     from ..props.figure import BODY_FIELDS, LIMIT_FIELDS
     own = SPORT_PRESETS.get(sport.lower())
     record = own if own is not None else SPORTS.lookup(sport.lower())
     key = SPORTS[own.sport].key if own is not None else record.key
-    values = {"sport": key, "plan_curvature_rate": record.plan_curvature_rate}
+    values = {"sport": key, "plan_curvature_rate": record.plan_curvature_rate,
+              "equipment.preset": own.name if own is not None else ""}
     values.update({s: getattr(record.figure.body, f) for s, f in BODY_FIELDS.items()})
     values.update({s: getattr(record.figure.limits, f) for s, f in LIMIT_FIELDS.items()})
     return {v.split(".", 1)[1]: values[v.split(".", 1)[1]] for v in PRESET_VALUES}
@@ -97,12 +101,20 @@ class TURNING_OT_apply_figure_preset(bpy.types.Operator):
                                    f"new figure with Add Figure > {sport_label(sport)}")
             return {"CANCELLED"}
         if values is None:
-            return bpy.ops.script.execute_preset(filepath=self.filepath,
-                                                 menu_idname=TURNING_MT_figure_presets.__name__)
+            # A file saved before presets stored the equipment sets none: the sport's own.
+            before = fig.turning.equipment.preset
+            fig.turning.equipment.preset = ""
+            done = set()
+            try:
+                done = bpy.ops.script.execute_preset(
+                    filepath=self.filepath, menu_idname=TURNING_MT_figure_presets.__name__)
+            finally:
+                if done != {"FINISHED"}:
+                    fig.turning.equipment.preset = before
+            return done
         for name, value in values.items():
-            setattr(fig.turning, name, value)
-        own = SPORT_PRESETS.get(self.sport.lower())
-        fig.turning.equipment.preset = own.name if own is not None else ""
+            owner, _, attr = name.rpartition(".")
+            setattr(getattr(fig.turning, owner) if owner else fig.turning, attr, value)
         habit = habit_of(self.sport.lower())        # the beginner's wedge at 4.5 m/s ...
         if habit is not None:
             fig.turning.skid.style = habit.style.upper()
