@@ -95,19 +95,21 @@ def dissipation(traj, ground, fig, res):
 
 def races():
     print("\nraces on 19 deg (40 s; speeds over the last 20 s)")
-    res = RESISTANCE["skier"]
-    for label, V, period, lean, corridor in (("slalom, 10 m gates", 12.0, 1.67, 45, 3.0),
-                                             ("giant slalom", 18.0, 2.8, 50, 5.0),
-                                             ("giant slalom at 16 m/s", 16.0, 2.8, 50, 5.0)):
+    for label, sport, V, period, lean, corridor in (
+            ("slalom, 10 m gates", "skier", 12.0, 1.67, 45, 3.0),
+            ("giant slalom", "gs_racer", 18.0, 2.8, 50, 5.0),
+            ("giant slalom at 16 m/s", "gs_racer", 16.0, 2.8, 50, 5.0),
+            ("giant slalom, skier's 0.5 m^2", "skier", 18.0, 2.8, 50, 5.0)):
+        res = RESISTANCE[sport]
         for name, skid in (("skid", Skidding("skid", corridor=corridor)), ("carve", None)):
             target = TargetSpeed(V, corridor=corridor)
-            traj, ground, _ = run("skier", 19, target, skid, V0=18.0 if V >= 16 else V,
+            traj, ground, _ = run(sport, 19, target, skid, V0=18.0 if V >= 16 else V,
                                   period=period, lean=lean, duration=40.0)
             late = traj.V_cm[traj.t >= 20.0]
-            fig = replace(preset("skier"), body=replace(preset("skier").body, V_cm=V))
-            print(f"  {label:24s} {name:5s} mean {late.mean():5.2f} ({late.min():.1f}-"
-                  f"{late.max():.1f}) m/s, drag {dissipation(traj, ground, fig, res):.0%} of the "
-                  "dissipated energy")
+            fig = replace(preset(sport), body=replace(preset(sport).body, V_cm=V))
+            print(f"  {label:30s} {name:5s} mean {late.mean():5.2f} ({late.min():.1f}-"
+                  f"{late.max():.1f}) m/s, drag {dissipation(traj, ground, fig, res):.1%} of the "
+                  f"dissipated energy (CdA {res.CdA:g} m^2, {fig.body.m:g} kg)")
 
 
 def cyclist():

@@ -2,6 +2,7 @@
 snowboarder with FIS equipment, reachable as ``--preset``, in scene files and by their sport's
 friction; the sidecut relation R = R_sc cos(edge) of their equipment."""
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -23,7 +24,11 @@ def test_the_presets_are_registered_with_their_sport_and_fis_equipment():
     for name, (sport, length, radius) in RACERS.items():
         fig = preset(name)
         assert fig.name == name and name in PRESETS and sport_of(name) == sport
-        assert RESISTANCE[name] is SPORTS[sport].resistance
+        own = SPORTS[sport].resistance
+        if name == "gs_racer":                  # its compact stance's own drag area
+            assert RESISTANCE[name] == replace(own, CdA=0.4)
+        else:
+            assert RESISTANCE[name] is own
         c = carving_of(name)
         assert (c.length, c.sidecut_radius) == (length, radius)
         # The curvature bound is the equipment's: the sidecut relation at the largest edge.
@@ -50,6 +55,7 @@ def test_the_sidecut_relation_carves_the_curvature_it_is_given():
     (dict(sport="luge"), r"sport = 'luge' is not one of"),
     (dict(name="skier"), r"the name is a sport's"),
     (dict(carving=None), r"carving must be a Carving"),
+    (dict(drag_area=-0.1), r"drag_area = -0.1 .* \[0, 2\]"),
 ])
 def test_a_bad_preset_is_refused_naming_the_field(bad, message):
     fig = preset("skier")

@@ -30,7 +30,7 @@ shows its equipment (``meta["preset"]`` of a trajectory names it).  numpy-free.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from .physics.params import Figure, Limits
 from .registry import SPORT_PRESETS, SPORTS
@@ -90,6 +90,9 @@ class SportPreset:
     """Its body and limits (Section 3); ``figure.name`` is ``name``."""
     carving: Carving
     """The ski or board the mapping shows on edge (the sidecut relation)."""
+    drag_area: float | None = None
+    """Its own drag area ``C_d A``, m^2, when its stance differs from the sport's (a racer's
+    compact stance); ``None``: the sport's."""
 
     def __post_init__(self):
         if self.sport not in SPORTS:
@@ -105,11 +108,14 @@ class SportPreset:
         if not isinstance(self.label, str) or not self.label.strip():
             raise ValueError(f"preset {self.name!r}: label = {self.label!r} is not a "
                              "non-empty string")
+        if self.drag_area is not None:
+            check_range(f"preset {self.name!r}: drag_area", self.drag_area, 0.0, 2.0)
 
     @property
     def resistance(self):
-        """Its sport's friction and drag."""
-        return SPORTS.lookup(self.sport).resistance
+        """Its sport's friction and drag, with its own drag area when it has one."""
+        res = SPORTS.lookup(self.sport).resistance
+        return res if self.drag_area is None else replace(res, CdA=self.drag_area)
 
     @property
     def plan_curvature_rate(self) -> float:

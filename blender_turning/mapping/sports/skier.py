@@ -462,10 +462,14 @@ register_preset(SportPreset(
 ))
 
 # Giant slalom: FIS (from 2017/18), men's GS ski at least 193 cm, sidecut radius at least
-# 30 m.  Edge to edge in ~0.5 s.
+# 30 m.  Edge to edge in ~0.5 s.  Drag area: elite slalom and GS racers in a wind tunnel,
+# Cd*S 0.23 +- 0.03 m^2 in a tuck to 0.66 +- 0.09 m^2 standing high (Elfmark, Ettema, Supej &
+# Holmberg 2022, Appl. Sci. 12(2):902); recreational skiers in GS postures 0.4-0.6 m^2 (Meyer,
+# Le Pelley & Borrani 2012, Med. Sci. Sports Exerc. 44(6)).  A racer's compact GS stance:
+# 0.4 m^2 (the recreational skier's 0.5 stays the sport's).
 GS_SKI = Carving(length=1.93, sidecut_radius=30.0, edge_max=math.radians(75.0))
 register_preset(SportPreset(
-    name="gs_racer", sport="skier", label="GS Racer", carving=GS_SKI,
+    name="gs_racer", sport="skier", label="GS Racer", carving=GS_SKI, drag_area=0.4,
     figure=Figure(
         "gs_racer", BodyParams(m=85.0, l=1.0, I_v=13.6, V_cm=18.0),
         carving_limits(GS_SKI, 0.5, math.radians(85)),
