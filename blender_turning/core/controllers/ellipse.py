@@ -63,7 +63,8 @@ from .feasible import STEER_BETAS, FeasibleTurn, feasible_turns
 
 GAIN = 3.0
 SPEED_GRID = 0.5
-"""m/s: a speed that varies is followed by feasibility tables at multiples of this (rounded down)."""
+"""m/s: a speed that varies is followed by feasibility tables at multiples of this (rounded
+down)."""
 
 
 def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=0.05):
@@ -102,7 +103,8 @@ class PhaseEllipse(Controller):
     beta): twice the peak of its own ``alpha_v``.  ``law``: ``"smooth"`` (the module docstring)
     or ``"paper"`` (Section 5.1 as written, :mod:`.ellipse_paper`).  ``directional``: how beta is
     found, ``"exact"`` (the closed form of :mod:`..heading_table`) or ``"linear"`` (the paper's
-    Eqs. 11/12).  ``limits``: the figure's bounds; the ellipse followed is kept feasible for them (:mod:`.feasible`).  ``None``
+    Eqs. 11/12).  ``limits``: the figure's bounds; the ellipse followed is kept feasible for them
+    (:mod:`.feasible`).  ``None``
     takes them from the run (:meth:`begin_run`).  :attr:`achieved` reports the turn followed.
     """
 

@@ -1,4 +1,5 @@
-"""Open-loop periodic turning (Section 4, Fig. 4): ``alpha_v = -omega0^2 theta_max sin(omega0 t)``."""
+"""Open-loop periodic turning (Section 4, Fig. 4):
+``alpha_v = -omega0^2 theta_max sin(omega0 t)``."""
 from __future__ import annotations
 
 from ..physics.params import BodyParams

@@ -85,7 +85,8 @@ def bound_cf(body: BodyParams, limits: Limits, C_f, sin_t, anchor=None, tau=0.0,
 
 
 def foot_speed(body: BodyParams, theta_v, C_f, sin_t=None, V_cm=None):
-    """Eq. (21): ``V_f = V_cm / (1 - C_f l sin theta_v)``, m/s (``V_cm`` overrides ``body.V_cm``)."""
+    """Eq. (21): ``V_f = V_cm / (1 - C_f l sin theta_v)``, m/s (``V_cm`` overrides
+    ``body.V_cm``)."""
     s = backend(theta_v).sin(theta_v) if sin_t is None else sin_t
     return (body.V_cm if V_cm is None else V_cm) / (1.0 - C_f * body.l * s)
 
