@@ -71,6 +71,68 @@ def numpy_floor(n, repeat, dt=DEFAULT_DT):
             best(lambda: [trig() for _ in range(100)], repeat) / 100)
 
 
+def bare_loop(fig, w, tm, n, dt=DEFAULT_DT):
+    """``run(body, limits, PhaseEllipse(body, w, tm), ...)`` for one figure (no heading: one
+    ellipse throughout) as a bare float RK4 loop with the same arithmetic: one function for the
+    right-hand side (Section 5.1's smooth law, Eq. 1, Section 3's bounds, Eqs. 21 and 2) and the
+    classical RK4 written out, a row per sample; no controller, no schedules, no bookkeeping.
+    Returns the rows (``run``'s columns x .. V_f)."""
+    from blender_turning.core.controllers.ellipse import GAIN
+    from blender_turning.core.controllers.feasible import feasible_turns
+    from blender_turning.core.physics.dynamics import PHYSICAL_MARGIN
+    b, lim = fig.body, fig.limits
+    g, l, J, V = b.g, b.l, b.J, b.V_cm
+    VV, VV2 = V * V, V ** 2
+    cmax, rate, fall = lim.C_f_max, lim.dC_f_max, lim.theta_fall
+    tmf = min(tm, feasible_turns(b, lim).max_lean(w))
+    amax, r0, w2, wt = 2.0 * w * w * tmf, 0.05, w * w, w * tmf
+    sin, cos, sqrt, inf, copysign = math.sin, math.cos, math.sqrt, math.inf, math.copysign
+
+    def f(x2, x3, x4, anchor, tau):
+        xe, ye = x4 / wt, x3 / tmf
+        r = sqrt(xe * xe + ye * ye)
+        a = -w2 * x3 + GAIN * w2 * tmf * (1.0 - r) * xe / (r if r > 1.0 else 1.0)
+        if r < r0:
+            q = 1.0 - r / r0
+            a += 0.5 * amax * q * q
+        a = -amax if a < -amax else (amax if a > amax else a)
+        s, c = sin(x3), cos(x3)
+        k = g * s - a * J
+        den = k * l * s + VV2 * c
+        cf = k / den if den > 0.0 else copysign(inf, k)
+        ls = l * s
+        lo = -cmax if ls >= 0.0 else max(-cmax, PHYSICAL_MARGIN / ls)
+        hi = cmax if ls <= 0.0 else min(cmax, PHYSICAL_MARGIN / ls)
+        cf = lo if cf < lo else hi if cf > hi else cf
+        if anchor is not None:
+            step = rate * tau
+            cf = anchor - step if cf < anchor - step else anchor + step if cf > anchor + step \
+                else cf
+        ratio = 1.0 / (1.0 - cf * ls)
+        V_f = V * ratio
+        alpha = (g * s - cf * VV * c * ratio) / J
+        return V_f * cos(x2), V_f * sin(x2), V_f * cf, x4, alpha, cf, V_f
+
+    h, w6 = 0.5 * dt, dt / 6.0
+    x0, x1, x2, x3, x4 = 0.0, 0.0, 0.0, 0.0, w * tm
+    anchor, rows = None, []
+    for i in range(n):
+        a0, a1, a2, a3, a4, cf, V_f = f(x2, x3, x4, anchor, dt)
+        rows.append((x0, x1, x2, x3, x4, a4, cf, V_f))
+        if abs(x3) > fall or i + 1 == n:
+            break
+        b0, b1, b2, b3, b4, _, _ = f(x2 + h * a2, x3 + h * a3, x4 + h * a4, cf, h)
+        c0, c1, c2, c3, c4, _, _ = f(x2 + h * b2, x3 + h * b3, x4 + h * b4, cf, h)
+        d0, d1, d2, d3, d4, _, _ = f(x2 + dt * c2, x3 + dt * c3, x4 + dt * c4, cf, dt)
+        x0 += w6 * (a0 + 2.0 * (b0 + c0) + d0)
+        x1 += w6 * (a1 + 2.0 * (b1 + c1) + d1)
+        x2 += w6 * (a2 + 2.0 * (b2 + c2) + d2)
+        x3 += w6 * (a3 + 2.0 * (b3 + c3) + d3)
+        x4 += w6 * (a4 + 2.0 * (b4 + c4) + d4)
+        anchor = cf
+    return rows
+
+
 def terrain(repeat):
     """The ``--terrain`` table."""
     from blender_turning.core import simulate, slalom_start

@@ -1,6 +1,7 @@
 """The user documents hold together: every relative link and anchor in README.md and docs/*.md
 resolves, the README stays a front door, no page (nor any other file of the tree) speaks of issue
-numbers, and every code block says where it runs (tests/test_doc_examples.py runs them)."""
+numbers, every code block says where it runs (tests/test_doc_examples.py runs them), and the
+package's code and docstrings fit in 100 columns."""
 import os
 import re
 from pathlib import Path
@@ -13,6 +14,9 @@ LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
 ISSUE = re.compile(r"\bissues? [0-9]+\b|\(issue [0-9]+", re.IGNORECASE)
 README_MAX_LINES = 260
 NOTES = {"run", "file", "slow", "not-run", ""}
+LINE_MAX = 100
+"""Columns a line of the package's Python files may take (its code and docstrings read in one
+window, side by side with a diff)."""
 
 
 def anchor(heading: str) -> str:
@@ -114,6 +118,26 @@ def test_no_issue_numbers_anywhere_else():
            for i, ln in enumerate(p.read_text(encoding="utf-8", errors="replace").split("\n"), 1)
            if ISSUE.search(ln)]
     assert not bad, "\n".join(bad)
+
+
+def long_lines(root):
+    """``path:line: columns`` of every line of the Python files under ``root`` longer than
+    :data:`LINE_MAX`."""
+    return [f"{p.relative_to(root)}:{i}: {len(ln)} columns" for p in sorted(root.rglob("*.py"))
+            for i, ln in enumerate(p.read_text(encoding="utf-8").split("\n"), 1)
+            if len(ln) > LINE_MAX]
+
+
+def test_the_package_fits_in_100_columns():
+    assert len(list((ROOT / "blender_turning").rglob("*.py"))) > 100     # every folder's files
+    bad = long_lines(ROOT / "blender_turning")
+    assert not bad, "\n".join(bad)
+
+
+def test_a_long_line_is_seen(tmp_path):
+    (tmp_path / "deep").mkdir()
+    (tmp_path / "deep" / "wide.py").write_text(f"x = 1\n#{'-' * LINE_MAX}\n{'y' * LINE_MAX}\n")
+    assert long_lines(tmp_path) == [f"deep/wide.py:2: {LINE_MAX + 1} columns"]
 
 
 def test_every_block_says_where_it_runs():

@@ -77,7 +77,7 @@ def test_on_flat_ground_without_resistance_energy_is_conserved():
     w, tm = math.pi, math.radians(30)
     ctl = PhaseEllipse(BODY, w, tm)
     ctl.begin_run(SKIER.limits)
-    law = ctl.terrain_cf_law(Flat())
+    law = model.steering(ctl, Flat())
     st, anchor, dt = np.array([*slalom_start(BODY, w, tm), BODY.V_cm]), None, 0.01
     E, V = [], []
     for i in range(2001):

@@ -13,7 +13,7 @@ import pytest
 from blender_turning.core import PhaseEllipse, preset
 from blender_turning.core.physics import model
 from blender_turning.core.controllers import Straight
-from blender_turning.core.physics.dynamics import PHYSICAL_MARGIN, steer
+from blender_turning.core.physics.dynamics import PHYSICAL_MARGIN, forward_alpha, inverse_cf, steer
 from blender_turning.core.physics.model import RESISTANCE, Flat, HeightField, Plane
 from blender_turning.core.physics.one_figure import rhs as float_rhs
 from blender_turning.core.physics.params import Limits
@@ -108,10 +108,12 @@ def _random_states(rng, n, lo_V=2.0, hi_V=25.0, box=(-9, 9, -9, 9)):
 
 @pytest.mark.parametrize("name,C_f_max", [("skier", None), ("cyclist", 2.0)])
 def test_flat_kernels_are_the_model_at_the_held_speed(name, C_f_max):
-    """:func:`.dynamics.steer` (arrays) and :func:`.one_figure.rhs` (floats) against
-    :func:`.model.rhs` on ``Flat()`` with the paper's held speed: every bound in play (demands
-    beyond C_f_max, infinite demands, the physical branch binding for a cyclist with C_f_max l
-    > 0.9, rate bounds with and without an anchor).  Round-off: 1e-12 of each output's scale."""
+    """:func:`.dynamics.steer` under :func:`.dynamics.inverse_cf` (arrays) and
+    :func:`.one_figure.rhs` (floats, Eq. 1 fused into the stage) against :func:`.model.rhs` on
+    ``Flat()`` with the paper's held speed under :func:`.model.inverse_cf` of the same lean
+    accelerations: every bound in play (demands beyond C_f_max, demands off the physical branch
+    that Eq. 1 makes infinite, the physical branch binding for a cyclist with C_f_max l > 0.9,
+    rate bounds with and without an anchor).  Round-off: 1e-12 of each output's scale."""
     fig = preset(name)
     if C_f_max is not None:
         fig = replace(fig, limits=replace(fig.limits, C_f_max=C_f_max))
@@ -121,24 +123,30 @@ def test_flat_kernels_are_the_model_at_the_held_speed(name, C_f_max):
     S = _random_states(rng, n)
     S[5] = body.V_cm
     cmax = limits.C_f_max
-    demand = rng.uniform(-3 * cmax, 3 * cmax, n)
-    demand[::17], demand[1::17] = np.inf, -np.inf
+    # The lean accelerations Eq. (2) gives for curvatures up to 3 C_f_max, and some far beyond
+    # any curvature's reach (Eq. 1 has no physical root: an infinite demand).
+    alpha = forward_alpha(body, S[3], rng.uniform(-3 * cmax, 3 * cmax, n))
+    alpha[::17], alpha[1::17] = 1e4, -1e4
+    frame = surface_frame(Flat(), S[0], S[1], S[2], body.g)
+    demand = model.inverse_cf(body, frame, S[3], alpha, S[5])
+    assert np.isinf(demand).sum() > 10                             # unreachable demands
     anchor, tau = rng.uniform(-cmax, cmax, n), rng.choice([0.0, 0.01, 0.02], n)
     hits = 0
     for with_anchor in (True, False):
         a = anchor if with_anchor else None
-        ref, cf, alpha, V_f, _, _ = model.rhs(body, limits, Flat(), demand, tuple(S), a, tau,
-                                              held=True)
+        ref, cf, alpha_v, V_f, _, _ = model.rhs(body, limits, Flat(), demand, tuple(S), a, tau,
+                                                held=True)
         held_V = np.broadcast_arrays(*ref)[5]
         # Rows compared: the five rates of the paper's state, C_f, alpha_v, V_f.
-        ref = np.array([*np.broadcast_arrays(*ref[:5]), cf, alpha, V_f])
+        ref = np.array([*np.broadcast_arrays(*ref[:5]), cf, alpha_v, V_f])
         scale = np.maximum(np.abs(np.where(np.isfinite(ref), ref, 0)).max(1), 1.0)
-        batch_d, b_cf, b_alpha, b_V = steer(body, limits, demand, S[:5], a, tau)
+        batch_d, b_cf, b_alpha, b_V = steer(body, limits, inverse_cf(body, S[3], alpha), S[:5],
+                                            a, tau)
         batch = np.array([*np.broadcast_arrays(*batch_d), b_cf, b_alpha, b_V])
         np.testing.assert_allclose(batch / scale[:, None], ref / scale[:, None], rtol=0,
                                    atol=1e-12)
         for j in range(n):
-            stage = float_rhs(body, limits, lambda t, s, c=float(demand[j]): c)
+            stage = float_rhs(body, limits, lambda t, th, om, c=float(alpha[j]): c, body)
             got = stage(0.0, *S[:5, j].tolist(), None if a is None else float(a[j]),
                         float(tau[j]))
             np.testing.assert_allclose(np.array(got) / scale, ref[:, j] / scale, rtol=0,
@@ -150,10 +158,12 @@ def test_flat_kernels_are_the_model_at_the_held_speed(name, C_f_max):
 
 
 class _Sharp(Straight):
-    """Demands beyond every bound (the physical branch's included)."""
+    """Demands beyond every bound: lean accelerations so large that Eq. (1) asks for ``C_f``
+    near ``1 / (l sin theta_v)`` (past the physical branch's bound) or has no physical root
+    (an infinite demand, clamped to ``C_f_max``)."""
 
-    def terrain_cf_law(self, ground):
-        return lambda t, st: 4.0 * math.sin(7.0 * st[0])
+    def lean_law(self, t, theta_v, omega_v):
+        return 1e5 * math.sin(7.0 * omega_v + 13.0 * theta_v)
 
 
 @pytest.mark.parametrize("ground", [Flat(), Plane(math.radians(25), 0.7, 1.0, -2.0, 3.0),
@@ -161,8 +171,9 @@ class _Sharp(Straight):
                          ids=["flat", "plane", "swell", "mogul height field"])
 def test_the_float_stepper_is_the_model(ground):
     """One stage of :class:`.terrain_one_figure.TerrainStage` (any ground, floats) against
-    :func:`.model.rhs` under the controller's terrain law, with the rate bound active and the
-    physical branch binding: to 1e-12 of each output's scale (``V_f`` for the foot's velocity,
+    :func:`.model.rhs` under the controller's steering (:func:`.model.steering`), with the rate
+    bound active and the physical branch binding: to 1e-12 of each output's scale (``V_f`` for
+    the foot's velocity,
     ``1 + V_f (|C_f| + |kappa_n|)`` for the heading rate, ``g + V_f^2 |kappa_n| + V V_f |C_f|``
     for the accelerations; ``V_f`` reaches 10 V on the physical bound)."""
     rng = np.random.default_rng(8)
@@ -171,10 +182,10 @@ def test_the_float_stepper_is_the_model(ground):
     hits = 0
     for ctl, limits in ((PhaseEllipse(BODY, W, TM, heading=-math.pi / 2), SKIER.limits),
                         (PhaseEllipse(BODY, W, TM), SKIER.limits),
-                        (Straight(BODY), SKIER.limits), (_Sharp(BODY), Limits())):
+                        (Straight(BODY), SKIER.limits), (_Sharp(BODY), Limits(C_f_max=10.0))):
         ctl.begin_run(limits)
         stage = TerrainStage(BODY, limits, res, ground, ctl).stage
-        law = ctl.terrain_cf_law(ground)
+        law = model.steering(ctl, ground)
         S = _random_states(rng, 200, box=(box[0] + 1, box[1] - 1, box[2] + 1, box[3] - 1))
         S[3] *= 0.5
         for st in S.T.tolist():

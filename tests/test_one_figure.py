@@ -11,21 +11,8 @@ import pytest
 from blender_turning.core import preset
 from blender_turning.core.controllers.ellipse import LAWS
 from blender_turning.core.controllers.heading_table import heading_table
-from blender_turning.core.physics.one_figure import scalar_inverse_cf
-from blender_turning.core.physics.dynamics import inverse_cf
 
 TWO_PI = 2 * math.pi
-
-
-def test_float_inverse_equals_eq_1():
-    body = preset("snowboarder").body
-    rng = np.random.default_rng(4)
-    th, alpha = rng.uniform(-1.4, 1.4, 500), rng.uniform(-60, 60, 500)
-    want = inverse_cf(body, th, alpha)
-    inverse = scalar_inverse_cf(body)
-    got = [inverse(float(a), float(b)) for a, b in zip(th, alpha)]
-    assert np.isinf(want).any()                          # unreachable demands are exercised
-    np.testing.assert_allclose(got, want, rtol=1e-12, atol=0)
 
 
 @pytest.mark.parametrize("law", sorted(LAWS))

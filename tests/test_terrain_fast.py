@@ -51,13 +51,21 @@ def test_off_the_grid_raises_on_floats_too():
         ROUGH.derivatives_one(-5.01, 3.0)
 
 
+def _relative_state(controller, ground, state, t):
+    """``state`` (6 rows) as the controller's lean law sees it at ``t``: 5 floats, the lean
+    taken from :func:`.model.equilibrium_lean`."""
+    x, y, d, th, om = (float(v) for v in state[:5])
+    fr = surface_frame(ground, x, y, d, controller.body.g)
+    return (x, y, d, th - model.equilibrium_lean(controller, fr, t), om)
+
+
 def _array_loop(figure, controller, ground, res, st, n, dt):
-    """The terrain loop through the array path: the controller's own ``relative_state`` and
-    ``terrain_cf_law``, and the state as a batch of one (shape (6, 1)) through
-    ``terrain_steer`` for the row and ``terrain_rk4_step`` for the step (numpy throughout)."""
+    """The terrain loop through the reference: the lean from :func:`.model.equilibrium_lean`
+    and :func:`.model.steering`, and the state as a batch of one (shape (6, 1)) through
+    :func:`.model.rhs` for the row and :func:`.model.rk4_step` for the step."""
     body, limits = figure.body, figure.limits
     controller.begin_run(limits)
-    law = controller.terrain_cf_law(ground)
+    law = model.steering(controller, ground)
 
     def law1(t, s):
         return np.atleast_1d(law(t, [float(v[0]) for v in s]))
@@ -68,7 +76,7 @@ def _array_loop(figure, controller, ground, res, st, n, dt):
         if st[5, 0] != V_now:
             V_now = float(st[5, 0])
             controller.follow_speed(V_now)
-        rel = controller.relative_state(ground, st[:, 0], t)
+        rel = _relative_state(controller, ground, st[:, 0], t)
         controller.begin_step(t, rel)
         _, cf, alpha, V_f, _, _ = model.rhs(body, limits, ground, law1(t, st), st,
                                                 anchor, dt, resistance=res)
@@ -113,27 +121,6 @@ def test_fused_run_is_the_array_loop(case):
         assert np.abs(fast.theta_v).max() > 0.2
     fr = surface_frame(ground, fast.x, fast.y, fast.theta_dir, BODY.g)
     np.testing.assert_allclose(fast.z, fr.z, atol=1e-12)
-
-
-class _LeanAboutHalfThePlumb(PhaseEllipse):
-    """A controller with an equilibrium lean of its own (the stepper asks it, with a frame)."""
-
-    def equilibrium_lean(self, frame, t):
-        return 0.5 * math.atan2(-frame.g_lateral, frame.g_normal)
-
-
-def test_a_controller_with_its_own_equilibrium_lean():
-    slope = ski_slope(length=400.0, width=200.0, cell=2.0)
-    res, dt, n, fall = RESISTANCE["skier"], 0.02, 300, -math.pi / 2
-    s0 = (*slalom_start(BODY, W, TM, fall, 40.0, 150.0), BODY.V_cm)
-
-    def make():
-        return _LeanAboutHalfThePlumb(BODY, W, TM, heading=fall + 0.5)
-
-    fast = simulate(SKIER, make(), (n - 1) * dt, dt, s0, ground=slope, resistance=res)
-    ref = _array_loop(SKIER, make(), slope, res, s0, n, dt)
-    np.testing.assert_allclose(fast.theta_v, ref[:, 3], rtol=0, atol=1e-12)   # measured 1e-14
-    np.testing.assert_allclose(fast.x, ref[:, 0], rtol=0, atol=1e-11)
 
 
 class _Recorder:
@@ -197,14 +184,13 @@ def test_the_ellipse_followed_is_feasible_at_the_current_speed():
     table allows, not one remembered from the faster speed."""
     ctl = PhaseEllipse(BODY, W, TM, heading=0.0)
     ctl.begin_run(SKIER.limits)
-    law = ctl.scalar_alpha_law()
-    state = (0.0, 0.0, 0.0, 0.1, 0.2)
     ctl.follow_speed(12.0)
-    fast = ctl.target(0.0)[1], law(0.0, state)
+    fast = ctl.target(0.0)[1], ctl.lean_law(0.0, 0.1, 0.2)
     ctl.follow_speed(5.2)
-    slow = ctl.target(0.0)[1], law(0.0, state)
+    slow = ctl.target(0.0)[1], ctl.lean_law(0.0, 0.1, 0.2)
     assert slow[0] == ctl.feasible_lean(W, TM) < fast[0] - math.radians(2)
-    assert slow[1] == ctl.desired_alpha(0.0, state) != fast[1]
+    # The float law keeps the ellipse per beta; the array law asks the table each time.
+    assert slow[1] == ctl.lean_law(0.0, np.array([0.1]), np.array([0.2]))[0] != fast[1]
 
 
 def test_a_body_at_another_speed_is_the_replaced_body():

@@ -11,7 +11,7 @@ import pytest
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
 from blender_turning.core.physics.params import Limits
 from blender_turning.core.ground.terrain import HeightField
-from blender_turning.core.physics.model import RESISTANCE, rhs as model_rhs
+from blender_turning.core.physics.model import RESISTANCE, rhs as model_rhs, steering as model_steering
 
 ROUGH = HeightField(np.random.default_rng(11).normal(0.0, 0.4, (9, 12)), -3.0, 1.0, 0.7)
 
@@ -128,8 +128,8 @@ def test_a_run_on_a_height_field_converges_as_the_step_shrinks(fine):
 
 def test_the_fine_run_is_the_adaptive_solution_of_the_model(fine):
     """The same 40 s by scipy's DOP853 at rtol = atol = 1e-10 from the model's right-hand side
-    (:func:`..core.physics.model.rhs` under the controller's terrain law, the reference the fused stepper
-    is held to): the dt = 0.00125 s run's lean is within 0.005 deg of it at every 0.02 s.
+    (:func:`..core.physics.model.rhs` under :func:`..core.physics.model.steering`, the
+    reference the fused stepper is held to): the dt = 0.00125 s run's lean is within 0.005 deg of it at every 0.02 s.
     Measured: 1.8e-4 deg (the dt = 0.02 s run: 0.024 deg); the reference itself moves 4.9e-4
     deg from rtol 1e-9 to 1e-10, so the bound is 10 times what the reference can resolve and
     28 times the measured gap.  The Catmull-Rom bicubic (C1): 0.041 deg, and DOP853 needed
@@ -139,7 +139,7 @@ def test_the_fine_run_is_the_adaptive_solution_of_the_model(fine):
 
     ctl = PhaseEllipse(SMOOTH.body, W, TM)
     ctl.begin_run(SMOOTH.limits)
-    law, res = ctl.terrain_cf_law(ROLLING), RESISTANCE["skier"]
+    law, res = model_steering(ctl, ROLLING), RESISTANCE["skier"]
 
     def rhs(t, y):
         st = y.tolist()

@@ -1,7 +1,8 @@
 """``crowd``: many figures in one shot from a crowd scene file (docs/crowds.md).
 
 Writes ``DIR/<figure>.csv`` per figure (the trajectory columns of docs/ARCHITECTURE.md Section 3,
-``t`` on the crowd's clock) and ``DIR/summary.json``.  Parametric figures run as batches here; path figures are planned one task
+``t`` on the crowd's clock) and ``DIR/summary.json``.  Parametric figures run as batches here; path
+figures are planned one task
 each (those in the crowd's ``priority``: one task per independent group) on ``--workers K``
 local processes or a Dask scheduler (``--scheduler ADDRESS``).  A figure
 that falls or finds no feasible plan is written up to there, listed in the summary, and makes

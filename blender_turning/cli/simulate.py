@@ -43,8 +43,8 @@ def register(sub):
                    help="initial lean rate, deg/s (default: on the ellipse, omega0 theta_max)")
     p.add_argument("--duration", type=float, default=20.0, help="s")
     p.add_argument("--dt", type=float, default=DEFAULT_DT,
-                   help=f"integration step, s ({RANGES['dt'].lo:g}-{RANGES['dt'].hi:g}; BENCHMARKS.md: "
-                        "accuracy per step)")
+                   help=f"integration step, s ({RANGES['dt'].lo:g}-{RANGES['dt'].hi:g}; "
+                        "BENCHMARKS.md: accuracy per step)")
     p.add_argument("--fps", type=float, help="resample to this frame rate (24, 25, 30, 60 ...)")
     p.add_argument("--out", help="trajectory CSV to write")
     p.add_argument("--plot", help="PNG of the track, lean, curvature and phase diagram")

@@ -2,8 +2,8 @@
 
 ``--slope-deg S --downhill-deg D`` is the plane (``D`` the direction of steepest descent, deg
 CCW from +x); ``--ground FILE`` any ground from a file instead (docs/TERRAIN.md, "The ground
-from a file"): a scene's ``terrain`` table as JSON (:mod:`..core.ground.scene_terrain`; a whole scene
-file gives its ``terrain``) or a ``.npy`` height grid with ``--ground-cell`` and
+from a file"): a scene's ``terrain`` table as JSON (:mod:`..core.ground.scene_terrain`; a whole
+scene file gives its ``terrain``) or a ``.npy`` height grid with ``--ground-cell`` and
 ``--ground-origin``; ``--start X Y`` where the foot starts.
 ``--friction MU --drag-area CDA --air-density RHO`` what slows the figure;
 ``--target-speed V`` brakes by turning across the hill (docs/TERRAIN.md Section 6) and, on
@@ -166,7 +166,8 @@ def start_point(args, ground) -> tuple:
 
 def read_ground(args, sport: str):
     """``(ground, resistance)`` of ``--ground FILE``: a ``.json`` file holding a ``terrain``
-    table (or a scene with one), read as a scene's (:func:`..core.ground.scene_terrain.read_terrain`:
+    table (or a scene with one), read as a scene's
+    (:func:`..core.ground.scene_terrain.read_terrain`:
     the same fields, ranges and messages; a ``file`` is relative to the JSON file), or a
     ``.npy`` grid of heights at ``--ground-cell`` spacing from ``--ground-origin``.  Every
     problem is a one-line ``ValueError`` naming ``--ground`` (or the flag at fault)."""

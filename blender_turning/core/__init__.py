@@ -9,6 +9,7 @@ from .controllers.braking import TargetSpeed
 from .physics.trajectory import COLUMNS, Trajectory
 
 __all__ = ["CONTROLLERS", "OpenLoop", "PhaseEllipse", "Straight", "TargetSpeed", "FellOver",
-           "RunEnded", "TurningError", "Flat", "Plane", "HeightField", "Resistance", "RESISTANCE", "PRESETS", "BodyParams", "Figure", "Limits", "preset", "Schedule", "TurnSchedule",
+           "RunEnded", "TurningError", "Flat", "Plane", "HeightField", "Resistance", "RESISTANCE",
+           "PRESETS", "BodyParams", "Figure", "Limits", "preset", "Schedule", "TurnSchedule",
            "read_schedule_csv", "DEFAULT_DT", "run", "simulate", "slalom_start", "COLUMNS",
            "Trajectory"]

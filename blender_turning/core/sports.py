@@ -28,7 +28,8 @@ __all__ = ["Sport", "Retarget", "SPORTS", "register_sport", "unregister_sport", 
 
 @dataclass(frozen=True, eq=False)
 class Retarget:
-    """How the sport's motion goes onto a user's own armature (:mod:`..mapping.retarget.retarget`)."""
+    """How the sport's motion goes onto a user's own armature
+    (:mod:`..mapping.retarget.retarget`)."""
 
     attach: dict
     """Equipment bone of the built-in rig -> the joint it is rigid with on the user's rig."""

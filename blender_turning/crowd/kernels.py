@@ -1,7 +1,8 @@
 """The parametric figures of a crowd task, on the cheaper of the two kernels of the model.
 
 :func:`blender_turning.core.run` steps the figures of Section 5 either one at a time on Python
-floats (:mod:`..core.physics.one_figure`) or as one numpy batch (:mod:`..core.physics.dynamics`); both are the
+floats (:mod:`..core.physics.one_figure`) or as one numpy batch (:mod:`..core.physics.dynamics`);
+both are the
 same model, held to its reference right-hand side by ``tests/test_model_kernels.py``.  A batch
 pays numpy's dispatch once per step for all its figures, floats pay the arithmetic per figure:
 measured on the project's 2-core machine (60 s at dt = 0.02 s, CPU s), a batch costs about
@@ -35,8 +36,8 @@ def run_turns(dt: float, duration: float, figures: tuple, kernel: str | None = N
     and limits) each for the crowd's ``duration`` less its time offset, on its own clock.
 
     ``kernel``: ``"floats"``, ``"batch"`` or ``None`` (:func:`kernel_for` the count).  Returns
-    one ``(columns, fell_at)`` per figure: the columns of :func:`~..core.physics.simulate.run` (shape
-    ``(n,)``, up to the figure's span or its fall) and the time of the fall on its own clock
+    one ``(columns, fell_at)`` per figure: the columns of :func:`~..core.physics.simulate.run`
+    (shape ``(n,)``, up to the figure's span or its fall) and the time of the fall on its own clock
     (``None``: it did not fall within its span)."""
     kernel = kernel_for(len(figures)) if kernel is None else kernel
     if kernel not in KERNELS:

@@ -14,7 +14,8 @@ Every figure has its own clock: it starts at ``time_offset`` seconds of the crow
 its trajectory is reported on the crowd's clock (``t = time_offset + own t``).
 
 Priority planning: the figures a crowd's ``priority`` names plan in that order, each
-path figure around the bodies of those before it (:mod:`..core.course.moving`), keeping ``clearance``.
+path figure around the bodies of those before it (:mod:`..core.course.moving`), keeping
+``clearance``.
 """
 from __future__ import annotations
 
@@ -34,8 +35,8 @@ __all__ = ["Turns", "FollowPath", "CrowdFigure", "Crowd", "FIRST_TURNS", "BODY_C
 FIRST_TURNS = ("left", "right")
 
 #: Distance kept between two figures' foot-CM segments in priority planning, m: each figure's
-#: half width with its equipment (the obstacles' :data:`..core.course.follow_problem.DEFAULT_CLEARANCE`)
-#: on either side of the gap.
+#: half width with its equipment (the obstacles'
+#: :data:`..core.course.follow_problem.DEFAULT_CLEARANCE`) on either side of the gap.
 BODY_CLEARANCE = 2.0 * DEFAULT_CLEARANCE
 
 

@@ -1,6 +1,6 @@
 """Priority planning: the path figures a crowd's ``priority`` names plan in that
-order, each around the bodies of those before it (moving obstacles: :mod:`..core.course.moving`), and
-groups of figures that cannot see each other plan in parallel.
+order, each around the bodies of those before it (moving obstacles: :mod:`..core.course.moving`),
+and groups of figures that cannot see each other plan in parallel.
 
 The result is defined as planning one figure after another, each with every body before it;
 the groups only make it faster, and they give the same result bit for bit:

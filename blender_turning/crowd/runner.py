@@ -1,7 +1,8 @@
 """Running a crowd: parametric figures in batches, path figures one task each, on any executor.
 
 The work is split into tasks the same way whatever runs them: one task per group of
-:class:`~.model.Turns` figures that share a body and limits (:func:`blender_turning.core.run` on the cheaper kernel for their number, :mod:`.kernels`:
+:class:`~.model.Turns` figures that share a body and limits (:func:`blender_turning.core.run` on the
+cheaper kernel for their number, :mod:`.kernels`:
 per-figure ellipses, a figure that falls stops alone), and one
 task per :class:`~.model.FollowPath` figure (the planner of Section 6).  Tasks run in this
 process (``workers=1``), on a :class:`concurrent.futures.ProcessPoolExecutor` (``workers=K``),
@@ -45,7 +46,8 @@ class FigureResult:
     figure's ``time_offset``) and ends at the fall or where planning failed; ``status`` is
     ``"ok"``, ``"fell"``, ``"infeasible"`` (no feasible plan), ``"failed"`` (another domain
     error of the planner, e.g. the path not finished in time; ``message`` says when and
-    where) or ``"lost"`` (the worker running it died; ``keep_going`` of :func:`run_crowd`).  ``cpu_time``:
+    where) or ``"lost"`` (the worker running it died; ``keep_going`` of :func:`run_crowd`).
+    ``cpu_time``:
     CPU seconds of the task that computed it (shared by a batch), ``plan`` the planner's totals
     (path figures).  ``region``: for a figure planned by priority, the regions its searches
     looked at for other figures' bodies, rows ``(x, y, radius, t_lo, t_hi)`` on its own clock

@@ -23,7 +23,8 @@ STATE_PROPS = {"turn_phase": "phi", "turn_lean": "theta_v", "turn_curvature": "C
 
 @dataclass(frozen=True)
 class BoneChannels:
-    """Animated channels of one pose bone: ``location`` (n, 3) and/or ``rotation`` (n, 4) w,x,y,z."""
+    """Animated channels of one pose bone: ``location`` (n, 3) and/or ``rotation`` (n, 4)
+    w,x,y,z."""
 
     location: np.ndarray | None = None
     rotation: np.ndarray | None = None

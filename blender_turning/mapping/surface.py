@@ -5,7 +5,8 @@ The object's origin is the foot point ``(x, y, z)`` (``z`` the trajectory's grou
 flat ground the object only turns about +Z by ``theta_dir - 90 deg`` (the rig faces +Y).  On
 terrain it also tilts with the surface: its +Z is the surface normal ``n`` at the foot and its +Y
 the heading lifted into the surface, the core's track tangent
-``t = (cos d, sin d, p) / sqrt(1 + p^2)`` with ``t . n = 0`` (:func:`..core.ground.terrain.surface_frame`).
+``t = (cos d, sin d, p) / sqrt(1 + p^2)`` with ``t . n = 0``
+(:func:`..core.ground.terrain.surface_frame`).
 Everything the sport mappings pose in the armature's own space then lies in the local surface:
 the skis, the board and the wheels sit on the armature's XY plane, and the body's lean
 ``theta_v``, which the mappings apply about the armature's +Y, is the model's lean from the

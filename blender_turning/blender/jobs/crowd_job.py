@@ -55,7 +55,8 @@ from .workers import PumpedExecutor, worker_pool
 
 def figure_scene(name: str, job) -> Scene:
     """The core scene of a prepared Follow Path job (:func:`.follow_scene.prepare`): the same
-    figure, path, obstacles, planner settings, start (:func:`~..core.course.follow_problem.start_state`
+    figure, path, obstacles, planner settings, start
+    (:func:`~..core.course.follow_problem.start_state`
     of the path) and problem, so its plan is the one :meth:`.follow_job.FollowJob.run` makes."""
     setup = job.setup
     return Scene(name, setup.figure, setup.path, setup.obstacles, start_state(setup.path), 0.0,

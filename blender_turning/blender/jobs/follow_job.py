@@ -26,7 +26,8 @@ class FollowJob:
     ``control`` are the path's Bezier control points (3 k + 1, 2) in world metres, ``footprints``
     a list of ``(name, polygon (k, 2))``, ``clearance`` the distance kept from them (m).  The
     problem, its run-out, time limit, start state and end test come from the core's one builder
-    (:class:`~..core.course.follow_problem.FollowSetup`), as for a scene file; on terrain (``ground``, a
+    (:class:`~..core.course.follow_problem.FollowSetup`), as for a scene file; on terrain
+    (``ground``, a
     core surface, and ``resistance``; ``follow_ground.py``) it is the terrain problem, braking to
     ``speed_cap`` (:class:`~..core.planner.speed_cap.SpeedCap`) when given.
     """

@@ -1,8 +1,8 @@
 """What the model changed, said to the user: the lean a bake reached when the figure's bounds
 kept it below the asked one (the core's :class:`~..core.controllers.feasible.FeasibleTurn`
 report), and how far a Follow Path run strayed from its drawn path (the core's
-:func:`~..core.course.path.path_deviation`).  Bake Turns, Follow Path (one figure and several) and the
-Turns panel all take their words from here; nothing is recomputed in an operator.
+:func:`~..core.course.path.path_deviation`).  Bake Turns, Follow Path (one figure and several) and
+the Turns panel all take their words from here; nothing is recomputed in an operator.
 """
 from __future__ import annotations
 
@@ -64,8 +64,8 @@ def panel_turn(obj, scene) -> FeasibleTurn | None:
 
 
 def panel_text(turn: FeasibleTurn) -> str:
-    return (f"Leans {math.degrees(turn.lean):.1f}\u00b0, not {math.degrees(turn.commanded_lean):.1f}"
-            f"\u00b0: limited by {turn.bound}")
+    return (f"Leans {math.degrees(turn.lean):.1f}\u00b0, "
+            f"not {math.degrees(turn.commanded_lean):.1f}\u00b0: limited by {turn.bound}")
 
 
 def warn_distance(op) -> float:

@@ -1,7 +1,8 @@
 """``turning.bake_turns`` and ``turning.clear_bake``: the parametric controller (Section 5) for
 every selected figure over a frame range, and its removal.
 
-A bake computes every figure first (:class:`..jobs.bake_job.BakeJob`) and writes only when all succeeded: a
+A bake computes every figure first (:class:`..jobs.bake_job.BakeJob`) and writes only when all
+succeeded: a
 failure or Esc leaves the scene as it was.  With several figures and a window the operator is
 modal (one figure per timer tick, a progress bar, Esc cancels between figures).
 """

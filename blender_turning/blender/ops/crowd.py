@@ -3,7 +3,8 @@ in the Add menu (Shift+A > Turning Figure > Add Crowd) and the Crowd panel.
 
 The formation is the core's, by its record (:data:`..crowd.registry.FORMATIONS`: follow the
 leader, synchronised, peloton, and any registered later), computed before anything is made, so
-bad input is reported and the scene stays as it was.  The figures are linked duplicates of the template (:mod:`.crowd_scene`) in a new "Crowd"
+bad input is reported and the scene stays as it was.  The figures are linked duplicates of the
+template (:mod:`.crowd_scene`) in a new "Crowd"
 collection, selected, so Bake Turns (or Follow Path) then does the whole crowd.
 """
 from __future__ import annotations
@@ -66,8 +67,8 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
                                 unit="LENGTH",
                                 description="Distance between successive followers, or rows "
                                             "of a peloton (m)")
-    lateral: FloatProperty(name="Lateral Offset", default=0.0, **_r("lateral_m", soft_min=-10.0, soft_max=10.0),
-                           unit="LENGTH",
+    lateral: FloatProperty(name="Lateral Offset", default=0.0,
+                           **_r("lateral_m", soft_min=-10.0, soft_max=10.0), unit="LENGTH",
                            description="How far to the left of the leader's track the "
                                        "followers go (m; negative: right)")
     alternate: BoolProperty(name="Alternate Sides", default=False,

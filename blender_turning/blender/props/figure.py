@@ -166,8 +166,8 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
                                description="Objects whose ground footprints the figure steers "
                                            "around (Follow Path)")
     plan_curvature_rate: FloatProperty(
-        name="Planner Curvature Rate (1/(m s))", default=0.0, **_range("plan_curvature_rate"), soft_min=0.0,
-        soft_max=2.0, options=_STATIC,
+        name="Planner Curvature Rate (1/(m s))", default=0.0, **_range("plan_curvature_rate"),
+        soft_min=0.0, soft_max=2.0, options=_STATIC,
         description="How fast the path planner may change the steering (dC_f/dt, 1/(m s)); 0 "
                     "uses Max Curvature Rate.  The sport presets set a gentler rate than the "
                     "figure's limit")

@@ -59,7 +59,8 @@ def make_terrain(bpy, name, spec, material):
 
 def _draped_strip(bpy, name, ground_obj, x, y, half_width, lift, material, rgba, offsets=(0.0,)):
     """Ribbons of quads along ``(x, y)`` (n,), each ``offsets`` metres to the left of it and
-    ``half_width`` (a number or (n,)) either side of that, every vertex a ray cast onto ``ground_obj`` lifted by
+    ``half_width`` (a number or (n,)) either side of that, every vertex a ray cast onto
+    ``ground_obj`` lifted by
     ``lift``: they lie on the surface, not on a plane.  One mesh; faces in order along the path
     (all ribbons' k-th quads together)."""
     from mathutils.bvhtree import BVHTree

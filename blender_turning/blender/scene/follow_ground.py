@@ -13,7 +13,8 @@ Ground mesh (``turning.ground``).
 - Obstacles stay the xy footprints of their objects (``scene_adapters.obstacle_footprints``);
   the Ground mesh itself is never one (it is the figure's own, ``follow_scene.own_objects``).
 - The planner runs :class:`..core.planner.Problem` on the ground
-  (:mod:`..core.planner.terrain_problem`): the speed is a state, starting at the Speed setting at the scene's first frame, with the figure's Slope
+  (:mod:`..core.planner.terrain_problem`): the speed is a state, starting at the Speed setting at
+  the scene's first frame, with the figure's Slope
   Friction, Drag Area and Air Density (``turning.terrain``).  *Target Speed* is not used: it
   steers Bake Turns' turns across the hill, while on a path the drawn line sets where the figure
   goes, and so its speed.

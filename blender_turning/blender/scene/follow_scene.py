@@ -36,8 +36,8 @@ def check_start_clear(control, footprints, collection) -> None:
         if gap <= DEFAULT_CLEARANCE:
             raise SceneInputError(
                 f"the path starts {'inside' if gap < 0 else f'{gap:.2f} m from'} obstacle "
-                f"{name!r} (collection {collection.name!r}; the plan keeps {DEFAULT_CLEARANCE} m from "
-                "every obstacle): move the path's first point or the obstacle, or take the "
+                f"{name!r} (collection {collection.name!r}; the plan keeps {DEFAULT_CLEARANCE} m "
+                "from every obstacle): move the path's first point or the obstacle, or take the "
                 "object out of the collection")
 
 

@@ -170,7 +170,8 @@ def read_ground(obj, depsgraph, cell: float | None = None) -> MeshGround:
     2 cm at half), coarser where the ground's extent would need more than :data:`MAX_SAMPLES`
     (:func:`_default_cell`).  A Ground not in the scene, part of a figure, animated, with a
     vertex that is not finite or strays far from the rest, or reaching past 100 km from the
-    origin is refused, naming the object (and the vertex).  A grid mesh's samples are computed as a run visits them
+    origin is refused, naming the object (and the vertex).  A grid mesh's samples are computed as a
+    run visits them
     (:class:`..core.ground.terrain.LazyHeightField`); any other mesh is rasterized whole.  Grid
     points the mesh does not cover take the height of the nearest covered point in their row
     (then column); raises ``ValueError`` naming the object when it has no faces."""

@@ -121,7 +121,8 @@ def figure_name(settings) -> str:
     if name not in SPORT_PRESETS or SPORT_PRESETS[name].sport != sport:
         raise SceneInputError(
             f"Equipment Preset (turning.equipment.preset) = {name!r} is not a preset of the "
-            f"{sport} ({', '.join(n for n, r in SPORT_PRESETS.items() if r.sport == sport) or 'none'}"
+            f"{sport} ("
+            f"{', '.join(n for n, r in SPORT_PRESETS.items() if r.sport == sport) or 'none'}"
             "; empty: the sport's own)")
     return name
 

@@ -4,8 +4,8 @@ through Blender's preset system.
 The Sport Presets menu lists every registered sport first (its record's body, limits and
 planner rate: nothing is stored in a file, so a sport registered by a script is there too), then
 the sports' own presets with their equipment (the racers, the carver: core/equipment.py; each
-applies to a figure of its sport), then the presets users save with the "+" button (preset scripts in their ``presets/turning_figure/``,
-next to Blender's other presets).
+applies to a figure of its sport), then the presets users save with the "+" button (preset scripts
+in their ``presets/turning_figure/``, next to Blender's other presets).
 """
 from __future__ import annotations
 

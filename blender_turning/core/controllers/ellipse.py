@@ -53,7 +53,6 @@ import numpy as np
 
 from ..physics.dynamics import OMEGA_V, THETA_DIR, THETA_V
 from .heading_table import BETA_MAX, BETA_MIN, heading_table, linear_beta
-from ..physics.one_figure import scalar_inverse_cf
 from ..physics.params import BodyParams, Limits
 from .schedule import Schedule
 from ..physics.xp import Scalar, backend
@@ -64,7 +63,8 @@ from .feasible import STEER_BETAS, FeasibleTurn, feasible_turns
 
 GAIN = 3.0
 SPEED_GRID = 0.5
-"""m/s: a speed that varies is followed by feasibility tables at multiples of this (rounded down)."""
+"""m/s: a speed that varies is followed by feasibility tables at multiples of this (rounded
+down)."""
 
 
 def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=0.05):
@@ -103,7 +103,8 @@ class PhaseEllipse(Controller):
     beta): twice the peak of its own ``alpha_v``.  ``law``: ``"smooth"`` (the module docstring)
     or ``"paper"`` (Section 5.1 as written, :mod:`.ellipse_paper`).  ``directional``: how beta is
     found, ``"exact"`` (the closed form of :mod:`..heading_table`) or ``"linear"`` (the paper's
-    Eqs. 11/12).  ``limits``: the figure's bounds; the ellipse followed is kept feasible for them (:mod:`.feasible`).  ``None``
+    Eqs. 11/12).  ``limits``: the figure's bounds; the ellipse followed is kept feasible for them
+    (:mod:`.feasible`).  ``None``
     takes them from the run (:meth:`begin_run`).  :attr:`achieved` reports the turn followed.
     """
 
@@ -115,8 +116,8 @@ class PhaseEllipse(Controller):
             raise ValueError(f"directional = {directional!r} is not one of exact, linear")
         if law not in LAWS:
             raise ValueError(f"law = {law!r} is not one of {', '.join(LAWS)}")
-        self.omega0 = Schedule.of(omega0)
-        self.theta_max = Schedule.of(theta_max)
+        self._omega0 = Schedule.of(omega0)
+        self._theta_max = Schedule.of(theta_max)
         self.heading = None if heading is None else Schedule.of(heading)
         self.alpha_max = alpha_max
         self.origin_radius = origin_radius
@@ -131,11 +132,39 @@ class PhaseEllipse(Controller):
         self._side = None           # +1 during a left half-turn, -1 right, per figure
         self._planned = False       # the coming half-turn's beta was set in this step
         self._t_prev = None
-        self._memo = {}
+        self._forget()
         self._rates = {}            # mean_heading_rate at the nominal speed, per table and turn
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
         self._steer_betas = STEER_BETAS
+
+    @property
+    def omega0(self) -> Schedule:
+        """The commanded turn frequency over time, rad/s."""
+        return self._omega0
+
+    @omega0.setter
+    def omega0(self, schedule: Schedule) -> None:
+        self._omega0 = schedule
+        self._forget()
+
+    @property
+    def theta_max(self) -> Schedule:
+        """The commanded sharpness (the ellipse's lean) over time, rad."""
+        return self._theta_max
+
+    @theta_max.setter
+    def theta_max(self, schedule: Schedule) -> None:
+        self._theta_max = schedule
+        self._forget()
+
+    def _forget(self) -> None:
+        """Forget the ellipses made feasible (:meth:`_ellipse`): the table, the room or a
+        schedule changed.  With both schedules constant (and floats) the ellipse depends on
+        beta alone and :meth:`lean_law` keeps it per beta (``_fixed``)."""
+        self._memo = {}
+        const = (self._omega0.constant_value, self._theta_max.constant_value)
+        self._fixed = {} if all(type(v) is float for v in const) else None
 
     @property
     def steer_betas(self) -> tuple:
@@ -147,7 +176,7 @@ class PhaseEllipse(Controller):
     @steer_betas.setter
     def steer_betas(self, betas) -> None:
         self._steer_betas = tuple(betas)
-        self._memo = {}
+        self._forget()
         self._rates = {}
 
     def begin_run(self, limits: Limits) -> None:
@@ -158,7 +187,7 @@ class PhaseEllipse(Controller):
             self._table_speed = None
         self._bp = self._bn = self._side = self._t_prev = None
         self._planned = False
-        self._memo = {}
+        self._forget()
         self.achieved = None
 
     def follow_speed(self, V_cm: float) -> BodyParams:
@@ -174,7 +203,7 @@ class PhaseEllipse(Controller):
                 self._feasible = feasible_turns(replace(self.nominal_body, V_cm=grid),
                                                 self._limits)
                 self._table_speed = grid
-                self._memo = {}                 # the ellipses made feasible by the old table
+                self._forget()                  # the ellipses made feasible by the old table
         return body
 
     # -- the feasible ellipse -------------------------------------------------------------------
@@ -395,53 +424,40 @@ class PhaseEllipse(Controller):
             return self._bp if theta_v >= 0.0 else self._bn
         return np.where(theta_v >= 0, self._bp, self._bn)
 
+    def _half_turn(self, t, b):
+        """:meth:`_ellipse` of the schedules at ``t`` for beta ``b``, kept per beta while both
+        schedules are constant (``_fixed``, :meth:`_forget`)."""
+        e = self._ellipse(self._omega0(t), self._theta_max(t), b)
+        fixed = self._fixed
+        if fixed is not None and type(b) is float:
+            if len(fixed) > 16:
+                fixed.clear()
+            fixed[b] = e
+        return e
+
     def target(self, t):
-        b = 1.0 if self._side is None else self._b(self._side)
-        tm, w, _ = self._ellipse(self.omega0(t), self.theta_max(t), b)
-        return w, tm
+        side = self._side
+        b = 1.0 if side is None else self._b(side)
+        fixed = self._fixed
+        e = fixed.get(b) if fixed is not None and type(b) is float else None
+        if e is None:
+            e = self._half_turn(t, b)
+        return e[1], e[0]
 
-    def scalar_cf_law(self):
-        """:meth:`desired_cf` for one figure on floats: :meth:`scalar_alpha_law` through
-        Eq. (1)."""
-        return self._float_law(scalar_inverse_cf(self.body))
-
-    def scalar_alpha_law(self):
-        """:meth:`desired_alpha` for one figure on floats (:func:`ellipse_alpha_one` or the
-        paper's), with constant schedules read once."""
-        return self._float_law(None)
-
-    def _float_law(self, inverse):
-        """The float law, ending in ``inverse(theta_v, alpha_v)`` (Eq. 1) unless ``None``."""
-        ellipse, alpha = self._ellipse, self._alpha_one
-        w_s, tm_s, r0 = self.omega0, self.theta_max, self.origin_radius
-        wc, tc = w_s.constant_value, tm_s.constant_value
-        fixed = {}                     # constant schedules: the ellipse per beta, computed once
-        table = [self._feasible]       # ... per feasibility table (follow_speed changes it)
-
-        def law(t, state):
-            th = state[3]
-            b = (self._bp if th >= 0.0 else self._bn) if self._bp is not None else 1.0
-            if wc is not None and tc is not None:
-                if self._feasible is not table[0]:
-                    fixed.clear()
-                    table[0] = self._feasible
-                e = fixed.get(b)
-                if e is None:
-                    if len(fixed) > 8:
-                        fixed.clear()
-                    e = fixed[b] = ellipse(wc, tc, b)
-            else:
-                e = ellipse(wc if wc is not None else w_s(t), tc if tc is not None else tm_s(t), b)
-            a = alpha(th, state[4], e[0], e[1], e[2], r0)
-            return a if inverse is None else inverse(th, a)
-
-        return law
-
-    def desired_alpha(self, t, state):
-        th = state[THETA_V]
-        tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t), self._b(th))
-        return self._alpha(th, state[OMEGA_V], tm, w, amax, self.origin_radius)
-
+    def lean_law(self, t, theta_v, omega_v):
+        """The law of the module docstring about the half-turn's ellipse (:meth:`_ellipse`; beta
+        by the side of the lean, :meth:`_b`); one figure on floats (:func:`ellipse_alpha_one`
+        or the paper's)."""
+        if type(theta_v) is float:
+            bp = self._bp
+            b = 1.0 if bp is None else bp if theta_v >= 0.0 else self._bn
+            fixed = self._fixed
+            e = fixed.get(b) if fixed is not None and type(b) is float else None
+            if e is None:
+                e = self._half_turn(t, b)
+            return self._alpha_one(theta_v, omega_v, e[0], e[1], e[2], self.origin_radius)
+        tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t), self._b(theta_v))
+        return self._alpha(theta_v, omega_v, tm, w, amax, self.origin_radius)
 
 register_controller(ControllerType(
     name="ellipse", label="Phase Ellipse",

@@ -159,7 +159,8 @@ class HeadingTable:
 
 
 def linear_beta(body: BodyParams, theta_max, omega0, dtheta_h):
-    """Eqs. (11)/(12): ``beta = sqrt(1 + dtheta_h V_f omega0 / (2 g theta_max))``, with ``V_f ~ V_cm``.
+    """Eqs. (11)/(12): ``beta = sqrt(1 + dtheta_h V_f omega0 / (2 g theta_max))``, with
+    ``V_f ~ V_cm``.
 
     ``dtheta_h`` is the extra heading change wanted over the half-turn in the turn's own sense
     (positive = more turn), which covers both equations.  Clamped to [BETA_MIN, BETA_MAX].

@@ -1,4 +1,5 @@
-"""Open-loop periodic turning (Section 4, Fig. 4): ``alpha_v = -omega0^2 theta_max sin(omega0 t)``."""
+"""Open-loop periodic turning (Section 4, Fig. 4):
+``alpha_v = -omega0^2 theta_max sin(omega0 t)``."""
 from __future__ import annotations
 
 from ..physics.params import BodyParams
@@ -25,7 +26,7 @@ class OpenLoop(Controller):
             self._phi += 0.5 * (self.omega0(self._t) + self.omega0(t)) * (t - self._t)
         self._t = t
 
-    def desired_alpha(self, t, state):
+    def lean_law(self, t, theta_v, omega_v):
         tau = t - self._t
         w = self.omega0(t)
         phi = self._phi + 0.5 * (self.omega0(self._t) + w) * tau

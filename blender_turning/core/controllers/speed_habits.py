@@ -1,7 +1,7 @@
 """How a preset's figure holds its speed on a slope (docs/skidding.md Section 8): the style
 (``wedge``, ``skid``) and the target speed it skis at unless told otherwise.  The beginner and
-the recreational skier (``mapping/sports/skier_presets.py``) have one; the command line's ``--style``
-and ``--target-speed``, and Blender's Speed Control settings, start from it."""
+the recreational skier (``mapping/sports/skier_presets.py``) have one; the command line's
+``--style`` and ``--target-speed``, and Blender's Speed Control settings, start from it."""
 from __future__ import annotations
 
 from dataclasses import dataclass

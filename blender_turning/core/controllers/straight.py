@@ -19,17 +19,8 @@ class Straight(Controller):
         super().__init__(body)
         self.omega0, self.theta_max = Schedule.of(omega0), Schedule.of(theta_max)
 
-    def desired_alpha(self, t, state):
-        raise NotImplementedError("Straight demands a curvature (0), not a lean acceleration")
-
-    def desired_cf(self, t, state):
-        return 0.0 * state[3]
-
-    def scalar_cf_law(self):
-        return lambda t, state: 0.0
-
-    def terrain_cf_law(self, ground):
-        return lambda t, state: 0.0 * state[3]
+    lean_law = None
+    """No lean law: the model steers ``C_f = 0`` (:class:`.base.Controller`)."""
 
     def target(self, t):
         return self.omega0(t), self.theta_max(t)

@@ -1,6 +1,6 @@
 """One builder of the path-following problem (Section 6) for every caller: the CLI's scene files
-(:mod:`.scene`) and Blender's Follow Path (``blender/jobs/follow_job.py``) build the same problem from
-the same inputs, with the same run-out, time limit, start state and end test.
+(:mod:`.scene`) and Blender's Follow Path (``blender/jobs/follow_job.py``) build the same problem
+from the same inputs, with the same run-out, time limit, start state and end test.
 
 - Run-out: the planner sees the path extended by a straight run-out along its end direction,
   by default one horizon's reach (:meth:`.planner.Problem.reach`), so it does not turn back

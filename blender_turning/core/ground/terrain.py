@@ -270,8 +270,9 @@ class LazyHeightField(HeightField):
     rows[:, None] cell)`` (data indices in range), elementwise (a point's height must not
     depend on the others asked with it).
 
-    A Ground mesh read in Blender (:func:`..blender.scene.ground.read_ground`) is one: a 200 m x 200 m
-    mesh at 0.25 m is 641,601 samples, of which a minute's run visits a few percent.  Reading
+    A Ground mesh read in Blender (:func:`..blender.scene.ground.read_ground`) is one: a
+    200 m x 200 m mesh at 0.25 m is 641,601 samples, of which a minute's run visits a few
+    percent.  Reading
     :attr:`_h` (all of it: the planner's slope bound) computes the rest; a pickled one (the crowd's
     worker processes) travels as the plain :class:`HeightField` of all samples."""
 

@@ -52,6 +52,18 @@ def inverse_cf(body: BodyParams, theta_v, alpha_v, sin_t=None, cos_t=None):
     return xp.where(ok, k / xp.where(ok, den, 1.0), xp.copysign(math.inf, k))
 
 
+def steering(controller):
+    """``f(t, state) -> C_f`` on flat ground (floats or arrays): the controller's lean law
+    (:meth:`~.controllers.base.Controller.lean_law`, asked about the lean from upright, flat
+    ground's equilibrium lean) turned into ``C_f`` by Eq. (1) with the controller's body
+    (:func:`inverse_cf`); ``C_f = 0`` for a controller without a lean law."""
+    law = controller.lean_law
+    if law is None:
+        return lambda t, state: 0.0 * state[THETA_V]
+    return lambda t, state: inverse_cf(controller.body, state[THETA_V],
+                                       law(t, state[THETA_V], state[OMEGA_V]))
+
+
 def physical_cf_limit(body: BodyParams, sin_t, xp=None):
     """Largest ``C_f`` toward the lean keeping ``1 - C_f l sin th >= 1 - PHYSICAL_MARGIN``."""
     xp = xp or backend(sin_t)
@@ -73,7 +85,8 @@ def bound_cf(body: BodyParams, limits: Limits, C_f, sin_t, anchor=None, tau=0.0,
 
 
 def foot_speed(body: BodyParams, theta_v, C_f, sin_t=None, V_cm=None):
-    """Eq. (21): ``V_f = V_cm / (1 - C_f l sin theta_v)``, m/s (``V_cm`` overrides ``body.V_cm``)."""
+    """Eq. (21): ``V_f = V_cm / (1 - C_f l sin theta_v)``, m/s (``V_cm`` overrides
+    ``body.V_cm``)."""
     s = backend(theta_v).sin(theta_v) if sin_t is None else sin_t
     return (body.V_cm if V_cm is None else V_cm) / (1.0 - C_f * body.l * s)
 
@@ -115,12 +128,12 @@ def steer(body: BodyParams, limits: Limits, C_f, state, anchor, tau, V_cm=None):
     return (V_f * xp.cos(d), V_f * xp.sin(d), V_f * cf, state[OMEGA_V], alpha), cf, alpha, V_f
 
 
-def stage(body: BodyParams, limits: Limits, desired_cf, t, state, anchor, tau):
-    """:func:`steer` under a steering law: ``desired_cf(t, state)`` is the demanded curvature."""
-    return steer(body, limits, desired_cf(t, state), state, anchor, tau)
+def stage(body: BodyParams, limits: Limits, cf_law, t, state, anchor, tau):
+    """:func:`steer` under a steering law: ``cf_law(t, state)`` is the demanded curvature."""
+    return steer(body, limits, cf_law(t, state), state, anchor, tau)
 
 
-def rk4_step(body: BodyParams, limits: Limits, state, t, dt, desired_cf, anchor, k1=None):
+def rk4_step(body: BodyParams, limits: Limits, state, t, dt, cf_law, anchor, k1=None):
     """One classical Runge-Kutta step of a ``(5, n)`` array (one figure on floats:
     :func:`.one_figure.integrate`, the same step fused).
 
@@ -130,11 +143,11 @@ def rk4_step(body: BodyParams, limits: Limits, state, t, dt, desired_cf, anchor,
     """
     h = 0.5 * dt
     if k1 is None:
-        k1 = stage(body, limits, desired_cf, t, state, anchor, 0.0)[0]
+        k1 = stage(body, limits, cf_law, t, state, anchor, 0.0)[0]
     k1 = np.asarray(k1)
-    k2 = np.asarray(stage(body, limits, desired_cf, t + h, state + h * k1, anchor, h)[0])
-    k3 = np.asarray(stage(body, limits, desired_cf, t + h, state + h * k2, anchor, h)[0])
-    k4 = np.asarray(stage(body, limits, desired_cf, t + dt, state + dt * k3, anchor, dt)[0])
+    k2 = np.asarray(stage(body, limits, cf_law, t + h, state + h * k1, anchor, h)[0])
+    k3 = np.asarray(stage(body, limits, cf_law, t + h, state + h * k2, anchor, h)[0])
+    k4 = np.asarray(stage(body, limits, cf_law, t + dt, state + dt * k3, anchor, dt)[0])
     return state + (dt / 6.0) * (k1 + 2.0 * (k2 + k3) + k4)
 
 

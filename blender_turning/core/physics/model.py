@@ -27,11 +27,12 @@ curvature in the surface (its geodesic curvature).  In the foot's frame (tangent
   ``V_f (C_f turn_gain + kappa_n bend_gain)`` (the Darboux frame's ``dt/ds = C_f b + kappa_n n``
   seen from above; docs/TERRAIN.md Section 1).
 
-:func:`rhs` is the reference: written once, on floats or arrays.  The fast paths are kernels
-behind it, each tested against it (``tests/test_model_kernels.py``): :func:`.dynamics.steer`
-(flat ground at a held speed, arrays), :mod:`.one_figure` (the same on floats),
-:mod:`.terrain_one_figure` (any ground, floats), :mod:`.planner.flat_stage` (the planner's
-fused flat stage).
+:func:`rhs` is the reference: written once, on floats or arrays; :func:`steering` is how a
+controller steers on it (its lean law, about :func:`equilibrium_lean`, through Eq. 1).  The fast
+paths are kernels behind the two, each tested against them (``tests/test_model_kernels.py``):
+:func:`.dynamics.steer` with :func:`.dynamics.steering` (flat ground at a held speed, arrays),
+:mod:`.one_figure` (the same on floats), :mod:`.terrain_one_figure` (any ground, floats),
+:mod:`.planner.flat_stage` (the planner's fused flat stage).
 """
 from __future__ import annotations
 
@@ -49,7 +50,8 @@ from .xp import Numpy, Scalar, backend
 
 __all__ = ["STATE", "V_CM", "Flat", "Plane", "HeightField", "LazyHeightField", "FLAT",
            "Resistance", "RESISTANCE", "NO_RESISTANCE", "speed_held", "plumb_lean",
-           "plumb_lean_along", "rhs", "inverse_cf", "leg_force", "rk4_step"]
+           "plumb_lean_along", "equilibrium_lean", "steering", "rhs", "inverse_cf", "leg_force",
+           "rk4_step"]
 
 STATE = ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm")
 V_CM = 5
@@ -124,6 +126,41 @@ def plumb_lean_along(frame, heading, g: float):
     return xp.atan2(-g_b, frame.g_normal)
 
 
+def equilibrium_lean(controller, frame, t):
+    """The lean a controller's lean law is asked about, as the lean from it (docs/TERRAIN.md
+    Section 6): the plumb lean along the controller's commanded mean heading ``heading(t)``
+    when it holds one (it does not swing with each turn's heading, which would force the lean
+    at the turn's own frequency; a target speed's command, :mod:`..controllers.braking`, moves
+    continuously), else the plumb lean of the current heading (:func:`plumb_lean`); upright
+    on flat ground."""
+    heading = getattr(controller, "heading", None)
+    if heading is None:
+        return plumb_lean(frame)
+    return plumb_lean_along(frame, heading(t), controller.body.g)
+
+
+def steering(controller, ground):
+    """``f(t, state) -> C_f`` on ``ground`` (``state`` the six rows of :data:`STATE`, one figure
+    on floats or a batch on arrays): the controller's lean law
+    (:meth:`~.controllers.base.Controller.lean_law`) asked about the lean from
+    :func:`equilibrium_lean`, so the lean oscillates about the equilibrium, not about the
+    surface normal, and its ``alpha_v`` turned into ``C_f`` by Eq. (1) on the ground at the
+    state's speed with the controller's body (:func:`inverse_cf`).  ``C_f = 0`` for a
+    controller without a lean law.  The reference the kernels' steering is held to."""
+    law = controller.lean_law
+    if law is None:
+        return lambda t, st: 0.0 * st[3]
+
+    def cf(t, st):
+        if np.ndim(st[0]) == 0:                               # one figure: Python floats
+            st = [float(v) for v in st]
+        fr = surface_frame(ground, st[0], st[1], st[2], controller.body.g)
+        rel = st[3] - equilibrium_lean(controller, fr, t)
+        return inverse_cf(controller.body, fr, st[3], law(t, rel, st[4]), st[5])
+
+    return cf
+
+
 def inverse_cf(body: BodyParams, frame, theta_v, alpha_v, V):
     """Eq. (1) on any ground: the ``C_f`` that gives ``alpha_v`` (closed form, physical root).
 
@@ -193,9 +230,9 @@ def leg_force(body: BodyParams, theta_v, omega_v, alpha_v, C_f, V, V_f, frame):
     return np.hypot(along, body.I_v * alpha_v / body.l), along
 
 
-def rk4_step(body, limits, ground, state, t, dt, desired_cf, anchor,
+def rk4_step(body, limits, ground, state, t, dt, cf_law, anchor,
              resistance: Resistance = NO_RESISTANCE, held: bool = False):
-    """One classical RK4 step of the state under the steering law ``desired_cf(t, state)``,
+    """One classical RK4 step of the state under the steering law ``cf_law(t, state)``,
     ``C_f`` bounded at every stage relative to ``anchor`` (the curvature at the start of the
     step; docs/ARCHITECTURE.md Section 5, Integration)."""
     state = np.asarray(state, dtype=float)
@@ -203,7 +240,7 @@ def rk4_step(body, limits, ground, state, t, dt, desired_cf, anchor,
 
     def f(tt, st, tau):
         st = st.tolist() if one else st
-        cf = desired_cf(tt, st)
+        cf = cf_law(tt, st)
         return np.asarray(rhs(body, limits, ground, float(cf) if one else cf, st, anchor, tau,
                               resistance, held)[0])
 

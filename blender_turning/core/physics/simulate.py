@@ -14,7 +14,7 @@ import numpy as np
 
 from ..controllers import Controller
 from ..controllers.feasible import fall_cause
-from .dynamics import THETA_V, leg_force, rk4_step, stage
+from .dynamics import THETA_V, leg_force, rk4_step, stage, steering
 from ..errors import FellOver
 from ..controllers.heading_table import heading_table
 from .one_figure import integrate
@@ -91,7 +91,7 @@ def run(body: BodyParams, limits: Limits, controller: Controller, state0, durati
     rec = np.empty((n, 10) + arr.shape[1:])
     fell = np.full(arr.shape[1:], np.inf)              # time of each figure's fall
     anyone = False                                     # has any figure fallen yet?
-    desired = controller.desired_cf
+    desired = steering(controller)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         for i in range(n):
             t = i * dt

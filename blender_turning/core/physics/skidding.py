@@ -116,8 +116,8 @@ class _Skid:
         self.edge = WEDGE_EDGE if rule.style == "wedge" else 0.0
         self.theta_max = getattr(controller, "theta_max", None)
         self.heading = getattr(controller, "heading", None)
-        # The lean the controller follows (its float law reads the schedule it had when the
-        # run began): a slip's small turns, a stop's turns dying out.
+        # The lean the controller follows (one schedule, set before the run, that reads
+        # self.lean): a slip's small turns, a stop's turns dying out.
         tm = self.theta_max
         self.lean = (lambda t: min(float(tm(t)), SLIP_LEAN)) if rule.style == "slip" else tm
         if tm is not None and (rule.style == "slip" or rule.stop_at is not None):

@@ -16,21 +16,18 @@ Here one RK4 stage is one function on floats with the body's constants bound as 
   ``(t_x b_y - t_y b_x) / (t_x^2 + t_y^2) = n_z w^2`` and the bend gain
   ``(t_x n_y - t_y n_x) / (t_x^2 + t_y^2) = n_z a w`` (:func:`.terrain.surface_frame`'s numbers
   to round-off, ~25 fewer operations a stage);
-- the controller's lean law about the local plumb lean
-  (:meth:`.controllers.base.Controller.equilibrium_lean`,
-  :func:`.model.plumb_lean_along`: ``atan((h_y cos H - h_x sin H) / sqrt(1 + q^2))``,
-  ``q = h_x cos H + h_y sin H`` along the course ``H``, read once when it is constant) and
-  Eq. (1) on terrain
-  (:func:`.model.inverse_cf`), docs/TERRAIN.md Section 6;
+- the controller's lean law about the equilibrium lean (:func:`.model.steering`,
+  :func:`.model.equilibrium_lean`: the plumb lean along the course ``H``,
+  ``atan((h_y cos H - h_x sin H) / sqrt(1 + q^2))``, ``q = h_x cos H + h_y sin H``, read once
+  when it is constant, else the plumb lean) and Eq. (1) on terrain (:func:`.model.inverse_cf`),
+  docs/TERRAIN.md Section 6;
 - Section 3's bounds on ``C_f`` (:func:`.dynamics.bound_cf`);
 - Eq. (21), Eq. (2) on terrain, the normal force and the speed equation
   (:func:`.model.rhs`, docs/TERRAIN.md Sections 2-3), with the braking force at the foot
   bounded by the grip when :attr:`TerrainStage.brake` is set (docs/skidding.md Section 2).
 
-A controller with a terrain law or an equilibrium lean of its own (:class:`.controllers.Straight`)
-is asked through its methods instead.  ``tests/test_terrain_fast.py`` holds this stage to
-:func:`.model.rhs` on numpy arrays to 1e-12 and whole runs to the array
-loop.
+``tests/test_model_kernels.py`` holds this stage to :func:`.model.rhs` under
+:func:`.model.steering` to 1e-12, ``tests/test_terrain_fast.py`` whole runs to the array loop.
 """
 from __future__ import annotations
 
@@ -39,7 +36,6 @@ import math
 from ..controllers.base import Controller
 from .dynamics import PHYSICAL_MARGIN
 from .params import BodyParams, Limits
-from ..ground.terrain import surface_frame
 from .model import Resistance
 
 __all__ = ["TerrainStage"]
@@ -49,8 +45,8 @@ class TerrainStage:
     """The float right-hand side of one figure on ``ground`` under ``controller``.
 
     :attr:`derivatives` gives the surface at a point, :meth:`lean` the lean the controller's
-    law sees there (from its equilibrium lean; what :meth:`.Controller.relative_state` gives),
-    :attr:`stage` one RK4 stage.  The controller's speed may change between calls
+    law sees there (from the equilibrium lean, :func:`.model.equilibrium_lean`), :attr:`stage`
+    one RK4 stage.  The controller's speed may change between calls
     (:meth:`.Controller.follow_speed`); the law reads the state's speed."""
 
     def __init__(self, body: BodyParams, limits: Limits, resistance: Resistance, ground,
@@ -60,16 +56,11 @@ class TerrainStage:
         self.derivatives = slopes if slopes is not None else (lambda x, y: one(x, y)[1:]) \
             if one is not None else (lambda x, y: [float(v) for v in ground.derivatives(x, y)[1:]])
         self.ground, self.controller = ground, controller
-        self._g = body.g
-        base = type(controller)
-        own_law = None if base.terrain_cf_law is Controller.terrain_cf_law else \
-            controller.terrain_cf_law(ground)
-        self._plumb = base.equilibrium_lean is Controller.equilibrium_lean
         # The course the plumb lean is taken along (plumb_lean_along): read once, as its cosine
         # and sine when constant; else kept for the time last asked (a step's stages 2 and 3
         # share one), and asked again by :meth:`lean` at each step's start (the brake's course
         # moves between steps, :class:`.braking.TargetSpeed`).
-        self._heading = getattr(controller, "heading", None) if self._plumb else None
+        self._heading = getattr(controller, "heading", None)
         H = getattr(self._heading, "constant_value", None)
         self._course = [None, 1.0, 0.0] if H is None else [math.inf, math.cos(H), math.sin(H)]
         self.brake = None
@@ -77,7 +68,7 @@ class TerrainStage:
         as :func:`.model.rhs` bounds it) or ``None``: the carved model."""
         self.foot = [0.0, 0.0, 0.0]
         """The last braked stage's ``(F_brake / m, F_lat / m, N / m)``, m/s^2 (:mod:`.grip`)."""
-        self.stage, self.lean = self._build(body, limits, resistance, own_law)
+        self.stage, self.lean = self._build(body, limits, resistance)
 
     def _along(self, t):
         """``(cos H, sin H)`` of the course at ``t``."""
@@ -87,7 +78,7 @@ class TerrainStage:
             course[0], course[1], course[2] = t, math.cos(H), math.sin(H)
         return course[1], course[2]
 
-    def _build(self, body, limits, resistance, own_law):
+    def _build(self, body, limits, resistance):
         g, l, J = body.g, body.l, body.J
         mu, kd = resistance.mu, resistance.drag_k(body.m)
         law_J, law_l = self.controller.body.J, self.controller.body.l
@@ -95,23 +86,19 @@ class TerrainStage:
         rated = rate != math.inf
         sin, cos, sqrt, atan = math.sin, math.cos, math.sqrt, math.atan
         inf, copysign = math.inf, math.copysign
-        derivatives, ground, ctl = self.derivatives, self.ground, self.controller
-        alpha_law = self.controller.scalar_alpha_law() if own_law is None else None
-        # The equilibrium lean: along the course (0), the plumb lean (1), the controller's (2).
-        kind = (0 if self._heading is not None else 1) if self._plumb else 2
+        derivatives, law = self.derivatives, self.controller.lean_law
+        # The equilibrium lean: along the course (0), the plumb lean (1).
+        kind = 0 if self._heading is not None else 1
         course, along = self._course, self._along
         row = [None, 0.0]                       # the last lean's dv and equilibrium lean
         foot = self.foot
 
         def lean(t, x, y, d, theta_v, dv):
-            """``theta_v`` from the controller's equilibrium lean
-            (:meth:`.Controller.equilibrium_lean`) at ``(x, y)`` heading ``d`` (``dv``:
-            :attr:`derivatives` there), at the start of a step: the course is read anew, and
-            the step's first stage (given this same ``dv``: the same point, time and heading)
-            takes the equilibrium from here."""
-            if kind == 2:
-                eq = ctl.equilibrium_lean(surface_frame(ground, x, y, d, g), t)
-            elif kind == 1:                                     # plumb_lean
+            """``theta_v`` from the equilibrium lean (:func:`.model.equilibrium_lean`) at
+            ``(x, y)`` heading ``d`` (``dv``: :attr:`derivatives` there), at the start of a
+            step: the course is read anew, and the step's first stage (given this same ``dv``:
+            the same point, time and heading) takes the equilibrium from here."""
+            if kind == 1:                                       # plumb_lean
                 hx, hy = dv[0], dv[1]
                 c, s = cos(d), sin(d)
                 p = hx * c + hy * s
@@ -142,8 +129,8 @@ class TerrainStage:
             g_b = g_n * across / w
             sn, cs = sin(th), cos(th)
             VV = V * V
-            if alpha_law is None:
-                cf = own_law(t, (x, y, d, th, om, V))
+            if law is None:
+                cf = 0.0 * th                                   # straight: C_f = 0
             else:
                 # The lean law about the equilibrium lean, then Eq. (1) on terrain.
                 if dv is not None and dv is row[0]:
@@ -153,12 +140,9 @@ class TerrainStage:
                         course[0] == inf else along(t)
                     q = hx * cH + hy * sH
                     eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))
-                elif kind == 1:                                 # plumb_lean
+                else:                                           # plumb_lean
                     eq = atan(-across / w)
-                else:
-                    eq = ctl.equilibrium_lean(surface_frame(ground, x, y, d, g), t)
-                k = ((g_n + VV * kappa) * sn + g_b * cs
-                     - alpha_law(t, (x, y, d, th - eq, om)) * law_J)
+                k = ((g_n + VV * kappa) * sn + g_b * cs - law(t, th - eq, om) * law_J)
                 den = k * law_l * sn + VV * cs
                 cf = k / den if den > 0.0 else copysign(inf, k)
             # Section 3: |C_f| <= C_f_max, the physical branch on the side of the lean, the rate.

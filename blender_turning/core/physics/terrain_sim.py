@@ -5,9 +5,9 @@
 (:class:`.model.Resistance`) by classical RK4 on floats (:mod:`.terrain_one_figure`;
 ``C_f`` bounded at every stage as on flat ground, as :func:`.model.rk4_step`).
 Each step the controller is re-targeted to the current speed
-(:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from the local plumb lean
-(:meth:`~.controllers.base.Controller.relative_state`) and steers by Eq. (1) on terrain
-(:meth:`~.controllers.base.Controller.terrain_cf_law`).  :class:`TargetSpeed` brakes by turning
+(:meth:`~.controllers.base.Controller.follow_speed`), sees the lean from the equilibrium lean
+(:func:`.model.equilibrium_lean`) and steers by its lean law through Eq. (1) on terrain
+(:func:`.model.steering`).  :class:`TargetSpeed` brakes by turning
 across the hill (docs/TERRAIN.md Section 6).
 
 :func:`.simulate.simulate` sends a run here unless the speed is held

@@ -112,7 +112,8 @@ class Trajectory:
 
         **On terrain** (a trajectory from the terrain loop, ``meta["ground"]`` set; pass the
         ``ground`` it ran on, :mod:`.terrain`, unless flat; or a trajectory without meta, e.g.
-        read from a CSV, given ``ground=`` and ``resistance=``) the state is ``(x, y, theta_dir, theta_v, omega_v,
+        read from a CSV, given ``ground=`` and ``resistance=``) the state is ``(x, y, theta_dir,
+        theta_v, omega_v,
         V_cm)`` and all six, and ``s``, are Hermite-interpolated with the terrain model's
         derivatives at the samples (:func:`.model.rhs` under the recorded
         ``C_f``; the friction and drag recorded in ``meta``).  ``z`` is the ground's height at

@@ -67,7 +67,8 @@ class FollowResult:
 def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None = None,
            progress: PathProgress | None = None, meta: dict | None = None,
            on_replan=None) -> FollowResult:
-    """Follow the path from ``state0`` (shape ``(5,)``; ``(6,)`` with ``V_cm`` on terrain) for ``duration`` seconds or, given a
+    """Follow the path from ``state0`` (shape ``(5,)``; ``(6,)`` with ``V_cm`` on terrain) for
+    ``duration`` seconds or, given a
     :class:`..path.PathProgress`, until the foot reaches the end of the path (progress along it
     by arc length, :meth:`PathProgress.at_end`), ``duration`` then being the time limit.
 

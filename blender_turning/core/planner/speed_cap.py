@@ -5,7 +5,8 @@ A :class:`SpeedCap` makes the braking force a law of the state, part of the prob
 the cap ``V_c`` the braking force is the one that makes the speed decay to ``V_c`` with the time
 constant ``tau``, ``F_brake / m = max(0, dV_free / dt + (V - V_c) / tau) V_cm / V_f`` for
 ``V > V_c`` (``dV_free`` the rate without it: gravity, friction, drag, the lean's share; the
-force works at the foot's speed, :func:`..model.rhs`), bounded by the friction circle it shares with the turn
+force works at the foot's speed, :func:`..model.rhs`), bounded by the friction circle it shares with
+the turn
 (:func:`..grip.brake_limit`, the skid at most :data:`..grip.SKID_MAX_TURNING`).  Below the cap it
 is 0, the carved model.  The cap is the speed the grip, the lean and the path allow:
 ``V_c = min(V_target, sqrt(a_max / kappa_max))``, ``kappa_max`` the path's largest curvature and

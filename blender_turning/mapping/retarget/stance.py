@@ -23,8 +23,8 @@ _S4 = np.diag([-1.0, 1.0, 1.0, 1.0])        # mirror across the travel line (x -
 def mirrored_trajectory(traj):
     """The mirror image of ``traj`` across its own line of travel: lean, its rate and
     acceleration, curvature and the skid change sign, the phase moves half a cycle; where the
-    foot goes (x, y, theta_dir) stays.  A goofy rider on ``traj`` is the mirror image, .L and .R swapped, of
-    a regular rider on this (Section 7's snowboarder rides regular)."""
+    foot goes (x, y, theta_dir) stays.  A goofy rider on ``traj`` is the mirror image, .L and .R
+    swapped, of a regular rider on this (Section 7's snowboarder rides regular)."""
     cols = traj.columns()
     for c in ("theta_v", "omega_v", "alpha_v", "C_f", "skid"):    # a ski turned left: right
         cols[c] = -np.asarray(cols[c])

@@ -248,8 +248,9 @@ class SkierMapping(Mapping):
             grip, wrist = arm.reach(hand)
             offset = grip - wrist
             free = hand + offset
-            plan = _plan_plants(place, d, o.pole_hold, o.pole_swing, grip + length * free_axis(grip),
-                                free, shoulder + offset, length, reach, o.plant_scale)
+            plan = _plan_plants(place, d, o.pole_hold, o.pole_swing,
+                                grip + length * free_axis(grip), free, shoulder + offset, length,
+                                reach, o.plant_scale)
             lift = plan.u[plan.after, None]
             target = free.copy()
             target[plan.held] = plan.grip_at[plan.held]
@@ -276,7 +277,8 @@ class SkierMapping(Mapping):
             # Held: aim at the hole.  Lifting off: at a point moving from the hole to the free
             # swing's tip (both on or above the snow, so the tip stays out of it).
             aim = plan.tip_at.copy()
-            aim[plan.after] = (1 - lift) * aim[plan.after] + lift * (grip + length * axis)[plan.after]
+            aim[plan.after] = ((1 - lift) * aim[plan.after]
+                               + lift * (grip + length * axis)[plan.after])
             moving = plan.held | plan.after
             to = aim[moving] - grip[moving]
             axis[moving] = to / np.linalg.norm(to, axis=1, keepdims=True)
@@ -392,7 +394,8 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
     for i0, i1 in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):   # runs [i0, i1)
         idx = np.arange(i0, i1)
         # The hole: where the swinging tip meets the snow.
-        P = on_snow(place, _world(place, np.array([[tips[i0, 0], tips[i0, 1], 0.0]]), [i0], scale)[0])
+        P = on_snow(place,
+                    _world(place, np.array([[tips[i0, 0], tips[i0, 1], 0.0]]), [i0], scale)[0])
         _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
                   grip_at, scale)
         local = _local(place, P, idx, scale)
