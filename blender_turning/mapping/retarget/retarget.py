@@ -92,6 +92,11 @@ for _s in ("L", "R"):
         ("shoulder", "upper_arm"), ("upper_arm", "forearm"), ("forearm", "hand"),
         ("thigh", "shin"), ("shin", "foot"))})
 FLAT = {B.side(b, s) for b in ("foot", "toe") for s in ("L", "R")}     # A = I: stand flat
+#: The share of the arm's length the wrist is put within when the pole turns about its tip (the
+#: IK reaches 0.9999 of it, :func:`..kinematics.two_bone_ik`).
+REACH = 0.999
+
+
 def _unit(v):
     v = np.asarray(v, float)
     return v / np.linalg.norm(v, axis=-1, keepdims=True)
@@ -310,7 +315,6 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
                     _knee_distance(bi, rest, s), s)
     for s, turn in turns.items():
         rot[f"foot.{s}"] = turn @ rot[f"foot.{s}"]
-    held_poles = {}
     for j in rest:
         if j == B.HIPS or j in poses:
             continue
@@ -321,17 +325,6 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         elif j.startswith("upper_arm"):
             chain = (j, f"forearm.{side}", f"hand.{side}")
             target = bi.head(chain[2])
-            pole = f"pole.{side}"
-            if ATTACH[sport].get(pole) == chain[2] and chain[2] in rest:
-                # The pole is rigid in the user's hand: the hand turns as the built-in's pole
-                # does, and the wrist goes where that puts the grip on the built-in's (the
-                # pole's rest offset from the wrist, k times the built-in's), so the pole lies
-                # where the built-in's lies and its planted tip stays in its hole.
-                turn = bi.delta(pole)
-                rot[chain[2]] = turn @ (A[chain[2]] @ rest[chain[2]][:3, :3])
-                grip = (fit.k / fit.scale) * bi.rest_vec(chain[2], pole)
-                target = bi.head(pole) - np.einsum("nij,j->ni", turn, grip)
-                held_poles[chain[2]] = (pole, grip)
         else:
             place(j, carried(j))
             continue
@@ -339,37 +332,55 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         root = carried(a)
         l1 = float(np.linalg.norm(rest[b][:3, 3] - rest[a][:3, 3]))
         l2 = float(np.linalg.norm(rest[c][:3, 3] - rest[b][:3, 3]))
+        pole = f"pole.{side}"
+        if ATTACH[sport].get(pole) == c and c in rest:
+            # The pole is rigid in the user's hand: the hand turns as the built-in's pole does,
+            # and the wrist goes where that puts the grip on the built-in's (the pole's rest
+            # offset from the wrist, k times the built-in's), so the pole lies where the
+            # built-in's lies and its planted tip stays in its hole; where the arm is too short
+            # for that, the pole turns about its tip instead.
+            turn = bi.delta(pole)
+            grip = (fit.k / fit.scale) * bi.rest_vec(c, pole)
+            target, S = _turn_about_tip(bi, pole, root,
+                                        bi.head(pole) - np.einsum("nij,j->ni", turn, grip),
+                                        REACH * (l1 + l2))
+            rot[c] = S @ turn @ (A[c] @ rest[c][:3, :3])
         mid, end = two_bone_ik(root, target, l1, l2, _pole(bi, a, b, c))
-        if c in held_poles:
-            rot[c] = _aim_pole(bi, fit, held_poles[c], rot[c], end, target)
         place(a, root, aimed(a, mid - root, rest[b][:3, 3] - rest[a][:3, 3]))
         place(b, mid, aimed(b, end - mid, rest[c][:3, 3] - rest[b][:3, 3]))
         place(c, end)
     return poses
 
 
-def _aim_pole(bi, fit, pole_grip, rot_hand, wrist, target):
-    """The hand's rotation where the arm fell short of ``target`` (the user's arm is shorter
-    than the built-in's, scaled): turned about the wrist so that the pole still points from
-    its grip at the built-in's tip (the hole, while planted), as the built-in's pole aims at
-    the hole it leaves; the tip then rises along that line instead of dragging through the
-    snow."""
-    pole, grip = pole_grip
-    short = np.linalg.norm(wrist - target, axis=1) > 1e-6
-    if not short.any():
-        return rot_hand
-    turn = bi.delta(pole)[short]
-    P = bi.P[pole][short]
+def _turn_about_tip(bi, pole, root, wrist, reach):
+    """Where the user's arm cannot reach ``wrist`` (n, 3) (the wrist that puts the pole where
+    the built-in's lies; the arm is shorter than the built-in's, scaled): the hand and the pole,
+    rigid, turn about the pole's tip by the smallest angle that brings the wrist within
+    ``reach`` of the shoulder ``root``.  The tip stays on the built-in's (in its hole while
+    planted) and only the pole's angle changes.  Where no turn does (the tip is farther from the
+    shoulder than the pole and the arm together) the wrist goes on the line from the tip to the
+    shoulder, and the tip as near its place as the arm allows, up that line.  Returns the wrist
+    target (n, 3) and the turn (n, 3, 3)."""
+    P = bi.P[pole]
     tip = bi.fit.point(P[:, :3, 3] + bi.skel.length(pole) * P[:, :3, 1])
-    axis = bi.fit.C @ bi.skel.rest_of(pole)[:3, 1]
-    S = np.broadcast_to(np.eye(3), turn.shape).copy()
-    for _ in range(6):      # turning the hand moves the grip: aim again (0.2 deg, then 1e-9)
-        now = np.einsum("nij,j->ni", S @ turn, axis)
-        at = wrist[short] + np.einsum("nij,j->ni", S @ turn, grip)
-        S = swing(now, tip - at) @ S
-    out = rot_hand.copy()
-    out[short] = S @ rot_hand[short]
-    return out
+    S = np.broadcast_to(np.eye(3), P.shape[:1] + (3, 3)).copy()
+    short = np.linalg.norm(wrist - root, axis=1) > reach
+    if not short.any():
+        return wrist, S
+    w, t, r = wrist[short], tip[short], root[short]
+    W = np.linalg.norm(w - t, axis=1, keepdims=True)
+    D = np.linalg.norm(r - t, axis=1, keepdims=True)
+    u0, c = (w - t) / W, (r - t) / D
+    # The wrists within reach, on the sphere of radius W about the tip, are the cap about c of
+    # half-angle a (law of cosines); the nearest of them to u0 is on the great circle to c.
+    cos_a = np.clip((W * W + D * D - reach * reach) / (2.0 * W * D), -1.0, 1.0)
+    across = u0 - np.sum(u0 * c, axis=1, keepdims=True) * c
+    across /= np.maximum(np.linalg.norm(across, axis=1, keepdims=True), 1e-12)
+    u = cos_a * c + np.sqrt(1.0 - cos_a * cos_a) * across
+    S[short] = swing(u0, u)
+    out = wrist.copy()
+    out[short] = t + W * u
+    return out, S
 
 
 def _channels(rig: UserRig, bone: str, pose, parent_delta):

@@ -31,8 +31,9 @@ from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexi
 
 SIDES = (("L", -1.0), ("R", 1.0))
 
-# Hand (wrist) targets from the shoulder in the chest's axes (outwards, forwards, up), m: held in
-# front of the hips, reaching forwards and down for the plant.  The pole's tip points 15 deg out
+# Hand (wrist) targets from the shoulder in the chest's axes (outwards, forwards, up), m, for the
+# built-in's arm (``SkierOptions.plant_reach`` times them for another): held in front of the
+# hips, reaching forwards and down for the plant.  The pole's tip points 15 deg out
 # from straight ahead when planted and 150 deg (behind, outwards) when trailing.
 HAND_NEUTRAL = (0.06, 0.30, -0.36)
 HAND_PLANT = (0.10, 0.40, -0.33)
@@ -68,8 +69,10 @@ class SkierOptions(SpringLegOptions):
     the pose about the foot point): the pole holes are planned to stay put in that figure's
     world."""
     plant_reach: float = 1.0
-    """The shown figure's arm length over ``plant_scale`` times the built-in's: a plant lasts
-    only as long as that arm can follow the figure past its hole."""
+    """The shown figure's arm length over ``plant_scale`` times the built-in's: the hand's
+    targets from the shoulder scale with it (a shorter arm swings the pole as the built-in's
+    does, at the same angles, and plants it nearer), and a plant lasts only as long as that arm
+    can follow the figure past its hole."""
     twist_amp: float = math.radians(12.0)
     """Amplitude of the upper-body counter-twist (against the turn), rad."""
     twist_phase: float = 0.0
@@ -223,8 +226,8 @@ class SkierMapping(Mapping):
             plant = o.pole_plant_L if s == "L" else o.pole_plant_R
             d = (traj.phi - plant + math.pi) % (2.0 * math.pi) - math.pi   # signed, wrapped
             w = phase_window(traj.phi, plant, o.pole_hold, o.pole_swing)
-            neutral = sx * HAND_NEUTRAL[0] * right + HAND_NEUTRAL[1] * fwd + HAND_NEUTRAL[2] * up
-            planted = sx * HAND_PLANT[0] * right + HAND_PLANT[1] * fwd + HAND_PLANT[2] * up
+            neutral, planted = (o.plant_reach * (sx * x * right + y * fwd + z * up)
+                                for x, y, z in (HAND_NEUTRAL, HAND_PLANT))
             shoulder = b.unposed(B.side("upper_arm", s))[:, :3, 3]
             hand = shoulder + np.einsum("nij,nj->ni", chest,
                                         (1 - w)[:, None] * neutral + w[:, None] * planted)
