@@ -53,6 +53,11 @@ class PlannerSettings:
     reuse_proof: bool = True
     """Receding horizon: bound the cost still to come by what the previous search proved about
     the same subtree (``proof.py``; exact)."""
+    edge_limit: bool = False
+    """On a preset's carving skis, clip branches whose curvature needs a larger edge angle than
+    the lean and the body's angulation give (``problem.py``, core/equipment.py's
+    ``EdgeLimit``); off (the default: it tightens the racers' lines on Reid's courses,
+    docs/racing.md): Section 3's curvature bounds alone."""
     batch: int = 128
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
     one node at a time; a long search grows its batches up to 4 times this, ``search.py``).  Any
