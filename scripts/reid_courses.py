@@ -25,6 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from blender_turning.core.equipment import (SPORT_PRESETS, carving_of,  # noqa: E402
                                             register_preset)
 from blender_turning.core.course.scene import scene_from_dict  # noqa: E402
+from blender_turning.core.errors import PlanInfeasible  # noqa: E402
 
 REID = {10.0: (3.96, 0.23, 65.7, 1.7), 13.0: (4.94, 0.59, 71.0, 1.9)}
 
@@ -110,7 +111,11 @@ def main(argv=None) -> int:
         scene = scene_from_dict(doc, f"reid {gap:g}").with_settings(
             edge_limit=a.edge_limit)
         t0 = time.perf_counter()
-        result = scene.run()
+        try:
+            result = scene.run()
+        except PlanInfeasible as exc:
+            print(f"gates {gap:g} m at {a.speed:g} m/s: {exc}")
+            continue
         traj = getattr(result, "trajectory", result)
         got = measure(traj, scene.figure, 10.0 + gap, 10.0 + gap * 8)
         ref = REID.get(gap)

@@ -27,7 +27,7 @@ same collisions for the same node.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -159,7 +159,8 @@ class Problem:
     def local(self, center, state=None, t=None) -> "Problem":
         """The same problem with the path samples and obstacles that cannot matter within one
         horizon of ``center`` dropped (exact: see :meth:`PathDistance.near` and
-        :meth:`Obstacles.near`).  ``state``: the root's (used on terrain only); ``t``: its time
+        :meth:`Obstacles.near`); with ``q_near`` choices where any is left
+        (:class:`.settings.PlannerSettings`).  ``state``: the root's (used on terrain only); ``t``: its time
         (the moving bodies kept are those that can come near from then to the end of the
         horizon and one stage more; ``None``: at any time)."""
         r = self.reach()
@@ -180,6 +181,11 @@ class Problem:
             p.movers = self.movers.near(center, far, t, None if t is None else
                                         t + (st.n_stages + 1) * st.t_stage * 1.001 + st.dt)
         p._pairs = False if not self.free else None     # its own path samples
+        st = self.settings
+        if st.q_near and st.q_near != st.q and (len(p.obstacles) or p.movers is not None):
+            # An obstacle within reach: the finer choices (PlannerSettings.q_near).
+            p.settings = replace(st, q=st.q_near)
+            p.u_values = self.limits.dC_f_max * np.linspace(-1.0, 1.0, st.q_near)
         return p
 
     @property
