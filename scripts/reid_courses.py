@@ -15,14 +15,17 @@ import argparse
 import math
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from blender_turning.core.equipment import carving_of  # noqa: E402
+from blender_turning.core.equipment import (SPORT_PRESETS, carving_of,  # noqa: E402
+                                            register_preset)
 from blender_turning.core.course.scene import scene_from_dict  # noqa: E402
+from blender_turning.core.errors import PlanInfeasible  # noqa: E402
 
 REID = {10.0: (3.96, 0.23, 65.7, 1.7), 13.0: (4.94, 0.59, 71.0, 1.9)}
 
@@ -67,13 +70,15 @@ def com_radius(traj, l: float) -> np.ndarray:
 
 
 def measure(traj, fig, x_lo: float, x_hi: float) -> dict:
-    """Minimum centre-of-mass radius (its track's curvature), peak edge angle (the sidecut
-    relation for C_f), peak lean and the leg force in body weights over the gates."""
+    """Minimum centre-of-mass radius (its track's curvature) and the foot's (``1 / max |C_f|``),
+    peak edge angle (the sidecut relation for C_f), peak lean and the leg force in body weights
+    over the gates."""
     m = (traj.x >= x_lo) & (traj.x <= x_hi)
     R = com_radius(traj, fig.body.l)[m]
     edge = np.abs(carving_of(fig.name).edge_angle(traj.C_f[m]))
     bw = traj.F_leg[m] / (fig.body.m * fig.body.g)
     return {"R_min": float(R.min()), "edge_max": math.degrees(float(edge.max())),
+            "R_foot_min": 1.0 / float(np.abs(traj.C_f[m]).max()),
             "lean_max": math.degrees(float(np.abs(traj.theta_v[m]).max())),
             "F_max_bw": float(bw.max()), "F_mean_bw": float(bw.mean())}
 
@@ -87,21 +92,38 @@ def main(argv=None) -> int:
     p.add_argument("--choices", type=int, default=7)
     p.add_argument("--stage-time", type=float, default=0.2)
     p.add_argument("--rate", type=float, default=1.0,
-                   help="the planner's dC_f_max, 1/(m s): its q choices span +-rate")
+                   help="the planner's dC_f_max, 1/(m s): its q choices span +-rate (with the "
+                        "preset's own 2.06 no plan exists at t = 0)")
+    p.add_argument("--angulation", type=float, default=None,
+                   help="with --edge-limit: the racer's largest angulation, deg (default: the "
+                        "preset's)")
+    p.add_argument("--edge-limit", action="store_true",
+                   help="clip lines whose edge the lean and the angulation cannot hold "
+                        "(PlannerSettings.edge_limit)")
     a = p.parse_args(argv)
+    if a.angulation is not None:
+        record = SPORT_PRESETS[a.preset]
+        register_preset(replace(record, angulation=math.radians(a.angulation)), replace=True)
     for gap in a.gates:
         doc = course(gap, a.speed, a.preset, planner={"stages": a.stages, "choices": a.choices,
                                                       "stage_time": a.stage_time})
         doc["figure"]["limits"] = {"dC_f_max": a.rate}
-        scene = scene_from_dict(doc, f"reid {gap:g}")
+        scene = scene_from_dict(doc, f"reid {gap:g}").with_settings(
+            edge_limit=a.edge_limit)
         t0 = time.perf_counter()
-        result = scene.run()
+        try:
+            result = scene.run()
+        except PlanInfeasible as exc:
+            print(f"gates {gap:g} m at {a.speed:g} m/s: {exc}")
+            continue
         traj = getattr(result, "trajectory", result)
         got = measure(traj, scene.figure, 10.0 + gap, 10.0 + gap * 8)
         ref = REID.get(gap)
         print(f"gates {gap:g} m at {a.speed:g} m/s ({a.preset}, N = {a.stages}, q = {a.choices}, "
-              f"t_stage {a.stage_time:g} s, rate {a.rate:g}, "
-              f"{time.perf_counter() - t0:.0f} s): R_min {got['R_min']:.2f} m, edge max "
+              f"t_stage {a.stage_time:g} s, rate {scene.figure.limits.dC_f_max:.3g}, "
+              f"edge limit {'on' if a.edge_limit else 'off'}, "
+              f"{time.perf_counter() - t0:.0f} s): R_min {got['R_min']:.2f} m (the foot's "
+              f"{got['R_foot_min']:.2f} m), edge max "
               f"{got['edge_max']:.1f} deg, lean max {got['lean_max']:.1f} deg, leg force max "
               f"{got['F_max_bw']:.2f} BW, mean {got['F_mean_bw']:.2f} BW"
               + (f"; Reid: R_min {ref[0]} +- {ref[1]} m, edge {ref[2]} +- {ref[3]} deg"

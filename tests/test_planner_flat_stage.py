@@ -93,7 +93,7 @@ def test_fall_table_is_its_definition():
     g = type(p).__new__(type(p))
     g.__dict__.update(p.__dict__)
     for stage in range(3):
-        P, c, _, _ = g._integrate(x, c, np.full(m, p.limits.dC_f_max), 0.0, np.zeros(m), False)
+        P, c, _, _, _ = g._integrate(x, c, np.full(m, p.limits.dC_f_max), 0.0, np.zeros(m), False)
         for k in range(1, steps + 1):
             lean = P[k, 3]
             lost |= ~(lean >= -p._lean_checked)

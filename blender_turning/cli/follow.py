@@ -34,6 +34,9 @@ def register(sub):
     p.add_argument("scene", help="scene JSON file (see docs/cli.md, 'Scene files')")
     p.add_argument("--stages", type=int, help="N, stages planned ahead (scene default)")
     p.add_argument("--choices", type=int, help="q, values of dC_f/dt tried per stage")
+    p.add_argument("--choices-near", type=int,
+                   help="values of dC_f/dt tried per stage with an obstacle within reach "
+                        "(0: --choices; 2 q - 1 passes obstacles closer)")
     p.add_argument("--stage-time", type=float, help="t_stage, s")
     p.add_argument("--target-speed", type=float, metavar="V",
                    help="m/s: brake at the foot, within the grip, to hold at most this speed "
@@ -56,6 +59,8 @@ def run(args) -> int:
         changes["n_stages"] = check("--stages", args.stages, "n_stages")
     if args.choices is not None:
         changes["q"] = check("--choices", args.choices, "q")
+    if args.choices_near is not None:
+        changes["q_near"] = check("--choices-near", args.choices_near, "q_near")
     if args.stage_time is not None:
         changes["t_stage"] = check("--stage-time", args.stage_time, "t_stage")
     scene = load_scene(args.scene)
@@ -68,7 +73,7 @@ def run(args) -> int:
             scene = scene.with_settings(**changes)
         except ValueError as exc:
             raise ValueError(f"planner settings: {exc}") from None
-        check_horizon(scene.settings, "with --stages, --choices, --stage-time: ")
+        check_horizon(scene.settings, "with --stages, --choices, --choices-near, --stage-time: ")
     outputs = Outputs()                       # every output path checked before the work
     for flag in ("out", "stats", "plot"):
         outputs.reserve(f"--{flag}", getattr(args, flag))
@@ -129,7 +134,7 @@ def _progress(bar, duration):
 
 
 def _settings(st) -> dict:
-    return {"t_stage": st.t_stage, "n_stages": st.n_stages, "q": st.q,
+    return {"t_stage": st.t_stage, "n_stages": st.n_stages, "q": st.q, "q_near": st.q_near,
             "theta_bound": st.theta_bound, "sample_dt": st.sample_dt, "dt": st.dt,
             "warm_start": st.warm_start, "lower_bound": st.lower_bound,
             "lookahead": st.lookahead, "fall_table": st.fall_table, "batch": st.batch}

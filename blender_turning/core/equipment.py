@@ -22,6 +22,19 @@ and 0 below it (a ski flat on the snow runs straight or skids).  ``edge_max``: t
 angle the figure reaches (the boot touches the snow beyond it), which bounds the curvature:
 ``C_f_max = 1 / (R_sc cos(edge_max))``.
 
+**The edge a lean can hold.**  A racer stands the skis further on edge than the body leans: the
+hips and knees angulate inside the turn, the upper body stays more upright (Reid et al. 2020,
+*Alpine Ski Motion Characteristics in Slalom*, Front. Sports Act. Living 2:25: edge angles of
+65.7 and 71.0 deg; docs/racing.md).  The angulation has a limit ``A`` (the hips and knees
+bend only so far sideways), so the edge angle on the inside of a lean ``theta_v`` (the leg
+line's inclination, Section 3) is at most ``min(edge_max, max(0, theta_v sgn(C) + A))``, and by
+the sidecut relation the curvature carved at a lean is bounded:
+
+    R_sc |C| cos(min(edge_max, max(0, theta_v sgn(C) + A))) <= 1,
+
+a flat ski (an edge of 0) carving at most ``1 / R_sc``.  :class:`EdgeLimit` tests it; the path
+planner clips branches that break it (core/planner/problem.py).
+
 **Presets of a sport.**  A :class:`SportPreset` is a registered sport's figure with its own body,
 limits and :class:`Carving` (the racers, the Eurocarver): it is a ``--preset`` of the command
 line, a scene's ``figure.preset``, an item of Blender's Sport Presets menu, and the mapping
@@ -37,7 +50,11 @@ from .registry import SPORT_PRESETS, SPORTS
 from .validate import check_range
 
 __all__ = ["Carving", "SportPreset", "SPORT_PRESETS", "register_preset", "carving_of",
-           "sport_of", "carving_limits"]
+           "sport_of", "carving_limits", "EdgeLimit", "edge_limit_of", "ANGULATION"]
+
+#: The largest angulation (the skis' edge angle over the leg line's lean, rad) a racer's hips and
+#: knees make: docs/racing.md, "The racer's line".
+ANGULATION = math.radians(15.0)
 
 
 @dataclass(frozen=True)
@@ -93,8 +110,11 @@ class SportPreset:
     drag_area: float | None = None
     """Its own drag area ``C_d A``, m^2, when its stance differs from the sport's (a racer's
     compact stance); ``None``: the sport's."""
+    angulation: float = ANGULATION
+    """The largest edge angle over the lean its body makes, rad (:class:`EdgeLimit`)."""
 
     def __post_init__(self):
+        check_range("angulation", self.angulation, 0.0, math.radians(45.0))
         if self.sport not in SPORTS:
             raise ValueError(f"preset {self.name!r}: sport = {self.sport!r} is not one of "
                              f"{', '.join(SPORTS)}")
@@ -123,6 +143,31 @@ class SportPreset:
         record = SPORTS.lookup(self.sport)
         return record.plan_curvature_rate * self.figure.limits.dC_f_max / \
             record.figure.limits.dC_f_max
+
+
+@dataclass(frozen=True)
+class EdgeLimit:
+    """The curvature a lean can carve (module docstring, "The edge a lean can hold")."""
+
+    carving: Carving
+    angulation: float
+    """A, rad: the largest edge angle over the lean."""
+
+    def holds(self, theta_v, C_f):
+        """Where ``R_sc |C_f| cos(min(edge_max, max(0, theta_v sgn(C_f) + A))) <= 1`` (numpy
+        arrays of the lean, rad, and the curvature, 1/m, broadcast; a relative 1e-9 for the
+        rounding of ``C_f_max`` itself, whose product is 1)."""
+        import numpy as np
+        c = self.carving
+        edge = np.clip(np.sign(C_f) * theta_v + self.angulation, 0.0, c.edge_max)
+        return c.sidecut_radius * np.abs(C_f) * np.cos(edge) <= 1.0 + 1e-9
+
+
+def edge_limit_of(name) -> EdgeLimit | None:
+    """The :class:`EdgeLimit` of the preset ``name`` (a figure's name), ``None`` for a sport's
+    own figure (its curvature bounds are Section 3's alone)."""
+    record = SPORT_PRESETS.get(name) if isinstance(name, str) else None
+    return None if record is None else EdgeLimit(record.carving, record.angulation)
 
 
 def carving_limits(carving: Carving, t_edge: float, theta_fall: float) -> Limits:

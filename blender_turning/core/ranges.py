@@ -107,6 +107,8 @@ RANGES: dict[str, Range] = {
                       "as q^N", integer=True),
     "q": Range(2, 9, "", "q; the paper uses 5-7 (Section 6.1); on scenes/slalom.json N = 12, "
                "q = 9 plans in 23 s while q = 11 runs for minutes", integer=True),
+    "q_near": Range(0, 9, "", "q where an obstacle is within reach (0: q); q's bound, the "
+                    "search growing as q^N", integer=True),
     "t_stage": Range(0.0, 60.0, "s", "one stage of constant dC_f/dt", lo_open=True),
     "theta_bound": Range(0.0, 90 * _DEG, "rad", "the lean bound of the search", lo_open=True,
                          hi_open=True),

@@ -30,6 +30,7 @@ _TOP = {"name", "description", "figure", "path", "obstacles", "clearance", "star
         "planner", "duration", "run_out", "terrain"}
 # planner key -> (PlannerSettings field, key of RANGES or None for a switch, default)
 _PLANNER = {"stages": ("n_stages", "n_stages", 10), "choices": ("q", "q", 5),
+            "choices_near": ("q_near", "q_near", 0),
             "stage_time": ("t_stage", "t_stage", 0.3),
             "lean_bound_deg": ("theta_bound", "theta_bound", 30.0),
             "sample_dt": ("sample_dt", "sample_dt", 0.1), "dt": ("dt", "planner_dt", 0.05),
@@ -88,9 +89,10 @@ class Scene:
 def check_horizon(settings: PlannerSettings, where: str = "") -> None:
     """One planning search must stay a bounded amount of work (``RANGES['search_size']``,
     ``RANGES['horizon_*']``)."""
-    size = float(settings.q) ** settings.n_stages
+    q = max(settings.q, settings.q_near)
+    size = float(q) ** settings.n_stages
     if not RANGES["search_size"].contains(size):
-        raise FieldError(f"{where}the search q^N = {settings.q}^{settings.n_stages} = "
+        raise FieldError(f"{where}the search q^N = {q}^{settings.n_stages} = "
                          f"{size:.3g} leaves is outside the allowed range [1, 7^16 = "
                          f"{7.0 ** 16:.3g}]: lower the stages or the choices")
     horizon = settings.n_stages * settings.t_stage

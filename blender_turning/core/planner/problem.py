@@ -6,6 +6,12 @@ Within a stage the control ``u = dC_f/dt`` is constant: the demanded curvature i
 the same rule as :func:`..dynamics.bound_cf` at every RK4 stage, relative to the curvature at the
 step's start (fused into :meth:`Problem._rhs`; tests hold it to the core's RK4).
 
+On a preset's carving skis a branch also falls when, at the start of an integration step or at
+the stage's end, its curvature needs a larger edge angle than its lean and the body's angulation
+give (:class:`..equipment.EdgeLimit`: ``R_sc |C_f| cos(min(edge_max, max(0, theta_v sgn(C_f) +
+A))) <= 1``): the racer cannot hold that edge, so the line is not skiable (docs/racing.md, "The
+racer's line"; ``PlannerSettings.edge_limit``).
+
 A node collides when, over any integration step, the foot's straight move or that of the ground
 point under the centre of mass (:meth:`Problem.body_point`) comes within the clearance of an
 obstacle (Section 6 checks the foot; the body sways up to ``l sin(theta_bound)`` to the side of
@@ -21,7 +27,7 @@ same collisions for the same node.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -31,6 +37,7 @@ from ..ground.terrain import FLAT
 from ..course.obstacles import Obstacles
 from ..physics.params import Figure
 from ..course.path import PathDistance
+from ..equipment import edge_limit_of
 from . import flat_stage, terrain_problem as free_speed
 from .settings import PlannerSettings, SpeedProfile
 
@@ -98,6 +105,8 @@ class Problem:
         self.obstacles = obstacles
         self.settings = settings
         self.speed = speed or SpeedProfile.constant(self.body.V_cm)
+        #: The edge a lean can hold (:class:`..equipment.EdgeLimit`), or ``None``.
+        self.edge_limit = edge_limit_of(figure.name) if settings.edge_limit else None
         #: The q values of dC_f/dt, spread evenly within their bound (Section 6.1).
         self.u_values = self.limits.dC_f_max * np.linspace(-1.0, 1.0, settings.q)
         # Largest foot speed on any branch that is not clipped (Eq. 21 at the largest |C_f| and
@@ -150,7 +159,8 @@ class Problem:
     def local(self, center, state=None, t=None) -> "Problem":
         """The same problem with the path samples and obstacles that cannot matter within one
         horizon of ``center`` dropped (exact: see :meth:`PathDistance.near` and
-        :meth:`Obstacles.near`).  ``state``: the root's (used on terrain only); ``t``: its time
+        :meth:`Obstacles.near`); with ``q_near`` choices where any is left
+        (:class:`.settings.PlannerSettings`).  ``state``: the root's (used on terrain only); ``t``: its time
         (the moving bodies kept are those that can come near from then to the end of the
         horizon and one stage more; ``None``: at any time)."""
         r = self.reach()
@@ -171,6 +181,11 @@ class Problem:
             p.movers = self.movers.near(center, far, t, None if t is None else
                                         t + (st.n_stages + 1) * st.t_stage * 1.001 + st.dt)
         p._pairs = False if not self.free else None     # its own path samples
+        st = self.settings
+        if st.q_near and st.q_near != st.q and (len(p.obstacles) or p.movers is not None):
+            # An obstacle within reach: the finer choices (PlannerSettings.q_near).
+            p.settings = replace(st, q=st.q_near)
+            p.u_values = self.limits.dC_f_max * np.linspace(-1.0, 1.0, st.q_near)
         return p
 
     @property
@@ -351,8 +366,9 @@ class Problem:
                 st.steps_per_stage, self.limits.C_f_max, self.limits.dC_f_max, st.t_stage)
             P = flat_stage.integrate(x, CF, st.dt, float(self.speed.V[0]), self.body)
             fell = np.zeros(m, bool)
+            C = np.concatenate([CF[:, 0], cf_end[None]]) if self.edge_limit else None
         else:
-            P, cf_end, fell, rec = self._integrate(x, C_f0, u, t0, s0, record)
+            P, cf_end, fell, rec, C = self._integrate(x, C_f0, u, t0, s0, record)
         # P: the state at every step's end, shape (steps + 1, rows, m).  The distance travelled
         # (the steps' chords), the cost (the path distance at every sample, Section 6) and a
         # fall (the lean past its bound at a step's end; NaN counts).
@@ -360,6 +376,8 @@ class Problem:
         for ds in np.hypot(P[1:, X] - P[:-1, X], P[1:, Y] - P[:-1, Y]):
             s = s + ds
         fell |= ~(np.abs(P[1:, THETA_V]) <= st.theta_bound).all(axis=0)
+        if self.edge_limit is not None:      # an edge the lean cannot hold (module docstring)
+            fell |= ~self.edge_limit.holds(P[:, THETA_V], C).all(axis=0)
         per = st.steps_per_sample
         D = self.distance(P[per::per, :2].transpose(0, 2, 1))      # (samples, m)
         cost = np.zeros(m)
@@ -383,14 +401,15 @@ class Problem:
 
     def _integrate(self, x, C_f0, u, t0, s0, record):
         """The stage's RK4 through :meth:`_rhs` (any problem).  Returns ``(P, cf_end, bad,
-        record)``: the states at every step boundary (shape ``(steps + 1, rows, m)``), the
-        curvature at the end, the columns ``_rhs`` clipped, and with ``record`` the per-step
-        columns."""
+        record, C)``: the states at every step boundary (shape ``(steps + 1, rows, m)``), the
+        curvature at the end, the columns ``_rhs`` clipped, with ``record`` the per-step
+        columns, and the curvature at every step boundary (shape ``(steps + 1, m)``)."""
         st = self.settings
         s = np.array(s0, float)
         anchor = C_f0
         bad = np.zeros(x.shape[1], bool)
         P = [x]
+        C = []
         rec = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")} if record else None
         h = st.dt
         half = 0.5 * h
@@ -399,6 +418,7 @@ class Problem:
             tau = k * h
             V = self._speed_at(t0 + tau, s)
             cf, alpha, V_f = self._rhs(x, V, tau, C_f0, u, anchor, h, k1, bad)
+            C.append(np.broadcast_to(cf, x.shape[1:]))
             if record:
                 rec["state"].append(x.copy())
                 rec["C_f"].append(cf)
@@ -415,7 +435,8 @@ class Problem:
         # The curvature in force at the end of the stage (the next stage's C0).
         cf_end = self._rhs(x, self._speed_at(t0 + st.t_stage, s), st.t_stage, C_f0, u, anchor,
                            h, k1, bad)[0]
-        return np.stack(P), cf_end, bad, rec
+        C.append(np.broadcast_to(cf_end, x.shape[1:]))
+        return np.stack(P), cf_end, bad, rec, np.stack(C)
 
     def end_rates(self, x, cf, t, s):
         """``(alpha_v, V_f)`` of the state ``x`` (shape ``(5, 1)``) at curvature ``cf``."""

@@ -85,6 +85,7 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
     rows = {k: [] for k in ("state", "C_f", "alpha_v", "V_f", "t")}
     replans = []
     previous = proof = None
+    q_last = st.q
     reached = False
     p = 0.0
     while t < duration - 1e-9:
@@ -92,6 +93,9 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
             on_replan(t, x[:2, 0].copy(), p / progress.length if progress else 0.0)
         clock = time.perf_counter()
         local = problem.local(x[:2, 0], x[:, 0], t)
+        if previous is not None and local.settings.q != q_last:   # q_near: other choices
+            previous = proof = None
+        q_last = local.settings.q
         plan = branch_and_bound(local, x[:, 0], cf, t, s, previous, proof)
         if not plan.feasible:
             traj = _trajectory(problem, rows, x, cf, t, s, meta)

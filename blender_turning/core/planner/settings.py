@@ -22,6 +22,11 @@ class PlannerSettings:
     """N, the number of stages planned ahead (the horizon is N t_stage)."""
     q: int = 5
     """Number of dC_f/dt values tried per stage, spread evenly over [-dC_f_max, dC_f_max]."""
+    q_near: int = 0
+    """Number of dC_f/dt values tried per stage by a search with an obstacle or another figure
+    within the horizon's reach (``Problem.local``), evenly spread as ``q``'s; 0: ``q``.  With
+    ``q_near = 2 q - 1`` the values include ``q``'s, and the line passes an obstacle as close as
+    the finer rates allow (docs/racing.md, "An obstacle on the line")."""
     theta_bound: float = math.radians(30.0)
     """|theta_v| beyond which a branch counts as fallen over and is clipped, rad."""
     sample_dt: float = 0.1
@@ -53,6 +58,11 @@ class PlannerSettings:
     reuse_proof: bool = True
     """Receding horizon: bound the cost still to come by what the previous search proved about
     the same subtree (``proof.py``; exact)."""
+    edge_limit: bool = False
+    """On a preset's carving skis, clip branches whose curvature needs a larger edge angle than
+    the lean and the body's angulation give (``problem.py``, core/equipment.py's
+    ``EdgeLimit``); off (the default: it tightens the racers' lines on Reid's courses,
+    docs/racing.md): Section 3's curvature bounds alone."""
     batch: int = 128
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
     one node at a time; a long search grows its batches up to 4 times this, ``search.py``).  Any
@@ -67,6 +77,8 @@ class PlannerSettings:
         check_range("t_stage", self.t_stage, 0.0, 60.0, lo_open=True)
         check_range("n_stages", self.n_stages, 1, 64)
         check_range("q", self.q, 2, 64)
+        if self.q_near:
+            check_range("q_near", self.q_near, 2, 64)
         check_range("theta_bound", self.theta_bound, 0.0, math.pi / 2, lo_open=True, hi_open=True)
         check_range("sample_dt", self.sample_dt, 0.0, 60.0, lo_open=True)
         check_range("dt", self.dt, 1e-4, 1.0)
@@ -75,7 +87,7 @@ class PlannerSettings:
         check_range("reach_directions", self.reach_directions, 0, 1000)
         check_range("max_expansions", self.max_expansions, 0, 1e12)
         check_range("viable_stages", self.viable_stages, 0, 64)
-        for name in ("n_stages", "q", "batch", "lookahead", "reach_directions", "max_expansions",
+        for name in ("n_stages", "q", "q_near", "batch", "lookahead", "reach_directions", "max_expansions",
                      "viable_stages"):
             if int(getattr(self, name)) != getattr(self, name):
                 raise ValueError(f"{name} = {getattr(self, name)!r} is not a whole number")
