@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
-from blender_turning.core.controllers.braking import TargetSpeed
+from blender_turning.core.controllers.braking import TargetSpeed, round_turns
 from blender_turning.core.controllers.straight import Straight
 from blender_turning.core.errors import RunEnded
 from blender_turning.core.physics.grip import tyre
@@ -37,34 +37,46 @@ ROOT = Path(__file__).resolve().parent.parent
 FALL = -math.pi / 2
 
 
-def run(sport, slope, target, skid, V0=None, period=2.0, lean=23.0, duration=60.0, res=None):
+def run(sport, slope, target, skid, V0=None, period=2.0, lean=23.0, duration=60.0, res=None,
+        rounds=False):
+    """One run down the fall line; ``rounds``: speed control's round turns (``round_turns``)
+    instead of the ``period`` / ``lean`` slalom."""
     fig = preset(sport)
     if V0 is not None:
         fig = replace(fig, body=replace(fig.body, V_cm=V0))
+    res = res or RESISTANCE[sport]
     ground = Plane(math.radians(slope), FALL)
-    ctl = PhaseEllipse(fig.body, 2 * math.pi / period, math.radians(lean), heading=FALL)
-    ctl.begin_run(fig.limits)
-    s0 = slalom_start(fig.body, *ctl.target(0.0), FALL)
+    if rounds:
+        rt = round_turns(fig, math.radians(slope), res, target, skid.corridor)
+        ctl = PhaseEllipse(fig.body, rt.omega0, rt.theta_max, heading=FALL)
+        ctl.begin_run(fig.limits)
+        s0 = rt.start(FALL, fig.body.V_cm)
+    else:
+        ctl = PhaseEllipse(fig.body, 2 * math.pi / period, math.radians(lean), heading=FALL)
+        ctl.begin_run(fig.limits)
+        s0 = slalom_start(fig.body, *ctl.target(0.0), FALL)
     t0 = time.perf_counter()
-    traj = simulate(fig, ctl, duration, 0.02, s0, ground=ground,
-                    resistance=res or RESISTANCE[sport], target_speed=target, skidding=skid)
+    traj = simulate(fig, ctl, duration, 0.02, s0, ground=ground, resistance=res,
+                    target_speed=target, skidding=skid)
     return traj, ground, time.perf_counter() - t0
 
 
 def pistes():
-    print("sport        slope  style  mean m/s  |x| max m  turning share  wall s")
+    print("sport        slope  turns          mean m/s  |x| max m  turning share  wall s")
     for sport in ("skier", "snowboarder"):
         for slope in (12, 18, 25):
-            for name, skid in (("skid", Skidding("skid")), ("carve", None)):
+            for name, skid, rounds in (("skid, round", Skidding("skid"), True),
+                                       ("skid, 2 s", Skidding("skid"), False),
+                                       ("carve, 2 s", None, False)):
                 try:
-                    traj, ground, wall = run(sport, slope, 10.0, skid)
+                    traj, ground, wall = run(sport, slope, 10.0, skid, rounds=rounds)
                 except RunEnded as exc:
-                    print(f"{sport:12s} {slope:4d}   {name:5s}  {exc}")
+                    print(f"{sport:12s} {slope:4d}   {name:13s}  {exc}")
                     continue
                 mean = traj.V_cm[traj.t >= 30.0].mean()
                 share = turning_share(traj, ground, 9.81)
-                print(f"{sport:12s} {slope:4d}   {name:5s}  {mean:8.2f}  {np.abs(traj.x).max():9.1f}"
-                      f"  {share:13.2f}  {wall:6.2f}")
+                print(f"{sport:12s} {slope:4d}   {name:13s}  {mean:8.2f}  "
+                      f"{np.abs(traj.x).max():9.1f}  {share:13.2f}  {wall:6.2f}")
 
 
 def stops():

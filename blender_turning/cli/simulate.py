@@ -5,6 +5,7 @@ import math
 import sys
 
 from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, slalom_start
+from ..core.controllers.braking import round_turns
 from ..core.ranges import RANGES
 from ..core.controllers.schedule import Schedule
 from ..core.physics.simulate import DEFAULT_DT
@@ -81,17 +82,22 @@ def run(args) -> int:
         omega0, theta_max = sched.omega0, sched.theta_max
         # No heading_deg column: the heading is held at 0 deg, as without --heading-deg.
         heading = sched.heading or Schedule.constant(0.0)
-    else:
+    x0, y0 = start_point(args, terrain.get("ground"))
+    rounds = None
+    if not args.schedule:
         if args.omega0 is not None:
             w = _flag("omega0", args.omega0, "omega0")
         else:
             w = 2 * math.pi / _flag("period", 2.0 if args.period is None else args.period,
                                     "period")
-        lean = _flag("lean_deg", 23.0 if args.lean_deg is None else args.lean_deg, "theta_max",
-                     deg=True)
+        lean = math.radians(_flag("lean_deg", 23.0 if args.lean_deg is None else args.lean_deg,
+                                  "theta_max", deg=True))
         head = _flag("heading_deg", 0.0 if args.heading_deg is None else args.heading_deg,
                      "heading", deg=True)
-        omega0, theta_max = Schedule.constant(w), Schedule.constant(math.radians(lean))
+        rounds = _round_turns(args, fig, terrain, x0, y0)
+        if rounds is not None:                # speed control's own turns (docs/skidding.md)
+            w, lean = rounds.omega0, rounds.theta_max
+        omega0, theta_max = Schedule.constant(w), Schedule.constant(lean)
         heading = Schedule.constant(math.radians(head))
 
     record = CONTROLLERS.lookup(args.controller)
@@ -104,10 +110,11 @@ def run(args) -> int:
     outputs = Outputs()                       # every output path checked before the work
     outputs.reserve("--out", args.out)
     outputs.reserve("--plot", args.plot)
-    # Start so that the slalom is centred on the heading (with the lean and rate asked for);
-    # a straight run starts on the heading.
-    x0, y0 = start_point(args, terrain.get("ground"))
+    # Start so that the slalom is centred on the heading (with the lean and rate asked for;
+    # round turns at the bottom of their swing on the slope); a straight run starts on the
+    # heading.
     state0 = ((x0, y0, heading(0.0)) if straight else
+              rounds.start(heading(0.0), fig.body.V_cm, x0, y0)[:3] if rounds is not None else
               slalom_start(fig.body, w0, tm0, heading(0.0), x0, y0)[:3]) + (theta0, omega_v0)
     traj = simulate(fig, ctl, duration, dt, state0, meta={"controller": args.controller},
                     **terrain)
@@ -128,9 +135,35 @@ def run(args) -> int:
           f"{abs(traj.C_f).max():.3f} 1/m, distance {traj.s[-1]:.1f} m"
           f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if terrain else ''}"
           f"{'; turn ' + ctl.achieved.describe() if getattr(ctl, 'achieved', None) else ''}"
+          f"{_round_summary(rounds)}"
           f"{_skid_summary(traj)}"
           f"{f' -> {args.out}' if args.out else ''}")
     return 0
+
+
+def _round_turns(args, fig, terrain: dict, x: float, y: float):
+    """Speed control's round turns (:func:`..core.controllers.braking.round_turns`) when a
+    target speed is held by skidded turns on a slope and no turn was asked for (``--period``,
+    ``--omega0``, ``--lean-deg``, ``--schedule``), else ``None``."""
+    skid, ground = terrain.get("skidding"), terrain.get("ground")
+    if (skid is None or skid.style != "skid" or skid.stop_at is not None or ground is None
+            or "target_speed" not in terrain or args.controller != "ellipse"
+            or any(getattr(args, f) is not None for f in ("period", "omega0", "lean_deg"))):
+        return None
+    d = ground.derivatives(x, y)
+    slope = math.atan(math.hypot(float(d[1]), float(d[2])))
+    if slope <= 0.0:
+        return None
+    return round_turns(fig, slope, terrain["resistance"], float(terrain["target_speed"]),
+                       skid.corridor)
+
+
+def _round_summary(rounds) -> str:
+    """``; round turns 9.9 s / 45 deg`` (speed control chose the turn), else ``""``."""
+    if rounds is None:
+        return ""
+    return (f"; round turns {2 * math.pi / rounds.omega0:.1f} s / "
+            f"{math.degrees(rounds.theta_max):.0f} deg")
 
 
 def _skid_summary(traj) -> str:

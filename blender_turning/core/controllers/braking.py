@@ -38,12 +38,15 @@ docs/TERRAIN.md Section 6 (``scripts/braking_grid.py``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+
+import numpy as np
 
 from ..validate import check
-from .feasible import BRAKE_BETAS
+from .feasible import BRAKE_BETAS, feasible_turns
+from .heading_table import heading_table
 
-__all__ = ["TargetSpeed"]
+__all__ = ["TargetSpeed", "RoundTurns", "round_turns"]
 
 
 @dataclass(frozen=True)
@@ -76,6 +79,131 @@ class TargetSpeed:
 
 def _wrap(a: float) -> float:
     return (a + math.pi) % (2.0 * math.pi) - math.pi
+
+
+ROUND_LEAN = math.radians(45.0)
+"""The lean of the round turns, rad: a recreational skier's carved turn (radius
+``V^2 / (g tan 40 deg)``: 12 m at 10 m/s), leaving the hard-pack circle ``sqrt(1 - tan^2)`` =
+0.64 of the load to skid with at the turn's apex (docs/skidding.md Section 1)."""
+ROUND_SWING = 1.0
+"""The most the speed swings through one of the round turns, m/s (+-10% of 10 m/s)."""
+LATERAL_SHARE = 0.7
+"""The share of the corridor the round turns' own lateral swing may take."""
+
+
+def _bessel(n: int, a: float) -> float:
+    """``J_n(a)``, the Bessel function of the first kind, by its power series (to round-off for
+    ``|a| <= pi``: the terms fall as ``(a/2)^2k / (k! (k+n)!)``)."""
+    h = 0.5 * a
+    term = h ** n / math.factorial(n)
+    total = term
+    for k in range(1, 24):
+        term *= -h * h / (k * (k + n))
+        total += term
+    return total
+
+
+@dataclass(frozen=True)
+class RoundTurns:
+    """The turns :func:`round_turns` chooses, and what they do on the slope."""
+
+    omega0: float
+    """The ellipse's frequency, rad/s."""
+    theta_max: float
+    """The lean asked, rad."""
+    amplitude: float
+    """The heading's swing each side of the fall line, rad."""
+    pull: float
+    """The mean of ``cos`` (heading from the fall line): the share of gravity's pull down the
+    fall line the turns leave."""
+    speed_swing: float
+    """The speed's swing each side of its mean through a turn, m/s."""
+    lateral: float
+    """The track's swing each side of its mean line, m."""
+
+    g: float
+    """Gravity, m/s^2."""
+    slope: float
+    """The slope they are for, rad."""
+    J: float
+    """The figure's ``(I_v + m l^2) / (m l)``, m."""
+
+    def start(self, heading: float, V: float, x: float = 0.0, y: float = 0.0) -> tuple:
+        """The state at phase 0 of these turns about ``heading`` (the fall line), at speed
+        ``V``: upright, leaning out at the ellipse's rate, the heading at the bottom of its
+        swing on the slope at ``V`` (:func:`_turn_on_slope`)."""
+        a = _turn_on_slope(self.g, self.J, self.slope, V, self.theta_max, self.omega0)[0]
+        return (x, y, heading - a, 0.0, self.omega0 * self.theta_max, V)
+
+
+def _turn_on_slope(g: float, J: float, slope: float, V: float, lean: float, w: float,
+                   periods: int = 5, n: int = 64):
+    """The heading of a turn on the ellipse ``theta = lean sin(w t)`` at speed ``V`` about the
+    fall line of a plane of ``slope`` (rad), settled.  On flat ground the ellipse turns the
+    heading at ``V_f C_f = (g sin theta + w^2 J theta) / (V cos theta)`` (Eq. 21 with Eq. 1,
+    :mod:`.heading_table`; ``J = (I_v + m l^2) / (m l)``); on the slope gravity's normal part
+    ``g cos(slope)`` holds the lean and its part across the track, ``g sin(slope) sin psi``,
+    turns the figure down the fall line:
+    ``dpsi/dt = (g_n sin theta + w^2 J theta) / (V cos theta) - g sin(slope) sin(psi) / V``.
+    Returns ``(amplitude, mean cos psi, speed swing, lateral swing)`` over the last period
+    (classical RK4, ``n`` steps a period; the speed and the track swing from the pull's and
+    the heading's oscillation at the mean speed ``V``)."""
+    g_n, pull = g * math.cos(slope), g * math.sin(slope)
+    h = 2.0 * math.pi / (w * n)
+    wj = w * w * J
+
+    def f(t, p):
+        th = lean * math.sin(w * t)
+        return ((g_n * math.sin(th) + wj * th) / math.cos(th) - pull * math.sin(p)) / V
+
+    t, p = 0.0, 0.0
+    psi = []
+    for i in range(periods * n):
+        k1 = f(t, p)
+        k2 = f(t + 0.5 * h, p + 0.5 * h * k1)
+        k3 = f(t + 0.5 * h, p + 0.5 * h * k2)
+        k4 = f(t + h, p + h * k3)
+        p += h * (k1 + 2.0 * k2 + 2.0 * k3 + k4) / 6.0
+        t += h
+        if i >= (periods - 1) * n:
+            psi.append(p)
+    psi = np.array(psi)
+    psi -= 0.5 * (psi.max() + psi.min())        # about the mean heading (flat: no settling)
+    cos = np.cos(psi)
+    dv = np.cumsum(pull * (cos - cos.mean())) * h          # the speed's swing
+    dx = np.cumsum(V * np.sin(psi)) * h                     # the track's, across the fall line
+    return (0.5 * float(np.ptp(psi)), float(cos.mean()), 0.5 * float(np.ptp(dv)),
+            0.5 * float(np.ptp(dx)))
+
+
+def round_turns(figure, slope: float, resistance, speed: float, corridor: float,
+                lean: float = ROUND_LEAN, swing: float = ROUND_SWING) -> RoundTurns:
+    """The phase-ellipse turn a good skier brakes with at ``speed`` (m/s) on a slope of
+    ``slope`` (rad) within ``corridor`` (m each side of the course line): round turns that
+    finish across the fall line on a gentle slope, shorter ones as the slope steepens
+    (docs/skidding.md Section 3).
+
+    The lean ``lean`` (at most what the ellipse follows with the braking rule's
+    ``BRAKE_BETAS``, :mod:`.feasible`); the frequency the slowest (the roundest turn) whose
+    settled heading on the slope (:func:`_turn_on_slope`) swings at most 90 deg each side of the
+    fall line (the turn finishes across it) with (1) a mean pull down the fall line at least
+    the friction and drag at ``speed``: the turns alone do not brake below it; (2) a speed
+    swing of at most ``swing``; (3) a lateral swing of at most :data:`LATERAL_SHARE` of the
+    corridor (the braking rule keeps the mean line in the rest); (4) a period of at most 20 s.  On flat ground, or
+    when nothing needs braking, the quickest turn of the scan (2 s)."""
+    g = figure.body.g
+    feasible = feasible_turns(replace(figure.body, V_cm=speed), figure.limits)
+    drag = resistance.mu * g * math.cos(slope) + resistance.drag_k(figure.body.m) * speed ** 2
+    best = None
+    for w in np.geomspace(math.pi, 2.0 * math.pi / 20.0, 40):     # 2 s to 20 s, slower on
+        w = float(w)
+        th = min(lean, feasible.steerable_lean(w, BRAKE_BETAS))
+        a, pull, dv, dx = _turn_on_slope(g, figure.body.J, slope, speed, th, w)
+        if best is not None and (a > 0.5 * math.pi or g * math.sin(slope) * pull < drag
+                                 or dv > swing or dx > LATERAL_SHARE * corridor):
+            break
+        best = RoundTurns(w, lean, a, pull, dv, dx, g, slope, figure.body.J)
+    return best
 
 
 class _Braking:
@@ -128,6 +256,19 @@ class _Braking:
             room = min(room, (y_lo - y) / uy)
         return room
 
+    def _reach(self, t: float, V: float) -> float:
+        """How far the track of the turns swings each side of its mean line at the target
+        speed, m: ``2 J1(A) V / omega0`` (:func:`round_turns`), ``A`` half of Eq. 6's change on
+        flat ground (at least the swing on a slope, where gravity turns the figure back down),
+        at most 90 deg."""
+        change = getattr(self.ctl, "half_turn_change", None)
+        if change is None:
+            return 0.0
+        w, V_t = float(self.ctl.omega0(t)), float(self.speed(t))
+        a = 0.5 * float(change(self.ctl.feasible_lean(w, float(self.ctl.theta_max(t))), w))
+        a = min(a * V / V_t, 0.5 * math.pi)          # Eq. 6's change goes as 1 / V
+        return 2.0 * _bessel(1, a) * V_t / w
+
     def update(self, t: float, state) -> None:
         r = self.rule
         x, y, V = float(state[0]), float(state[1]), float(state[5])
@@ -166,10 +307,15 @@ class _Braking:
         margin = (V * self.period(t) * abs(math.sin(off)) + V * (1.0 - math.cos(swing)) / rate
                   + self.radius)
         s = self.side
-        if self.offset * s > 0.0 and (s * lateral + margin > r.corridor
-                                      or self._room(x, y, s * lat_x, s * lat_y) < margin):
-            self.side = s = -s
-        want = 0.0 if abs(w) >= self.angle else s * self.angle - w
+        if self._reach(t, V) > 0.5 * r.corridor:
+            # Round turns (round_turns) take most of the corridor: no room for a zig-zag; the
+            # turns brake, and the mean line is steered back to the course line over a turn.
+            want = -math.atan(lateral / (V * self.period(t)))
+        else:
+            if self.offset * s > 0.0 and (s * lateral + margin > r.corridor
+                                          or self._room(x, y, s * lat_x, s * lat_y) < margin):
+                self.side = s = -s
+            want = 0.0 if abs(w) >= self.angle else s * self.angle - w
         # 3. Toward it no faster than the body can follow, and within ``reach`` of the mean
         # heading the figure has (low-passed over half a turn).
         step = rate * dt
