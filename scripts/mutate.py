@@ -533,7 +533,7 @@ MUTANTS = [
     M("pole_aims_forward_after_plant", "mapping/sports/skier.py",
       "w_aim = np.where(d > 0.0, 0.0, w)", "w_aim = w", POLES, "bake"),
     M("users_pole_follows_the_hand", "mapping/retarget/retarget.py",
-      "                rot[chain[2]] = turn @ (A[chain[2]] @ rest[chain[2]][:3, :3])\n", "",
+      "            rot[c] = S @ turn @ (A[c] @ rest[c][:3, :3])\n", "",
       POLES, "bake"),
     # -- crowd staging (docs/crowds.md) -----------------------------------------------------------
     M("staging_always_waits", "crowd/staging.py",
