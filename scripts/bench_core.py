@@ -6,7 +6,9 @@
 
 - One figure: 60 s of a 2 s / 23 deg slalom under the phase-ellipse controller with heading
   control, at the default step (the accuracy the tests demand): simulated seconds per wall second;
-  also the open-loop slalom of Section 4 (no feedback), for scale.
+  also the open-loop slalom of Section 4 (no feedback), for scale, and the slalom on one ellipse
+  (no heading) against the same run as a bare float RK4 loop with the same arithmetic
+  (:func:`bare_loop`, bit for bit the core's trajectory): what the core's structure costs.
   Baseline in the same run: the same figure stepped by the numpy backend (a batch of one).
 - A batch of 1,000 figures stepped together: figure-steps per second.  Baseline in the same run:
   50 of the figures one after another on floats.  Also the numpy floor: the cheapest RK4 step
@@ -209,6 +211,10 @@ def main():
     t_scalar = best(one(s0), args.repeat)
     t_open = best(lambda: run(fig.body, fig.limits, OpenLoop(fig.body, w, tm), s0, 60.0,
                               DEFAULT_DT), args.repeat)
+    t_one = best(lambda: run(fig.body, fig.limits, PhaseEllipse(fig.body, w, tm), s0, 60.0,
+                             DEFAULT_DT), args.repeat)
+    n60 = int(math.floor(60.0 / DEFAULT_DT + 1e-9)) + 1
+    t_bare = best(lambda: bare_loop(fig, w, tm, n60), args.repeat)
     t_numpy1 = best(one(s0[:, None]), max(1, args.repeat // 2))
     n = args.batch
     rng = np.random.default_rng(0)
@@ -231,6 +237,10 @@ def main():
           f"{60 / t_scalar:.0f}x real time | 1000x |")
     print(f"| one figure, 60 s open-loop slalom (Section 4), on floats | {t_open * 1e3:.0f} ms | "
           f"{60 / t_open:.0f}x real time | 1000x |")
+    print(f"| one figure, 60 s phase-ellipse slalom on one ellipse (no heading), on floats | "
+          f"{t_one * 1e3:.0f} ms | {60 / t_one:.0f}x real time | |")
+    print(f"| floor: the same run as a bare float RK4 loop, same arithmetic | "
+          f"{t_bare * 1e3:.0f} ms | the core takes {t_one / t_bare:.2f}x | |")
     print(f"| baseline: the phase-ellipse run as a numpy batch of one | {t_numpy1 * 1e3:.0f} ms | "
           f"{60 / t_numpy1:.0f}x real time | |")
     print(f"| batch of {n}, {dur:g} s ({steps} steps) | {t_batch * 1e3:.0f} ms | "
