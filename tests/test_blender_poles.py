@@ -107,64 +107,48 @@ def baked_poles(scene, sport, on_ground):
     return poles(fig, frames), surface(mountain if on_ground else None)
 
 
-@pytest.mark.parametrize("kind", ["RIGIFY", "MIXAMO"])
-def test_a_users_rig_plants_its_poles_on_the_snow_not_through_it(scene, kind):
-    """The pole is rigid in the user's hand: the hand turns as the built-in's pole, the wrist
-    goes where that puts the grip on the built-in's, and the plants are planned for the
-    user's size (retargeting's k, about the foot point).  Without that the tips went 0.57-0.71
-    m into the snow and more than 5 cm under it on about 40% of the frames."""
-    (tracks, h) = baked_poles(scene, kind, False)
+def check_plants(tracks, h):
+    """Every plant of ``tracks`` (:func:`poles`) on the snow ``h`` (:func:`surface`) stays in its
+    hole, lifts out smoothly, and no part of a pole is ever under the snow."""
     for s, (grip, tip) in tracks.items():
-        height = tip[:, 2] - h(tip[:, :2])
-        assert height.min() > -0.01, (s, height.min())       # measured: 0.1 mm under at most
-        runs = [(a, b) for a, b in contact_runs(height) if a > 0]
-        assert len(runs) >= 3, (s, runs)                     # it does reach the snow
-        pts = grip[:, None] + ALONG[None, :, None] * (tip - grip)[:, None]
-        assert pts[..., 2].min() > -0.01
-
-
-@pytest.mark.parametrize("kind", ["RIGIFY", "MIXAMO"])
-def test_a_users_rig_keeps_a_planted_tip_in_its_hole(scene, kind):
-    (tracks, h) = baked_poles(scene, kind, False)
-    for s, (grip, tip) in tracks.items():
-        height = tip[:, 2] - h(tip[:, :2])
-        for a, b in [(a, b) for a, b in contact_runs(height) if a > 0]:
-            assert np.linalg.norm(tip[a:b, :2] - tip[a, :2], axis=1).max() < 0.03
-
-
-@pytest.mark.parametrize("sport, on_ground", [("SKIER", False), ("SKIER", True),
-                                              ("TELEMARK", False)])
-def test_planted_tips_stay_put_lift_out_smoothly_and_stay_out_of_the_snow(scene, sport,
-                                                                          on_ground):
-    sc, mountain = scene
-    fig = add(sport, (0.0, 60.0, 0.0) if on_ground else (0.0, 0.0, 0.0), -90.0)
-    if on_ground:
-        fig.turning.ground = mountain
-        fig.turning.terrain.target_speed = 12.0
-    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    frames = range(sc.frame_start, sc.frame_end + 1)
-    h = surface(mountain if on_ground else None)
-    for s, (grip, tip) in poles(fig, frames).items():
         height = tip[:, 2] - h(tip[:, :2])
         runs = [(a, b) for a, b in contact_runs(height) if a > 0]
         assert len(runs) >= 3, (s, runs)                  # a plant every turn (8 s, 2 s turns)
         for a, b in runs:
-            # In its hole from touching down to lifting out: the figure passes it at 0.3-0.5 m
-            # a frame, a sliding tip would go with it.  Measured: 0 on flat snow; on the mesh
-            # the hole is on the surface's tangent plane under the foot, a few mm off the mesh.
+            # In its hole from touching down to lifting out: the figure passes it at 0.3-0.7 m
+            # a frame, a sliding tip would go with it.  Measured: 0 on flat snow, 2 mm on the
+            # mesh; 1.5 cm on the Rigify rig's first plant (the tip coming down 3 mm short).
             travel = np.linalg.norm(tip[a:b, :2] - tip[a, :2], axis=1).max()
             assert travel < 0.03, (s, a, b, travel)
         # No part of the pole under the snow (the grip-to-tip segment, 12 points).
         pts = grip[:, None] + ALONG[None, :, None] * (tip - grip)[:, None]
         under = pts[..., 2] - h(pts[..., :2].reshape(-1, 2)).reshape(pts.shape[:2])
-        assert under.min() > -0.01, (s, under.min())
+        assert under.min() > -0.01, (s, under.min())      # measured: 0.01 mm under at most
         # Lifting out: the tip moves no more a frame than the hand does, but for the pole's
         # own turn about the grip as it rises out of the hole (1.15 m x up to 3 deg a frame:
-        # measured 2.4 cm on flat snow, 6.1 cm on the mesh); a tip snatched out of its hole
-        # jumped 0.6-0.7 m more than the hand.
+        # measured 2.4 cm on flat snow, 2.9 cm on the users' rigs, 5.9 cm on the mesh); a tip
+        # snatched out of its hole jumped 0.6-0.7 m more than the hand.
         step_tip = np.linalg.norm(np.diff(tip, axis=0), axis=1)
         step_hand = np.linalg.norm(np.diff(grip, axis=0), axis=1)
         for a, b in runs:
             after = slice(b - 1, min(b + 12, len(step_tip)))     # the half-second after
             excess = (step_tip[after] - step_hand[after]).max()
             assert excess < 0.08, (s, b, excess)
+
+
+@pytest.mark.parametrize("kind", ["RIGIFY", "MIXAMO"])
+def test_a_users_rig_keeps_a_planted_tip_in_its_hole(scene, kind):
+    """The pole is rigid in the user's hand: the hand turns as the built-in's pole, the wrist
+    goes where that puts the grip on the built-in's, and the plants are planned for the
+    user's size (retargeting's k, about the foot point) and arm (Rigify's is 0.86 times k
+    times the built-in's, Mixamo's 0.94): the hand swings at the built-in's angles, and where
+    it cannot reach the pole turns about its tip.  Without that the tips went 0.57-0.71 m into
+    the snow, and later a plant was held 1-2 frames and slid 9-18 cm as it lifted out."""
+    check_plants(*baked_poles(scene, kind, False))
+
+
+@pytest.mark.parametrize("sport, on_ground", [("SKIER", False), ("SKIER", True),
+                                              ("TELEMARK", False)])
+def test_planted_tips_stay_put_lift_out_smoothly_and_stay_out_of_the_snow(scene, sport,
+                                                                          on_ground):
+    check_plants(*baked_poles(scene, sport, on_ground))

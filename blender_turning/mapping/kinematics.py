@@ -227,6 +227,29 @@ def frame_from_yx(y_axis, x_hint):
     return np.stack([x, y, cross(x, y)], axis=-1)
 
 
+def on_sphere_within(centre, radius, u0, other, lo, hi):
+    """The point of the sphere of ``radius`` (a number or (n, 1)) about ``centre`` (n, 3) nearest to
+    ``centre + radius u0`` (``u0`` (n, 3) unit) among those ``lo``..``hi`` from ``other`` (n, 3):
+    a pole pivoting about its tip whose grip a hand at ``other`` can hold.  On the sphere the
+    distance from ``other`` grows with the angle from the direction towards it (law of cosines),
+    so the allowed points are a band about that direction and the nearest one is on the great
+    circle from ``u0`` to it.  Returns ``(u (n, 3), ok (n,))``: the unit direction from the
+    centre, and whether any point is within the band (else ``u`` points at ``other``, or away
+    from it where the whole sphere is nearer than ``lo``)."""
+    to = np.asarray(other, float) - centre
+    D = np.maximum(np.linalg.norm(to, axis=-1, keepdims=True), 1e-12)
+    c = to / D
+    law = lambda r: (radius * radius + D * D - r * r) / (2.0 * radius * D)     # noqa: E731
+    near, far = law(hi), law(lo)            # cos(angle) bounds of the band
+    cos0 = np.sum(u0 * c, axis=-1, keepdims=True)
+    cos = np.clip(cos0, np.maximum(near, -1.0), np.clip(far, -1.0, 1.0))
+    cos = np.minimum(cos, 1.0)
+    across = u0 - cos0 * c
+    across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
+    ok = (near[..., 0] <= 1.0) & (far[..., 0] >= -1.0)
+    return cos * c + np.sqrt(np.maximum(1.0 - cos * cos, 0.0)) * across, ok
+
+
 def two_bone_ik(root, target, l1: float, l2: float, pole, reach: float = 0.9999):
     """Analytic two-bone IK: the middle joint for a chain ``root -> mid -> target``.
 

@@ -52,7 +52,8 @@ from .. import bones as B
 from ..base import BoneChannels, PoseTrack
 from .bone_map import JOINT_PARENT, JOINTS, BoneMap
 from ..sports.common import rot_z
-from ..kinematics import cross, quat_continuous, quat_from_matrix, rigid_inverse, two_bone_ik
+from ..kinematics import (cross, on_sphere_within, quat_continuous, quat_from_matrix,
+                          rigid_inverse, two_bone_ik)
 from ...core.registry import SPORTS
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
 from ..surface import euler_xyz
@@ -367,16 +368,10 @@ def _turn_about_tip(bi, pole, root, wrist, reach):
     short = np.linalg.norm(wrist - root, axis=1) > reach
     if not short.any():
         return wrist, S
-    w, t, r = wrist[short], tip[short], root[short]
+    w, t = wrist[short], tip[short]
     W = np.linalg.norm(w - t, axis=1, keepdims=True)
-    D = np.linalg.norm(r - t, axis=1, keepdims=True)
-    u0, c = (w - t) / W, (r - t) / D
-    # The wrists within reach, on the sphere of radius W about the tip, are the cap about c of
-    # half-angle a (law of cosines); the nearest of them to u0 is on the great circle to c.
-    cos_a = np.clip((W * W + D * D - reach * reach) / (2.0 * W * D), -1.0, 1.0)
-    across = u0 - np.sum(u0 * c, axis=1, keepdims=True) * c
-    across /= np.maximum(np.linalg.norm(across, axis=1, keepdims=True), 1e-12)
-    u = cos_a * c + np.sqrt(1.0 - cos_a * cos_a) * across
+    u0 = (w - t) / W
+    u, _ = on_sphere_within(t, W, u0, root[short], 0.0, reach)
     S[short] = swing(u0, u)
     out = wrist.copy()
     out[short] = t + W * u

@@ -23,7 +23,8 @@ from ..base import Mapping
 from ..anthropometry import centre_and_roll_inertia
 from .common import (add_local_rotation, carried, ik_limb, lean, leg_lengths, limb_frames,
                      phase_window, place_on_ground, rot_y, rot_z, smoothstep)
-from ..kinematics import PoseBuilder, frame_from_yx, rigid_inverse, stack_dot
+from ..kinematics import (PoseBuilder, frame_from_yx, on_sphere_within, rigid_inverse,
+                          stack_dot)
 from .skid_pose import SkidPose, knee_direction, ski_front
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
@@ -41,6 +42,9 @@ POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
 #: An arm whose grip offset moved less than this (m) in an aiming pass has settled: another pass
 #: would give the same numbers to rounding, so it leaves the loop.
 SETTLED = 1e-12
+#: A planted grip the arm's IK misses by more than this (m) is out of the arm's reach: the plant
+#: ends before it (the aiming loop itself stops within 0.2 mm).
+MISSED = 1e-3
 
 
 @dataclass(frozen=True)
@@ -219,8 +223,10 @@ class SkierMapping(Mapping):
         """
         skel = b.skel
         chest = stack_dot(b.pose(B.CHEST)[:, :3, :3], skel.rest_of(B.CHEST)[:3, :3].T)
-        reach = 0.98 * o.plant_reach * (skel.length(B.side("upper_arm", "L"))
-                                        + skel.length(B.side("forearm", "L")))
+        # The hand holds a planted pole between the elbow at a right angle and 98% of the arm's
+        # length from the shoulder (of the arm shown: plant_reach times the built-in's).
+        l1, l2 = (o.plant_reach * skel.length(B.side(bone, "L")) for bone in ("upper_arm", "forearm"))
+        reach = (math.hypot(l1, l2), 0.98 * (l1 + l2))
         place = b.placement
         for s, sx in SIDES:
             plant = o.pole_plant_L if s == "L" else o.pole_plant_R
@@ -251,30 +257,20 @@ class SkierMapping(Mapping):
             grip, wrist = arm.reach(hand)
             offset = grip - wrist
             free = hand + offset
-            plan = _plan_plants(place, d, o.pole_hold, o.pole_swing,
-                                grip + length * free_axis(grip), free, shoulder + offset, length,
-                                reach, o.plant_scale)
-            lift = plan.u[plan.after, None]
-            target = free.copy()
-            target[plan.held] = plan.grip_at[plan.held]
-            target[plan.after] = (1 - lift) * plan.grip_at[plan.after] + lift * free[plan.after]
-            # ... never nearer the hole than the pole is long, or the tip would go into the snow.
-            out = target[plan.after] - plan.tip_at[plan.after]
-            r = np.linalg.norm(out, axis=1, keepdims=True)
-            target[plan.after] = plan.tip_at[plan.after] + out * np.maximum(r, length) / r
-            # The offset turns with the hand: aim again with the new one.  Each frame is solved on
-            # its own, so a frame whose offset no longer moves (a free swing, after one pass)
-            # would only give the same numbers again: it leaves the loop, the rest go on.
-            moving_aim = np.arange(len(target))
-            aim_wrist = target - offset
-            for _ in range(12):
-                aim_wrist[moving_aim] = target[moving_aim] - offset[moving_aim]
-                g, wr = arm.reach(aim_wrist[moving_aim], moving_aim)
-                step = np.max(np.abs(g - wr - offset[moving_aim]), axis=1, initial=0.0)
-                grip[moving_aim], offset[moving_aim] = g, g - wr
-                if np.max(np.abs(grip - target), initial=0.0) < 2e-4:    # ~10x per two passes
+            # The plan tells where the arm reaches from the free swing's offset; the arm's own
+            # IK has the last word: a planted frame it cannot reach ends the plant (planned
+            # again, until the frames in their holes are all reached: 1-3 passes).
+            barred = np.zeros(len(d), bool)
+            tips = grip + length * free_axis(grip)
+            for _ in range(4):
+                plan = _plan_plants(place, d, o.pole_hold, o.pole_swing, tips, free,
+                                    shoulder + offset, length, reach, o.plant_scale, barred)
+                target, aim_wrist, grip, aimed = _aim(arm, plan, free, offset, length)
+                missed = plan.in_hole & (np.linalg.norm(grip - target, axis=1) > MISSED)
+                if not missed.any():
                     break
-                moving_aim = moving_aim[step > SETTLED]
+                barred |= missed
+            lift = plan.u[plan.after, None]
             ik_limb(b, arm.upper, arm.lower, aim_wrist, elbow_dir)     # the arm's pose, once
             axis = free_axis(grip)
             # Held: aim at the hole.  Lifting off: at a point moving from the hole to the free
@@ -286,10 +282,40 @@ class SkierMapping(Mapping):
             to = aim[moving] - grip[moving]
             axis[moving] = to / np.linalg.norm(to, axis=1, keepdims=True)
             # Where that would still dip the tip into the snow, it stays on the line to the hole.
-            dip = plan.after & (grip[:, 2] + length * axis[:, 2] < 0.0)
+            dip = plan.after & under_snow(place, grip + length * axis, o.plant_scale)
             to = plan.tip_at[dip] - grip[dip]
             axis[dip] = to / np.linalg.norm(to, axis=1, keepdims=True)
             b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
+
+
+def _aim(arm, plan, free, offset, length):
+    """The grip's targets of the plan ``plan`` (the free swing's grips ``free`` elsewhere) and
+    the arm aimed at them from the free swing's grip offsets ``offset``: returns ``(target,
+    wrist aimed at, grip reached, its offset from the wrist)``."""
+    lift = plan.u[plan.after, None]
+    target = free.copy()
+    target[plan.held] = plan.grip_at[plan.held]
+    target[plan.after] = (1 - lift) * plan.grip_at[plan.after] + lift * free[plan.after]
+    # ... never nearer the hole than the pole is long, or the tip would go into the snow.
+    out = target[plan.after] - plan.tip_at[plan.after]
+    r = np.linalg.norm(out, axis=1, keepdims=True)
+    target[plan.after] = plan.tip_at[plan.after] + out * np.maximum(r, length) / r
+    # The offset turns with the hand: aim again with the new one.  Each frame is solved on its
+    # own, so a frame whose offset no longer moves (a free swing, after one pass) would only
+    # give the same numbers again: it leaves the loop, the rest go on.
+    offset = offset.copy()
+    grip = target.copy()
+    moving_aim = np.arange(len(target))
+    aim_wrist = target - offset
+    for _ in range(12):
+        aim_wrist[moving_aim] = target[moving_aim] - offset[moving_aim]
+        g, wr = arm.reach(aim_wrist[moving_aim], moving_aim)
+        step = np.max(np.abs(g - wr - offset[moving_aim]), axis=1, initial=0.0)
+        grip[moving_aim], offset[moving_aim] = g, g - wr
+        if np.max(np.abs(grip - target), initial=0.0) < 2e-4:    # ~10x per two passes
+            break
+        moving_aim = moving_aim[step > SETTLED]
+    return target, aim_wrist, grip, offset
 
 
 class _Arm:
@@ -362,6 +388,17 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
     grip_at[idx] = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
 
 
+def under_snow(place, p, k) -> np.ndarray:
+    """(n,) whether the armature-space points ``p`` (n, 3, one per frame) are under the snow in
+    the world of the figure ``k`` times the built-in's size: under the plane under the foot, or
+    under the Ground mesh where there is one."""
+    under = p[:, 2] < 0.0
+    if place.surface is not None:
+        w = _world(place, p, np.arange(len(p)), k)
+        under |= w[:, 2] < place.surface(w[:, 0], w[:, 1])
+    return under
+
+
 def on_snow(place, p):
     """The world point ``p`` moved onto the ground (vertically; the plane under the foot when
     there is no Ground mesh, where it already is)."""
@@ -377,18 +414,20 @@ class _Plants:
     u: np.ndarray         # (n,) 0 at lift-off -> 1 when the pole swings free again
     tip_at: np.ndarray    # (n, 3) armature-space hole in the snow while held and lifting off
     grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
+    in_hole: np.ndarray   # (n,) bool: held with the tip in its hole (not coming down to it)
 
 
 def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
-                 scale: float = 1.0) -> _Plants:
+                 scale: float = 1.0, barred=None) -> _Plants:
     """Where each plant goes into the snow and how long it can stay (see arms_and_poles); the
     holes stay put in the world of the figure ``scale`` times the built-in's size.
 
     ``d`` is the signed phase from the plant, ``tips`` and ``free`` the free swing's tip and grip
     (armature space), ``shoulder`` the shoulder shifted by the grip's offset from the wrist, so
-    that ``|grip - shoulder| <= reach`` says the arm reaches."""
+    that ``reach[0] <= |grip - shoulder| <= reach[1]`` says the arm holds it; ``barred`` (n,) bool: frames the
+    arm was found not to reach, where a plant ends."""
     n = len(d)
-    held, after = np.zeros(n, bool), np.zeros(n, bool)
+    held, after, in_hole = np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool)
     u = np.ones(n)
     tip_at, grip_at = tips.copy(), free.copy()
     # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
@@ -402,12 +441,18 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
         _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
                   grip_at, scale)
         local = _local(place, P, idx, scale)
+        # The grip on the sphere of the pole's length about the hole: towards the free swing's
+        # grip, turned about the hole as far as needed for the hand to hold it (the pole's
+        # angle changes, the tip stays put); the plant ends where no point of it is in reach.
         away = free[idx] - local
-        grip = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
-        ok = np.linalg.norm(grip - shoulder[idx], axis=1) <= reach
+        to, ok = on_sphere_within(local, length, away / np.linalg.norm(away, axis=1, keepdims=True),
+                                  shoulder[idx], *reach)
+        grip = local + length * to
+        if barred is not None:
+            ok &= ~barred[idx]
         k = len(idx) if ok.all() else max(int(np.argmin(ok)), 1)
         idx, local, grip = idx[:k], local[:k], grip[:k]
-        held[idx], tip_at[idx], grip_at[idx] = True, local, grip
+        held[idx], in_hole[idx], tip_at[idx], grip_at[idx] = True, True, local, grip
         # Lift off: from the last held pose to the free swing over `swing` of phase.
         r = idx[-1]
         dd = d[r + 1:] - d[r]
@@ -418,7 +463,7 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
         # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
         # rises off the snow along that line) while it swings free.
         tip_at[r + 1:j] = _local(place, P, np.arange(r + 1, j), scale)
-    return _Plants(held, after, u, tip_at, grip_at)
+    return _Plants(held, after, u, tip_at, grip_at, in_hole)
 
 
 #: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
