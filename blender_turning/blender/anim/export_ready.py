@@ -1,17 +1,24 @@
-"""An export-ready bake: the equipment of a figure made from the user's rig keyed on every baked
-frame, so glTF and FBX carry it with their default settings.
+"""An export-ready bake: the equipment of a figure made from the user's rig keyed on the baked
+range, so glTF and FBX carry it with their default settings.
 
 On a user's rig the skis, poles and bicycle are objects of their own that follow the rig through
 Child Of and Damped Track constraints and drivers (:func:`.retarget_adapter.build_equipment`).
-The exporters write an object's keyed transform, not what its constraints and drivers make of
-it, so without keys the equipment stays where it stood while the rider rides on.  After the
-armature is baked, :func:`bake_equipment` reads every equipment object's transform as Blender
-evaluates it (the rig's own IK and constraints place the bones the equipment follows, so there
-is no closed form of it here: this is the one place the add-on steps the scene through its
-frames), writes whole F-curves of it (``foreach_set``, one action per object, owned by it as the
-figure's action is by the figure), and turns the constraints and drivers off, so the keys alone
-move the equipment, the same at every frame as before.  :func:`clear_equipment` undoes all of
-it (Clear Bake, a re-bake, a Live Preview re-bake, Remove Figure).
+Both exporters sample each object's evaluated transform frame by frame (``matrix_world``, so
+what its constraints and drivers make of it), but only of objects they see as animated:
+
+- glTF samples an object with an action; one without stays where it stands.
+- FBX, by default (*NLA Strips* and *All Actions* on), writes one take per unmuted NLA strip of
+  the exported objects, sampling every exported object with that strip playing and every active
+  action removed, then one take per action that fits an object.  The figure's bake plays from
+  its NLA strip (docs/layers.md), so the bake's take is the first in the file (the one an
+  importer plays) and carries whatever follows the rig live; equipment moved by keys of its own
+  would stand still in it.
+
+So :func:`bake_equipment` leaves the constraints and drivers on and gives each piece an action
+holding the transform it already has (its rest under the constraints, on the first and last
+baked frames): glTF then samples it, FBX's bake take samples it as it follows the rig, and in
+Blender nothing moves differently.  Nothing steps the scene.  :func:`clear_equipment` removes
+those actions (Clear Bake, a re-bake, a Live Preview re-bake, Remove Figure).
 
 A built-in figure needs none of this: its equipment is part of its skinned mesh and moves with
 the bones the bake keys.
@@ -26,8 +33,9 @@ from .. import compat
 from . import bake
 from ..scene.retarget_adapter import is_user_rig, rig_settings
 
-#: ID property on an equipment object keyed by :func:`bake_equipment`: its rotation mode and
-#: transform (``matrix_basis``, row by row) before, given back by :func:`clear_equipment`.
+#: ID property on an equipment object keyed by :func:`bake_equipment`: its transform
+#: (``matrix_basis``, row by row) before, given back exactly by :func:`clear_equipment` (the keys
+#: hold it as float32).
 KEYED = "turning_export_keys"
 
 
@@ -38,51 +46,23 @@ def equipment(fig) -> list:
     return list(rig_settings(fig).equipment.objects)
 
 
-def _sample(scene, objs, frames) -> np.ndarray:
-    """``(n_frames, n_objects, 4, 4)`` transforms of ``objs`` relative to their parents (their
-    ``matrix_basis`` once constraints are off), as evaluated on each of ``frames``."""
-    out = np.empty((len(frames), len(objs), 4, 4))
-    for i, f in enumerate(frames):
-        scene.frame_set(int(f))
-        for j, obj in enumerate(objs):
-            world = obj.matrix_world
-            if obj.parent is not None:
-                world = (obj.parent.matrix_world @ obj.matrix_parent_inverse).inverted() @ world
-            out[i, j] = np.array(world)
-    return out
+#: The rotation property of each rotation mode (an Euler order otherwise).
+_ROTATION = {"QUATERNION": "rotation_quaternion", "AXIS_ANGLE": "rotation_axis_angle"}
 
 
-def _channels(mats, mode: str) -> dict:
-    """``{data_path: (n, k) values}`` of ``(n, 4, 4)`` rigid-and-scale transforms, the rotation
-    in the object's own ``mode``: Euler angles unwrapped from frame to frame (a wheel's spin
-    keeps counting), quaternions kept on one side (q and -q are the same turn)."""
-    loc = mats[:, :3, 3]
-    scale = np.linalg.norm(mats[:, :3, :3], axis=1)                   # column lengths
-    rot = [Matrix((m[:3, :3] / s[None, :]).tolist()) for m, s in zip(mats, scale)]
-    if mode in ("QUATERNION", "AXIS_ANGLE"):
-        quats = np.array([np.array(r.to_quaternion()) for r in rot])
-        for i in range(1, len(quats)):
-            if np.dot(quats[i], quats[i - 1]) < 0.0:
-                quats[i] = -quats[i]
-        return {"location": loc, "rotation_quaternion": quats, "scale": scale}
-    eulers, prev = [], None
-    for r in rot:
-        prev = r.to_euler(mode) if prev is None else r.to_euler(mode, prev)
-        eulers.append(tuple(prev))
-    return {"location": loc, "rotation_euler": np.array(eulers), "scale": scale}
+def _basis_channels(obj) -> list:
+    """``[(data_path, index, value)]`` of ``obj``'s own transform in its rotation mode."""
+    rot = _ROTATION.get(obj.rotation_mode, "rotation_euler")
+    return [(path, i, float(v)) for path in ("location", rot, "scale")
+            for i, v in enumerate(getattr(obj, path))]
 
 
-#: An object's transforms that are not its basis, held at rest while it is keyed.
-_DELTAS = ("delta_location", "delta_rotation_euler", "delta_rotation_quaternion", "delta_scale")
-_REST = {"delta_location": (0.0, 0.0, 0.0), "delta_rotation_euler": (0.0, 0.0, 0.0),
-         "delta_rotation_quaternion": (1.0, 0.0, 0.0, 0.0), "delta_scale": (1.0, 1.0, 1.0)}
-
-
-#: Custom property each bake's action keys on its own object only (``"turn_take <name>"``,
-#: value 0): FBX exports, as a take of an object, every action all of whose F-curves resolve on
-#: it, and figures of a sport share their bones (equipment objects share location, rotation,
-#: scale).  On a figure it is one of the bake's state properties (Clear Bake removes those).
-TAKE = "turn_take "
+#: Custom property each bake's action keys (``"turn_take <name>"``, value 0) and no object has
+#: (``bake.KEY_ONLY``): FBX exports, as a take of an object, every action all of whose F-curves
+#: resolve on it, and figures of a sport share their bones (equipment objects share location,
+#: rotation, scale); with this curve a bake's action fits no object, and plays only where the
+#: add-on put it (the figure's NLA strip, a piece's active action).
+TAKE = bake.KEY_ONLY
 
 
 def with_take(fig, track):
@@ -94,67 +74,34 @@ def with_take(fig, track):
 
 def own_take(obj, bag, frames) -> None:
     """Key an equipment object's own take property in ``bag`` on ``frames``."""
-    prop = TAKE + obj.name
-    obj[prop] = 0.0
-    path = f'["{bpy.utils.escape_identifier(prop)}"]'
+    path = f'["{bpy.utils.escape_identifier(TAKE + obj.name)}"]'
     frames = np.asarray(frames, float)
     bake.write_channels(bag, [(path, 0, "Turning", np.zeros(len(frames)))], frames)
 
 
-def drop_take(obj) -> None:
-    for prop in [p for p in obj.keys() if p.startswith(TAKE)]:
-        del obj[prop]
-
-
 def bake_equipment(fig, frames) -> int:
-    """Key a user rig's equipment on ``frames`` (the figure's baked frames, ascending) from
-    Blender's evaluation, then turn its constraints and drivers off (and its delta transforms to
-    rest).  Returns the objects keyed.  The scene ends on the frame it was on."""
-    clear_equipment(fig)                     # evaluate with the constraints on
+    """Key a user rig's equipment with the transform it holds (constraints and drivers stay
+    on and move it) on the first and last of ``frames`` (the figure's baked frames, ascending).
+    Returns the objects keyed."""
+    clear_equipment(fig)
     objs = equipment(fig)
     if not objs:
         return 0
-    scene = bpy.context.scene
-    current = scene.frame_current
-    frames = np.asarray(frames, float)
-    try:
-        mats = _sample(scene, objs, frames)
-    finally:
-        scene.frame_set(current)
-    for j, obj in enumerate(objs):
-        before = {"mode": obj.rotation_mode,
-                  "basis": [float(v) for row in obj.matrix_basis for v in row],
-                  **{d: list(getattr(obj, d)) for d in _DELTAS}}
+    ends = np.unique(np.asarray(frames, float)[[0, -1]])
+    for obj in objs:
+        obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]
         keyed = compat.assign_new_action(obj, obj.name)
         keyed[bake.OWNER] = obj
         keyed[bake.MERGE_INTO] = bake.figure_action(fig).name    # one glTF animation
-        obj[KEYED] = before
-        _switch(obj, on=False)
-        for d in _DELTAS:
-            setattr(obj, d, _REST[d])
-        values = _channels(mats[:, j], obj.rotation_mode)
         obj_bag = compat.channels(obj)
-        bake.write_channels(obj_bag, [(path, i, "Object Transforms", v[:, i])
-                                      for path, v in values.items() for i in range(v.shape[1])],
-                            frames)
-        own_take(obj, obj_bag, frames)
-    scene.frame_set(current)
+        bake.write_channels(obj_bag, [(path, i, "Object Transforms", np.full(len(ends), v))
+                                      for path, i, v in _basis_channels(obj)], ends)
+        own_take(obj, obj_bag, ends)
     return len(objs)
 
 
-def _switch(obj, on: bool) -> None:
-    """The add-on's constraints and drivers of an equipment object on or off."""
-    for con in obj.constraints:
-        if con.name.startswith("Turning:"):
-            con.enabled = on
-    adt = obj.animation_data
-    for fc in (adt.drivers if adt else ()):
-        fc.mute = not on
-
-
 def clear_equipment(fig) -> None:
-    """Remove the keys :func:`bake_equipment` wrote and turn the constraints and drivers back
-    on: the equipment follows the rig again."""
+    """Remove the keys :func:`bake_equipment` wrote and give each piece its transform back."""
     for obj in equipment(fig):
         if KEYED not in obj:
             continue
@@ -163,14 +110,8 @@ def clear_equipment(fig) -> None:
         if action is not None and action.get(bake.OWNER) == obj:
             adt.action = None
             bpy.data.actions.remove(action)
-        before = obj[KEYED]
-        obj.rotation_mode = before["mode"]
-        obj.matrix_basis = Matrix(np.reshape(before["basis"], (4, 4)).tolist())
-        for d in _DELTAS:
-            setattr(obj, d, before[d])
+        obj.matrix_basis = Matrix(np.reshape(obj[KEYED], (4, 4)).tolist())
         del obj[KEYED]
-        drop_take(obj)
-        _switch(obj, on=True)
 
 
 # -- root motion --------------------------------------------------------------------------------
