@@ -630,9 +630,16 @@ MUTANTS = [
       EXPORT, "bake"),
     M("fbx_figure_take_dropped", "blender/anim/figure_bake.py",
       "        track = export_ready_mod.with_take(fig, track)", "        pass",
-      EXPORT + [T + "test_blender_physics.py"], "bake"),      # FBX's own test is an xfail now
-    M("equipment_constraints_left_on", "blender/anim/export_ready.py",
-      "        _switch(obj, on=False)", "        pass", EXPORT, "bake"),
+      EXPORT + [T + "test_blender_physics.py"], "bake"),
+    M("fbx_bake_take_fits_its_figure", "blender/anim/bake.py",
+      "        if prop not in obj.keys() and not prop.startswith(KEY_ONLY):",
+      "        if prop not in obj.keys():", EXPORT, "bake"),
+    M("fbx_tweak_take_one_frame", "blender/anim/bake.py",
+      "    bake_layers.span_tweaks(obj, action.frame_range)", "    pass", EXPORT, "bake"),
+    M("equipment_keyed_where_it_stands", "blender/anim/export_ready.py",
+      "        obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]\n",
+      "        obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]\n"
+      "        obj.matrix_basis = obj.matrix_world\n", EXPORT, "bake"),
 ]
 
 LIVE_MUTANTS = [

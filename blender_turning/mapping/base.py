@@ -53,10 +53,6 @@ class PoseTrack:
     """bone name -> :class:`BoneChannels`."""
     props: dict = field(default_factory=dict)
     """custom property name -> (n,) values (see ``STATE_PROPS``)."""
-    joints: dict = field(default_factory=dict)
-    """bone name -> (n, 4, 4) the armature-space pose (Blender's ``PoseBone.matrix``) the keys
-    give the bone, where the mapping knows it in closed form (the retarget's solved joints of a
-    user's rig, whose controls move them through the rig's own constraints); else empty."""
 
     def __post_init__(self):
         n = len(self.frames)
@@ -70,9 +66,6 @@ class PoseTrack:
         for prop, arr in self.props.items():
             if np.shape(arr) != (n,):
                 raise ValueError(f"property {prop!r} must have shape ({n},)")
-        for bone, arr in self.joints.items():
-            if np.shape(arr) != (n, 4, 4):
-                raise ValueError(f"joint pose {bone!r} must have shape ({n}, 4, 4)")
 
     def __len__(self) -> int:
         return len(self.frames)

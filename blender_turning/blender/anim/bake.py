@@ -45,6 +45,13 @@ class BakeResult:
     """Keys per F-curve."""
 
 
+#: Custom properties a bake keys but never creates on an object (``export_ready.TAKE``): their
+#: F-curves resolve on no object, so FBX's *All Actions* (which exports an action as a take of
+#: every object all of its F-curves resolve on) finds no object the bake's action fits, and the
+#: bake's only take is its NLA strip's (docs/export.md).  Blender skips a curve that resolves on
+#: nothing when it plays the action.
+KEY_ONLY = "turn_take "
+
 #: ID property on an equipment object's action: the name of its figure's action (the glTF
 #: animation its keys merge into; export_ready.py writes it, export_gltf.py reads it).
 MERGE_INTO = "turning_export_merge"
@@ -194,6 +201,13 @@ def _remove_baked(bag, action) -> None:
     action[BAKED_PATHS] = ""
 
 
+def _make_props(obj, track: PoseTrack) -> None:
+    """The custom properties ``track`` keys, made on ``obj`` (but not ``KEY_ONLY`` ones)."""
+    for prop, values in track.props.items():
+        if prop not in obj.keys() and not prop.startswith(KEY_ONLY):
+            obj[prop] = float(values[0])
+
+
 def write_channels(bag, channels, frames) -> int:
     """Write each ``(data_path, index, group, values)`` as one whole F-curve; return the count."""
     n = len(frames)
@@ -221,9 +235,7 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
         if ch.rotation is not None:
             obj.pose.bones[name].rotation_mode = "QUATERNION"
     obj.rotation_mode = "XYZ"
-    for prop, values in track.props.items():
-        if prop not in obj.keys():
-            obj[prop] = float(values[0])
+    _make_props(obj, track)
     bag = _bag(obj, action, strip)
     action[bake_layers.FINGERPRINTS] = ""     # a bake cut short must not read as the user's edits
     _remove_baked(bag, action)
@@ -237,6 +249,7 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
     else:
         bake_layers.push_bake(obj, action)
     _play_tweaks(obj, keep, bag)
+    bake_layers.span_tweaks(obj, action.frame_range)
     return BakeResult(action, count, len(track))
 
 
@@ -287,9 +300,7 @@ def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
         buf = old[fc]
         buf[2 * i0 + 1:2 * (i0 + n):2] = -values if signs.get(path, 0.0) < 0 else values
         fc.keyframe_points.foreach_set("co", buf)
-    for prop, values in track.props.items():
-        if prop not in obj.keys():
-            obj[prop] = float(values[0])
+    _make_props(obj, track)
     bake_layers.fingerprint(action, bag, keys)  # the bake's own keys now: not the user's edits
     action.update_tag()                 # re-evaluate the animation, relations unchanged
     return BakeResult(action, len(todo), n)

@@ -167,6 +167,17 @@ def start_tweaks(obj):
     return action
 
 
+def span_tweaks(obj, frame_range) -> None:
+    """Give ``obj``'s playing tweak layer the bake's frame range as its own (Manual Frame Range):
+    an exporter that plays each action over its range (FBX's *All Actions*) then plays the
+    figure with its tweaks over the whole bake, not over the keys the layer happens to hold (an
+    empty one: none)."""
+    action, _ = tweak_layer(obj)
+    if playing(obj, action):
+        action.use_frame_range = True
+        action.frame_start, action.frame_end = frame_range
+
+
 def tweak_channels(obj):
     """The F-curve container of ``obj``'s tweak layer (its one slot), or ``None``."""
     action, _ = tweak_layer(obj)

@@ -82,7 +82,7 @@ def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True):
         set_hermite_handles(fig, slopes)
     foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z)     # on the ground
     if export_ready:
-        export_ready_mod.bake_equipment(fig, track.frames, track)
+        export_ready_mod.bake_equipment(fig, track.frames)
     else:
         export_ready_mod.clear_equipment(fig)
     return result

@@ -73,9 +73,9 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         description="Fewer Keys: how far a position may stray from the every-frame motion")
     export_ready: BoolProperty(
         name="Export-Ready Equipment", default=True,
-        description="A figure made from your own rig: key its skis, poles or bicycle on every "
-                    "baked frame too (their constraints and drivers off while baked), so glTF "
-                    "and FBX carry them. Off: they follow the rig live, and exporters drop them")
+        description="A figure made from your own rig: give its skis, poles or bicycle an "
+                    "action too (they still follow the rig through their constraints and "
+                    "drivers), so glTF exports their motion. Off: glTF leaves them behind")
     root_motion: BoolProperty(
         name="Root Motion", default=False,
         description="Key the travel on the rig's root bone (Rigify's or the built-in figures' "

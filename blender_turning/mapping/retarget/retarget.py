@@ -451,5 +451,4 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
         # the piece's rest frame); the user's figure is k times the size.
         axis = bi.skel.rest_of(piece)[:3, :3].T @ bi.skel.rest_of(along)[:3, 1]
         props[prop] = fit.k * (track.bones[piece].location @ axis)
-    joints = {bm.bone(j): pose for j, pose in poses.items()}
-    return PoseTrack(track.frames, location, rotation, bones, props, joints)
+    return PoseTrack(track.frames, location, rotation, bones, props)
