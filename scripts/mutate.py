@@ -69,6 +69,7 @@ REGISTRY = [T + "test_registry.py", T + "test_crowd.py"]
 BLENDER_REGISTRY = [T + "test_blender_registry.py"]
 NOTES = [T + "test_blender_model_notes.py"]
 EXPORT = [T + "test_blender_export.py"]
+EQUIPMENT_KEYS = [T + "test_blender_equipment_keys.py"]
 LIVE = [T + "test_blender_live.py", T + "test_mapping_cyclist.py"]
 LAYERS = [T + "test_blender_layers.py", T + "test_blender_robustness.py"]
 STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
@@ -625,6 +626,18 @@ MUTANTS = [
       EXPORT + [T + "test_blender_physics.py"], "bake"),      # FBX's own test is an xfail now
     M("equipment_constraints_left_on", "blender/anim/export_ready.py",
       "        _switch(obj, on=False)", "        pass", EXPORT, "bake"),
+    M("equipment_closed_form_without_basis", "blender/anim/export_ready.py",
+      "        mats[:, j] = O @ track.joints[con.subtarget] @ rest",
+      "        mats[:, j] = O @ track.joints[con.subtarget]", EQUIPMENT_KEYS, "bake"),
+    M("equipment_closed_form_over_tweaks", "blender/anim/export_ready.py",
+      "    if not track.joints or _moved_otherwise(fig):", "    if not track.joints:",
+      EQUIPMENT_KEYS, "bake"),
+    M("equipment_closed_form_unchecked", "blender/anim/export_ready.py",
+      "    got, want = _sample(scene, objs, frames[idx]), mats[idx]",
+      "    got, want = mats[idx], mats[idx]", EQUIPMENT_KEYS, "bake"),
+    M("terrain_tiles_own_normals", "blender/render/terrain.py",
+      "            mesh.normals_split_custom_set_from_vertices(", "            (lambda _: None)(",
+      [T + "test_blender_ground.py"], "bake"),
 ]
 
 LIVE_MUTANTS = [
