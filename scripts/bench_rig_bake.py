@@ -5,7 +5,9 @@ map + bake, in the same run.
     blender -b --python scripts/bench_rig_bake.py -- --seconds 60
 
 The simulation is done once and shared (both figures have the same settings); timed are the
-Section 7 mapping, the retargeting and the F-curve bake, each the best of ``--repeat``.
+Section 7 mapping, the retargeting and the F-curve bake, each the best of ``--repeat``; then, on
+the Rigify rig and on a Mixamo-like one, keying the equipment for export
+(``export_ready.bake_equipment``, Bake Turns' Export-Ready Equipment).
 """
 from __future__ import annotations
 
@@ -26,12 +28,12 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
-from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.anim import bake, export_ready  # noqa: E402
 from blender_turning.blender.scene import retarget_adapter  # noqa: E402
 from blender_turning.blender.jobs.pipeline import map_track, simulate_figure  # noqa: E402
 from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
 from blender_turning.mapping.retarget.retarget import retarget  # noqa: E402
-from rig_fixtures import rigify_rig  # noqa: E402
+from rig_fixtures import mixamo_skeleton, rigify_rig  # noqa: E402
 
 
 def best_of(repeat, fn):
@@ -94,7 +96,29 @@ def _bench(args) -> int:
     print(f"  Rigify rig:     map {t_map:.3f} s + retarget {t_ret:.3f} s + bake {t_bake_r:.3f} s "
           f"({res_r.fcurves} F-curves) = {rig_total:.3f} s")
     print(f"  ratio Rigify / built-in: {rig_total / builtin_total:.2f}x (best of {args.repeat})")
+    bake.clear_bake(rig)
+    bpy.data.objects.remove(builtin)
+    _bench_equipment(rig, track, frames, "Rigify rig")
+    retarget_adapter.remove_equipment(rig)
+    bpy.data.objects.remove(rig)
+    bpy.context.view_layer.objects.active = mixamo_skeleton("Mixamo", location=(-3.0, 0.0, 0.0))
+    assert bpy.ops.turning.make_figure(sport="SKIER", bone_map="AUTO") == {"FINISHED"}
+    _bench_equipment(bpy.context.view_layer.objects.active, track, frames, "Mixamo-like rig")
     return 0
+
+
+def _bench_equipment(fig, track, frames, label) -> None:
+    """Key ``fig``'s equipment for export (alone in the scene): CPU and wall seconds."""
+    rtrack = retarget(track, "skier", retarget_adapter.user_rig(fig),
+                      retarget_adapter.figure_bone_map(fig))
+    bake.bake_pose_track(fig, rtrack)
+    c, t = time.process_time(), time.perf_counter()
+    export_ready.bake_equipment(fig, rtrack.frames)
+    wall, cpu = time.perf_counter() - t, time.process_time() - c
+    print(f"  {label}'s equipment keys ({len(export_ready.equipment(fig))} pieces): "
+          f"{wall:.3f} s ({cpu:.3f} s CPU)")
+    bake.clear_bake(fig)
+    export_ready.clear_equipment(fig)
 
 
 if __name__ == "__main__":

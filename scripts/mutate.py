@@ -640,6 +640,9 @@ MUTANTS = [
       "        obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]\n",
       "        obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]\n"
       "        obj.matrix_basis = obj.matrix_world\n", EXPORT, "bake"),
+    M("terrain_tiles_own_normals", "blender/render/terrain.py",
+      "            mesh.normals_split_custom_set_from_vertices(", "            (lambda _: None)(",
+      [T + "test_blender_ground.py"], "bake"),
 ]
 
 LIVE_MUTANTS = [

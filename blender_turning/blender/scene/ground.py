@@ -497,14 +497,18 @@ def mesh_from_height_field(bpy, field: HeightField, name: str, step: int = 1):
     ys = y_lo + field.cell * np.arange(0, field.ny, step)
     X, Y = np.meshgrid(xs, ys)
     Z = field.derivatives(X, Y)[0]
-    ny, nx = X.shape
-    co = np.stack([X, Y, Z], -1).reshape(-1)
+    return grid_mesh(bpy, np.stack([X, Y, Z], -1), name)
+
+
+def grid_mesh(bpy, co, name: str):
+    """A mesh of quads through a grid of points ``co`` (ny, nx, 3), row by row."""
+    ny, nx = co.shape[:2]
     ii, jj = np.meshgrid(np.arange(nx - 1), np.arange(ny - 1))
     a = (jj * nx + ii).ravel()
     quads = np.stack([a, a + 1, a + nx + 1, a + nx], -1).reshape(-1)
     mesh = bpy.data.meshes.new(name)
     mesh.vertices.add(nx * ny)
-    mesh.vertices.foreach_set("co", co.astype(np.float32))
+    mesh.vertices.foreach_set("co", np.asarray(co, np.float32).reshape(-1))
     mesh.loops.add(len(quads))
     mesh.loops.foreach_set("vertex_index", quads.astype(np.int32))
     n_faces = len(quads) // 4
