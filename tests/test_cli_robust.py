@@ -299,7 +299,7 @@ def test_a_horizon_of_too_many_steps_is_refused(tmp_path):
     one_line_error(run("follow", scene), "scene.json: planner: the horizon N t_stage / dt",
                    "240000", "[1, 2000]")
     one_line_error(run("follow", small_scene(tmp_path), "--stages", "16", "--stage-time", "60"),
-                   "--stages, --choices, --stage-time", "[1, 2000]")
+                   "--stages, --choices, --choices-near, --stage-time", "[1, 2000]")
 
 
 def test_the_search_size_is_bounded():
