@@ -189,8 +189,8 @@ def round_turns(figure, slope: float, resistance, speed: float, corridor: float,
     fall line (the turn finishes across it) with (1) a mean pull down the fall line at least
     the friction and drag at ``speed``: the turns alone do not brake below it; (2) a speed
     swing of at most ``swing``; (3) a lateral swing of at most :data:`LATERAL_SHARE` of the
-    corridor (the braking rule keeps the mean line in the rest); (4) a period of at most 20 s.  On flat ground, or
-    when nothing needs braking, the quickest turn of the scan (2 s)."""
+    corridor (the braking rule keeps the mean line in the rest); (4) a period of at most 20 s.
+    On flat ground, or when nothing needs braking, the quickest turn of the scan (2 s)."""
     g = figure.body.g
     feasible = feasible_turns(replace(figure.body, V_cm=speed), figure.limits)
     drag = resistance.mu * g * math.cos(slope) + resistance.drag_k(figure.body.m) * speed ** 2

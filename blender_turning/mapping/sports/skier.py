@@ -225,7 +225,8 @@ class SkierMapping(Mapping):
         chest = stack_dot(b.pose(B.CHEST)[:, :3, :3], skel.rest_of(B.CHEST)[:3, :3].T)
         # The hand holds a planted pole between the elbow at a right angle and 98% of the arm's
         # length from the shoulder (of the arm shown: plant_reach times the built-in's).
-        l1, l2 = (o.plant_reach * skel.length(B.side(bone, "L")) for bone in ("upper_arm", "forearm"))
+        l1, l2 = (o.plant_reach * skel.length(B.side(bone, "L"))
+                  for bone in ("upper_arm", "forearm"))
         reach = (math.hypot(l1, l2), 0.98 * (l1 + l2))
         place = b.placement
         for s, sx in SIDES:
@@ -424,8 +425,8 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
 
     ``d`` is the signed phase from the plant, ``tips`` and ``free`` the free swing's tip and grip
     (armature space), ``shoulder`` the shoulder shifted by the grip's offset from the wrist, so
-    that ``reach[0] <= |grip - shoulder| <= reach[1]`` says the arm holds it; ``barred`` (n,) bool: frames the
-    arm was found not to reach, where a plant ends."""
+    that ``reach[0] <= |grip - shoulder| <= reach[1]`` says the arm holds it; ``barred`` (n,)
+    bool: frames the arm was found not to reach, where a plant ends."""
     n = len(d)
     held, after, in_hole = np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool)
     u = np.ones(n)
