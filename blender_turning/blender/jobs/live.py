@@ -14,8 +14,8 @@ into the existing F-curves in place where the channels and frames are the same
 (:func:`.bake.rewrite_pose_track`).  A user rig's equipment loses its export keys
 (:mod:`..anim.export_ready`; its constraints and drivers move it as before, and the keys would
 end where the old bake did); Bake Turns keys it again.  A failure (a fall, a setting out of
-range) leaves the last good bake, and is shown in the panel, beside the figure in the viewport and, for a fall, as a
-timeline marker at the frame where the figure falls.
+range) leaves the last good bake, and is shown in the panel, beside the figure in the viewport
+and, for a fall, as a timeline marker at the frame where the figure falls.
 
 In the interface, a change reaches :func:`refresh` through the message bus (any figure setting:
 a slider drag publishes every step) or the depsgraph (keys, the Path curve, obstacles, the Ground
