@@ -31,6 +31,10 @@ The rule, from the speed equation (docs/TERRAIN.md Section 3)
    figure lags the command by up to a period: directional control acts at the lean's zero
    crossings and the half-turn under way turns the wrong way), ``r`` the rate of item 3, and one
    tightest turn radius to spare.
+5. *Round turns.*  When the turns' own track swings more than half the corridor each side
+   (:func:`round_turns`: speed control's turns, docs/skidding.md Section 3) no zig-zag fits:
+   the command keeps the turns' mean line on the course line, ``-atan(lateral / (V T))``
+   from the course, and the turns and the skid brake.
 
 Measured over a grid of sports, slopes and targets, and the limits of braking by carving:
 docs/TERRAIN.md Section 6 (``scripts/braking_grid.py``).
