@@ -34,7 +34,24 @@ def test_target_speed_skids_on_snow_by_default_and_carve_is_todays(tmp_path, cap
                     name="b.csv")
     assert np.all(carve.brake == 0.0)
     assert np.all(carve.skid == 0.0)
-    assert abs(skid.V_cm[skid.t >= 10].mean() - 10.0) < 1.5        # measured 11.05
+    assert abs(skid.V_cm[skid.t >= 10].mean() - 10.0) < 1.5        # measured 10.61 (round turns)
+
+
+def test_a_target_speed_without_a_turn_asked_skis_round_turns(tmp_path, capsys):
+    """No --period / --lean-deg: speed control's round turns (braking.round_turns), said on the
+    summary line, starting at the bottom of their swing on the slope; a turn asked for is
+    skied as asked."""
+    from blender_turning.core import preset
+    from blender_turning.core.controllers.braking import round_turns
+    from blender_turning.core.physics.model import RESISTANCE
+    traj, _ = _sim(tmp_path, "--duration", "12", "--target-speed", "10", name="r.csv")
+    rt = round_turns(preset("skier"), math.radians(15), RESISTANCE["skier"], 10.0, 25.0)
+    assert f"round turns {2 * math.pi / rt.omega0:.1f} s / 45 deg" in capsys.readouterr().out
+    assert traj.theta_dir[0] == pytest.approx(rt.start(-0.5 * math.pi, 10.0)[2], abs=1e-12)
+    swing = np.ptp(traj.theta_dir[traj.t >= 2.0])
+    assert swing > math.radians(100)                      # round: well across the fall line
+    _sim(tmp_path, "--duration", "2", "--target-speed", "10", "--period", "2", name="p.csv")
+    assert "round turns" not in capsys.readouterr().out
 
 
 def test_a_stop_from_the_command_line(tmp_path, capsys):

@@ -101,11 +101,38 @@ def test_the_demo_has_a_ski_school_of_eight_with_a_shot(tmp_path):
     assert school["shot"] and len(school["members"]) >= 9
     alone = [f["name"] for f in cfg["figures"] if f["crowd"] is None]
     assert alone == ["Skier", "Snowboarder", "Telemark", "Cyclist"]
-    # Beginners in a wedge behind their instructor at a ski school's speed, a stop at the end,
-    # on the mountain's 18 deg (docs/skidding.md).
-    school = [f for f in cfg["figures"] if f["crowd"] is not None]
-    assert {(f["style"], f["target_speed"], f["stop_s"]) for f in school} == {("wedge", 5.0, 3.0)}
-    assert cfg["terrain"][school[0]["ground"]]["slope_deg"] > 15.0
+    # Beginners in a wedge behind their instructor, who skis skidded turns, at a ski school's
+    # speed, a stop at the end, on the mountain's 18 deg (docs/skidding.md).
+    lead, *pupils = [f for f in cfg["figures"] if f["crowd"] is not None]
+    assert (lead["style"], lead["target_speed"], lead["stop_s"]) == ("skid", 5.0, 3.0)
+    assert {(f["style"], f["target_speed"], f["stop_s"]) for f in pupils} == {("wedge", 5.0, 3.0)}
+    assert cfg["terrain"][lead["ground"]]["slope_deg"] > 15.0
+
+
+def test_followers_may_brake_in_their_own_style(tmp_path):
+    """``[crowds.followers]`` sets the followers' style, target speed and stop; the rest is
+    the leader's, and the leader keeps its own."""
+    text = CROWD.format(extra="", leader='target_speed = 6.0\nstyle = "skid"') + \
+        '[crowds.followers]\nstyle = "wedge"\ntarget_speed = 4.5\nstop_s = 2.0\n'
+    lead, *followers = load(tmp_path, text)["figures"]
+    assert (lead["style"], lead["target_speed"], lead["stop_s"]) == ("skid", 6.0, None)
+    assert {(f["style"], f["target_speed"], f["stop_s"]) for f in followers} == \
+        {("wedge", 4.5, 2.0)}
+    plain = load(tmp_path, CROWD.format(extra="", leader='target_speed = 6.0\nstyle = "skid"'))
+    assert {f["style"] for f in plain["figures"]} == {"skid"}
+
+
+@pytest.mark.parametrize("table, words", [
+    ('style = "slip"', ["crowds[0].followers.style = 'slip'", "wedge"]),
+    ("target_speed = -2", ["crowds[0].followers.target_speed = -2"]),
+    ("speed = 3.0", ["crowds[0].followers", "speed"]),
+])
+def test_bad_follower_settings_are_named(tmp_path, table, words):
+    text = CROWD.format(extra="", leader="") + f"[crowds.followers]\n{table}\n"
+    with pytest.raises(ValueError) as err:
+        load(tmp_path, text)
+    for w in words:
+        assert w in str(err.value)
 
 
 @pytest.mark.parametrize("old, new, words", [

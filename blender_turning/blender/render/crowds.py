@@ -25,13 +25,17 @@ from dataclasses import replace
 import numpy as np
 
 from ...core.physics.params import preset
+from ...core.registry import SPORTS
 from ...crowd import STAGINGS, CrowdFigure, Turns, stage
 from ...crowd.formations import FORMATIONS
 from ...crowd.registry import FormationRefused
 from .terrain import follow_target, key_locations, tracking_camera
 
 #: A crowd's own keys; its formation's keys are the formation record's (crowd/registry.py).
-KNOWN = {"name", "formation", "leader", "count", "shot", "staging"}
+KNOWN = {"name", "formation", "leader", "followers", "count", "shot", "staging"}
+#: What ``[crowds.followers]`` may set differently from the leader: how they brake (an
+#: instructor skids while the pupils behind snowplough, docs/skidding.md).
+FOLLOWER_KEYS = {"style", "target_speed", "stop_s"}
 
 
 def _led_formations() -> tuple:
@@ -77,16 +81,30 @@ def read_crowds(top, figures: list, paths, obstacles, terrains, read_figure,
             c.fail("staging", f"= 'wait': the last follower starts at {last:.2f} s, not before "
                               f"the shot ends (job.seconds = {seconds:g}); give the shot more "
                               "seconds or stage the crowd 'along_track'")
+        own = _follower_settings(c.table("followers", FOLLOWER_KEYS), lead)
         members = [dict(lead, crowd=name)]
         for f in followers:
             if any(f.name == g["name"] for g in figures + members):
                 c.fail("name", f"= {name!r}: its follower {f.name!r} has the name of another "
                                "figure")
-            members.append(_member(lead, f, name))
+            members.append(dict(_member(lead, f, name), **own))
         figures.extend(members)
         crowds.append({"name": name, "members": [m["name"] for m in members],
                        "shot": c.boolean("shot", True)})
     return crowds
+
+
+def _follower_settings(t, lead) -> dict:
+    """``[crowds.followers]``: the followers' own style, target speed and stop (checked as a
+    figure's, against the leader's sport); the keys not given are the leader's."""
+    out = {}
+    if t.has("style"):
+        out["style"] = t.string("style", choices=SPORTS[lead["sport"]].styles)
+    if t.has("target_speed"):
+        out["target_speed"] = t.number("target_speed", "target_speed")
+    if t.has("stop_s"):
+        out["stop_s"] = t.number("stop_s", "stop_at")
+    return out
 
 
 def _leader(lead) -> CrowdFigure:

@@ -31,6 +31,11 @@ The rule, from the speed equation (docs/TERRAIN.md Section 3)
    figure lags the command by up to a period: directional control acts at the lean's zero
    crossings and the half-turn under way turns the wrong way), ``r`` the rate of item 3, and one
    tightest turn radius to spare.
+5. *Round turns.*  When the turns swing 45 deg or more each side and their own track more than
+   half the corridor (:func:`round_turns`: speed control's turns, docs/skidding.md Section 3)
+   no zig-zag fits:
+   the command keeps the turns' mean line on the course line, ``-atan(lateral / (V T))``
+   from the course, and the turns and the skid brake.
 
 Measured over a grid of sports, slopes and targets, and the limits of braking by carving:
 docs/TERRAIN.md Section 6 (``scripts/braking_grid.py``).
@@ -256,18 +261,19 @@ class _Braking:
             room = min(room, (y_lo - y) / uy)
         return room
 
-    def _reach(self, t: float, V: float) -> float:
-        """How far the track of the turns swings each side of its mean line at the target
-        speed, m: ``2 J1(A) V / omega0`` (:func:`round_turns`), ``A`` half of Eq. 6's change on
-        flat ground (at least the swing on a slope, where gravity turns the figure back down),
-        at most 90 deg."""
+    def _round(self, t: float, V: float, corridor: float) -> bool:
+        """Whether the turns are round (:func:`round_turns`): their heading swings at least
+        45 deg each side of the mean and their track more than half the corridor, ``2 J1(A) V /
+        omega0`` at the target speed ``V``, ``A`` half of Eq. 6's change on flat ground (at
+        least the swing on a slope, where gravity turns the figure back down), at most 90 deg.
+        A racer's quick turns in a narrow course are not (they zig-zag as before)."""
         change = getattr(self.ctl, "half_turn_change", None)
         if change is None:
-            return 0.0
+            return False
         w, V_t = float(self.ctl.omega0(t)), float(self.speed(t))
         a = 0.5 * float(change(self.ctl.feasible_lean(w, float(self.ctl.theta_max(t))), w))
         a = min(a * V / V_t, 0.5 * math.pi)          # Eq. 6's change goes as 1 / V
-        return 2.0 * _bessel(1, a) * V_t / w
+        return a >= 0.25 * math.pi and 2.0 * _bessel(1, a) * V_t / w > 0.5 * corridor
 
     def update(self, t: float, state) -> None:
         r = self.rule
@@ -307,7 +313,7 @@ class _Braking:
         margin = (V * self.period(t) * abs(math.sin(off)) + V * (1.0 - math.cos(swing)) / rate
                   + self.radius)
         s = self.side
-        if self._reach(t, V) > 0.5 * r.corridor:
+        if self._round(t, V, r.corridor):
             # Round turns (round_turns) take most of the corridor: no room for a zig-zag; the
             # turns brake, and the mean line is steered back to the course line over a turn.
             want = -math.atan(lateral / (V * self.period(t)))

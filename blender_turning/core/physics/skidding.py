@@ -16,7 +16,9 @@ across the hill, ``e`` stays positive and ``I`` grows until the skid holds the r
 **Styles.**  ``carve``: no skid (the paper's model).  ``skid``: skidded turns, the skid angle at
 most :data:`.grip.SKID_MAX_TURNING`.  ``wedge`` (snowplough): both skis edged inward at
 ``+-skid`` from the travel; their lateral forces cancel and their braking adds, so the brake is
-bounded by ``mu_grip N sin(WEDGE_MAX)`` whatever the turn; ``skid`` records the wedge's
+bounded by ``mu_grip N sin(WEDGE_MAX)`` whatever the turn; a beginner's wedge is its brake, so
+it holds the speed where the slope steepens (the brake that holds it, plus the error over
+``tau``, no dead band); ``skid`` records the wedge's
 half-angle ``asin(F_brake / (mu_grip N))``.  ``slip`` (the snowboarder's side-slip): the board
 across the fall line, sliding down it under the brake, turns small.
 
@@ -128,9 +130,12 @@ class _Skid:
         if self.theta_max is not None:
             self.ctl.theta_max, self.ctl.heading = self.theta_max, self.heading
 
-    def update(self, t: float, state, F_lat: float) -> None:
-        """Set the step's braking command (``F_lat``: the foot's lateral force over the mass at
-        the step's start, for the side of a stop)."""
+    def update(self, t: float, state, foot) -> None:
+        """Set the step's braking command from the last step's ``foot``
+        (:attr:`.terrain_one_figure.TerrainStage.foot`: the foot's lateral force over the mass,
+        for the side of a stop; the normal force and the brake that would hold the speed, for
+        a wedge)."""
+        F_lat, N_m, hold = foot[1], foot[2], foot[3]
         r = self.rule
         V = float(state[5])
         dt = 0.0 if self.t is None else t - self.t
@@ -152,9 +157,14 @@ class _Skid:
             return
         e = V - self.target(t)
         self.integral = max(0.0, self.integral + e * dt / (r.tau * r.reset_time))
-        b = max(0.0, (e - r.dead_band) / r.tau + self.integral)
         if r.style == "wedge":
-            b = min(b, r.grip.mu_at(self.edge) * self.g * math.sin(WEDGE_MAX))
+            # A beginner's wedge is its brake: it holds the speed wherever the slope steepens
+            # (``hold``), and the error decays in ``tau``; at most the widest wedge.
+            b = max(0.0, hold + e / r.tau + self.integral)
+            b = min(b, r.grip.mu_at(self.edge) * (N_m if N_m > 0.0 else self.g)
+                    * math.sin(WEDGE_MAX))
+        else:
+            b = max(0.0, (e - r.dead_band) / r.tau + self.integral)
         self.stage.brake = FootBrake(b, r.grip, self.skid_max, self.edge)
 
     def skid(self, brake: float, F_lat: float, N_m: float, theta_v: float) -> float:

@@ -66,8 +66,10 @@ class TerrainStage:
         self.brake = None
         """The braking command of the step (a :class:`.grip.FootBrake`, bounded at every stage
         as :func:`.model.rhs` bounds it) or ``None``: the carved model."""
-        self.foot = [0.0, 0.0, 0.0]
-        """The last braked stage's ``(F_brake / m, F_lat / m, N / m)``, m/s^2 (:mod:`.grip`)."""
+        self.foot = [0.0, 0.0, 0.0, 0.0]
+        """The last braked stage's ``(F_brake / m, F_lat / m, N / m, hold)``, m/s^2
+        (:mod:`.grip`): ``hold`` the braking force over the mass that would hold the speed
+        (the speed's rate without the brake over the foot's speed ratio)."""
         self.stage, self.lean = self._build(body, limits, resistance)
 
     def _along(self, t):
@@ -170,8 +172,8 @@ class TerrainStage:
             if fb is not None:                        # docs/skidding.md Section 2
                 F_lat = V * V_f * cf + l * (alpha * cs - om * om * sn) - g_b   # foot_lateral
                 b = fb.bound(N_m, F_lat, th)
+                foot[0], foot[1], foot[2], foot[3] = b, F_lat, N_m, dV / ratio
                 dV -= b * ratio
-                foot[0], foot[1], foot[2] = b, F_lat, N_m
             return (u * c, u * s, turn, om, alpha, dV, alpha, V_f, cf)
 
         return stage, lean

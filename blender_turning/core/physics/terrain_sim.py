@@ -183,7 +183,7 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid)
         if brake is not None and not (skid is not None and skid.stopping):
             brake.update(t, (x0, x1, x2, x3, x4, x5))
         if skid is not None:
-            skid.update(t, (x0, x1, x2, x3, x4, x5), foot[1])
+            skid.update(t, (x0, x1, x2, x3, x4, x5), foot)
         try:
             dv = derivatives(x0, x1)
         except OffTerrain:                      # the step ended past the edge

@@ -16,6 +16,13 @@ legs follow the skis, as a skier's does in a skidded turn and a hockey stop.
 - **Stop** (from ``meta["stop_at"]``): both skis (the board) yaw by ``skid`` (up to 90 deg, and
   across the fall line when the figure stands), edged uphill by
   :data:`..core.physics.skidding.STOP_EDGE`, ramped in over :data:`STOP_RAMP`.
+- **Leaning back against the brake** (any braking: a skid, a wedge, a stop): the snow's force on
+  the figure is the leg force ``F_leg`` (the resultant of the normal and lateral forces, along
+  which the pendulum leans ``theta_v``) and the braking force ``m F_brake / m`` against the
+  travel.  A body that does not pitch has its centre of mass on the line of that force through
+  the foot, as the lean in a turn does: it leans back (uphill in a stop) by
+  ``atan(m brake / F_leg)`` about the line across the travel through the foot, taken in over
+  :data:`STOP_RAMP` (a first-order lag: the body cannot pitch at once).
 
 A carved run (``skid`` 0 on every frame, no wedge, no stop) is left exactly as it was: every
 function returns its input (tested bit for bit).
@@ -26,10 +33,10 @@ import numpy as np
 
 from ...core.physics.skidding import STOP_EDGE, WEDGE_EDGE
 from .. import bones as B
-from .common import add_local_rotation, mesh_points, smoothstep
+from .common import add_local_rotation, mesh_points, smoothstep, static_force
 
-__all__ = ["SkidPose", "HIP_SHARE", "CHEST_SHARE", "TIP_GAP", "STOP_RAMP", "knee_direction",
-           "ski_front", "equipment_length", "brushed_half_width"]
+__all__ = ["SkidPose", "HIP_SHARE", "CHEST_SHARE", "TIP_GAP", "STOP_RAMP", "back_pitch",
+           "knee_direction", "ski_front", "equipment_length", "brushed_half_width"]
 
 HIP_SHARE = 0.5
 """The share of the skid the pelvis turns with the skis."""
@@ -53,7 +60,15 @@ class SkidPose:
                      else smoothstep((t - float(stop_at)) / STOP_RAMP))
         self.stopping = self.stop > 0.0
         self.wedge = (meta.get("style") == "wedge") & ~self.stopping
-        self.active = bool(np.any(self.skid) or np.any(self.wedge) or np.any(self.stopping))
+        self.pitch = back_pitch(traj)
+        self.active = bool(np.any(self.skid) or np.any(self.wedge) or np.any(self.stopping)
+                           or np.any(self.pitch))
+
+    def lean_back(self, b) -> None:
+        """The body leans back by :attr:`pitch` about the line across the travel through the
+        foot (after the lean ``theta_v``, before the legs are placed)."""
+        if self.active:
+            add_local_rotation(b, B.LEAN, (1.0, 0.0, 0.0), self.pitch)
 
     def yaw(self, s: str | None = None) -> np.ndarray:
         """The yaw from the travel (n,) of ski ``s`` (``None``: the board), rad."""
@@ -108,6 +123,25 @@ class SkidPose:
         out = np.where(self.wedge, np.maximum(
             front * np.sin(np.abs(self.skid)) + 0.5 * TIP_GAP - half_width, 0.0), 0.0)
         return {"L": -out, "R": out}
+
+
+def back_pitch(traj) -> np.ndarray:
+    """How far the body leans back against the braking force (n,), rad: ``atan(m brake /
+    F_leg)`` (module docstring), lagged by :data:`STOP_RAMP`; 0 where nothing brakes."""
+    brake = np.asarray(traj.brake, float)
+    if not np.any(brake):
+        return np.zeros(len(brake))
+    m = traj.meta.get("body.m")
+    m = float(m) if m is not None else static_force(traj) / 9.81
+    want = np.arctan2(m * brake, np.maximum(np.asarray(traj.F_leg, float), 1e-9))
+    t = np.asarray(traj.t, float)
+    out = np.empty_like(want)
+    p = 0.0
+    for i, w in enumerate(want):
+        dt = t[i] - t[i - 1] if i else 0.0
+        p += (1.0 - np.exp(-dt / STOP_RAMP)) * (w - p)
+        out[i] = p
+    return out
 
 
 def knee_direction(fwd, yaw) -> np.ndarray:

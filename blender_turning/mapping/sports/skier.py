@@ -152,6 +152,7 @@ class SkierMapping(Mapping):
         skel = b.skel
         th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
         skid = SkidPose(traj)       # the skis across the travel (docs/skidding.md Section 8)
+        skid.lean_back(b)
         skid.turn_hips(b, up)
         extra = np.broadcast_to(np.asarray(extra, float), th.shape)
         back = np.broadcast_to(np.asarray(back, float), th.shape)

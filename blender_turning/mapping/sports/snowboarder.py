@@ -69,6 +69,7 @@ class SnowboarderMapping(Mapping):
         skel = b.skel
         th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
         skid = SkidPose(traj)       # the board across the travel (docs/skidding.md Section 8)
+        skid.lean_back(b)
         skid.turn_hips(b, up)
         ankle_rest = {s: skel.rest_of(B.side("foot", s))[:3, 3] for s in SIDES}
         anchor = 0.5 * (ankle_rest["L"] + ankle_rest["R"])
