@@ -160,9 +160,9 @@ class Problem:
         """The same problem with the path samples and obstacles that cannot matter within one
         horizon of ``center`` dropped (exact: see :meth:`PathDistance.near` and
         :meth:`Obstacles.near`); with ``q_near`` choices where any is left
-        (:class:`.settings.PlannerSettings`).  ``state``: the root's (used on terrain only); ``t``: its time
-        (the moving bodies kept are those that can come near from then to the end of the
-        horizon and one stage more; ``None``: at any time)."""
+        (:class:`.settings.PlannerSettings`).  ``state``: the root's (used on terrain only);
+        ``t``: its time (the moving bodies kept are those that can come near from then to the
+        end of the horizon and one stage more; ``None``: at any time)."""
         r = self.reach()
         self.fall_table()                       # built once, shared by the local copies
         p = type(self).__new__(type(self))

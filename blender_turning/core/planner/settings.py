@@ -87,8 +87,8 @@ class PlannerSettings:
         check_range("reach_directions", self.reach_directions, 0, 1000)
         check_range("max_expansions", self.max_expansions, 0, 1e12)
         check_range("viable_stages", self.viable_stages, 0, 64)
-        for name in ("n_stages", "q", "q_near", "batch", "lookahead", "reach_directions", "max_expansions",
-                     "viable_stages"):
+        for name in ("n_stages", "q", "q_near", "batch", "lookahead", "reach_directions",
+                     "max_expansions", "viable_stages"):
             if int(getattr(self, name)) != getattr(self, name):
                 raise ValueError(f"{name} = {getattr(self, name)!r} is not a whole number")
         for name in ("t_stage", "sample_dt"):
