@@ -33,13 +33,15 @@ def test_follow_writes_track_stats_and_plot(tmp_path, capsys):
     scene = small_scene(tmp_path)
     out, stats, plot = tmp_path / "t.csv", tmp_path / "s.json", tmp_path / "p.png"
     rc = main(["follow", str(scene), "--stages", "6", "--choices", "5", "--stage-time", "0.3",
-               "--out", str(out), "--stats", str(stats), "--plot", str(plot)])
+               "--choices-near", "7", "--out", str(out), "--stats", str(stats), "--plot",
+               str(plot)])
     assert rc == 0
     with open(out) as fh:
         rows = list(csv.reader(fh))
     assert tuple(rows[0]) == COLUMNS and len(rows) > 20
     doc = json.loads(stats.read_text())
     assert doc["settings"]["n_stages"] == 6 and doc["settings"]["q"] == 5
+    assert doc["settings"]["q_near"] == 7
     r0 = doc["replans"][0]
     for key in ("expanded", "clipped_collision", "clipped_fall", "clipped_bound", "wall_time"):
         assert key in r0
@@ -70,6 +72,14 @@ def test_bad_scene_is_one_line_naming_the_field(tmp_path, capsys, doc_change, fi
     assert main(["follow", str(scene)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and field in err[0]
+
+
+@pytest.mark.parametrize("value, text", [("12", "--choices-near = 12 is outside"),
+                                         ("1", "q_near = 1 is outside")])
+def test_bad_choices_near_is_one_line(tmp_path, capsys, value, text):
+    assert main(["follow", str(small_scene(tmp_path)), "--choices-near", value]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and text in err[0]
 
 
 def test_missing_file_and_bad_json(tmp_path, capsys):

@@ -70,6 +70,7 @@ def test_the_clip_keeps_the_search_exact_and_every_plan_holds_its_edges(N, q):
         for u in p.u:
             r = on.simulate_stage(x, cf, np.array([u]), t, s, record=True)
             lean = np.array([np.ravel(v) for v in r.record["state"]])[:, 3]
-            held &= bool(on.edge_limit.holds(lean, np.array([np.ravel(c)[0] for c in r.record["C_f"]])).all())
+            cfs = np.array([np.ravel(c)[0] for c in r.record["C_f"]])
+            held &= bool(on.edge_limit.holds(lean, cfs).all())
             x, cf, t, s = r.state, r.C_f, t + 0.3, r.s
         assert held == ok
