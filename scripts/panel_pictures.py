@@ -262,9 +262,27 @@ class Canvas:
             boxstyle=f"round,pad={radius}", fc=colour, ec=edge or "none", lw=0.8,
             ls="--" if dashed else "-"))
 
-    def text(self, x, y, s, colour=None, ha="left", size=7.2, weight="normal"):
+    def text(self, x, y, s, colour=None, ha="left", size=7.2, weight="normal", width=None):
+        """Text at (x, y); wider than ``width`` px it ends in an ellipsis, as Blender clips."""
+        if width is not None:
+            s = fit(s, width, size)
         self.ax.text(x, y, s, color=colour or COLOURS["text"], ha=ha, va="center",
                      fontsize=size, fontweight=weight, family="DejaVu Sans", clip_on=True)
+
+
+def fit(text: str, width: float, size: float) -> str:
+    """``text`` cut to ``width`` px (the font at ``size`` pt, 100 px an inch) with an ellipsis."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import TextPath
+    font = FontProperties(family="DejaVu Sans")
+
+    def wide(t):
+        return TextPath((0, 0), t, size=size * 100 / 72, prop=font).get_extents().width
+
+    cut = text
+    while cut and wide(cut if cut == text else cut + "\u2026") > width:
+        cut = cut[:-1]
+    return cut if cut == text else cut.rstrip() + "\u2026"
 
 
 def icon(c, x, y, name, colour):
@@ -288,27 +306,28 @@ def widget(c, it, x, y, w, active):
     kind = it.widget
     if kind == "label":
         dx = icon(c, x + 7, mid, it.icon, ink)
-        c.text(x + 2 + dx, mid, it.text, ink)
+        c.text(x + 2 + dx, mid, it.text, ink, width=w - 4 - dx)
     elif kind == "check":
         on = it.value == "on"
         c.rect(x + 2, mid - 6, 12, 12, COLOURS["selected"] if on else COLOURS["number"], 2)
         if on:
             c.text(x + 8, mid, "\u2713", "white" if active else COLOURS["dim"], "center", 7)
-        c.text(x + 19, mid, it.text, ink)
+        c.text(x + 19, mid, it.text, ink, width=w - 21)
     elif kind in ("number", "button", "toggle"):
         on = kind == "toggle" and it.value == "on"
         fill = COLOURS["alert"] if it.alert else COLOURS["selected" if on else kind
                                                            if kind != "toggle" else "button"]
         c.rect(x, y, w, ROW, fill)
         if kind == "number" and it.text:
-            c.text(x + 6, mid, it.text, ink)
+            c.text(x + 6, mid, it.text, ink, width=w / 2)
             c.text(x + w - 6, mid, it.value, ink, "right")
             return
         label = it.value if kind == "number" else it.text
         glyph = GLYPHS.get(it.icon, "")
         if it.icon != "NONE" and not glyph:
             icon(c, x + 10, mid, it.icon, ink)
-        c.text(x + w / 2, mid, "  ".join(t for t in (glyph, label) if t), ink, "center")
+        c.text(x + w / 2, mid, "  ".join(t for t in (glyph, label) if t), ink, "center",
+               width=w - 8)
     elif kind in ("enum", "dropdown", "field", "search"):
         fill = COLOURS["dropdown"] if kind in ("enum", "dropdown") else COLOURS["field"]
         c.rect(x, y, w, ROW, COLOURS["alert"] if it.alert else fill, edge=COLOURS["outline"])
@@ -316,7 +335,7 @@ def widget(c, it, x, y, w, active):
         shown = it.value if kind in ("enum", "field", "search") else it.text
         if kind in ("field", "search") and it.text:
             shown = f"{it.text}: {shown}"
-        c.text(x + 5 + dx, mid, shown, ink)
+        c.text(x + 5 + dx, mid, shown, ink, width=w - 10 - dx - 12 * (kind in ("enum", "dropdown")))
         if kind in ("enum", "dropdown"):
             c.text(x + w - 8, mid - 1, "\u2304", ink, "center")
     elif kind == "missing":
@@ -342,7 +361,7 @@ def draw_line(c, ln, y):
         left = width * SPLIT
         active = any(a for _, a in ln.items)
         c.text(x0 + left - 6, y + ROW / 2, ln.label,
-               COLOURS["text"] if active else COLOURS["dim"], "right")
+               COLOURS["text"] if active else COLOURS["dim"], "right", width=left - 8)
         x0, width = x0 + left, width - left
     narrow = [it.widget in ("button", "dropdown", "toggle", "check") and not it.text
               for it, _ in ln.items]

@@ -137,3 +137,20 @@ def test_a_broken_draw_call_is_seen(drawn):
         layout.proprety(fig.turning, "lean")
     with pytest.raises(AttributeError, match="no attribute 'use_property_splt'"):
         layout.use_property_splt = True
+
+
+def test_a_picture_carries_what_it_shows(drawn, tmp_path):
+    shown, _ = drawn
+    cls = next(c for c in shown if c.bl_label == "Your Rig")
+    path = tmp_path / "your-rig.png"
+    pp.render(shown[cls], path)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert pp.png_text(path)[pp.CONTENT_KEY] == pp.describe(shown[cls])
+
+
+def test_without_matplotlib_one_line_and_exit_2(monkeypatch, capsys, tmp_path):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)       # import matplotlib fails
+    assert pp.main(["--out", str(tmp_path)]) == 2
+    out = capsys.readouterr().out
+    assert out.count("\n") == 1 and "matplotlib" in out
+    assert not list(tmp_path.iterdir())
