@@ -3,7 +3,7 @@
     .venv/bin/python scripts/panel_pictures.py --out docs/panels
 
 Registers the add-on on the bpy wheel, builds a scene that gives each panel something to show
-(a skier, a baked skier with Live Preview on beside a second one, a snowboarder stopping on a
+(a skier asked to lean more than it can, a baked skier with Live Preview on beside a second one, a snowboarder stopping on a
 Ground mesh, a path with obstacles, a crowd, an armature that is not a figure yet), runs every
 registered "Turning" panel's ``draw`` into the recording layout of ``scripts/panel_recorder.py``
 (``poll`` honoured, sub-panels under their parents) and draws each as a PNG in the look of
@@ -14,6 +14,7 @@ matches its panel.  Without matplotlib: one line, exit 2.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import struct
@@ -76,6 +77,7 @@ def build_scene() -> dict:
     scene = bpy.context.scene
     scene.frame_start, scene.frame_end = FRAMES
     skier = add_figure("SKIER", 0.0, "Skier")
+    skier.turning.lean = math.radians(45)      # more than it can make at 10 m/s: Turns says so
     baked = add_figure("SKIER", 4.0, "Baked Skier")
     other = add_figure("SKIER", 8.0, "Second Skier")
     select(baked)

@@ -71,7 +71,8 @@ def test_the_pictures_show_what_the_panels_draw(drawn):
     rows; the selections give each panel what it shows (Live Preview, Layers, a Stop)."""
     shown, _ = drawn
     text = {cls.bl_label: pp.describe(d) for cls, d in shown.items()}
-    assert "Lean: 23°" in text["Turns"] and "Speed: 10 m/s" in text["Turns"]
+    assert "Lean: 45°" in text["Turns"] and "Speed: 10 m/s" in text["Turns"]
+    assert "ERROR Leans 36.0°, not 45.0°" in text["Turns"]
     assert "Mass: 75 kg" in text["Body"]
     assert "Style: Skid" in text["Speed Control"] and "Stop Side: " in text["Speed Control"]
     assert "~0.050" not in text["Ground"] and "Slope Friction: 0.050" in text["Ground"]
