@@ -100,6 +100,9 @@ def build_scene() -> dict:
     leader = add_figure("SKIER", 16.0, "Leader")
     assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=3) == {"FINISHED"}
     crowd = bpy.context.view_layer.objects.active.users_collection[0]
+    for fig in crowd.all_objects:                 # a course each: Crowd lists the planning order
+        if fig.type == "ARMATURE":
+            fig.turning.path = course
     rig = bpy.data.objects.new("My Rig", bpy.data.armatures.new("My Rig"))
     scene.collection.objects.link(rig)
     select(rig)

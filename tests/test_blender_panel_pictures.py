@@ -79,7 +79,8 @@ def test_the_pictures_show_what_the_panels_draw(drawn):
     assert "REC Bake 2 Figures" in text["Bake"] and "PLAY Live Preview on" in text["Bake"]
     assert "Layers (top first)" in text["Bake"]
     assert "Follow Path" in text["Follow Path"] and "Path: Course" in text["Follow Path"]
-    assert "(collection 'Crowd')" in text["Crowd"]
+    assert "(collection 'Crowd')" in text["Crowd"] and "SORTSIZE Follow Path plans: " in text[
+        "Crowd"]
     assert "spine / ORG-spine" in text["Your Rig"]
     assert [c.cls.bl_label for c in shown[rec.panels(pp.CATEGORY)[0]].children][:2] == [
         "Turns", "Bake"]
