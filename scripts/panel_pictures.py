@@ -70,7 +70,8 @@ def select(active, *others, collection=None, selected=True) -> None:
 
 def build_scene() -> dict:
     """Register the add-on in an empty scene and add what the panels show; ``{panel class name:
-    how to select for it}`` (panels not named here show the skier)."""
+    how to select for it}`` (panels not named here show the skier; the selections named by a
+    sentence draw every panel for the checks, and no picture)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     from blender_turning import blender as addon
     addon.register()
@@ -107,6 +108,10 @@ def build_scene() -> dict:
     scene.collection.objects.link(rig)
     select(rig)
     assert bpy.ops.turning.custom_map_from(source="RIGIFY") == {"FINISHED"}
+    own = bpy.data.objects.new("Own Rig", skier.data.copy())   # an own rig, made a figure
+    scene.collection.objects.link(own)
+    select(own)
+    assert bpy.ops.turning.make_figure(sport="SNOWBOARDER", bone_map="BUILTIN") == {"FINISHED"}
     return {
         "VIEW3D_PT_turning_bake": lambda: select(baked, other),
         "VIEW3D_PT_turning_speed": lambda: select(boarder),
@@ -114,6 +119,8 @@ def build_scene() -> dict:
         "VIEW3D_PT_turning_your_rig": lambda: select(rig),
         "VIEW3D_PT_turning_crowd": lambda: select(leader, collection=crowd, selected=False),
         None: lambda: select(skier),
+        "an own rig's figure (drawn, not pictured)": lambda: select(own),
+        "nothing selected (drawn, not pictured)": lambda: select(None, selected=False),
     }
 
 
