@@ -142,7 +142,7 @@ class Layout:
         rna = operator_rna(idname)
         if rna is None:
             self._problem(f"{kind}({idname!r}): no such operator")
-            return Item(kind, text=idname, widget="missing"), None
+            return Item(kind, text=idname, widget="missing"), OperatorProperties(None, idname, self)
         item = Item(kind, text=a.get("text", rna.name), icon=a.get("icon", "NONE"),
                     widget="button" if kind == "operator" else "dropdown")
         if kind == "operator_menu_enum":
@@ -195,6 +195,8 @@ class OperatorProperties:
         self.__dict__.update(rna=rna, idname=idname, layout=layout)
 
     def __setattr__(self, name, value):
+        if self.rna is None:                    # the operator itself is missing: said already
+            return
         prop = self.rna.properties.get(name)
         if prop is None:
             self.layout._problem(f"operator({self.idname!r}).{name}: no such property")
