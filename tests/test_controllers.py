@@ -227,3 +227,19 @@ def test_closed_loop_converges_with_the_step(skier):
     fine = simulate(skier, PhaseEllipse(skier.body, w, tm), 30.0, dt=0.005)
     coarse = simulate(skier, PhaseEllipse(skier.body, w, tm), 30.0, dt=0.02)
     assert math.degrees(np.abs(coarse.theta_v - fine.theta_v[::4]).max()) < 0.3
+
+
+@pytest.mark.parametrize("name", ["omega0", "theta_max"])
+def test_a_schedule_set_on_the_controller_is_the_one_its_lean_law_follows(name):
+    """The float lean law keeps the ellipse per beta while the schedules are constant; giving the
+    controller another schedule (as the grip and skidding do) makes the law follow it at once,
+    equal to the array law asked the same."""
+    fig = preset("skier")
+    w, tm = 2 * math.pi / 2.0, math.radians(23)
+    ctl = PhaseEllipse(fig.body, w, tm)
+    ctl.begin_run(fig.limits)
+    before = ctl.lean_law(0.0, 0.1, 0.2)
+    setattr(ctl, name, Schedule.constant(0.7 * (w if name == "omega0" else tm)))
+    after = ctl.lean_law(0.0, 0.1, 0.2)
+    assert after == ctl.lean_law(0.0, np.array([0.1]), np.array([0.2]))[0]
+    assert abs(after - before) > 0.03                   # measured: 0.050 and 0.239 rad/s^2
