@@ -628,6 +628,12 @@ MUTANTS = [
       "        if prop not in obj.keys():", EXPORT, "bake"),
     M("fbx_tweak_take_one_frame", "blender/anim/bake.py",
       "    bake_layers.span_tweaks(obj, action.frame_range)", "    pass", EXPORT, "bake"),
+    M("state_not_driven", "blender/anim/export_state.py",
+      '        _drive(emp, "location", 0, fig, prop, 1.0)', "        pass", EXPORT, "bake"),
+    M("state_not_keyed_for_gltf", "blender/anim/export_state.py",
+      "        key_in_place(fig, emp, frames)", "        pass", EXPORT, "bake"),
+    M("state_kept_by_clear_bake", "blender/ops/bake.py",
+      "            export_state.clear_state(fig)", "            pass", EXPORT, "bake"),
     M("equipment_keyed_where_it_stands", "blender/anim/export_ready.py",
       "        obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]\n",
       "        obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]\n"
