@@ -309,7 +309,9 @@ def test_the_turn_state_comes_back_on_every_frame(scene, tmp_path, fmt):
 
 
 def test_the_state_empties_go_with_clear_bake_and_a_bake_without_them(scene):
-    from blender_turning.blender.anim.export_state import carriers
+    from blender_turning.blender.anim.export_state import CARRIES, carriers
+    from blender_turning.blender.ops.rig import remove_user_figure
+    from blender_turning.blender.scene import crowd_scene
     rig = mixamo_skeleton("Ann")
     activate(rig)
     assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
@@ -320,6 +322,10 @@ def test_the_state_empties_go_with_clear_bake_and_a_bake_without_them(scene):
             "turn_phase", "turn_lean", "turn_curvature", "turn_leg_force", "turn_speed",
             "turn_skid"))
     assert len(bpy.data.actions) == actions + 2 + 4 + 6   # the bake, tweaks, gear, Empties
+    copy = crowd_scene.duplicate_figure(rig, "Bo", rig.users_collection[0])    # Add Crowd's
+    assert not [o for o in copy.children if CARRIES in o]
+    remove_user_figure(copy)
+    bpy.data.objects.remove(copy)
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     assert not carriers(rig) and len(bpy.data.actions) == actions + 2 + 4
     assert bpy.ops.turning.bake_turns(export_turn_state=True) == {"FINISHED"}
