@@ -173,7 +173,9 @@ def test_one_figure_exports_its_own_animation_only(scene, tmp_path, fmt):
     bake's action over itself or another figure's bake."""
     first = add("SKIER", at=(0, 0, 0))
     first.turning.period = 2.5
+    first["turn_take Skier"] = 0.0                # as a bake made it before it was key-only
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert "turn_take Skier" not in first
     other = add("SKIER", at=(5, 0, 0))                 # the same bones: its bake fits the first
     other.turning.period = 1.5
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}

@@ -74,6 +74,7 @@ def with_take(fig, track):
 
 def own_take(obj, bag, frames) -> None:
     """Key an equipment object's own take property in ``bag`` on ``frames``."""
+    obj.pop(TAKE + obj.name, None)            # made on a piece baked when it was made
     path = f'["{bpy.utils.escape_identifier(TAKE + obj.name)}"]'
     frames = np.asarray(frames, float)
     bake.write_channels(bag, [(path, 0, "Turning", np.zeros(len(frames)))], frames)
