@@ -311,12 +311,14 @@ def test_the_turn_state_comes_back_on_every_frame(scene, tmp_path, fmt):
 
 
 def test_the_state_empties_go_with_clear_bake_and_a_bake_without_them(scene):
+    from test_blender_operators import make_path
     from blender_turning.blender.anim.export_state import CARRIES, carriers
     from blender_turning.blender.ops.rig import remove_user_figure
     from blender_turning.blender.scene import crowd_scene
     rig = mixamo_skeleton("Ann")
     activate(rig)
     assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
+    path = make_path([(0, 0), (0, -30)])
     objects, actions = len(bpy.data.objects), len(bpy.data.actions)
     for _ in range(2):                                     # a rebake makes them afresh
         assert bpy.ops.turning.bake_turns(export_turn_state=True) == {"FINISHED"}
@@ -328,6 +330,12 @@ def test_the_state_empties_go_with_clear_bake_and_a_bake_without_them(scene):
     assert not [o for o in copy.children if CARRIES in o]
     remove_user_figure(copy)
     bpy.data.objects.remove(copy)
+    rig.turning.path = path
+    assert bpy.ops.turning.follow_path() == {"FINISHED"}          # keeps them, on its frames
+    sc = bpy.context.scene
+    assert len(carriers(rig)) == 6 and all(
+        {k.co[0] for fc in compat.all_fcurves(o.animation_data.action)
+         for k in fc.keyframe_points} == {sc.frame_start, sc.frame_end} for o in carriers(rig))
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     assert not carriers(rig) and len(bpy.data.actions) == actions + 2 + 4
     assert bpy.ops.turning.bake_turns(export_turn_state=True) == {"FINISHED"}
