@@ -30,6 +30,7 @@ TWEAKS_LOST = pytest.mark.xfail(strict=True, reason="the take an importer plays 
 GLTF_HOOK = "blender_turning.blender.anim.export_gltf"
 TOLERANCE = {"glb": 1e-5, "fbx": 1e-3}         # m, see the measurements where they are used
 ANGLE = {"glb": 1e-5, "fbx": 1e-2}             # rad, likewise
+RELATIVE = {"glb": 1e-6, "fbx": 4e-3}          # of a value's magnitude, likewise
 
 
 @pytest.fixture
@@ -172,7 +173,9 @@ def test_one_figure_exports_its_own_animation_only(scene, tmp_path, fmt):
     bake's action over itself or another figure's bake."""
     first = add("SKIER", at=(0, 0, 0))
     first.turning.period = 2.5
+    first["turn_take Skier"] = 0.0                # as a bake made it before it was key-only
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert "turn_take Skier" not in first
     other = add("SKIER", at=(5, 0, 0))                 # the same bones: its bake fits the first
     other.turning.period = 1.5
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
@@ -264,6 +267,81 @@ def test_follow_path_keys_the_equipment_once_over_its_frames(scene):
     clear_equipment(rig)
     # the same evaluation, from float32 keys of the transform (measured 1.4e-9)
     np.testing.assert_allclose(world_matrices(gear), shown, atol=1e-6)
+
+
+@pytest.mark.installed
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_the_turn_state_comes_back_on_every_frame(scene, tmp_path, fmt):
+    """With Export Turn State each ``turn_*`` property is the X location of an Empty of its own
+    (a child of the figure) in the file, on every frame."""
+    from blender_turning.mapping.base import STATE_PROPS
+    fig = add("SKIER")
+    assert bpy.ops.turning.bake_turns(export_turn_state=True) == {"FINISHED"}
+    sc = bpy.context.scene
+    frames = range(sc.frame_start, sc.frame_end + 1)
+    want = {}
+    for f in frames:
+        sc.frame_set(f)
+        for prop in STATE_PROPS:
+            want.setdefault(prop, []).append(fig[prop])
+    sc.frame_set(1)
+    assert np.ptp(want["turn_lean"]) > 0.1 and np.ptp(want["turn_speed"]) > 0.0
+    path = str(tmp_path / f"state.{fmt}")
+    export(path, [fig, *fig.children_recursive])
+    name = fig.name
+    reimport(path)
+    sc = bpy.context.scene
+    arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+    for prop, values in want.items():
+        emp = bpy.data.objects[f"{name} {prop}"]
+        assert emp.parent == arm
+        got = []
+        for f in frames:
+            sc.frame_set(f)
+            got.append(emp.matrix_local.translation.copy())
+        got = np.array(got)
+        # float32 positions of a figure 10 m away (1e-5 m, as elsewhere) and of the value itself
+        # (glTF: measured 2.7e-7 of the largest, 2.4e-4 of a leg force of 920); FBX's default
+        # curve simplification drops a sample within 0.1 % of the sum of its neighbours'
+        # magnitudes (io_scene_fbx, AnimationCurveNodeWrapper.simplify, factor 1): up to 0.4 %
+        # (measured 1.7e-3 of the speed: 0.018 m/s of 10.3)
+        tol = 1e-5 + RELATIVE[fmt] * float(np.abs(values).max())
+        np.testing.assert_allclose(got[:, 0], values, atol=tol, err_msg=prop)
+        np.testing.assert_allclose(got[:, 1:], 0.0, atol=tol, err_msg=prop)
+
+
+def test_the_state_empties_go_with_clear_bake_and_a_bake_without_them(scene):
+    from test_blender_operators import make_path
+    from blender_turning.blender.anim.export_state import CARRIES, carriers
+    from blender_turning.blender.ops.rig import remove_user_figure
+    from blender_turning.blender.scene import crowd_scene
+    rig = mixamo_skeleton("Ann")
+    activate(rig)
+    assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
+    path = make_path([(0, 0), (0, -30)])
+    objects, actions = len(bpy.data.objects), len(bpy.data.actions)
+    for _ in range(2):                                     # a rebake makes them afresh
+        assert bpy.ops.turning.bake_turns(export_turn_state=True) == {"FINISHED"}
+        assert sorted(o.name for o in carriers(rig)) == sorted(f"Ann {p}" for p in (
+            "turn_phase", "turn_lean", "turn_curvature", "turn_leg_force", "turn_speed",
+            "turn_skid"))
+    assert len(bpy.data.actions) == actions + 2 + 4 + 6   # the bake, tweaks, gear, Empties
+    copy = crowd_scene.duplicate_figure(rig, "Bo", rig.users_collection[0])    # Add Crowd's
+    assert not [o for o in copy.children if CARRIES in o]
+    remove_user_figure(copy)
+    bpy.data.objects.remove(copy)
+    rig.turning.path = path
+    assert bpy.ops.turning.follow_path() == {"FINISHED"}          # keeps them, on its frames
+    sc = bpy.context.scene
+    assert len(carriers(rig)) == 6 and all(
+        {k.co[0] for fc in compat.all_fcurves(o.animation_data.action)
+         for k in fc.keyframe_points} == {sc.frame_start, sc.frame_end} for o in carriers(rig))
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert not carriers(rig) and len(bpy.data.actions) == actions + 2 + 4
+    assert bpy.ops.turning.bake_turns(export_turn_state=True) == {"FINISHED"}
+    assert bpy.ops.turning.clear_bake() == {"FINISHED"}
+    assert not carriers(rig) and len(bpy.data.actions) == actions
+    assert len(bpy.data.objects) == objects
 
 
 def bone_world(fig) -> np.ndarray:

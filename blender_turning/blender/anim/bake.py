@@ -202,9 +202,12 @@ def _remove_baked(bag, action) -> None:
 
 
 def _make_props(obj, track: PoseTrack) -> None:
-    """The custom properties ``track`` keys, made on ``obj`` (but not ``KEY_ONLY`` ones)."""
+    """The custom properties ``track`` keys, made on ``obj``; ``KEY_ONLY`` ones not (and removed
+    from a figure baked when they were made)."""
     for prop, values in track.props.items():
-        if prop not in obj.keys() and not prop.startswith(KEY_ONLY):
+        if prop.startswith(KEY_ONLY):
+            obj.pop(prop, None)
+        elif prop not in obj.keys():
             obj[prop] = float(values[0])
 
 

@@ -64,10 +64,12 @@ class glTF2ExportUserExtension:  # noqa: N801 (the name the exporter looks for)
             name = _merge_name(act, blender_object)
             if name is not None:
                 actions.blender_tracks[act.name] = name
-            elif act.get(bake.OWNER) == blender_object and _has_equipment(blender_object):
+            elif act.get(bake.OWNER) == blender_object and _has_keyed_pieces(blender_object):
                 actions.blender_tracks[act.name] = act.name
 
 
-def _has_equipment(obj) -> bool:
+def _has_keyed_pieces(obj) -> bool:
+    """Keyed equipment or state Empties, whose animations merge into ``obj``'s."""
     from .export_ready import equipment, KEYED
-    return any(KEYED in e for e in equipment(obj))
+    from .export_state import carriers
+    return any(KEYED in e for e in equipment(obj)) or bool(carriers(obj))

@@ -74,6 +74,7 @@ def with_take(fig, track):
 
 def own_take(obj, bag, frames) -> None:
     """Key an equipment object's own take property in ``bag`` on ``frames``."""
+    obj.pop(TAKE + obj.name, None)            # made on a piece baked when it was made
     path = f'["{bpy.utils.escape_identifier(TAKE + obj.name)}"]'
     frames = np.asarray(frames, float)
     bake.write_channels(bag, [(path, 0, "Turning", np.zeros(len(frames)))], frames)
@@ -85,19 +86,23 @@ def bake_equipment(fig, frames) -> int:
     Returns the objects keyed."""
     clear_equipment(fig)
     objs = equipment(fig)
-    if not objs:
-        return 0
-    ends = np.unique(np.asarray(frames, float)[[0, -1]])
     for obj in objs:
-        obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]
-        keyed = compat.assign_new_action(obj, obj.name)
-        keyed[bake.OWNER] = obj
-        keyed[bake.MERGE_INTO] = bake.figure_action(fig).name    # one glTF animation
-        obj_bag = compat.channels(obj)
-        bake.write_channels(obj_bag, [(path, i, "Object Transforms", np.full(len(ends), v))
-                                      for path, i, v in _basis_channels(obj)], ends)
-        own_take(obj, obj_bag, ends)
+        key_in_place(fig, obj, frames)
     return len(objs)
+
+
+def key_in_place(fig, obj, frames) -> None:
+    """Give ``obj`` an action of its own that holds its transform on the first and last of
+    ``frames``, merged into ``fig``'s glTF animation (see the module doc)."""
+    ends = np.unique(np.asarray(frames, float)[[0, -1]])
+    obj[KEYED] = [float(v) for row in obj.matrix_basis for v in row]
+    keyed = compat.assign_new_action(obj, obj.name)
+    keyed[bake.OWNER] = obj
+    keyed[bake.MERGE_INTO] = bake.figure_action(fig).name        # one glTF animation
+    bag = compat.channels(obj)
+    bake.write_channels(bag, [(path, i, "Object Transforms", np.full(len(ends), v))
+                              for path, i, v in _basis_channels(obj)], ends)
+    own_take(obj, bag, ends)
 
 
 def clear_equipment(fig) -> None:

@@ -11,7 +11,7 @@ import numpy as np
 from ...mapping.base import BoneChannels, PoseTrack
 from . import bake, foot_track
 from ..scene import retarget_adapter
-from . import export_ready as export_ready_mod
+from . import export_ready as export_ready_mod, export_state
 
 
 def every_nth(track: PoseTrack, step: int) -> PoseTrack:
@@ -67,10 +67,12 @@ def set_hermite_handles(fig, slopes: dict) -> None:
         fc.update()
 
 
-def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True):
+def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True,
+               export_turn_state: bool | None = None):
     """Write a computed bake: F-curves (every ``step``-th frame, smooth in between), then the
     foot track; ``export_ready``: a user rig's equipment keyed too, for glTF and FBX
-    (:mod:`.export_ready`).  Returns the bake result."""
+    (:mod:`.export_ready`); ``export_turn_state``: the state Empties (:mod:`.export_state`;
+    ``None``: made again if the figure has them).  Returns the bake result."""
     if export_ready:
         track = export_ready_mod.with_take(fig, track)
     if step > 1:
@@ -85,6 +87,12 @@ def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True):
         export_ready_mod.bake_equipment(fig, track.frames)
     else:
         export_ready_mod.clear_equipment(fig)
+    if export_turn_state is None:
+        export_turn_state = bool(export_state.carriers(fig))
+    if export_turn_state:
+        export_state.bake_state(fig, track.frames)
+    else:
+        export_state.clear_state(fig)
     return result
 
 

@@ -19,9 +19,11 @@ class BakeJob:
     written), then :meth:`write` all of them."""
 
     def __init__(self, names, frames: FrameRange, step: int = 1, export_ready: bool = True,
-                 root_motion: bool = False, fewer_keys: KeyTolerance | None = None):
+                 root_motion: bool = False, fewer_keys: KeyTolerance | None = None,
+                 export_turn_state: bool = False):
         self.names, self.frames, self.step = list(names), frames, step
         self.export_ready, self.root_motion = export_ready, root_motion
+        self.export_turn_state = export_turn_state
         self.fewer_keys = fewer_keys              # None: a key on every (step-th) frame
         self.key_reports = {}                 # name -> fewer_keys.KeyReport
         self.results = []                     # (name, start or None, traj, track)
@@ -70,7 +72,8 @@ class BakeJob:
             if start is not None:                 # the height where the user put it stays
                 fig.turning.start = (start[0], start[1], float(fig.location[2]))
                 fig.turning.start_heading = start[2]
-            out.append((name, apply_bake(fig, traj, track, self.step, self.export_ready)))
+            out.append((name, apply_bake(fig, traj, track, self.step, self.export_ready,
+                                         self.export_turn_state)))
             if self.fewer_keys is not None:
                 self.key_reports[name] = fewer_keys.reduce_bake(fig, self.fewer_keys)
         return out

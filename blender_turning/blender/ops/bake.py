@@ -15,7 +15,7 @@ from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 from ...mapping.keys import KeyTolerance
 from ..anim import bake, foot_track
-from ..anim import export_ready as export_ready_mod
+from ..anim import export_ready as export_ready_mod, export_state
 from ..anim.figure_bake import reset_pose
 from ..jobs.bake_job import BakeJob
 from ..jobs.model_notes import turn_note
@@ -76,6 +76,11 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         description="A figure made from your own rig: give its skis, poles or bicycle an "
                     "action too (they still follow the rig through their constraints and "
                     "drivers), so glTF exports their motion. Off: glTF leaves them behind")
+    export_turn_state: BoolProperty(
+        name="Export Turn State", default=False,
+        description="Add an Empty per turn_* state property as a child of the figure, its X "
+                    "location driven by the property, so glTF and FBX carry the state on every "
+                    "frame (docs/export.md)")
     root_motion: BoolProperty(
         name="Root Motion", default=False,
         description="Key the travel on the rig's root bone (Rigify's or the built-in figures' "
@@ -104,6 +109,7 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         col.prop(self, "key_angle")
         col.prop(self, "key_length")
         layout.prop(self, "export_ready")
+        layout.prop(self, "export_turn_state")
         layout.prop(self, "root_motion")
 
     def _prepare(self, context):
@@ -123,7 +129,7 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
             self.report({"ERROR"}, f"Bake Turns: {exc}")
             return None
         return BakeJob([f.name for f in selected_figures(context)], frames, self.step,
-                       self.export_ready, self.root_motion, tolerance)
+                       self.export_ready, self.root_motion, tolerance, self.export_turn_state)
 
     def _finish(self, job):
         try:
@@ -227,6 +233,7 @@ class TURNING_OT_clear_bake(bpy.types.Operator):
             fig.turning.live = False          # else Live Preview would bake it again at once
             recorded = bake.REST in fig       # the pose before the bake, put back exactly
             export_ready_mod.clear_equipment(fig)
+            export_state.clear_state(fig)
             bake.clear_bake(fig)
             foot_track.remove_foot_track(fig)
             if not recorded:                  # baked before the pose was recorded

@@ -11,7 +11,7 @@ from ...core.physics.params import PRESETS
 from ...core.errors import TurningError
 from ...mapping.retarget.stance import STANCES as RIG_STANCES
 from ...mapping.retarget.user_rig import fit_rig
-from ..anim import bake, bake_layers, export_ready, foot_track
+from ..anim import bake, bake_layers, export_ready, export_state, foot_track
 from ..scene import retarget_adapter as ra
 from ..registry_items import retargeted_sport_items
 from ..props.rig import BONE_MAPS, STANCES
@@ -128,6 +128,7 @@ def remove_user_figure(obj) -> str | None:
     figure settings.  Returns the name of the action a tweak layer with keys is kept in (off
     the rig, :func:`.bake_layers.keep_in_file`), or ``None``."""
     export_ready.clear_equipment(obj)
+    export_state.clear_state(obj)
     bake.clear_bake(obj)
     tweaks = bake_layers.keep_in_file(obj)
     foot_track.remove_foot_track(obj)

@@ -23,6 +23,7 @@ from ...core.course.path import HermitePath
 from ...crowd import CrowdFigure, FollowPath, Turns, point_at_distance
 from ..anim import bake
 from . import retarget_adapter
+from ..anim.export_state import CARRIES
 from ..anim.foot_track import OWNER as FOOT_TRACK_OWNER
 from .figure_context import CROWD_TAG
 from .scene_adapters import figure_from_settings
@@ -118,7 +119,7 @@ def _retarget(obj, made: dict) -> None:
 
 def duplicate_figure(template, name: str, collection, children=None):
     """A linked duplicate of the figure ``template`` named ``name`` in ``collection``: its
-    children and (a user's rig) equipment with it; no bake, no foot track.  ``children``: the
+    children and (a user's rig) equipment with it; no bake, no foot track, no state Empties.  ``children``: the
     template's ``children_recursive`` when the caller has it (it costs O(objects): a crowd
     takes it once for all its members)."""
     made = {template: template.copy()}
@@ -133,7 +134,7 @@ def duplicate_figure(template, name: str, collection, children=None):
                 del new[key]
     new.turning.foot_track = None
     for child in template.children_recursive if children is None else children:
-        if child.get(FOOT_TRACK_OWNER) is not None:
+        if child.get(FOOT_TRACK_OWNER) is not None or CARRIES in child:   # the template's
             continue
         made[child] = child.copy()
         collection.objects.link(made[child])
