@@ -192,3 +192,23 @@ def test_registry_has_one_mapping_per_rig():
     assert set(MAPPINGS) <= {"skier", "snowboarder", "telemark", "cyclist"}
     for sport, m in MAPPINGS.items():
         assert m.sport == sport
+
+
+def test_pole_tips_stay_on_or_above_a_bumpy_surface():
+    """On a Ground mesh the holes are on the mesh and no tip goes under it (here flat, with
+    bumps of 15 cm a few metres across; numpy only, the ground's height a function).  Holes
+    on the plane under the foot instead went 10 cm under the bumps."""
+    traj = run("skier")
+
+    def bumps(x, y):
+        return 0.15 * np.sin(np.asarray(x) / 2.0) * np.cos(np.asarray(y) / 1.5)
+
+    track = map_trajectory("skier", traj, surface=bumps)
+    spec = load_rig("skier")
+    sk = Skeleton.from_spec(spec)
+    P = sk.fk(track.bones, len(track))
+    for s in ("L", "R"):
+        tip = world_points(track, sk.carry(P, f"pole.{s}", spec.bone(f"pole.{s}").tail))
+        above = tip[:, 2] - bumps(tip[:, 0], tip[:, 1])
+        assert above.min() > -1e-3, (s, above.min())
+        assert (above < 1e-3).sum() > 10                      # it does plant
