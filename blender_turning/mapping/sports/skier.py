@@ -222,7 +222,8 @@ class SkierMapping(Mapping):
         chest = stack_dot(b.pose(B.CHEST)[:, :3, :3], skel.rest_of(B.CHEST)[:3, :3].T)
         # The hand holds a planted pole between the elbow at a right angle and 98% of the arm's
         # length from the shoulder (of the arm shown: plant_reach times the built-in's).
-        l1, l2 = (o.plant_reach * skel.length(B.side(bone, "L")) for bone in ("upper_arm", "forearm"))
+        l1, l2 = (o.plant_reach * skel.length(B.side(bone, "L"))
+                  for bone in ("upper_arm", "forearm"))
         reach = (math.hypot(l1, l2), 0.98 * (l1 + l2))
         place = b.placement
         for s, sx in SIDES:
