@@ -73,6 +73,7 @@ LIVE = [T + "test_blender_live.py", T + "test_mapping_cyclist.py"]
 LAYERS = [T + "test_blender_layers.py", T + "test_blender_robustness.py"]
 STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
 POLES = [T + "test_blender_poles.py"]
+SKIER_MAPPING = [T + "test_mapping_skier.py"]
 RACING = [T + "test_racing_presets.py", T + "test_mapping_racing.py"]
 LEAN_ROOM = [T + "test_racing_lean.py", T + "test_feasible_turns.py"]
 
@@ -535,6 +536,17 @@ MUTANTS = [
     M("users_pole_follows_the_hand", "mapping/retarget/retarget.py",
       "            rot[c] = S @ turn @ (A[c] @ rest[c][:3, :3])\n", "",
       POLES, "bake"),
+    M("users_hand_swings_the_builtins_reach", "mapping/sports/skier.py",
+      "neutral, planted = (o.plant_reach * (", "neutral, planted = (1.0 * (", POLES, "bake"),
+    M("users_pole_turns_about_the_wrist", "mapping/retarget/retarget.py",
+      "    if not short.any():\n        return wrist, S", "    if True:\n        return wrist, S",
+      RETARGET, "mapping"),
+    M("planted_grip_only_towards_the_free_swing", "mapping/kinematics.py",
+      "    cos = np.clip(cos0, np.maximum(near, -1.0), np.clip(far, -1.0, 1.0))",
+      "    cos = cos0", RETARGET + SKIER_MAPPING, "mapping"),
+    M("planted_hand_at_the_armpit", "mapping/sports/skier.py",
+      "                                  shoulder[idx], *reach)",
+      "                                  shoulder[idx], 0.0, reach[1])", SKIER_MAPPING, "mapping"),
     # -- crowd staging (docs/crowds.md) -----------------------------------------------------------
     M("staging_always_waits", "crowd/staging.py",
       '    if staging == "wait":\n', "    if True:\n", STAGING),

@@ -228,14 +228,14 @@ def frame_from_yx(y_axis, x_hint):
 
 
 def on_sphere_within(centre, radius, u0, other, lo, hi):
-    """The point of the sphere of ``radius`` (a number or (n, 1)) about ``centre`` (n, 3) nearest to
-    ``centre + radius u0`` (``u0`` (n, 3) unit) among those ``lo``..``hi`` from ``other`` (n, 3):
-    a pole pivoting about its tip whose grip a hand at ``other`` can hold.  On the sphere the
-    distance from ``other`` grows with the angle from the direction towards it (law of cosines),
-    so the allowed points are a band about that direction and the nearest one is on the great
-    circle from ``u0`` to it.  Returns ``(u (n, 3), ok (n,))``: the unit direction from the
-    centre, and whether any point is within the band (else ``u`` points at ``other``, or away
-    from it where the whole sphere is nearer than ``lo``)."""
+    """The point of the sphere of ``radius`` (a number or (n, 1)) about ``centre`` (n, 3) nearest
+    to ``centre + radius u0`` (``u0`` (n, 3) unit) among those ``lo``..``hi`` from ``other``
+    (n, 3): a pole pivoting about its tip whose grip a hand at ``other`` can hold.  On the
+    sphere the distance from ``other`` grows with the angle from the direction towards it (law
+    of cosines), so the allowed points are a band about that direction and the nearest one is
+    on the great circle from ``u0`` to it.  Returns ``(u (n, 3), ok (n,))``: the unit direction
+    from the centre, and whether any point is within the band (else ``u`` points at ``other``,
+    or away from it where the whole sphere is nearer than ``lo``)."""
     to = np.asarray(other, float) - centre
     D = np.maximum(np.linalg.norm(to, axis=-1, keepdims=True), 1e-12)
     c = to / D

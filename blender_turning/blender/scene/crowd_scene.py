@@ -119,9 +119,9 @@ def _retarget(obj, made: dict) -> None:
 
 def duplicate_figure(template, name: str, collection, children=None):
     """A linked duplicate of the figure ``template`` named ``name`` in ``collection``: its
-    children and (a user's rig) equipment with it; no bake, no foot track, no state Empties.  ``children``: the
-    template's ``children_recursive`` when the caller has it (it costs O(objects): a crowd
-    takes it once for all its members)."""
+    children and (a user's rig) equipment with it; no bake, no foot track, no state Empties.
+    ``children``: the template's ``children_recursive`` when the caller has it (it costs
+    O(objects): a crowd takes it once for all its members)."""
     made = {template: template.copy()}
     new = made[template]
     new.name = name

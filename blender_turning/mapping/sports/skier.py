@@ -42,9 +42,6 @@ POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
 #: An arm whose grip offset moved less than this (m) in an aiming pass has settled: another pass
 #: would give the same numbers to rounding, so it leaves the loop.
 SETTLED = 1e-12
-#: A planted grip the arm's IK misses by more than this (m) is out of the arm's reach: the plant
-#: ends before it (the aiming loop itself stops within 0.2 mm).
-MISSED = 1e-3
 
 
 @dataclass(frozen=True)
@@ -259,19 +256,10 @@ class SkierMapping(Mapping):
             grip, wrist = arm.reach(hand)
             offset = grip - wrist
             free = hand + offset
-            # The plan tells where the arm reaches from the free swing's offset; the arm's own
-            # IK has the last word: a planted frame it cannot reach ends the plant (planned
-            # again, until the frames in their holes are all reached: 1-3 passes).
-            barred = np.zeros(len(d), bool)
-            tips = grip + length * free_axis(grip)
-            for _ in range(4):
-                plan = _plan_plants(place, d, o.pole_hold, o.pole_swing, tips, free,
-                                    shoulder + offset, length, reach, o.plant_scale, barred)
-                target, aim_wrist, grip, aimed = _aim(arm, plan, free, offset, length)
-                missed = plan.in_hole & (np.linalg.norm(grip - target, axis=1) > MISSED)
-                if not missed.any():
-                    break
-                barred |= missed
+            plan = _plan_plants(place, d, o.pole_hold, o.pole_swing,
+                                grip + length * free_axis(grip), free, shoulder + offset, length,
+                                reach, o.plant_scale)
+            target, aim_wrist, grip, offset = _aim(arm, plan, free, offset, length)
             lift = plan.u[plan.after, None]
             ik_limb(b, arm.upper, arm.lower, aim_wrist, elbow_dir)     # the arm's pose, once
             axis = free_axis(grip)
@@ -284,7 +272,7 @@ class SkierMapping(Mapping):
             to = aim[moving] - grip[moving]
             axis[moving] = to / np.linalg.norm(to, axis=1, keepdims=True)
             # Where that would still dip the tip into the snow, it stays on the line to the hole.
-            dip = plan.after & under_snow(place, grip + length * axis, o.plant_scale)
+            dip = plan.after & (grip[:, 2] + length * axis[:, 2] < 0.0)
             to = plan.tip_at[dip] - grip[dip]
             axis[dip] = to / np.linalg.norm(to, axis=1, keepdims=True)
             b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
@@ -390,17 +378,6 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
     grip_at[idx] = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
 
 
-def under_snow(place, p, k) -> np.ndarray:
-    """(n,) whether the armature-space points ``p`` (n, 3, one per frame) are under the snow in
-    the world of the figure ``k`` times the built-in's size: under the plane under the foot, or
-    under the Ground mesh where there is one."""
-    under = p[:, 2] < 0.0
-    if place.surface is not None:
-        w = _world(place, p, np.arange(len(p)), k)
-        under |= w[:, 2] < place.surface(w[:, 0], w[:, 1])
-    return under
-
-
 def on_snow(place, p):
     """The world point ``p`` moved onto the ground (vertically; the plane under the foot when
     there is no Ground mesh, where it already is)."""
@@ -416,20 +393,18 @@ class _Plants:
     u: np.ndarray         # (n,) 0 at lift-off -> 1 when the pole swings free again
     tip_at: np.ndarray    # (n, 3) armature-space hole in the snow while held and lifting off
     grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
-    in_hole: np.ndarray   # (n,) bool: held with the tip in its hole (not coming down to it)
 
 
 def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
-                 scale: float = 1.0, barred=None) -> _Plants:
+                 scale: float = 1.0) -> _Plants:
     """Where each plant goes into the snow and how long it can stay (see arms_and_poles); the
     holes stay put in the world of the figure ``scale`` times the built-in's size.
 
     ``d`` is the signed phase from the plant, ``tips`` and ``free`` the free swing's tip and grip
     (armature space), ``shoulder`` the shoulder shifted by the grip's offset from the wrist, so
-    that ``reach[0] <= |grip - shoulder| <= reach[1]`` says the arm holds it; ``barred`` (n,)
-    bool: frames the arm was found not to reach, where a plant ends."""
+    that ``reach[0] <= |grip - shoulder| <= reach[1]`` says the arm holds it."""
     n = len(d)
-    held, after, in_hole = np.zeros(n, bool), np.zeros(n, bool), np.zeros(n, bool)
+    held, after = np.zeros(n, bool), np.zeros(n, bool)
     u = np.ones(n)
     tip_at, grip_at = tips.copy(), free.copy()
     # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
@@ -450,11 +425,9 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
         to, ok = on_sphere_within(local, length, away / np.linalg.norm(away, axis=1, keepdims=True),
                                   shoulder[idx], *reach)
         grip = local + length * to
-        if barred is not None:
-            ok &= ~barred[idx]
         k = len(idx) if ok.all() else max(int(np.argmin(ok)), 1)
         idx, local, grip = idx[:k], local[:k], grip[:k]
-        held[idx], in_hole[idx], tip_at[idx], grip_at[idx] = True, True, local, grip
+        held[idx], tip_at[idx], grip_at[idx] = True, local, grip
         # Lift off: from the last held pose to the free swing over `swing` of phase.
         r = idx[-1]
         dd = d[r + 1:] - d[r]
@@ -465,7 +438,7 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
         # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
         # rises off the snow along that line) while it swings free.
         tip_at[r + 1:j] = _local(place, P, np.arange(r + 1, j), scale)
-    return _Plants(held, after, u, tip_at, grip_at, in_hole)
+    return _Plants(held, after, u, tip_at, grip_at)
 
 
 #: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
