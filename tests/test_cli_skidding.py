@@ -54,6 +54,24 @@ def test_a_target_speed_without_a_turn_asked_skis_round_turns(tmp_path, capsys):
     assert "round turns" not in capsys.readouterr().out
 
 
+def test_a_target_speed_on_a_plane_skis_down_its_fall_line_by_default(tmp_path):
+    """The issue's command verbatim, no --heading-deg: the turns are about the plane's fall line
+    (--downhill-deg), the same run as with that heading given; speed held, within the corridor."""
+    def run(name, *extra):
+        out = tmp_path / name
+        assert main(["simulate", "--preset", "skier", "--slope-deg", "25", "--target-speed", "10",
+                     "--duration", "60", "--out", str(out), *extra]) == 0
+        return Trajectory.from_csv(out)
+    free = run("free.csv", "--downhill-deg", "30")
+    given = run("given.csv", "--downhill-deg", "30", "--heading-deg", "30")
+    np.testing.assert_array_equal(free.x, given.x)
+    np.testing.assert_array_equal(free.y, given.y)
+    assert abs(free.V_cm[free.t >= 30].mean() - 10.0) < 1.5
+    down = np.array([math.cos(math.radians(30)), math.sin(math.radians(30))])
+    off = np.abs(-(free.x - free.x[0]) * down[1] + (free.y - free.y[0]) * down[0])
+    assert off.max() < 30.0                              # measured 19-24 m (BENCHMARKS)
+
+
 def test_a_stop_from_the_command_line(tmp_path, capsys):
     traj, _ = _sim(tmp_path, "--preset", "snowboarder", "--speed", "10", "--stop-at", "0",
                    "--stop-side", "toe", "--duration", "4", "--fps", "25")

@@ -8,6 +8,7 @@ from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, sl
 from ..core.controllers.braking import round_turns
 from ..core.ranges import RANGES
 from ..core.controllers.schedule import Schedule
+from ..core.ground.terrain import Plane
 from ..core.physics.simulate import DEFAULT_DT
 from ..core.validate import check
 from .common import Outputs, check_steps, require_matplotlib
@@ -59,6 +60,15 @@ def _flag(name: str, value, key: str, deg: bool = False) -> float:
     return check(f"--{name.replace('_', '-')}", value, rng)
 
 
+def _default_heading(terrain) -> float:
+    """The heading without ``--heading-deg``, deg: down the fall line of a plane when a target
+    speed controls the speed (the turns brake about the fall line, docs/skidding.md), else 0."""
+    ground = terrain.get("ground")
+    if "target_speed" in terrain and isinstance(ground, Plane):
+        return math.degrees(ground.downhill)
+    return 0.0
+
+
 def run(args) -> int:
     overrides = {field: _flag(flag, getattr(args, flag), field)
                  for flag, field in BODY_FLAGS.items() if getattr(args, flag) is not None}
@@ -92,8 +102,8 @@ def run(args) -> int:
                                     "period")
         lean = math.radians(_flag("lean_deg", 23.0 if args.lean_deg is None else args.lean_deg,
                                   "theta_max", deg=True))
-        head = _flag("heading_deg", 0.0 if args.heading_deg is None else args.heading_deg,
-                     "heading", deg=True)
+        head = _flag("heading_deg", _default_heading(terrain) if args.heading_deg is None
+                     else args.heading_deg, "heading", deg=True)
         rounds = _round_turns(args, fig, terrain, x0, y0)
         if rounds is not None:                # speed control's own turns (docs/skidding.md)
             w, lean = rounds.omega0, rounds.theta_max
