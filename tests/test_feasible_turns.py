@@ -217,7 +217,7 @@ def test_table_is_the_bisected_lean_to_its_tolerance(name):
     """The table's leans (false position with a bisection fallback, each frequency stopped when
     its bracket is below LEAN_TOL) are the fully bisected ones to within LEAN_TOL, never above
     them (the tabulated lean is feasible), with the same binding bound, from the Blender minimum
-    speed to 30 m/s and for a pupil's jittered body (measured: at most 1.0e-12 rad apart)."""
+    speed to 30 m/s and for a pupil's jittered body (measured: at most 7.5e-13 rad apart)."""
     from blender_turning.core.controllers.feasible import LEAN_TOL, FeasibleTurns
     p = preset(name)
     bodies = [replace(p.body, V_cm=V) for V in (0.5, 2.0, 5.0, 10.0, 30.0)]
