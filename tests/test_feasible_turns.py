@@ -197,3 +197,62 @@ def test_nearby_tables_answer_with_a_close_body_s_table_only_inside_the_block(mo
     # The nearby table's leans are close to the body's own: within 2 % at 1% more mass.
     w = 2 * math.pi / 2.0
     assert own.max_lean(w) == pytest.approx(base.max_lean(w), rel=0.02)
+
+
+def _bisected_leans(table, omega0):
+    """The slow reference: 60 rounds of plain bisection on every frequency (the bracket of
+    about 1 rad closed to 1e-18 rad), what the table held before it stopped at ``LEAN_TOL``."""
+    lo = np.zeros_like(omega0)
+    hi = np.full_like(omega0, table.allowed[3])
+    ok_top = table._ratio(hi, omega0)[0] <= 1.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        ok = table._ratio(mid, omega0)[0] <= 1.0
+        lo, hi = np.where(ok, mid, lo), np.where(ok, hi, mid)
+    return np.where(ok_top, table.allowed[3], lo)
+
+
+@pytest.mark.parametrize("name", ["skier", "cyclist", "telemark", "gs_racer"])
+def test_table_is_the_bisected_lean_to_its_tolerance(name):
+    """The table's leans (false position with a bisection fallback, each frequency stopped when
+    its bracket is below LEAN_TOL) are the fully bisected ones to within LEAN_TOL, never above
+    them (the tabulated lean is feasible), with the same binding bound, from the Blender minimum
+    speed to 30 m/s and for a pupil's jittered body (measured: at most 7.5e-13 rad apart)."""
+    from blender_turning.core.controllers.feasible import LEAN_TOL, FeasibleTurns
+    p = preset(name)
+    bodies = [replace(p.body, V_cm=V) for V in (0.5, 2.0, 5.0, 10.0, 30.0)]
+    bodies.append(replace(p.body, m=p.body.m * 0.97, l=p.body.l * 1.04, I_v=p.body.I_v * 0.95,
+                          V_cm=4.0))
+    for body in bodies:
+        table = FeasibleTurns(body, p.limits)        # built here, not taken from the cache
+        w = np.exp(table._lw)
+        ref = _bisected_leans(table, w)
+        assert np.all(table._lean <= ref + 1e-15)
+        assert np.all(ref - table._lean <= LEAN_TOL)
+        assert np.all(table._ratio(table._lean, w)[0] <= 1.0)
+        ref_bound = table._ratio(np.minimum(ref * (1 + 1e-6) + 1e-12, np.pi / 2 - 1e-6), w)[1]
+        np.testing.assert_array_equal(table._bound, ref_bound)
+
+
+@pytest.mark.parametrize("nearby", [False, True])
+def test_a_table_is_shared_only_by_the_same_body_and_limits(monkeypatch, nearby):
+    """The tables are cached by every parameter of the body and of the limits (a crowd's pupils
+    with their own jittered bodies get their own): the same parameters give the same table, a
+    change of any one of them (by 5 %, past ``nearby_tables``' 2 %) another, built for it."""
+    from dataclasses import fields
+    from contextlib import nullcontext
+    from blender_turning.core.controllers import feasible
+    from blender_turning.core.controllers.feasible import nearby_tables
+    from blender_turning.core.physics.params import BodyParams, Limits
+    monkeypatch.setattr(feasible, "_TABLES", {})
+    fig = preset("skier")
+    with nearby_tables(0.02) if nearby else nullcontext():
+        base = feasible_turns(fig.body, fig.limits)
+        assert feasible_turns(replace(fig.body), replace(fig.limits)) is base
+        for cls, obj in ((BodyParams, fig.body), (Limits, fig.limits)):
+            for f in fields(cls):
+                changed = replace(obj, **{f.name: getattr(obj, f.name) * 1.05})
+                body, limits = (changed, fig.limits) if cls is BodyParams else (fig.body, changed)
+                table = feasible_turns(body, limits)
+                assert table is not base, f.name
+                assert (table.body, table.limits) == (body, limits), f.name
