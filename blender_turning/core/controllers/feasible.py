@@ -285,7 +285,7 @@ _BODY_FIELDS = ("m", "l", "I_v", "V_cm", "g")
 
 
 def feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
-    """:class:`FeasibleTurns` for ``body`` and ``limits``, built once (about 30 ms).  256: a run
+    """:class:`FeasibleTurns` for ``body`` and ``limits``, built once (about 6 ms).  256: a run
     down a slope passes through a table per 0.5 m/s of speed (10 to 27.5 m/s: 36), and a
     cache smaller than one run's sweep would rebuild every table on every run.  Inside
     :func:`nearby_tables`, a table already built for a nearby body."""
