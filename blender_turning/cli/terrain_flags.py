@@ -16,7 +16,6 @@ defaults are none, so today's runs are unchanged.
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -30,7 +29,7 @@ from ..core.controllers.speed_habits import habit_of
 from ..core.ground.scene_terrain import read_terrain
 from ..core.ground.terrain import Plane
 from ..core.physics.model import RESISTANCE, Resistance
-from ..core.validate import FieldError, Fields, check, read_text
+from ..core.validate import FieldError, Fields, check, read_json
 
 # flag -> (Resistance field, allowed range)
 RESISTANCE_FLAGS = {"friction": ("mu", 0.0, 1.0), "drag_area": ("CdA", 0.0, 10.0),
@@ -189,12 +188,7 @@ def read_ground(args, sport: str):
             if getattr(args, flag) is not None:
                 raise ValueError(f"--{flag.replace('_', '-')} is for a .npy --ground; the JSON "
                                  f"terrain {args.ground} gives its own cell and origin")
-        try:
-            doc = json.loads(read_text(path, "--ground file"))
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"--ground file {args.ground!r} is not valid JSON ({exc})") from None
-        except RecursionError:
-            raise ValueError(f"--ground file {args.ground!r} is nested too deeply") from None
+        doc = read_json(path, "--ground file")
         if not isinstance(doc, dict):
             raise ValueError(f"--ground file {args.ground!r} holds a JSON "
                              f"{type(doc).__name__}, not a terrain table")

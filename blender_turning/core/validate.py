@@ -15,6 +15,7 @@ binary, not UTF-8) named by the file.
 from __future__ import annotations
 
 import difflib
+import json
 from pathlib import Path
 
 import numpy as np
@@ -77,6 +78,18 @@ def read_text(path, what: str) -> str:
     if "\x00" in text:
         raise FieldError(f"{what} {str(path)!r} is not a text file (it holds NUL bytes)")
     return text
+
+
+def read_json(path, what: str):
+    """The JSON document in ``path`` (:func:`read_text`), or :class:`FieldError` naming
+    ``what`` and the file when it is not JSON or is nested deeper than Python can parse."""
+    text = read_text(path, what)
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise FieldError(f"{what} {str(path)!r} is not valid JSON ({exc})") from None
+    except RecursionError:
+        raise FieldError(f"{what} {str(path)!r} is nested too deeply") from None
 
 
 _REQUIRED = object()

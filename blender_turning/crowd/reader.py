@@ -8,13 +8,12 @@ read by the core's scene reader; its errors name the crowd file and ``figures[i]
 """
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 from ..core.ranges import CROWD_RANGES, RANGES
 from ..core.course.scene import read_figure, scene_from_dict
-from ..core.validate import FieldError, Fields, read_text
+from ..core.validate import FieldError, Fields, read_json
 from .formations import FORMATIONS
 from .registry import FormationRefused
 from .model import BODY_CLEARANCE, FIRST_TURNS, Crowd, CrowdFigure, FollowPath, Turns
@@ -29,15 +28,7 @@ _FIGURE = {"name", "preset", "body", "limits", "turns", "follow", "start", "time
 def load_crowd(path) -> Crowd:
     """Read and validate a crowd scene file (a path figure's ``follow.scene`` file names are
     relative to it)."""
-    text = read_text(path, "crowd file")
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise FieldError(f"crowd file {str(path)!r} is not valid JSON ({exc})") from None
-    except RecursionError:
-        raise FieldError(f"crowd file {str(path)!r} is nested too deeply to be a crowd") \
-            from None
-    return crowd_from_dict(doc, Path(path).parent, Path(path).name)
+    return crowd_from_dict(read_json(path, "crowd file"), Path(path).parent, Path(path).name)
 
 
 def crowd_from_dict(doc, base_dir=".", source: str = "crowd") -> Crowd:
@@ -110,11 +101,9 @@ def _scene(f: Fields, base: Path):
     if "scene" in doc:
         ref = follow.string("scene")
         try:
-            loaded = json.loads(read_text(base / ref, "scene file"))
-        except (ValueError, OSError) as exc:
+            loaded = read_json(base / ref, "scene file")
+        except ValueError as exc:
             follow.fail("scene", f"= {ref!r} cannot be read ({exc})")
-        except RecursionError:
-            follow.fail("scene", f"= {ref!r} is nested too deeply to be a scene")
         if not isinstance(loaded, dict):
             follow.fail("scene", f"= {ref!r} is not a JSON object")
         doc = {**loaded, **{k: {**loaded[k], **v} if isinstance(v, dict) and isinstance(

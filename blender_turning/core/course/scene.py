@@ -8,7 +8,6 @@ Lengths are metres, times seconds, angles degrees (``*_deg``) at this edge and r
 """
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import dataclass, replace
 
@@ -22,7 +21,7 @@ from .path import HermitePath
 from ..planner import FollowResult, PlannerSettings, Problem, SpeedProfile
 from ..ranges import RANGES
 from ..ground.scene_terrain import read_terrain
-from ..validate import FieldError, Fields, read_text
+from ..validate import FieldError, Fields, read_json
 
 __all__ = ["Scene", "load_scene", "scene_from_dict"]
 
@@ -107,15 +106,7 @@ def check_horizon(settings: PlannerSettings, where: str = "") -> None:
 
 def load_scene(path) -> Scene:
     """Read and validate a scene file; every error names the file and the field."""
-    text = read_text(path, "scene file")
-    try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise FieldError(f"scene file {str(path)!r} is not valid JSON ({exc})") from None
-    except RecursionError:
-        raise FieldError(f"scene file {str(path)!r} is nested too deeply to be a scene") \
-            from None
-    return scene_from_dict(doc, str(path))
+    return scene_from_dict(read_json(path, "scene file"), str(path))
 
 
 def _path(pf: Fields) -> HermitePath:
