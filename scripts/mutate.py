@@ -291,6 +291,12 @@ MUTANTS = [
     M("cli_ground_start_ignored", "cli/simulate.py",
       "slalom_start(fig.body, w0, tm0, heading(0.0), x0, y0)",
       "slalom_start(fig.body, w0, tm0, heading(0.0))", CLI_GROUND),
+    M("cli_target_speed_traverses", "cli/simulate.py",
+      "        return math.degrees(ground.downhill)\n", "        return -90.0\n",
+      [T + "test_cli_skidding.py"]),
+    M("json_reader_deep_nesting_unreported", "core/validate.py",
+      "    except RecursionError:\n        raise FieldError(f\"{what} {str(path)!r} is nested too deeply\") from None\n",
+      "", [T + "test_cli_robust.py", T + "test_cli_crowd_failures.py"]),
     # -- the half-turn's heading change (core/controllers/heading_table.py, Section 5.2) -----------
     M("heading_table_no_inertia_term", "core/controllers/heading_table.py",
       "return th * (self._gv * A / w + self._jv * w * B)", "return th * (self._gv * A / w)",
