@@ -89,3 +89,36 @@ def test_a_file_cut_short_fails_its_check(tmp_path, name, data, says):
                                          bytes(20))])
 def test_a_whole_file_passes_its_check(tmp_path, name, data):
     verify_file(written(tmp_path, name, data))
+
+
+@pytest.mark.parametrize("where", ["open", "write"])
+def test_a_signal_while_the_lock_is_made_leaves_no_lock(tmp_path, monkeypatch, where):
+    """An interrupt (a signal's exception) after the lock file is made but before ``with``
+    enters its block: ``__exit__`` never runs, so ``__enter__`` itself removes the lock (a
+    crowd stopped then left its new --out folder behind)."""
+    from blender_turning.core import files
+    real_open, real_dump = os.open, json.dump
+
+    def open_then_stop(*args, **kwargs):
+        real_open(*args, **kwargs)
+        raise KeyboardInterrupt
+
+    def dump_then_stop(obj, fh):
+        real_dump(obj, fh)
+        fh.flush()
+        raise KeyboardInterrupt
+
+    if where == "open":
+        monkeypatch.setattr(files.os, "open", open_then_stop)
+    else:
+        monkeypatch.setattr(files.json, "dump", dump_then_stop)
+    with pytest.raises(KeyboardInterrupt):
+        with files.OutputLock(tmp_path):
+            pass
+    monkeypatch.undo()
+    assert not (tmp_path / files.OutputLock.NAME).exists()
+    other = tmp_path / files.OutputLock.NAME                # another live job's lock stays
+    other.write_text(json.dumps({"pid": 1, "host": "elsewhere"}))
+    lock = files.OutputLock(tmp_path)
+    lock._drop_if_ours()
+    assert other.exists()

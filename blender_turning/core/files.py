@@ -196,7 +196,7 @@ class OutputLock:
               "since": time.strftime("%Y-%m-%d %H:%M:%S")}
         for _ in range(3):
             try:
-                fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+                return self._take(me)
             except FileExistsError:
                 other = self._owner()
                 if other is not None and self._alive(other):
@@ -208,12 +208,33 @@ class OutputLock:
                         f"{str(self.path)!r} if that job is gone") from None
                 self.path.unlink(missing_ok=True)       # stale: its owner is gone
                 continue
-            with os.fdopen(fd, "w") as fh:
-                json.dump(me, fh)
-            self._held = True
-            return self
+            except BaseException:         # a signal while the lock was being made
+                self._drop_if_ours()
+                raise
         raise OutputLocked(f"{self.flag} = {str(self.folder)!r}: cannot take the lock "
                            f"{str(self.path)!r}")
+
+    def _take(self, me):
+        fd = os.open(self.path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+        with os.fdopen(fd, "w") as fh:
+            json.dump(me, fh)
+        self._held = True
+        return self
+
+    def _drop_if_ours(self) -> None:
+        """Remove a lock this process made but did not finish (empty, or naming this pid):
+        ``with`` never enters its block then, so ``__exit__`` would not."""
+        try:
+            text = self.path.read_text()
+        except OSError:
+            return
+        try:
+            ours = not text or json.loads(text).get("pid") == os.getpid()
+        except (ValueError, AttributeError):
+            ours = False
+        if ours:
+            self.path.unlink(missing_ok=True)
+        self._held = False
 
     def _owner(self):
         try:
