@@ -52,7 +52,7 @@ def test_bake_and_panel_say_the_lean_the_bounds_allow_and_why(scene, capfd):
     assert math.degrees(tele.turning.lean) == pytest.approx(23.0)
     text = turns_panel_labels(bpy.context)
     assert [t for t in text if t.startswith("Leans")] == \
-        ["Leans 19.6\u00b0, not 23.0\u00b0: limited by C_f_max"], text
+        ["Leans 19.6\u00b0, not 23.0\u00b0: limited by Max Curvature"], text
     capfd.readouterr()
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     out = capfd.readouterr().out

@@ -64,8 +64,12 @@ def panel_turn(obj, scene) -> FeasibleTurn | None:
 
 
 def panel_text(turn: FeasibleTurn) -> str:
+    """The Turns panel's line, naming the bound by the setting's label the panel shows."""
+    setting = BOUND_SETTING.get(turn.bound, turn.bound).rpartition(" > ")[2]
+    if turn.bound == "physical branch":
+        setting = "the physical branch"
     return (f"Leans {math.degrees(turn.lean):.1f}\u00b0, "
-            f"not {math.degrees(turn.commanded_lean):.1f}\u00b0: limited by {turn.bound}")
+            f"not {math.degrees(turn.commanded_lean):.1f}\u00b0: limited by {setting}")
 
 
 def warn_distance(op) -> float:
