@@ -1,6 +1,7 @@
 """The batch API: per-figure ellipses with heading control, and a fallen figure
 that stops alone while the others go on."""
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -73,3 +74,17 @@ def test_the_run_ends_when_every_figure_has_fallen():
     r = run(BODY, FIG.limits, PhaseEllipse(BODY, W[:2], TM[:2], heading=HEADING), s0, 6.0)
     assert [k for k, _ in r.falls] == [0, 1] and r.falls[0][1] < r.falls[1][1]
     assert r.columns["t"][-1, 0] == pytest.approx(r.falls[1][1])
+
+
+def test_a_batch_run_again_under_other_limits_follows_their_table():
+    # A batch keeps its per-figure feasible ellipses for its constant schedules; a new run under
+    # tighter limits (a new feasibility table) must ski what a fresh controller skis under them.
+    tight = replace(FIG.limits, C_f_max=0.5 * FIG.limits.C_f_max)
+    ctl = PhaseEllipse(BODY, W, TM, heading=HEADING)
+    run(BODY, FIG.limits, ctl, starts(4), 4.0)
+    again = run(BODY, tight, ctl, starts(4), 4.0).columns
+    fresh = run(BODY, tight, PhaseEllipse(BODY, W, TM, heading=HEADING), starts(4), 4.0).columns
+    assert not np.array_equal(again["theta_v"], run(BODY, FIG.limits, ctl, starts(4),
+                                                    4.0).columns["theta_v"])
+    for name in ("theta_v", "theta_dir", "C_f"):
+        assert np.array_equal(again[name], fresh[name]), name

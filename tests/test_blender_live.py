@@ -401,3 +401,33 @@ def test_unregister_removes_the_handlers(scene):
     finally:
         addon.register()
     assert all(fn in handlers for handlers, fn in live.HANDLERS)
+
+
+def test_drag_steps_read_the_ground_mesh_again_only_once_it_changed(scene, monkeypatch):
+    fig = ground_figure()
+    fig.turning.live = True
+    bpy.ops.turning.refresh_preview()
+    scene.frame_set(100)
+    reads, read = [], live.ground_of
+    monkeypatch.setattr(live, "ground_of", lambda f: reads.append(f.name) or read(f))
+    for lean in (5.1, 5.2):
+        fig.turning.lean = math.radians(lean)
+        live.schedule()                            # drag steps
+    assert len(reads) == 1
+    mesh = fig.turning.ground
+    for v in mesh.data.vertices:                   # the slope a little steeper
+        v.co.z -= 0.02 * v.co.x
+    mesh.data.update()
+    bpy.context.view_layer.update()                # the depsgraph sees the edit
+    fig.turning.lean = math.radians(5.3)
+    live.schedule()
+    assert len(reads) == 2
+    step = baked(fig)
+    live._state["last_change"] -= live.SETTLE      # the release
+    assert live._tick() is None and not live.is_pending(fig)
+    full = baked(fig)
+    w = slice(2 * (100 - live.WINDOW - 1), 2 * (100 + live.WINDOW))
+    turns = [k for k in step if k[0].startswith('["turn_')]
+    assert turns
+    for k in turns:                                # the window ran on the edited mesh
+        np.testing.assert_array_equal(step[k][w], full[k][w], err_msg=str(k))

@@ -106,7 +106,8 @@ def quat_from_matrix(m):
 
 
 def quat_continuous(q):
-    """Flip signs along axis 0 so consecutive quaternions have a non-negative dot product.
+    """Flip signs along axis 0 so consecutive quaternions have a non-negative dot product
+    (``q`` (n, ..., 4): several tracks side by side are made continuous each on its own).
 
     ``q`` and ``-q`` are the same rotation, but F-curves interpolate the components: a sign jump
     between two keys would spin the bone the long way round.
@@ -114,9 +115,10 @@ def quat_continuous(q):
     q = np.array(q, float)
     if len(q) < 2:
         return q
-    flip = np.sum(q[1:] * q[:-1], axis=1) < 0
-    sign = np.concatenate([[1.0], np.where(np.cumsum(flip) % 2 == 1, -1.0, 1.0)])
-    return q * sign[:, None]
+    flip = np.sum(q[1:] * q[:-1], axis=-1) < 0
+    sign = np.concatenate([np.ones((1,) + flip.shape[1:]),
+                           np.where(np.cumsum(flip, axis=0) % 2 == 1, -1.0, 1.0)])
+    return q * sign[..., None]
 
 
 # -- rest frames (Blender's armature.cc) ---------------------------------------------------------

@@ -55,12 +55,13 @@ KEY = "turning_live_key"
 #: Seconds the settings stand still before a drag counts as ended (the whole range, the foot
 #: track, Follow Path).
 SETTLE = 0.3
-#: A drag step re-bakes the frames within WINDOW of the current one; the simulation runs from
-#: the first frame to MARGIN frames past them, and MARGIN frames on either side are mapped too
-#: (a pole plant, a quaternion's sign depend on the frames around: from 12 frames of context
-#: on, a window's rotations agree with the whole range's to 5e-6 given the same edge tilt,
-#: measured on the four sports; the tilt is fitted over the part simulated).
-WINDOW, MARGIN = 12, 24
+#: A drag step re-bakes the frames within WINDOW of the current one (the frame on screen and
+#: its neighbours); the simulation runs from the first frame to MARGIN frames past them, and
+#: MARGIN frames on either side are mapped too (a pole plant, a quaternion's sign depend on the
+#: frames around: from 12 frames of context on, a window's rotations agree with the whole
+#: range's to 5e-6 given the same edge tilt, measured on the four sports; the tilt is fitted
+#: over the part simulated).  The mapping's cost goes with the frames mapped: 29 here.
+WINDOW, MARGIN = 2, 12
 #: A drag step's controller may take the feasible turns of a body within this (relative) of the
 #: figure's (:func:`..core.controllers.feasible.nearby_tables`); the release bakes its own.
 NEARBY_BODY = 0.02
@@ -76,6 +77,10 @@ _MSGBUS_OWNER = object()
 _state = {"last_change": 0.0, "tracks_due": {}}
 #: figure name -> the digest of the settings its window was last re-baked for (the rest waits).
 _WINDOWS: dict = {}
+#: Ground mesh name -> (what the digest reads of it, its read): a drag step reads the mesh only
+#: when the digest sees it changed (a read takes ~15 ms on a 200 x 200 grid, most of it in
+#: evaluating the mesh to tell whether it changed); the release reads it anew.
+_GROUNDS: dict = {}
 
 
 class Failure:
@@ -265,7 +270,7 @@ def _track_rows(track, a: int, b: int):
                      {k: take(v) for k, v in track.props.items()})
 
 
-def _rebake_window(fig, frames: FrameRange, grounds) -> bool:
+def _rebake_window(fig, frames: FrameRange) -> bool:
     """A drag step: the keys within :data:`WINDOW` frames of the current frame, in place
     (raises as :func:`_rebake_turns`, nothing written).  ``False`` when a window is no cheaper
     or cannot be written in place (not baked yet, a start offset): then the whole range."""
@@ -279,10 +284,7 @@ def _rebake_window(fig, frames: FrameRange, grounds) -> bool:
     if mlo == frames.start and mhi == frames.end:
         return False
     check_figure(fig)
-    mesh = s.ground
-    if mesh is not None and mesh.name not in grounds:
-        grounds[mesh.name] = ground_of(fig)
-    ground = None if mesh is None else grounds[mesh.name]
+    ground = _window_ground(fig)
     with nearby_tables(NEARBY_BODY):      # a Body slider's step: no new feasibility table
         traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground)
     # What the mapping reads of the whole run, from the part simulated: the edge tilt's fit
@@ -299,6 +301,18 @@ def _rebake_window(fig, frames: FrameRange, grounds) -> bool:
         return False
     export_ready.clear_equipment(fig)
     return True
+
+
+def _window_ground(fig):
+    """A drag step's read of ``fig``'s Ground mesh (:data:`_GROUNDS`), ``None`` when flat."""
+    mesh = fig.turning.ground
+    if mesh is None:
+        return None
+    seen = _object_bytes(mesh, "ground")
+    kept = _GROUNDS.get(mesh.name)
+    if kept is None or kept[0] != seen:
+        kept = _GROUNDS[mesh.name] = (seen, ground_of(fig))
+    return kept[1]
 
 
 def _rebake_path(fig) -> None:
@@ -332,7 +346,7 @@ def refresh(scene=None, with_tracks: bool = True, paths: bool = True,
         try:
             if fig.turning.path is not None:
                 _rebake_path(fig)
-            elif window and _rebake_window(fig, frames, grounds):
+            elif window and _rebake_window(fig, frames):
                 _WINDOWS[fig.name] = key
                 out[fig.name] = None
                 continue
@@ -414,6 +428,7 @@ def on_load_post(*_args) -> None:
     FAILURES.clear()
     _EDITS.clear()
     _WINDOWS.clear()
+    _GROUNDS.clear()
     _subscribe()
 
 
@@ -468,4 +483,5 @@ def unregister():
     FAILURES.clear()
     _EDITS.clear()
     _WINDOWS.clear()
+    _GROUNDS.clear()
     _state["tracks_due"] = {}

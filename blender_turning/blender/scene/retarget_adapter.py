@@ -100,8 +100,8 @@ def user_rig(obj) -> UserRig:
     bones.foreach_get("matrix_local", rest)
     local = np.empty(n, bool)
     bones.foreach_get("use_local_location", local)
-    return UserRig(tuple(b.name for b in bones),
-                   tuple(b.parent.name if b.parent else None for b in bones),
+    parents = [b.parent for b in bones]
+    return UserRig(tuple(bones.keys()), tuple(p.name if p else None for p in parents),
                    rest.reshape(n, 4, 4).transpose(0, 2, 1).astype(float),
                    tuple(bool(v) for v in local), float(obj.scale[0]), obj.name)
 
@@ -109,7 +109,7 @@ def user_rig(obj) -> UserRig:
 def resolve_bone_map(obj, choice: str) -> BoneMap:
     """The bone map ``choice`` ('AUTO', 'RIGIFY', 'MIXAMO', 'BUILTIN' or 'CUSTOM') for ``obj``,
     checked against its bones (raises naming everything missing)."""
-    names = [b.name for b in obj.data.bones]
+    names = obj.data.bones.keys()
     where = f"armature {obj.name!r}"
     if choice == "AUTO":
         return auto_bone_map(names, where)

@@ -165,6 +165,7 @@ class PhaseEllipse(Controller):
         self._memo = {}
         const = (self._omega0.constant_value, self._theta_max.constant_value)
         self._fixed = {} if all(type(v) is float for v in const) else None
+        self._batch = None          # a batch's per-figure ellipses (:meth:`_batch_lean`)
 
     @property
     def steer_betas(self) -> tuple:
@@ -323,7 +324,7 @@ class PhaseEllipse(Controller):
         crossed = side != self._side
         self._side = side
         w, tm = self.omega0(t), self.theta_max(t)
-        tmf = self.feasible_lean(w, tm)
+        tmf = self.feasible_lean(w, tm) if type(th) is float else self._batch_lean(w, tm)
         if self._feasible is not None and (any_crossed or first):
             self._note(t, w, tm, tmf)
         if self.heading is None:
@@ -350,12 +351,13 @@ class PhaseEllipse(Controller):
         that the modified half-turn stays feasible (:mod:`.feasible`)."""
         if type(side) is not float:
             idx = np.nonzero(which)[0]
+            every = tmf, w
             tmf, w = (np.asarray(v)[idx] if np.ndim(v) else v for v in (tmf, w))
         change = self.half_turn_change(tmf, w)
         if self._feasible is None:
             lo, hi = BETA_MIN, BETA_MAX
         elif np.ndim(tmf) or np.ndim(w):                          # per-figure ellipses
-            lo, hi = np.vectorize(self._feasible.beta_range, otypes=[float, float])(tmf, w)
+            lo, hi = self._beta_ranges(*every, idx)
         else:
             lo, hi = self._feasible.beta_range(tmf, w)
         if type(side) is float:
@@ -406,7 +408,7 @@ class PhaseEllipse(Controller):
             out = self._memo.get(key)
             if out is not None:
                 return out
-        tmf = self.feasible_lean(w0, tm0)
+        tmf = self.feasible_lean(w0, tm0) if key is not None else self._batch_lean(w0, tm0)
         w = w0 / b
         amax = self.alpha_max if self.alpha_max is not None else 2.0 * w * w * (b * tmf)
         out = (b * tmf, w, amax)
@@ -415,6 +417,32 @@ class PhaseEllipse(Controller):
                 self._memo.clear()
             self._memo[key] = out
         return out
+
+    def _batch_lean(self, w0, tm0):
+        """:meth:`feasible_lean` of a batch's per-figure ellipses.  While both schedules are
+        constant they are the same arrays at every stage, and the leans are kept (with the
+        figures' beta ranges, :meth:`_beta_ranges`): a batch asked the table at every stage of
+        every step, twice the cost of the rest of the step at 100 figures."""
+        kept = self._batch
+        if kept is not None and kept[0] is w0 and kept[1] is tm0:
+            return kept[2]
+        tmf = self.feasible_lean(w0, tm0)
+        if w0 is self._omega0.constant_value and tm0 is self._theta_max.constant_value:
+            self._batch = [w0, tm0, tmf, None]
+        return tmf
+
+    def _beta_ranges(self, tmf, w, idx):
+        """``(lo, hi)`` of :meth:`.FeasibleTurns.beta_range` for the figures ``idx`` of a batch
+        whose followed ellipses are ``(tmf, w)``; every figure's at once, and kept, when they
+        are the ones :meth:`_batch_lean` keeps (``beta_range``'s own cache holds 64 figures, so a
+        crowd of more re-solved every figure's range at each of its zero crossings)."""
+        ranges = np.vectorize(self._feasible.beta_range, otypes=[float, float])
+        kept = self._batch
+        if kept is None or kept[2] is not tmf:
+            return ranges(*(np.asarray(v)[idx] if np.ndim(v) else v for v in (tmf, w)))
+        if kept[3] is None:
+            kept[3] = ranges(*np.broadcast_arrays(tmf, w))
+        return kept[3][0][idx], kept[3][1][idx]
 
     def _b(self, theta_v):
         """beta for a lean: the planned half-turn on its side."""

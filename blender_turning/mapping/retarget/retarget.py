@@ -179,17 +179,32 @@ class _Builtin:
         return self.fit.C @ (self.skel.rest_of(b)[:3, 3] - self.skel.rest_of(a)[:3, 3])
 
 
+def _rest_differences(bm, rig, skel, fit, joints) -> dict:
+    """``A`` of each of ``joints``: the rotation taking the user's rest segment of the joint (to
+    the next mapped joint down its chain, or the bone's Y) onto the built-in's (``skel``), in
+    the user's axes; all in one :func:`swing`."""
+    out, pairs = {}, {}
+    for joint in joints:
+        if joint in FLAT:
+            out[joint] = np.eye(3)
+            continue
+        u_rest = rig.rest_of(bm.bone(joint))
+        child = _chain_child(bm, rig, joint)
+        if child is None:
+            pairs[joint] = (u_rest[:3, 1], fit.C @ skel.rest_of(joint)[:3, 1])
+        else:
+            pairs[joint] = (rig.head(bm.bone(child)) - u_rest[:3, 3],
+                            fit.C @ (skel.rest_of(child)[:3, 3] - skel.rest_of(joint)[:3, 3]))
+    if pairs:
+        turns = swing(np.array([a for a, _ in pairs.values()]),
+                      np.array([b for _, b in pairs.values()]))
+        out.update(zip(pairs, turns))
+    return out
+
+
 def _rest_difference(bm, rig, skel, fit, joint):
-    """``A``: the rotation taking the user's rest segment of ``joint`` (to the next mapped joint
-    down its chain, or the bone's Y) onto the built-in's (``skel``), in the user's axes."""
-    if joint in FLAT:
-        return np.eye(3)
-    u_rest = rig.rest_of(bm.bone(joint))
-    child = _chain_child(bm, rig, joint)
-    if child is None:
-        return swing(u_rest[:3, 1], fit.C @ skel.rest_of(joint)[:3, 1])
-    b_vec = fit.C @ (skel.rest_of(child)[:3, 3] - skel.rest_of(joint)[:3, 3])
-    return swing(rig.head(bm.bone(child)) - u_rest[:3, 3], b_vec)
+    """``A`` of one joint (:func:`_rest_differences`)."""
+    return _rest_differences(bm, rig, skel, fit, (joint,))[joint]
 
 
 def _pole(bi, upper, lower, end):
@@ -268,7 +283,7 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
     """Armature-space poses (n, 4, 4) of the user's mapped joints (see the module doc)."""
     fit, n = bi.fit, bi.n
     rest = {j: rig.rest_of(bm.bone(j)) for j in JOINTS if _mapped(bm, rig, j)}
-    A = {j: _rest_difference(bm, rig, bi.skel, fit, j) for j in rest}
+    A = _rest_differences(bm, rig, bi.skel, fit, rest)
     rot = {j: bi.delta(j) @ (A[j] @ rest[j][:3, :3]) for j in rest}
     poses = {}
 
@@ -378,26 +393,26 @@ def _turn_about_tip(bi, pole, root, wrist, reach):
     return out, S
 
 
-def _channels(rig: UserRig, bone: str, pose, parent_delta):
-    """Local channels ``(location (n, 3), rotation (n, 4))`` giving ``bone`` the armature-space
-    ``pose`` (n, 4, 4) when its parent frame has moved by ``parent_delta`` (n, 4, 4) or not at
-    all (``None``)."""
-    i = rig.i(bone)
-    rest, p = rig.rest[i], rig.parents[i]
-    base = rest if parent_delta is None else parent_delta @ rest
-    base = np.broadcast_to(base, pose.shape)
-    local = rigid_inverse(base) @ pose
-    if rig.local_location[i]:
-        loc = local[:, :3, 3]
-    else:     # Blender: the location is in the parent's posed orientation (armature.cc)
-        par = np.eye(4) if p is None else rig.rest_of(p)
-        par = np.broadcast_to(par if parent_delta is None else parent_delta @ par, pose.shape)
-        loc = np.einsum("nji,nj->ni", par[:, :3, :3], pose[:, :3, 3] - base[:, :3, 3])
-    return loc, quat_continuous(quat_from_matrix(local[:, :3, :3]))
-
-
-def _delta(poses, rig, bm, joint):
-    return None if joint is None else poses[joint] @ rigid_inverse(rig.rest_of(bm.bone(joint)))
+def _channels(rig: UserRig, bones, poses, parent_deltas):
+    """Local channels ``(location (m, n, 3), rotation (m, n, 4))`` giving each of the ``m``
+    ``bones`` its armature-space pose (``poses`` (m, n, 4, 4)) when its parent frame has moved
+    by ``parent_deltas[i]`` ((n, 4, 4), or ``None``: not at all); all bones in one pass."""
+    idx = [rig.i(b) for b in bones]
+    eye = np.eye(4)
+    moved = np.stack([np.broadcast_to(eye if d is None else d, poses.shape[1:])
+                      for d in parent_deltas])
+    base = moved @ rig.rest[idx][:, None]
+    local = rigid_inverse(base) @ poses
+    loc = local[..., :3, 3].copy()
+    far = [k for k, i in enumerate(idx) if not rig.local_location[i]]
+    if far:       # Blender: the location is in the parent's posed orientation (armature.cc)
+        par = np.stack([eye if rig.parents[idx[k]] is None else rig.rest_of(rig.parents[idx[k]])
+                        for k in far])
+        par = moved[far] @ par[:, None]
+        loc[far] = np.einsum("mnji,mnj->mni", par[..., :3, :3],
+                             poses[far][..., :3, 3] - base[far][..., :3, 3])
+    q = quat_from_matrix(local[..., :3, :3])
+    return loc, np.swapaxes(quat_continuous(np.swapaxes(q, 0, 1)), 0, 1)
 
 
 def _fk_ancestor(rig, bm, bone):
@@ -420,19 +435,19 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     fit = fit_rig(rig, bm, sport, mirror) if fit is None else fit
     bi = _Builtin(sport, track, fit, mirror)
     poses = solve_joints(bi, rig, bm, sport)
-    bones = {}
+    moved = {None: None}          # joint -> its pose's change from rest (n, 4, 4)
+    for j in poses:
+        moved[j] = poses[j] @ rigid_inverse(rig.rest_of(bm.bone(j)))
     if bm.controls:
-        for c in bm.controls:
-            rest = rig.rest_of(c.bone)
-            pose = _delta(poses, rig, bm, c.joint) @ rest
-            loc, q = _channels(rig, c.bone, pose, _delta(poses, rig, bm, c.parent))
-            bones[c.bone] = BoneChannels(location=loc if c.parent is None else None, rotation=q)
+        keyed = [(c.bone, moved[c.joint] @ rig.rest_of(c.bone), c.parent)
+                 for c in bm.controls]
     else:
-        for j in poses:
-            bone = bm.bone(j)
-            anc = _fk_ancestor(rig, bm, bone)
-            loc, q = _channels(rig, bone, poses[j], _delta(poses, rig, bm, anc))
-            bones[bone] = BoneChannels(location=loc if anc is None else None, rotation=q)
+        keyed = [(bm.bone(j), poses[j], _fk_ancestor(rig, bm, bm.bone(j))) for j in poses]
+    names = [b for b, _, _ in keyed]
+    loc, q = _channels(rig, names, np.stack([p for _, p, _ in keyed]),
+                       [moved[a] for _, _, a in keyed])
+    bones = {b: BoneChannels(location=loc[k] if a is None else None, rotation=q[k])
+             for k, (b, _, a) in enumerate(keyed)}
     # Root motion: the object turns the user's facing onto the heading and puts `origin` on
     # the foot point (the built-in's object carries the foot point and theta_dir - 90 deg, and
     # on terrain stands in the local surface, mapping/surface.py).  The user's armature point

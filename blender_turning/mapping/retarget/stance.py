@@ -54,10 +54,21 @@ class MirroredSkeleton:
         return _S4 @ self._skel.rest_of(B.mirror(name)) @ _S4
 
 
+_SKELETONS = {}         # (sport, mirror) -> (the rig spec it was built from, skeleton)
+
+
 def builtin_skeleton(sport: str, mirror: bool = False):
-    """The built-in rig of ``sport`` (its rest frames by ``rest_of``), or its mirror image."""
-    skel = Skeleton.from_spec(load_rig(sport))
-    return MirroredSkeleton(skel) if mirror else skel
+    """The built-in rig of ``sport`` (its rest frames by ``rest_of``), or its mirror image:
+    built once per rig spec and shared (read-only; every retarget step asks for it several
+    times, and building it costs about a millisecond)."""
+    spec = load_rig(sport)
+    built = _SKELETONS.get((sport, mirror))
+    if built is None or built[0] is not spec:
+        skel = Skeleton.from_spec(spec)
+        skel.rest.setflags(write=False)
+        built = (spec, MirroredSkeleton(skel) if mirror else skel)
+        _SKELETONS[(sport, mirror)] = built
+    return built[1]
 
 
 def mirror_poses(poses: dict) -> dict:

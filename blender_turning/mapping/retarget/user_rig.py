@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -74,11 +75,13 @@ class RigFit:
     scale: float
     """World metres per user armature unit."""
 
-    @property
+    @cached_property
     def C(self) -> np.ndarray:
         """(3, 3) the built-in's axes -> the user's (turns the built-in's facing onto the
         user's)."""
-        return rot_z(self.facing - self.builtin_facing)
+        C = rot_z(self.facing - self.builtin_facing)
+        C.setflags(write=False)
+        return C
 
     @property
     def travel(self) -> float:

@@ -1,0 +1,94 @@
+"""Reid et al. 2020's slalom courses through ``follow`` (core/course/reid.py; docs/racing.md,
+"The racer's line"): the per-turn measures on tracks whose radii are known, and the slalom
+racer's line on a section of the 10 m course against Reid's turn radii and edge angles."""
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from blender_turning.core.course.reid import (REID, com_radius, course, gate_positions,
+                                              per_turn, summary, turns)
+from blender_turning.core.course.scene import scene_from_dict
+from blender_turning.core.equipment import carving_of
+
+
+def figure(l=0.0):
+    return SimpleNamespace(name="slalom_racer", body=SimpleNamespace(l=l, m=80.0, g=10.0))
+
+
+def slalom_track(gap=10.0, gates=6, amplitude=2.5, n=4001):
+    """A foot on ``y = A cos(pi (x - x_1) / gap)`` through the gates of :func:`gate_positions`
+    (apexes at the gates, turns from one zero of ``y`` to the next), its curvature as ``C_f``,
+    leaning into each turn; the apex radius is ``gap^2 / (pi^2 A)``."""
+    g = gate_positions(gap, gates)
+    x = np.linspace(g[0] - 0.7 * gap, g[-1] + 0.7 * gap, n)
+    k = math.pi / gap
+    y = amplitude * np.cos(k * (x - g[0]))
+    dy = -amplitude * k * np.sin(k * (x - g[0]))
+    ddy = -amplitude * k * k * np.cos(k * (x - g[0]))
+    C = ddy / (1 + dy ** 2) ** 1.5
+    force = 1.0 + np.abs(C)          # body weights with m g = 800 N below
+    return SimpleNamespace(t=x / 10.0, x=x, y=y, theta_dir=np.arctan(dy), C_f=C,
+                           theta_v=0.5 * np.sign(C) * np.abs(C) ** 0.5, F_leg=800.0 * force)
+
+
+def test_each_inner_gate_is_one_turn_with_its_apex_radius():
+    gap, A = 10.0, 2.5
+    track = slalom_track(gap, 6, A)
+    got = per_turn(track, figure(), gate_positions(gap, 6))
+    # The turns into and out of the course (gates 1 and 6) are left out.
+    assert got["gates"].tolist() == [1, 2, 3, 4]
+    apex = gap ** 2 / (math.pi ** 2 * A)                       # 4.05 m
+    np.testing.assert_allclose(got["R_foot"], apex, rtol=1e-5)
+    # l = 0: the centre of mass is on the foot; central differences on 0.03 m steps.
+    np.testing.assert_allclose(got["R_com"], apex, rtol=1e-3)
+    edge = math.degrees(math.acos(1.0 / (carving_of("slalom_racer").sidecut_radius / apex)))
+    np.testing.assert_allclose(got["edge"], edge, rtol=1e-5)
+    np.testing.assert_allclose(got["F_bw"], 1.0 + 1.0 / apex, rtol=1e-5)
+    mean, sd = summary(got)["R_foot"]
+    assert mean == pytest.approx(apex, rel=1e-5) and sd == pytest.approx(0.0, abs=1e-5)
+
+
+def test_the_summary_is_the_mean_and_the_sample_sd_over_turns():
+    got = summary({"gates": np.arange(3.0), "R_foot": np.array([3.0, 4.0, 5.0])})
+    assert got == {"R_foot": (4.0, 1.0)}
+
+
+def test_a_stretch_with_two_gates_is_no_turn():
+    # Two gates within one crossing-to-crossing stretch: the turn belongs to neither.
+    track = slalom_track(10.0, 6)
+    g = gate_positions(10.0, 6)
+    g[3] = g[2] + 1.0
+    assert 2 not in [k for k, _ in turns(track, g)]
+
+
+def test_the_centre_of_mass_turns_inside_the_foot():
+    """A steady left turn of radius R leaning theta_v to the left: the centre of mass turns on
+    the concentric circle of radius R - l sin(theta_v) (Eq. 21's V_cm = V_f (1 - C_f l
+    sin(theta_v)))."""
+    R, l, lean = 5.0, 0.95, math.radians(60.0)
+    a = np.linspace(0.0, 2.0, 2001)
+    traj = SimpleNamespace(t=a, x=R * np.sin(a), y=R * (1 - np.cos(a)), theta_dir=a,
+                           theta_v=np.full_like(a, lean))
+    inner = com_radius(traj, l)[5:-5]
+    np.testing.assert_allclose(inner, R - l * math.sin(lean), rtol=1e-5)
+
+
+@pytest.mark.slow
+def test_the_racer_skis_a_section_of_the_10_m_course_like_reids_racers():
+    """Five gates of the 10 m course at 12 m/s (q = 9 over +-1 1/(m s) per 0.2 s stage), the
+    three inner turns: the skis' (foot's) tightest radii and largest edge angles, each turn's,
+    within 10 % of Reid's means on average; leg force at most 5 body weights."""
+    scene = scene_from_dict({**course(10.0, 12.0, gates=5, planner={
+        "stages": 10, "choices": 9, "stage_time": 0.2}),
+        "figure": {"preset": "slalom_racer", "body": {"V_cm": 12.0},
+                   "limits": {"dC_f_max": 1.0}}}, "reid 10")
+    traj = scene.run().trajectory
+    got = per_turn(traj, scene.figure, gate_positions(10.0, 5))
+    assert got["gates"].tolist() == [1, 2, 3]
+    s = summary(got)
+    R, _, edge, _ = REID[10.0]
+    assert abs(s["R_foot"][0] - R) <= 0.1 * R
+    assert abs(s["edge"][0] - edge) <= 0.1 * edge
+    assert got["F_bw"].max() <= 5.0
