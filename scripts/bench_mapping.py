@@ -58,17 +58,28 @@ def timed(fn, calls):
     return 1e3 * statistics.median(wall), 1e3 * statistics.median(cpu)
 
 
-def one_tree(runs_path: str) -> None:
+def one_tree(runs_path: str, poses_path: str) -> None:
     """In a fresh process with the tree's package first on sys.path: time every case, print
-    JSON ``{case: [wall ms, cpu ms]}``."""
+    JSON ``{case: [wall ms, cpu ms]}``; write every case's poses to ``poses_path`` (npz)."""
     from dataclasses import replace
+
+    import numpy as np
 
     from blender_turning.core import Trajectory
     from blender_turning.core.physics.trajectory import COLUMNS
     from blender_turning.mapping import MAPPINGS, map_trajectory
     from blender_turning.mapping.sports.snow import tilt_gain
 
-    out = {}
+    out, poses = {}, {}
+
+    def keep(case, track):
+        poses[f"{case}/location"], poses[f"{case}/rotation"] = track.location, track.rotation
+        for bone, ch in track.bones.items():
+            for name in ("location", "rotation"):
+                if getattr(ch, name) is not None:
+                    poses[f"{case}/{bone}/{name}"] = getattr(ch, name)
+        return track
+
     for sport, doc in json.loads(Path(runs_path).read_text()).items():
         traj = Trajectory.from_columns({c: doc["data"][c] for c in COLUMNS}, doc["meta"])
         n = len(traj)
@@ -77,28 +88,45 @@ def one_tree(runs_path: str) -> None:
         options = MAPPINGS[sport].Options()
         if getattr(options, "tilt_gain", 0.0) is None:
             options = replace(options, tilt_gain=tilt_gain(traj, None))
-        out[f"{sport}, {WINDOW} frames"] = timed(
-            lambda: map_trajectory(sport, part, options, frame_start=lo + 1), CALLS["window"])
-        out[f"{sport}, 60 s ({n} frames)"] = timed(lambda: map_trajectory(sport, traj),
-                                                   CALLS["run"])
+        for case, call, calls in (
+                (f"{sport}, {WINDOW} frames",
+                 lambda: map_trajectory(sport, part, options, frame_start=lo + 1), "window"),
+                (f"{sport}, 60 s ({n} frames)", lambda: map_trajectory(sport, traj), "run")):
+            keep(case, call())
+            out[case] = timed(call, CALLS[calls])
+    np.savez(poses_path, **poses)
     print(json.dumps(out))
 
 
-def run_tree(tree: Path, runs_path: Path) -> dict:
+def run_tree(tree: Path, runs_path: Path, poses_path: Path) -> dict:
     env = {**os.environ, "PYTHONPATH": str(tree)}
-    res = subprocess.run([sys.executable, __file__, "--one", str(runs_path)], cwd=tree, env=env,
-                         capture_output=True, text=True, check=True)
+    res = subprocess.run([sys.executable, __file__, "--one", str(runs_path), str(poses_path)],
+                         cwd=tree, env=env, capture_output=True, text=True, check=True)
     return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def poses_differ(tmp: Path) -> dict:
+    """Per case, the largest difference between the two trees' channels (quaternion components
+    and locations, m); a channel one tree has and the other not is infinite."""
+    import numpy as np
+    a, b = np.load(tmp / "baseline.npz"), np.load(tmp / "this.npz")
+    out = {}
+    for key in set(a.files) | set(b.files):
+        case = key.split("/")[0]
+        d = (float(np.max(np.abs(a[key] - b[key]))) if key in a.files and key in b.files
+             else math.inf)
+        out[case] = max(out.get(case, 0.0), d)
+    return out
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--against", type=Path, help="another tree's root (the baseline)")
     ap.add_argument("--repeat", type=int, default=3, help="rounds, interleaved (best kept)")
-    ap.add_argument("--one", help=argparse.SUPPRESS)
+    ap.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.one:
-        return one_tree(args.one)
+        return one_tree(*args.one)
     now = datetime.datetime.now(datetime.timezone.utc)
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"load average {os.getloadavg()[0]:.1f} before; {now:%Y-%m-%d %H:%M} UTC")
@@ -109,19 +137,22 @@ def main():
         best = {name: {} for name, _ in trees}
         for r in range(args.repeat):
             for name, tree in (trees if r % 2 == 0 else trees[::-1]):
-                for case, (wall, cpu) in run_tree(tree, runs).items():
+                for case, (wall, cpu) in run_tree(tree, runs, Path(tmp) / name).items():
                     old = best[name].get(case)
                     if old is None or cpu < old[1]:
                         best[name][case] = (wall, cpu)
+        diff = poses_differ(Path(tmp)) if len(trees) == 2 else {}
     print(f"load average {os.getloadavg()[0]:.1f} after; median ms per call, wall (CPU), "
           f"best of {args.repeat} rounds\n")
     names = [name for name, _ in trees]
-    print("| case | " + " | ".join(names) + (" | CPU ratio |" if len(trees) == 2 else " |"))
-    print("|---" * (len(names) + 1 + (len(trees) == 2)) + "|")
+    two = len(trees) == 2
+    print("| case | " + " | ".join(names) + (" | CPU ratio | largest pose difference |"
+                                              if two else " |"))
+    print("|---" * (len(names) + 1 + 2 * two) + "|")
     for case in best["this"]:
         cells = [f"{best[n][case][0]:.1f} ({best[n][case][1]:.1f})" for n in names]
-        ratio = (f" {best['baseline'][case][1] / best['this'][case][1]:.2f}x |"
-                 if len(trees) == 2 else "")
+        ratio = (f" {best['baseline'][case][1] / best['this'][case][1]:.2f}x | "
+                 f"{diff[case]:.1e} |" if two else "")
         print(f"| {case} | " + " | ".join(cells) + " |" + ratio)
 
 
