@@ -6,7 +6,7 @@ For each built-in sport (skier, snowboarder, telemark, cyclist): a 60 s run on t
 controller (its preset, a 2 s turn, 20 deg lean) resampled at 24 fps (1,441 frames), mapped
 whole (``map_trajectory``) and as Live Preview's drag step maps it: a window of 73 frames in
 the middle of the run (the run's edge-tilt fit passed in, as ``blender/jobs/live.py`` does).
-Times are the median over the calls of one process, wall and CPU (the process's CPU: OpenBLAS
+Times are the least over the calls of one process, wall and CPU (the process's CPU: OpenBLAS
 threads woken by LAPACK calls show as CPU above wall).
 
 ``--against DIR`` times another tree's package (e.g. ``git archive f2c78aa | tar -x -C DIR``)
@@ -21,7 +21,6 @@ import json
 import math
 import os
 import platform
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -55,7 +54,7 @@ def timed(fn, calls):
         fn()
         wall.append(time.perf_counter() - w)
         cpu.append(time.process_time() - c)
-    return 1e3 * statistics.median(wall), 1e3 * statistics.median(cpu)
+    return 1e3 * min(wall), 1e3 * min(cpu)
 
 
 def one_tree(runs_path: str, poses_path: str) -> None:
@@ -142,7 +141,7 @@ def main():
                     if old is None or cpu < old[1]:
                         best[name][case] = (wall, cpu)
         diff = poses_differ(Path(tmp)) if len(trees) == 2 else {}
-    print(f"load average {os.getloadavg()[0]:.1f} after; median ms per call, wall (CPU), "
+    print(f"load average {os.getloadavg()[0]:.1f} after; least ms per call, wall (CPU), "
           f"best of {args.repeat} rounds\n")
     names = [name for name, _ in trees]
     two = len(trees) == 2
