@@ -46,7 +46,7 @@ def quat_conj(q):
 def quat_from_axis_angle(axis, angle):
     """Rotation by ``angle`` (rad, right-handed) about ``axis`` (normalised here)."""
     axis = np.asarray(axis, float)
-    axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    axis = axis / norm(axis, keepdims=True)
     half = 0.5 * np.asarray(angle, float)[..., None]
     return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
 
@@ -54,7 +54,7 @@ def quat_from_axis_angle(axis, angle):
 def quat_to_matrix(q):
     """(..., 4) unit quaternions -> (..., 3, 3) rotation matrices."""
     q = np.asarray(q, float)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    q = q / norm(q, keepdims=True)
     w, x, y, z = np.moveaxis(q, -1, 0)
     xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
     wx, wy, wz = w * x, w * y, w * z
@@ -101,7 +101,7 @@ def quat_from_matrix(m):
             v[:, 1 + kk] = (a[:, kk, i] + a[:, i, kk]) / r
         q[s] = v
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q /= norm(q, keepdims=True)
     return q.reshape(shape + (4,))
 
 
@@ -114,7 +114,7 @@ def quat_continuous(q):
     q = np.array(q, float)
     if len(q) < 2:
         return q
-    flip = np.sum(q[1:] * q[:-1], axis=1) < 0
+    flip = dot(q[1:], q[:-1]) < 0
     sign = np.concatenate([[1.0], np.where(np.cumsum(flip) % 2 == 1, -1.0, 1.0)])
     return q * sign[:, None]
 
@@ -257,15 +257,15 @@ def on_sphere_within(centre, radius, u0, other, lo, hi):
     from the centre, and whether any point is within the band (else ``u`` points at ``other``,
     or away from it where the whole sphere is nearer than ``lo``)."""
     to = np.asarray(other, float) - centre
-    D = np.maximum(np.linalg.norm(to, axis=-1, keepdims=True), 1e-12)
+    D = np.maximum(norm(to, keepdims=True), 1e-12)
     c = to / D
     law = lambda r: (radius * radius + D * D - r * r) / (2.0 * radius * D)     # noqa: E731
     near, far = law(hi), law(lo)            # cos(angle) bounds of the band
-    cos0 = np.sum(u0 * c, axis=-1, keepdims=True)
+    cos0 = dot(u0, c, keepdims=True)
     cos = np.clip(cos0, np.maximum(near, -1.0), np.clip(far, -1.0, 1.0))
     cos = np.minimum(cos, 1.0)
     across = u0 - cos0 * c
-    across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
+    across /= np.maximum(norm(across, keepdims=True), 1e-12)
     ok = (near[..., 0] <= 1.0) & (far[..., 0] >= -1.0)
     return cos * c + np.sqrt(np.maximum(1.0 - cos * cos, 0.0)) * across, ok
 

@@ -38,10 +38,10 @@ def rot_z(angle) -> np.ndarray:
 
 def rotate_about(v, axis, angle):
     """Rodrigues: rotate vectors ``v`` (n, 3) about unit ``axis`` (n, 3) by ``angle`` (n,)."""
-    k = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    k = axis / norm(axis, keepdims=True)
     a = np.asarray(angle, float)[..., None]
     return (v * np.cos(a) + cross(k, v) * np.sin(a)
-            + k * np.sum(k * v, axis=-1, keepdims=True) * (1.0 - np.cos(a)))
+            + k * dot(k, v, keepdims=True) * (1.0 - np.cos(a)))
 
 
 def smoothstep(u):
