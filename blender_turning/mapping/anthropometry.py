@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kinematics import dot, norm
+from .kinematics import dot, norm, stack_dot
 
 __all__ = ["SEGMENTS", "segment_ends", "centre_and_roll_inertia"]
 
@@ -67,12 +67,12 @@ def centre_and_roll_inertia(P, skel, mass: float, axis=(0.0, 1.0, 0.0)):
         seg = b - a
         length = norm(seg)
         u = seg / length[:, None]
-        own = (rg * length) ** 2 * (1.0 - (u @ e) ** 2)     # a rod about a parallel axis
+        own = (rg * length) ** 2 * (1.0 - stack_dot(u, e) ** 2)   # a rod about a parallel axis
         parts.append((frac * mass, a + at * seg, frac * mass * own))
     m = sum(p[0] for p in parts)
     com = sum(p[0] * p[1] for p in parts) / m
     inertia = np.zeros(len(com))
     for mi, c, own in parts:
         d = c - com
-        inertia += mi * (dot(d, d) - (d @ e) ** 2) + own
+        inertia += mi * (dot(d, d) - stack_dot(d, e) ** 2) + own
     return com, inertia

@@ -181,13 +181,30 @@ def rotation4(r):
     return m
 
 
+#: The most multiply-adds of one BLAS call that OpenBLAS runs on one thread (its default
+#: GEMM_MULTITHREAD_THRESHOLD of 4: a matrix-vector product of m x n with m n < 2304 x 4, a
+#: matrix product of m x k x n with m k n <= 65536 x 4).  Above them it wakes its other
+#: threads, which then spin waiting for more work: a 60 s run's poses (1,441 frames) times a
+#: vector did, measured by the worker thread's CPU ticks.
+BLAS_ONE_THREAD = {1: 2304 * 4 - 1, 2: 65536 * 4}
+
+
 def stack_dot(a, k):
-    """``a @ k`` for a stack ``a`` (..., r, c) and one matrix (c, m) or vector (c,) ``k``, as one
-    2-D product over the whole stack: numpy's matmul loops over a stack of small matrices, about
-    8x slower than this at a thousand frames."""
+    """``a @ k`` for a stack ``a`` (..., r, c) and one matrix (c, m) or vector (c,) ``k``, as 2-D
+    products over the whole stack: numpy's matmul loops over a stack of small matrices, about
+    8x slower than this at a thousand frames.  A long stack goes in pieces that OpenBLAS runs
+    on the calling thread alone (:data:`BLAS_ONE_THREAD`); each row is the same sum either way."""
     a = np.asarray(a, float)
     k = np.asarray(k, float)
-    return (a.reshape(-1, a.shape[-1]) @ k).reshape(a.shape[:-1] + k.shape[1:])
+    flat = a.reshape(-1, a.shape[-1])
+    rows = max(BLAS_ONE_THREAD[k.ndim] // k.size, 1)
+    if len(flat) <= rows:
+        out = flat @ k
+    else:
+        out = np.empty((len(flat),) + k.shape[1:])
+        for i in range(0, len(flat), rows):
+            np.matmul(flat[i:i + rows], k, out=out[i:i + rows])
+    return out.reshape(a.shape[:-1] + k.shape[1:])
 
 
 def rigid_inverse(m):
@@ -293,6 +310,11 @@ def two_bone_ik(root, target, l1: float, l2: float, pole, reach: float = 0.9999)
 
 
 # -- skeleton and pose ----------------------------------------------------------------------------
+#: id(spec) -> (spec, its Skeleton): :meth:`Skeleton.from_spec`'s cache (the spec is kept, so
+#: its id is not reused while the entry stands).
+_SKELETONS = {}
+
+
 class Skeleton:
     """Bones in parent-before-child order with their rest matrices (armature space)."""
 
@@ -310,9 +332,20 @@ class Skeleton:
 
     @classmethod
     def from_spec(cls, spec) -> "Skeleton":
-        return cls([b.name for b in spec.bones], [b.parent for b in spec.bones],
+        """The skeleton of the rig ``spec``, built once per spec object (the rigs are loaded
+        once per file): its rest matrices are read-only and shared, and so is its cache of
+        :meth:`rest_relative`."""
+        hit = _SKELETONS.get(id(spec))
+        if hit is not None and hit[0] is spec:
+            return hit[1]
+        skel = cls([b.name for b in spec.bones], [b.parent for b in spec.bones],
                    [rest_matrix(b.head, b.tail, b.roll) for b in spec.bones],
                    [b.connected for b in spec.bones], [b.length for b in spec.bones])
+        skel.rest.setflags(write=False)
+        if len(_SKELETONS) >= 64:                      # specs made on the fly (tests, rigs)
+            _SKELETONS.clear()
+        _SKELETONS[id(spec)] = (spec, skel)
+        return skel
 
     def i(self, name: str) -> int:
         try:
