@@ -86,3 +86,70 @@ def test_settled_arms_leaving_the_aiming_loop_change_nothing(monkeypatch):
                      (ch.location, fast.bones[name].location)):
             if a is not None:
                 assert np.max(np.abs(a - b)) < 1e-12, name      # measured 4e-15
+
+
+def test_norm_and_dot_are_numpys_numbers():
+    """kinematics.norm and dot give np.linalg.norm's and np.sum's numbers bit for bit (the
+    poses of every sport are unchanged by them)."""
+    from blender_turning.mapping.kinematics import dot, norm
+    rng = np.random.default_rng(5)
+    for shape in ((73, 3), (7, 5, 4), (3,)):
+        a, b = rng.normal(size=shape), rng.normal(size=shape)
+        assert np.array_equal(norm(a), np.linalg.norm(a, axis=-1))
+        assert np.array_equal(norm(a, keepdims=True), np.linalg.norm(a, axis=-1, keepdims=True))
+        assert np.array_equal(dot(a, b), np.sum(a * b, axis=-1))
+        assert np.array_equal(dot(a, b, keepdims=True), np.sum(a * b, axis=-1, keepdims=True))
+
+
+def test_a_long_stack_gives_the_one_products_numbers():
+    """Past OpenBLAS's one-thread size stack_dot goes in pieces: the same numbers as one 2-D
+    product (each row is its own sum)."""
+    rng = np.random.default_rng(6)
+    a = rng.normal(size=(20000, 4, 4))
+    k, v = rng.normal(size=(4, 4)), rng.normal(size=4)
+    assert np.array_equal(stack_dot(a, k), (a.reshape(-1, 4) @ k).reshape(a.shape))
+    assert np.array_equal(stack_dot(a, v), (a.reshape(-1, 4) @ v).reshape(20000, 4))
+    assert np.array_equal(stack_dot(a[:, :3, :3], v[:3]),
+                          (a[:, :3, :3].reshape(-1, 3) @ v[:3]).reshape(20000, 3))
+
+
+def _other_threads_ticks():
+    import os
+    me, ticks = str(os.getpid()), 0
+    for t in os.listdir("/proc/self/task"):
+        if t != me:
+            with open(f"/proc/self/task/{t}/stat") as fh:
+                fields = fh.read().rsplit(")", 1)[1].split()
+            ticks += int(fields[11]) + int(fields[12])        # utime + stime, clock ticks
+    return ticks
+
+
+def test_a_long_stack_leaves_openblas_threads_asleep():
+    """stack_dot on a long run's poses keeps OpenBLAS on the calling thread: its other threads
+    use no CPU (one 2-D product of the whole stack wakes them: 16-23 ticks a second measured;
+    awake they spin, a second core busy for nothing).  Linux only; skipped where numpy's
+    OpenBLAS runs one thread."""
+    import os
+    import time
+    if not os.path.isdir("/proc/self/task") or len(os.listdir("/proc/self/task")) < 2:
+        pytest.skip("no other thread to watch")
+    rng = np.random.default_rng(7)
+    a = rng.normal(size=(20000, 4, 4))
+    k, v = rng.normal(size=(4, 4)), rng.normal(size=4)
+    time.sleep(0.5)                              # any thread woken before this test sleeps
+    before = _other_threads_ticks()
+    for _ in range(100):
+        stack_dot(a, k)
+        stack_dot(a, v)
+    time.sleep(0.2)
+    assert _other_threads_ticks() - before == 0
+
+
+def test_a_rigs_skeleton_is_built_once():
+    """Skeleton.from_spec keeps one skeleton per rig (read-only rest matrices, shared)."""
+    spec = load_rig("skier")
+    skel = Skeleton.from_spec(spec)
+    assert Skeleton.from_spec(load_rig("skier")) is skel
+    assert Skeleton.from_spec(load_rig("telemark")) is not skel
+    with pytest.raises(ValueError):
+        skel.rest[0, 0, 0] = 2.0

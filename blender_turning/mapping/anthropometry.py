@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .kinematics import dot, norm, stack_dot
+
 __all__ = ["SEGMENTS", "segment_ends", "centre_and_roll_inertia"]
 
 #: Winter (2009) Table 4.1: segment -> (mass fraction, COM from the proximal end as a fraction
@@ -63,14 +65,14 @@ def centre_and_roll_inertia(P, skel, mass: float, axis=(0.0, 1.0, 0.0)):
     for name, a, b in segment_ends(P, skel):
         frac, at, rg = SEGMENTS[name]
         seg = b - a
-        length = np.linalg.norm(seg, axis=1)
+        length = norm(seg)
         u = seg / length[:, None]
-        own = (rg * length) ** 2 * (1.0 - (u @ e) ** 2)     # a rod about a parallel axis
+        own = (rg * length) ** 2 * (1.0 - stack_dot(u, e) ** 2)   # a rod about a parallel axis
         parts.append((frac * mass, a + at * seg, frac * mass * own))
     m = sum(p[0] for p in parts)
     com = sum(p[0] * p[1] for p in parts) / m
     inertia = np.zeros(len(com))
     for mi, c, own in parts:
         d = c - com
-        inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own
+        inertia += mi * (dot(d, d) - stack_dot(d, e) ** 2) + own
     return com, inertia

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["cross", "quat_mul", "quat_conj", "quat_from_axis_angle", "quat_to_matrix",
+__all__ = ["cross", "norm", "dot", "quat_mul", "quat_conj", "quat_from_axis_angle", "quat_to_matrix",
            "quat_from_matrix", "quat_continuous", "vec_roll_to_mat3", "rest_matrix", "translation",
            "rotation4", "rot_axis_angle", "stack_dot", "two_bone_ik", "frame_from_yx", "Skeleton",
            "PoseBuilder"]
@@ -46,7 +46,7 @@ def quat_conj(q):
 def quat_from_axis_angle(axis, angle):
     """Rotation by ``angle`` (rad, right-handed) about ``axis`` (normalised here)."""
     axis = np.asarray(axis, float)
-    axis = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    axis = axis / norm(axis, keepdims=True)
     half = 0.5 * np.asarray(angle, float)[..., None]
     return np.concatenate([np.cos(half), np.sin(half) * axis], axis=-1)
 
@@ -54,7 +54,7 @@ def quat_from_axis_angle(axis, angle):
 def quat_to_matrix(q):
     """(..., 4) unit quaternions -> (..., 3, 3) rotation matrices."""
     q = np.asarray(q, float)
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    q = q / norm(q, keepdims=True)
     w, x, y, z = np.moveaxis(q, -1, 0)
     xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
     wx, wy, wz = w * x, w * y, w * z
@@ -101,7 +101,7 @@ def quat_from_matrix(m):
             v[:, 1 + kk] = (a[:, kk, i] + a[:, i, kk]) / r
         q[s] = v
     q *= np.where(q[:, :1] < 0, -1.0, 1.0)
-    q /= np.linalg.norm(q, axis=1, keepdims=True)
+    q /= norm(q, keepdims=True)
     return q.reshape(shape + (4,))
 
 
@@ -115,7 +115,7 @@ def quat_continuous(q):
     q = np.array(q, float)
     if len(q) < 2:
         return q
-    flip = np.sum(q[1:] * q[:-1], axis=-1) < 0
+    flip = dot(q[1:], q[:-1]) < 0
     sign = np.concatenate([np.ones((1,) + flip.shape[1:]),
                            np.where(np.cumsum(flip, axis=0) % 2 == 1, -1.0, 1.0)])
     return q * sign[..., None]
@@ -183,13 +183,30 @@ def rotation4(r):
     return m
 
 
+#: The most multiply-adds of one BLAS call that OpenBLAS runs on one thread (its default
+#: GEMM_MULTITHREAD_THRESHOLD of 4: a matrix-vector product of m x n with m n < 2304 x 4, a
+#: matrix product of m x k x n with m k n <= 65536 x 4).  Above them it wakes its other
+#: threads, which then spin waiting for more work: a 60 s run's poses (1,441 frames) times a
+#: vector did, measured by the worker thread's CPU ticks.
+BLAS_ONE_THREAD = {1: 2304 * 4 - 1, 2: 65536 * 4}
+
+
 def stack_dot(a, k):
-    """``a @ k`` for a stack ``a`` (..., r, c) and one matrix (c, m) or vector (c,) ``k``, as one
-    2-D product over the whole stack: numpy's matmul loops over a stack of small matrices, about
-    8x slower than this at a thousand frames."""
+    """``a @ k`` for a stack ``a`` (..., r, c) and one matrix (c, m) or vector (c,) ``k``, as 2-D
+    products over the whole stack: numpy's matmul loops over a stack of small matrices, about
+    8x slower than this at a thousand frames.  A long stack goes in pieces that OpenBLAS runs
+    on the calling thread alone (:data:`BLAS_ONE_THREAD`); each row is the same sum either way."""
     a = np.asarray(a, float)
     k = np.asarray(k, float)
-    return (a.reshape(-1, a.shape[-1]) @ k).reshape(a.shape[:-1] + k.shape[1:])
+    flat = a.reshape(-1, a.shape[-1])
+    rows = max(BLAS_ONE_THREAD[k.ndim] // k.size, 1)
+    if len(flat) <= rows:
+        out = flat @ k
+    else:
+        out = np.empty((len(flat),) + k.shape[1:])
+        for i in range(0, len(flat), rows):
+            np.matmul(flat[i:i + rows], k, out=out[i:i + rows])
+    return out.reshape(a.shape[:-1] + k.shape[1:])
 
 
 def rigid_inverse(m):
@@ -205,28 +222,48 @@ def rigid_inverse(m):
     return out
 
 
-def cross(a, b) -> np.ndarray:
+def cross(a, b, out=None) -> np.ndarray:
     """``np.cross`` of (..., 3) vectors, the same numbers at half its cost on the mapping's short
-    arrays (``np.cross`` moves axes about first: 67 against 34 us for 73 frames, measured)."""
-    a, b = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float))
-    out = np.empty(a.shape)
-    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
-    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
-    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    arrays (``np.cross`` moves axes about first: 67 against 34 us for 73 frames, measured);
+    into ``out`` when given (a (..., 3) view: a frame's column)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if a.shape != b.shape:
+        a, b = np.broadcast_arrays(a, b)
+    if out is None:
+        out = np.empty(a.shape)
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    np.subtract(a1 * b2, a2 * b1, out=out[..., 0])
+    np.subtract(a2 * b0, a0 * b2, out=out[..., 1])
+    np.subtract(a0 * b1, a1 * b0, out=out[..., 2])
     return out
+
+
+def norm(v, keepdims: bool = False):
+    """``np.linalg.norm(v, axis=-1)``: the same numbers (the square root of the same sum)
+    without its argument checks, a third of its cost on the mapping's short arrays."""
+    return np.sqrt(np.add.reduce(v * v, axis=-1, keepdims=keepdims))
+
+
+def dot(a, b, keepdims: bool = False):
+    """``np.sum(a * b, axis=-1)`` (row-wise dot products), the same numbers."""
+    return np.add.reduce(a * b, axis=-1, keepdims=keepdims)
 
 
 def _unit(v):
     v = np.asarray(v, float)
-    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+    return v / norm(v, keepdims=True)
 
 
 def frame_from_yx(y_axis, x_hint):
     """(..., 3, 3) rotations whose Y column is ``y_axis`` and X column lies along ``x_hint``
     (made orthogonal to Y); Z = X x Y."""
     y = _unit(y_axis)
-    x = _unit(x_hint - np.sum(x_hint * y, axis=-1, keepdims=True) * y)
-    return np.stack([x, y, cross(x, y)], axis=-1)
+    x = _unit(x_hint - dot(x_hint, y, keepdims=True) * y)
+    out = np.empty(y.shape + (3,))
+    out[..., 0], out[..., 1] = x, y
+    cross(x, y, out[..., 2])
+    return out
 
 
 def on_sphere_within(centre, radius, u0, other, lo, hi):
@@ -239,15 +276,15 @@ def on_sphere_within(centre, radius, u0, other, lo, hi):
     from the centre, and whether any point is within the band (else ``u`` points at ``other``,
     or away from it where the whole sphere is nearer than ``lo``)."""
     to = np.asarray(other, float) - centre
-    D = np.maximum(np.linalg.norm(to, axis=-1, keepdims=True), 1e-12)
+    D = np.maximum(norm(to, keepdims=True), 1e-12)
     c = to / D
     law = lambda r: (radius * radius + D * D - r * r) / (2.0 * radius * D)     # noqa: E731
     near, far = law(hi), law(lo)            # cos(angle) bounds of the band
-    cos0 = np.sum(u0 * c, axis=-1, keepdims=True)
+    cos0 = dot(u0, c, keepdims=True)
     cos = np.clip(cos0, np.maximum(near, -1.0), np.clip(far, -1.0, 1.0))
     cos = np.minimum(cos, 1.0)
     across = u0 - cos0 * c
-    across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
+    across /= np.maximum(norm(across, keepdims=True), 1e-12)
     ok = (near[..., 0] <= 1.0) & (far[..., 0] >= -1.0)
     return cos * c + np.sqrt(np.maximum(1.0 - cos * cos, 0.0)) * across, ok
 
@@ -262,19 +299,24 @@ def two_bone_ik(root, target, l1: float, l2: float, pole, reach: float = 0.9999)
     """
     root = np.asarray(root, float)
     d = np.asarray(target, float) - root
-    dist = np.linalg.norm(d, axis=-1, keepdims=True)
+    dist = norm(d, keepdims=True)
     u = d / np.maximum(dist, 1e-12)
-    dist = np.clip(dist, abs(l1 - l2) + 1e-9, reach * (l1 + l2))
+    dist = np.minimum(np.maximum(dist, abs(l1 - l2) + 1e-9), reach * (l1 + l2))
     # Law of cosines: distance of the middle joint's projection along u, and its offset.
     a = (l1 * l1 - l2 * l2 + dist * dist) / (2.0 * dist)
     h = np.sqrt(np.maximum(l1 * l1 - a * a, 0.0))
     p = np.asarray(pole, float)
-    p = p - np.sum(p * u, axis=-1, keepdims=True) * u
+    p = p - dot(p, u, keepdims=True) * u
     p = _unit(p)
     return root + a * u + h * p, root + dist * u
 
 
 # -- skeleton and pose ----------------------------------------------------------------------------
+#: id(spec) -> (spec, its Skeleton): :meth:`Skeleton.from_spec`'s cache (the spec is kept, so
+#: its id is not reused while the entry stands).
+_SKELETONS = {}
+
+
 class Skeleton:
     """Bones in parent-before-child order with their rest matrices (armature space)."""
 
@@ -292,9 +334,20 @@ class Skeleton:
 
     @classmethod
     def from_spec(cls, spec) -> "Skeleton":
-        return cls([b.name for b in spec.bones], [b.parent for b in spec.bones],
+        """The skeleton of the rig ``spec``, built once per spec object (the rigs are loaded
+        once per file): its rest matrices are read-only and shared, and so is its cache of
+        :meth:`rest_relative`."""
+        hit = _SKELETONS.get(id(spec))
+        if hit is not None and hit[0] is spec:
+            return hit[1]
+        skel = cls([b.name for b in spec.bones], [b.parent for b in spec.bones],
                    [rest_matrix(b.head, b.tail, b.roll) for b in spec.bones],
                    [b.connected for b in spec.bones], [b.length for b in spec.bones])
+        skel.rest.setflags(write=False)
+        if len(_SKELETONS) >= 64:                      # specs made on the fly (tests, rigs)
+            _SKELETONS.clear()
+        _SKELETONS[id(spec)] = (spec, skel)
+        return skel
 
     def i(self, name: str) -> int:
         try:

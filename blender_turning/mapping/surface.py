@@ -20,6 +20,7 @@ import math
 
 import numpy as np
 
+from .kinematics import norm
 from .sports.common import rot_z
 
 __all__ = ["Placement", "surface_axes", "euler_xyz"]
@@ -30,7 +31,7 @@ def surface_axes(theta_dir, normal) -> np.ndarray:
     heading lifted into the surface, Z the unit surface ``normal`` ((n, 3), upward)."""
     d = np.asarray(theta_dir, float)
     nrm = np.asarray(normal, float)
-    nrm = nrm / np.linalg.norm(nrm, axis=1, keepdims=True)
+    nrm = nrm / norm(nrm, keepdims=True)
     if np.any(nrm[:, 2] <= 0.0):
         raise ValueError("the surface normal must point up (n_z > 0) on every frame")
     c, s = np.cos(d), np.sin(d)

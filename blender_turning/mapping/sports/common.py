@@ -12,8 +12,8 @@ import math
 import numpy as np
 
 from .. import bones as B
-from ..kinematics import (PoseBuilder, cross, frame_from_yx, quat_from_axis_angle, quat_mul,
-                          quat_to_matrix, rigid_inverse, stack_dot, two_bone_ik)
+from ..kinematics import (PoseBuilder, cross, dot, frame_from_yx, norm, quat_from_axis_angle,
+                          quat_mul, quat_to_matrix, rigid_inverse, stack_dot, two_bone_ik)
 
 __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "static_force",
            "add_local_rotation", "lean", "carried", "limb_frames", "ik_limb", "place_on_ground",
@@ -38,10 +38,10 @@ def rot_z(angle) -> np.ndarray:
 
 def rotate_about(v, axis, angle):
     """Rodrigues: rotate vectors ``v`` (n, 3) about unit ``axis`` (n, 3) by ``angle`` (n,)."""
-    k = axis / np.linalg.norm(axis, axis=-1, keepdims=True)
+    k = axis / norm(axis, keepdims=True)
     a = np.asarray(angle, float)[..., None]
     return (v * np.cos(a) + cross(k, v) * np.sin(a)
-            + k * np.sum(k * v, axis=-1, keepdims=True) * (1.0 - np.cos(a)))
+            + k * dot(k, v, keepdims=True) * (1.0 - np.cos(a)))
 
 
 def smoothstep(u):
@@ -117,13 +117,15 @@ def limb_frames(root, hinge_x, target, pole, l1: float, l2: float, twist=None, r
     towards ``pole`` rotated by ``twist`` (n,) rad about the root-target line, with the hinge
     (each bone's X) on the side of ``hinge_x`` (the upper bone's unposed X).  Returns
     ``(upper_rot, lower_rot, end)``, ``end`` the point reached."""
-    pole = np.broadcast_to(np.asarray(pole, float), root.shape)
+    pole = np.asarray(pole, float)
+    if pole.shape != root.shape:
+        pole = np.broadcast_to(pole, root.shape)
     if twist is not None:
         pole = rotate_about(pole, target - root, twist)
     mid, end = two_bone_ik(root, target, l1, l2, pole, reach)
     n = cross(end - root, pole)
-    n /= np.linalg.norm(n, axis=-1, keepdims=True)
-    n *= np.where(np.sum(n * hinge_x, axis=-1) < 0, -1.0, 1.0)[:, None]
+    n /= norm(n, keepdims=True)
+    n[dot(n, hinge_x) < 0] *= -1.0
     return frame_from_yx(mid - root, n), frame_from_yx(end - mid, n), end
 
 

@@ -23,7 +23,7 @@ from ..base import Mapping
 from ..anthropometry import centre_and_roll_inertia
 from .common import (add_local_rotation, carried, ik_limb, lean, leg_lengths, limb_frames,
                      phase_window, place_on_ground, rot_y, rot_z, smoothstep)
-from ..kinematics import (PoseBuilder, frame_from_yx, on_sphere_within, rigid_inverse,
+from ..kinematics import (PoseBuilder, frame_from_yx, norm, on_sphere_within, rigid_inverse,
                           stack_dot)
 from .skid_pose import SkidPose, knee_direction, ski_front
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
@@ -270,11 +270,11 @@ class SkierMapping(Mapping):
                                + lift * (grip + length * axis)[plan.after])
             moving = plan.held | plan.after
             to = aim[moving] - grip[moving]
-            axis[moving] = to / np.linalg.norm(to, axis=1, keepdims=True)
+            axis[moving] = to / norm(to, keepdims=True)
             # Where that would still dip the tip into the snow, it stays on the line to the hole.
             dip = plan.after & (grip[:, 2] + length * axis[:, 2] < 0.0)
             to = plan.tip_at[dip] - grip[dip]
-            axis[dip] = to / np.linalg.norm(to, axis=1, keepdims=True)
+            axis[dip] = to / norm(to, keepdims=True)
             b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
 
 
@@ -288,7 +288,7 @@ def _aim(arm, plan, free, offset, length):
     target[plan.after] = (1 - lift) * plan.grip_at[plan.after] + lift * free[plan.after]
     # ... never nearer the hole than the pole is long, or the tip would go into the snow.
     out = target[plan.after] - plan.tip_at[plan.after]
-    r = np.linalg.norm(out, axis=1, keepdims=True)
+    r = norm(out, keepdims=True)
     target[plan.after] = plan.tip_at[plan.after] + out * np.maximum(r, length) / r
     # The offset turns with the hand: aim again with the new one.  Each frame is solved on its
     # own, so a frame whose offset no longer moves (a free swing, after one pass) would only
@@ -375,7 +375,7 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
         local = _local(place, world, idx, k)
     away = free[idx] - local
     held[idx], tip_at[idx] = True, local
-    grip_at[idx] = local + length * away / np.linalg.norm(away, axis=1, keepdims=True)
+    grip_at[idx] = local + length * away / norm(away, keepdims=True)
 
 
 def on_snow(place, p):
@@ -422,7 +422,7 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
         # grip, turned about the hole as far as needed for the hand to hold it (the pole's
         # angle changes, the tip stays put); the plant ends where no point of it is in reach.
         away = free[idx] - local
-        to, ok = on_sphere_within(local, length, away / np.linalg.norm(away, axis=1, keepdims=True),
+        to, ok = on_sphere_within(local, length, away / norm(away, keepdims=True),
                                   shoulder[idx], *reach)
         grip = local + length * to
         k = len(idx) if ok.all() else max(int(np.argmin(ok)), 1)

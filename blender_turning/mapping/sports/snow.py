@@ -17,6 +17,7 @@ import numpy as np
 
 from ...core.physics.params import check_range
 from .. import bones as B
+from ..kinematics import dot, norm
 from .common import (add_local_rotation, body_axes, carried, ik_limb, lean, leg_lengths,
                      static_force)
 
@@ -115,11 +116,11 @@ def hip_drop(b, ankles: dict, reach: float) -> np.ndarray:
     for s, ankle in ankles.items():
         l1, l2 = leg_lengths(b.skel, B.side("thigh", s), B.side("shin", s))
         v = b.unposed(B.side("thigh", s))[:, :3, 3] - ankle
-        vu = np.sum(v * up, axis=1)
+        vu = dot(v, up)
         target = reach * (l1 + l2)
-        disc = target * target - np.sum(v * v, axis=1) + vu * vu
+        disc = target * target - dot(v, v) + vu * vu
         need = vu - np.sqrt(np.maximum(disc, 0.0))
-        drop = np.maximum(drop, np.where(np.linalg.norm(v, axis=1) > target, need, 0.0))
+        drop = np.maximum(drop, np.where(norm(v) > target, need, 0.0))
     return drop
 
 
@@ -127,7 +128,7 @@ def knee_flexion(b, s: str) -> np.ndarray:
     """Angle (n,) between thigh and shin, rad (0 = straight leg)."""
     y1 = b.pose(B.side("thigh", s))[:, :3, 1]
     y2 = b.pose(B.side("shin", s))[:, :3, 1]
-    return np.arccos(np.clip(np.sum(y1 * y2, axis=1), -1.0, 1.0))
+    return np.arccos(np.clip(dot(y1, y2), -1.0, 1.0))
 
 
 def legs_to(b, ankles: dict, pole, twist: dict | None = None, carriers: dict | None = None):

@@ -1,0 +1,159 @@
+"""Benchmark of the Section 7 mapping alone (no bpy).  Prints a Markdown table.
+
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_mapping.py [--against DIR] [--repeat 3]
+
+For each built-in sport (skier, snowboarder, telemark, cyclist): a 60 s run on the parametric
+controller (its preset, a 2 s turn, 20 deg lean) resampled at 24 fps (1,441 frames), mapped
+whole (``map_trajectory``) and as Live Preview's drag step maps it: a window of 73 frames in
+the middle of the run (the run's edge-tilt fit passed in, as ``blender/jobs/live.py`` does).
+Times are the least over the calls of one process, wall and CPU (the process's CPU: OpenBLAS
+threads woken by LAPACK calls show as CPU above wall).
+
+``--against DIR`` times another tree's package (e.g. ``git archive f2c78aa | tar -x -C DIR``)
+on the same trajectories (simulated once with this tree, handed over as columns): each tree in
+a fresh process, the trees interleaved, ``--repeat`` rounds, the best round's median kept.
+"""
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+SPORTS = ("skier", "snowboarder", "telemark", "cyclist")
+WINDOW = 73                 # Live Preview's drag step: 12 frames either side + 24 of context
+CALLS = {"window": 40, "run": 5}
+
+
+def make_runs(path: Path) -> None:
+    """Simulate each sport's 60 s run with this tree and write its 24 fps samples as JSON."""
+    from blender_turning.core import PhaseEllipse, preset, simulate
+    runs = {}
+    for sport in SPORTS:
+        fig = preset(sport)
+        traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(20),
+                                          heading=0.0), duration=60.0).resample(24)
+        runs[sport] = {"meta": traj.meta, "data": {c: v.tolist() for c, v in
+                                                   traj.columns().items()}}
+    path.write_text(json.dumps(runs))
+
+
+def timed(fn, calls):
+    fn()                                            # warm: the rig's file, caches
+    wall, cpu = [], []
+    for _ in range(calls):
+        w, c = time.perf_counter(), time.process_time()
+        fn()
+        wall.append(time.perf_counter() - w)
+        cpu.append(time.process_time() - c)
+    return 1e3 * min(wall), 1e3 * min(cpu)
+
+
+def one_tree(runs_path: str, poses_path: str) -> None:
+    """In a fresh process with the tree's package first on sys.path: time every case, print
+    JSON ``{case: [wall ms, cpu ms]}``; write every case's poses to ``poses_path`` (npz)."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from blender_turning.core import Trajectory
+    from blender_turning.core.physics.trajectory import COLUMNS
+    from blender_turning.mapping import MAPPINGS, map_trajectory
+    from blender_turning.mapping.sports.snow import tilt_gain
+
+    out, poses = {}, {}
+
+    def keep(case, track):
+        poses[f"{case}/location"], poses[f"{case}/rotation"] = track.location, track.rotation
+        for bone, ch in track.bones.items():
+            for name in ("location", "rotation"):
+                if getattr(ch, name) is not None:
+                    poses[f"{case}/{bone}/{name}"] = getattr(ch, name)
+        return track
+
+    for sport, doc in json.loads(Path(runs_path).read_text()).items():
+        traj = Trajectory.from_columns({c: doc["data"][c] for c in COLUMNS}, doc["meta"])
+        n = len(traj)
+        lo = n // 2 - WINDOW // 2
+        part = Trajectory(traj.data[:, lo:lo + WINDOW], {**traj.meta, "s_start": float(traj.s[0])})
+        options = MAPPINGS[sport].Options()
+        if getattr(options, "tilt_gain", 0.0) is None:
+            options = replace(options, tilt_gain=tilt_gain(traj, None))
+        for case, call, calls in (
+                (f"{sport}, {WINDOW} frames",
+                 lambda: map_trajectory(sport, part, options, frame_start=lo + 1), "window"),
+                (f"{sport}, 60 s ({n} frames)", lambda: map_trajectory(sport, traj), "run")):
+            keep(case, call())
+            out[case] = timed(call, CALLS[calls])
+    np.savez(poses_path, **poses)
+    print(json.dumps(out))
+
+
+def run_tree(tree: Path, runs_path: Path, poses_path: Path) -> dict:
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    res = subprocess.run([sys.executable, __file__, "--one", str(runs_path), str(poses_path)],
+                         cwd=tree, env=env, capture_output=True, text=True, check=True)
+    return json.loads(res.stdout.strip().splitlines()[-1])
+
+
+def poses_differ(tmp: Path) -> dict:
+    """Per case, the largest difference between the two trees' channels (quaternion components
+    and locations, m); a channel one tree has and the other not is infinite."""
+    import numpy as np
+    a, b = np.load(tmp / "baseline.npz"), np.load(tmp / "this.npz")
+    out = {}
+    for key in set(a.files) | set(b.files):
+        case = key.split("/")[0]
+        d = (float(np.max(np.abs(a[key] - b[key]))) if key in a.files and key in b.files
+             else math.inf)
+        out[case] = max(out.get(case, 0.0), d)
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--against", type=Path, help="another tree's root (the baseline)")
+    ap.add_argument("--repeat", type=int, default=3, help="rounds, interleaved (best kept)")
+    ap.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.one:
+        return one_tree(*args.one)
+    now = datetime.datetime.now(datetime.timezone.utc)
+    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+          f"load average {os.getloadavg()[0]:.1f} before; {now:%Y-%m-%d %H:%M} UTC")
+    trees = ([("baseline", args.against.resolve())] if args.against else []) + [("this", ROOT)]
+    with tempfile.TemporaryDirectory() as tmp:
+        runs = Path(tmp) / "runs.json"
+        make_runs(runs)
+        best = {name: {} for name, _ in trees}
+        for r in range(args.repeat):
+            for name, tree in (trees if r % 2 == 0 else trees[::-1]):
+                for case, (wall, cpu) in run_tree(tree, runs, Path(tmp) / name).items():
+                    old = best[name].get(case)
+                    if old is None or cpu < old[1]:
+                        best[name][case] = (wall, cpu)
+        diff = poses_differ(Path(tmp)) if len(trees) == 2 else {}
+    print(f"load average {os.getloadavg()[0]:.1f} after; least ms per call, wall (CPU), "
+          f"best of {args.repeat} rounds\n")
+    names = [name for name, _ in trees]
+    two = len(trees) == 2
+    print("| case | " + " | ".join(names) + (" | CPU ratio | largest pose difference |"
+                                              if two else " |"))
+    print("|---" * (len(names) + 1 + 2 * two) + "|")
+    for case in best["this"]:
+        cells = [f"{best[n][case][0]:.1f} ({best[n][case][1]:.1f})" for n in names]
+        ratio = (f" {best['baseline'][case][1] / best['this'][case][1]:.2f}x | "
+                 f"{diff[case]:.1e} |" if two else "")
+        print(f"| {case} | " + " | ".join(cells) + " |" + ratio)
+
+
+if __name__ == "__main__":
+    main()
