@@ -431,3 +431,51 @@ def test_drag_steps_read_the_ground_mesh_again_only_once_it_changed(scene, monke
     assert turns
     for k in turns:                                # the window ran on the edited mesh
         np.testing.assert_array_equal(step[k][w], full[k][w], err_msg=str(k))
+
+
+def test_a_drag_step_after_another_writes_and_reads_back_only_the_window(scene, monkeypatch):
+    from blender_turning.blender.anim import bake_layers
+    scene.frame_end = 240
+    fig = live_figure()
+    scene.frame_set(100)
+    reads, read = [], bake._read_keys
+    monkeypatch.setattr(bake, "_read_keys", lambda *a: reads.append(1) or read(*a))
+    w = slice(2 * (100 - live.WINDOW - 1), 2 * (100 + live.WINDOW))
+    fig.turning.lean = math.radians(24)
+    live.schedule()                                # the first step of a drag reads every key
+    first = baked(fig)
+    fig.turning.lean = math.radians(25)
+    live.schedule()                                # the next: the window's keys only
+    assert len(reads) == 1
+    second = baked(fig)
+    assert any(not np.array_equal(second[k][w], first[k][w]) for k in first)
+    action = bake.figure_action(fig)
+    bag = bake.baked_channels(fig)
+    # Blender's keys are the ones the fingerprints were taken from: the keys written one by one
+    # are the window's values, and nothing else moved.
+    assert bake_layers.edited_curves(action, bag) == []
+    for k in first:
+        np.testing.assert_array_equal(second[k][:w.start], first[k][:w.start], err_msg=str(k))
+        np.testing.assert_array_equal(second[k][w.stop:], first[k][w.stop:], err_msg=str(k))
+    # A key of the user's in the window (a script between two steps): read anew, refused.
+    fc = next(f for f in bag.fcurves if f.data_path.endswith(".rotation_quaternion"))
+    was = fc.keyframe_points[99].co.y             # frame 100
+    fc.keyframe_points[99].co.y += 0.2
+    fig.turning.lean = math.radians(26)
+    live.schedule()
+    assert len(reads) == 2
+    assert "holds keys of yours on " + fc.data_path in live.FAILURES[fig.name].message
+    fc.keyframe_points[99].co.y = was
+    fig.turning.lean = math.radians(27)
+    live.schedule()                                # back as written: the drag goes on
+    assert fig.name not in live.FAILURES, live.FAILURES[fig.name].message
+    # One outside the window stays as the user left it, and the release refuses to bake over it.
+    fc.keyframe_points[180].co.y += 0.2
+    edited = fc.keyframe_points[180].co.y
+    fig.turning.lean = math.radians(28)
+    live.schedule()
+    assert fig.name not in live.FAILURES and fc.keyframe_points[180].co.y == edited
+    live._state["last_change"] -= live.SETTLE
+    live._tick()
+    assert "holds keys of yours on " + fc.data_path in live.FAILURES[fig.name].message
+    assert fc.keyframe_points[180].co.y == edited

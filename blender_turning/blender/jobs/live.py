@@ -347,6 +347,7 @@ def refresh(scene=None, with_tracks: bool = True, paths: bool = True,
             if fig.turning.path is not None:
                 _rebake_path(fig)
             elif window and _rebake_window(fig, frames):
+                clear_failure(fig)           # a step that failed before: the drag went on
                 _WINDOWS[fig.name] = key
                 out[fig.name] = None
                 continue
