@@ -440,3 +440,45 @@ def test_on_terrain_the_rig_stands_in_the_surface_as_the_builtin(sport):
         Mb = Pb[piece.name]
         assert np.max(np.abs(Ru @ Mu[:, :3, :3] - Rb @ Mb[:, :3, :3])) < 1e-6, piece.name
         assert np.max(np.abs(user(Mu[:, :3, 3]) - scaled(Mb[:, :3, 3]))) < 1e-6, piece.name
+
+
+def test_channels_give_back_the_pose_in_either_location_convention():
+    """The local channels of several bones at once give back each bone's armature-space pose
+    by Blender's rule (armature.cc): ``parent_posed @ rest_relative @ [R(q), loc]`` with
+    ``use_local_location``, else the location in the parent's posed orientation; the quaternions
+    are continuous along time for every bone (no sign jump between frames)."""
+    from blender_turning.mapping.kinematics import quat_to_matrix
+    from blender_turning.mapping.retarget.retarget import _channels
+    rng = np.random.default_rng(5)
+
+    def turn(axis, angle):
+        q = np.concatenate([np.cos(angle / 2)[:, None],
+                            np.sin(angle / 2)[:, None] * axis / np.linalg.norm(axis)], axis=1)
+        return quat_to_matrix(q)
+
+    def frame(R, t):
+        m = np.zeros(R.shape[:-2] + (4, 4))
+        m[..., :3, :3], m[..., :3, 3], m[..., 3, 3] = R, t, 1.0
+        return m
+
+    n = 40
+    rest = [frame(turn(rng.normal(size=3), np.array([a]))[0], rng.normal(size=3))
+            for a in (0.3, 1.1, 2.0)]
+    rig = UserRig(("a", "b", "c"), (None, "a", "b"), np.array(rest), (True, False, False))
+    t = np.linspace(0.0, 1.0, n)
+    parent_delta = frame(turn(np.array([0.2, 1.0, 0.3]), 3.5 * t), rng.normal(size=(n, 3)))
+    poses = np.stack([frame(turn(rng.normal(size=3), 6.0 * t + k), rng.normal(size=(n, 3)))
+                      for k in range(3)])
+    deltas = [None, parent_delta, parent_delta]
+    loc, q = _channels(rig, ["a", "b", "c"], poses, deltas)
+    for k, name in enumerate(rig.names):
+        base = rest[k] if deltas[k] is None else deltas[k] @ rest[k]
+        base = np.broadcast_to(base, (n, 4, 4))
+        got = base @ frame(quat_to_matrix(q[k]), np.zeros(3))
+        if rig.local_location[k]:
+            got = base @ frame(quat_to_matrix(q[k]), loc[k])
+        else:
+            par = deltas[k] @ rest[k - 1]
+            got[:, :3, 3] = base[:, :3, 3] + np.einsum("nij,nj->ni", par[:, :3, :3], loc[k])
+        assert np.abs(got - poses[k]).max() < 1e-12, name
+        assert np.all(np.sum(q[k][1:] * q[k][:-1], axis=1) >= 0.0), name
