@@ -1,15 +1,17 @@
 """Writing a computed bake onto a figure (keys at every frame or every n-th with smooth
-in-betweens, then its foot track), and putting a figure without keys back at its start.  Shared by
-Bake Turns, Follow Path, Follow Path on several figures and Add Crowd."""
+in-betweens, then its foot track), several figures' at once (those with another's motion playing
+its bake), and putting a figure without keys back at its start.  Shared by Bake Turns, Follow
+Path, Follow Path on several figures and Add Crowd."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 
 import bpy
 import numpy as np
 
 from ...mapping.base import BoneChannels, PoseTrack
-from . import bake, foot_track
+from . import bake, fewer_keys, foot_track
 from ..scene import retarget_adapter
 from . import export_ready as export_ready_mod, export_state
 
@@ -82,18 +84,67 @@ def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True,
     result = bake.bake_pose_track(fig, every_nth(track, step))
     if step > 1:
         set_hermite_handles(fig, slopes)
+    _around_the_bake(fig, traj, track.frames, export_ready, export_turn_state)
+    return result
+
+
+def _around_the_bake(fig, traj, frames, export_ready, export_turn_state) -> None:
+    """What a bake writes besides the figure's keys: the foot track, the equipment's keys (or
+    none), the state Empties."""
     foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z)     # on the ground
     if export_ready:
-        export_ready_mod.bake_equipment(fig, track.frames)
+        export_ready_mod.bake_equipment(fig, frames)
     else:
         export_ready_mod.clear_equipment(fig)
     if export_turn_state is None:
         export_turn_state = bool(export_state.carriers(fig))
     if export_turn_state:
-        export_state.bake_state(fig, track.frames)
+        export_state.bake_state(fig, frames)
     else:
         export_state.clear_state(fig)
-    return result
+
+
+@dataclass
+class Written:
+    """What :func:`write_bakes` wrote."""
+
+    results: list
+    """``[BakeResult]`` in the figures' order (a figure sharing another's: 0 F-curves)."""
+    shared: dict = field(default_factory=dict)
+    """figure name -> the name of the figure whose bake it plays."""
+    key_reports: dict = field(default_factory=dict)
+    """figure name -> :class:`.fewer_keys.KeyReport` (the figures baked with Fewer Keys)."""
+
+
+def write_bakes(figs, trajs, tracks, step: int = 1, export_ready: bool = True,
+                export_turn_state: bool | None = None, fewer=None,
+                share: bool = True) -> Written:
+    """Write the computed bakes of several figures (:func:`apply_bake` each; ``fewer``: a
+    :class:`..mapping.keys.KeyTolerance`, then Fewer Keys).  With ``share`` (keys on every
+    frame, or Fewer Keys), a figure whose pose track is another's moved and later by whole
+    frames (:func:`...mapping.shared_motion.plan`) plays that figure's bake
+    (:func:`.bake.share_bake`) instead of baking its own: the figures that bake are written
+    first."""
+    from ...mapping.shared_motion import plan
+    can = [bake.can_share(f) for f in figs] if share and step == 1 else [False] * len(figs)
+    which = [k for k, ok in enumerate(can) if ok]
+    shares = [None] * len(figs)
+    for k, sh in zip(which, plan([tracks[k] for k in which])):
+        shares[k] = None if sh is None else (which[sh.source], sh)
+    out = Written([None] * len(figs))
+    for k in sorted(range(len(figs)), key=lambda k: shares[k] is not None):
+        fig = figs[k]
+        if shares[k] is None:
+            out.results[k] = apply_bake(fig, trajs[k], tracks[k], step, export_ready,
+                                        export_turn_state)
+            if fewer is not None:
+                out.key_reports[fig.name] = fewer_keys.reduce_bake(fig, fewer)
+            continue
+        source, sh = shares[k]
+        out.results[k] = bake.share_bake(fig, figs[source], tracks[k], sh.shift, sh.translation)
+        out.shared[fig.name] = figs[source].name
+        _around_the_bake(fig, trajs[k], tracks[k].frames, export_ready, export_turn_state)
+    return out
 
 
 def reset_pose(fig):
