@@ -34,7 +34,7 @@ import numpy as np
 
 from .base import PoseTrack
 
-__all__ = ["Share", "plan", "shares"]
+__all__ = ["Matcher", "Share", "order", "plan", "shares"]
 
 #: Rows compared first, for every candidate at once (most candidates differ there).
 _HEAD = 3
@@ -141,24 +141,49 @@ class _Sources:
         return [self.index[m] for m in np.nonzero(near)[0]]
 
 
+class Matcher:
+    """Tracks met one at a time, the earliest-starting first: :meth:`match` finds a source met
+    before whose motion a track is, :meth:`add` makes a track a source.  Only the sources'
+    tracks are kept (a crowd baked figure by figure holds no more)."""
+
+    def __init__(self):
+        self._groups = {}                # (channel layout, head's shape) -> _Sources
+        self._tracks = {}                # source key -> its track
+
+    def match(self, track: PoseTrack) -> Share | None:
+        """The :class:`Share` (``source``: the key it was added with) of ``track``, or
+        ``None``.  Candidates are narrowed on their first rows, for all sources at once, then
+        compared whole (:func:`shares`)."""
+        head = _channels(track, slice(0, _HEAD))
+        sources = self._groups.get((_layout(track), head.shape))
+        for key in (sources.candidates(head) if sources is not None else ()):
+            share = shares(self._tracks[key], track)
+            if share is not None:
+                return Share(key, share.shift, share.translation)
+        return None
+
+    def add(self, key, track: PoseTrack) -> None:
+        head = _channels(track, slice(0, _HEAD))
+        sources = self._groups.setdefault((_layout(track), head.shape), _Sources(head.size))
+        sources.add(key, head, _scale(_channels(track, slice(None))))
+        self._tracks[key] = track
+
+
+def order(tracks) -> list:
+    """Indices of ``tracks`` in the order to meet them: the earliest start first (a source
+    starts no later than the figures sharing its motion), then as given."""
+    return sorted(range(len(tracks)), key=lambda i: (float(tracks[i].frames[0]), i))
+
+
 def plan(tracks) -> list:
     """For each of ``tracks`` (:class:`.base.PoseTrack`), ``None`` (it is baked on its own) or
     the :class:`Share` of an earlier-starting one whose motion it is (see :func:`shares`).  The
     figure that starts first (then: comes first) of a group is its source; a source shares
-    nobody's.  Candidates are narrowed on their first rows, for all sources at once, then
-    compared whole."""
-    order = sorted(range(len(tracks)), key=lambda i: (float(tracks[i].frames[0]), i))
+    nobody's."""
     out = [None] * len(tracks)
-    groups = {}                      # (channel layout, head's shape) -> _Sources
-    for i in order:
-        t = tracks[i]
-        head = _channels(t, slice(0, _HEAD))
-        sources = groups.setdefault((_layout(t), head.shape), _Sources(head.size))
-        for s in sources.candidates(head):
-            share = shares(tracks[s], t)
-            if share is not None:
-                out[i] = Share(s, share.shift, share.translation)
-                break
-        else:
-            sources.add(i, head, _scale(_channels(t, slice(None))))
+    matcher = Matcher()
+    for i in order(tracks):
+        out[i] = matcher.match(tracks[i])
+        if out[i] is None:
+            matcher.add(i, tracks[i])
     return out

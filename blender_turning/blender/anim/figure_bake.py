@@ -5,11 +5,11 @@ Path, Follow Path on several figures and Add Crowd."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 import bpy
 import numpy as np
 
+from ...mapping import shared_motion
 from ...mapping.base import BoneChannels, PoseTrack
 from . import bake, fewer_keys, foot_track
 from ..scene import retarget_adapter
@@ -104,46 +104,48 @@ def _around_the_bake(fig, traj, frames, export_ready, export_turn_state) -> None
         export_state.clear_state(fig)
 
 
-@dataclass
-class Written:
-    """What :func:`write_bakes` wrote."""
+class BakeWriter:
+    """Write computed bakes figure by figure (:meth:`write`), in the order of their first frames
+    (:func:`...mapping.shared_motion.order`).  With ``share`` (keys on every frame, or Fewer
+    Keys), a figure whose pose track is one met before, moved and later by whole frames
+    (:class:`...mapping.shared_motion.Matcher`), plays that figure's bake
+    (:func:`.bake.share_bake`) instead of baking its own; else :func:`apply_bake` (``fewer``: a
+    :class:`...mapping.keys.KeyTolerance`, then Fewer Keys)."""
 
-    results: list
-    """``[BakeResult]`` in the figures' order (a figure sharing another's: 0 F-curves)."""
-    shared: dict = field(default_factory=dict)
-    """figure name -> the name of the figure whose bake it plays."""
-    key_reports: dict = field(default_factory=dict)
-    """figure name -> :class:`.fewer_keys.KeyReport` (the figures baked with Fewer Keys)."""
+    def __init__(self, step: int = 1, export_ready: bool = True,
+                 export_turn_state: bool | None = None, fewer=None, share: bool = True):
+        self.step, self.export_ready, self.export_turn_state = step, export_ready, \
+            export_turn_state
+        self.fewer = fewer
+        self.matcher = shared_motion.Matcher() if share and step == 1 else None
+        self.shared = {}                  # figure name -> the figure whose bake it plays
+        self.key_reports = {}             # figure name -> fewer_keys.KeyReport
+
+    def write(self, fig, traj, track):
+        """Bake (or share) one figure; its :class:`.bake.BakeResult` (sharing: 0 F-curves)."""
+        can = self.matcher is not None and bake.can_share(fig)
+        share = self.matcher.match(track) if can else None
+        if share is not None:
+            source = share.source
+            result = bake.share_bake(fig, source, track, share.shift, share.translation)
+            self.shared[fig.name] = source.name
+            _around_the_bake(fig, traj, track.frames, self.export_ready, self.export_turn_state)
+            return result
+        result = apply_bake(fig, traj, track, self.step, self.export_ready,
+                            self.export_turn_state)
+        if self.fewer is not None:
+            self.key_reports[fig.name] = fewer_keys.reduce_bake(fig, self.fewer)
+        if can:
+            self.matcher.add(fig, track)
+        return result
 
 
-def write_bakes(figs, trajs, tracks, step: int = 1, export_ready: bool = True,
-                export_turn_state: bool | None = None, fewer=None,
-                share: bool = True) -> Written:
-    """Write the computed bakes of several figures (:func:`apply_bake` each; ``fewer``: a
-    :class:`..mapping.keys.KeyTolerance`, then Fewer Keys).  With ``share`` (keys on every
-    frame, or Fewer Keys), a figure whose pose track is another's moved and later by whole
-    frames (:func:`...mapping.shared_motion.plan`) plays that figure's bake
-    (:func:`.bake.share_bake`) instead of baking its own: the figures that bake are written
-    first."""
-    from ...mapping.shared_motion import plan
-    can = [bake.can_share(f) for f in figs] if share and step == 1 else [False] * len(figs)
-    which = [k for k, ok in enumerate(can) if ok]
-    shares = [None] * len(figs)
-    for k, sh in zip(which, plan([tracks[k] for k in which])):
-        shares[k] = None if sh is None else (which[sh.source], sh)
-    out = Written([None] * len(figs))
-    for k in sorted(range(len(figs)), key=lambda k: shares[k] is not None):
-        fig = figs[k]
-        if shares[k] is None:
-            out.results[k] = apply_bake(fig, trajs[k], tracks[k], step, export_ready,
-                                        export_turn_state)
-            if fewer is not None:
-                out.key_reports[fig.name] = fewer_keys.reduce_bake(fig, fewer)
-            continue
-        source, sh = shares[k]
-        out.results[k] = bake.share_bake(fig, figs[source], tracks[k], sh.shift, sh.translation)
-        out.shared[fig.name] = figs[source].name
-        _around_the_bake(fig, trajs[k], tracks[k].frames, export_ready, export_turn_state)
+def write_bakes(figs, trajs, tracks, writer: BakeWriter) -> list:
+    """Write the computed bakes of ``figs`` with ``writer``, the earliest-starting first (a
+    figure's motion is shared by those starting later); their results in ``figs``' order."""
+    out = [None] * len(figs)
+    for k in shared_motion.order(tracks):
+        out[k] = writer.write(figs[k], trajs[k], tracks[k])
     return out
 
 

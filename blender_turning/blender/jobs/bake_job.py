@@ -8,7 +8,7 @@ import bpy
 from ...mapping.keys import KeyTolerance
 from ..anim import bake
 from ..anim import export_ready as export_ready_mod
-from ..anim.figure_bake import write_bakes
+from ..anim.figure_bake import BakeWriter, write_bakes
 from ..scene.figure_context import check_figure
 from ..scene.scene_adapters import FrameRange, start_from_object
 from .pipeline import figure_pose_track, ground_of
@@ -67,15 +67,16 @@ class BakeJob:
         return self.grounds[mesh.name]
 
     def write(self) -> list:
-        """Write every computed figure (:func:`.figure_bake.write_bakes`); ``[(name,
-        BakeResult)]``."""
+        """Write every computed figure (:func:`.figure_bake.write_bakes`: a figure with
+        another's motion plays its bake); ``[(name, BakeResult)]``."""
         figs = [bpy.data.objects[name] for name, *_ in self.results]
         for fig, (_, start, _, _) in zip(figs, self.results):
             if start is not None:                 # the height where the user put it stays
                 fig.turning.start = (start[0], start[1], float(fig.location[2]))
                 fig.turning.start_heading = start[2]
+        writer = BakeWriter(self.step, self.export_ready, self.export_turn_state,
+                            self.fewer_keys, self.share)
         written = write_bakes(figs, [r[2] for r in self.results], [r[3] for r in self.results],
-                              self.step, self.export_ready, self.export_turn_state,
-                              self.fewer_keys, self.share)
-        self.key_reports, self.shared = written.key_reports, written.shared
-        return list(zip(self.names, written.results))
+                              writer)
+        self.key_reports, self.shared = writer.key_reports, writer.shared
+        return list(zip(self.names, written))
