@@ -723,6 +723,39 @@ LIVE_MUTANTS = [
 ]
 MUTANTS += LIVE_MUTANTS
 
+SHARE = [T + "test_mapping_shared_motion.py", T + "test_blender_crowd_share.py",
+         T + "test_blender_crowd.py"]
+SHARE_MUTANTS = [
+    # -- shared motion: which figures play another's bake, and that nothing changes another's -----
+    M("share_one_key_apart_loosened", "mapping/shared_motion.py",
+      "return bool(np.all(np.abs(a - b) <= np.spacing(_scale(a, b))))",
+      "return bool(np.all(np.abs(a - b) <= 1e3 * np.spacing(_scale(a, b))))", SHARE, "share"),
+    M("share_location_unchecked", "mapping/shared_motion.py",
+      "return d if bool(np.all(np.abs(played - b) <= tol)) else None", "return d", SHARE, "share"),
+    M("share_half_frames", "mapping/shared_motion.py",
+      "if shift != round(shift) or \\", "if False or \\", SHARE, "share"),
+    M("share_later_source", "mapping/shared_motion.py",
+      "key=lambda i: (float(tracks[i].frames[0]), i))", "key=lambda i: i)", SHARE, "share"),
+    M("share_strip_not_shifted", "blender/anim/bake.py",
+      "played = nla.strips.new(action.name, int(first), action)",
+      "played = nla.strips.new(action.name, int(first - shift), action)", SHARE, "share"),
+    M("share_leader_rebakes_in_place", "blender/anim/bake.py",
+      "    baked = action is not None and shared_elsewhere(action)\n",
+      "    baked = False\n", SHARE, "share"),
+    M("share_leader_live_in_place", "blender/anim/bake.py",
+      "if bag is None or shared_elsewhere(action):", "if bag is None:", SHARE, "share"),
+    M("share_leader_clear_deletes", "blender/anim/bake.py",
+      "    if action is not None and shared_elsewhere(action):    # theirs to keep playing",
+      "    if False:", SHARE, "share"),
+    M("share_delta_left", "blender/anim/bake.py",
+      "        obj.delta_location = (0.0, 0.0, 0.0)\n        del obj[SHARE_OFFSET]",
+      "        del obj[SHARE_OFFSET]", SHARE, "share"),
+    M("share_over_users_delta", "blender/anim/bake.py",
+      "return (SHARE_OFFSET in obj or not any(obj.delta_location)) and \\",
+      "return True and \\", SHARE, "share"),
+]
+MUTANTS += SHARE_MUTANTS
+
 # -- modules that had no mutant: the open-loop law (Section 4), the phase post-pass (Section 6.2),
 # the paper's phase-ellipse law (Section 5.1), the fall table's monotonicity (Eq. 2), the free-speed
 # planner's run-away bound (Eq. 21, docs/TERRAIN.md), the free-speed stepper -----------------

@@ -217,9 +217,10 @@ def test_an_active_crowd_collection_is_baked_whole(scene):
     vl = bpy.context.view_layer
     vl.active_layer_collection = vl.layer_collection.children[coll.name]
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    for o in coll.objects:
+    for o in coll.objects:      # the followers (no differences) play the leader's bake
         if o.type == "ARMATURE":
-            assert bake.baked_channels(o) is not None and len(bake.baked_channels(o).fcurves), o
+            action = bake.figure_action(o)
+            assert action is not None and len(compat.all_fcurves(action)), o
 
 
 @pytest.mark.installed
@@ -242,7 +243,7 @@ def test_a_users_rig_is_a_template(scene):
                                        else ()) for v in fc.driver.variables for t in v.targets]
             assert all(t is fig for t in targets + drivers), obj.name
             assert obj.parent is None or obj.parent.name in {o.name for o in eq.objects}
-    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert bpy.ops.turning.bake_turns(share=False) == {"FINISHED"}
     # A follower without random differences is its leader's motion 1 s (24 frames) later, 2 m
     # to the left of the start direction.
     lead, late = curves(rig), curves(followers[0])
@@ -255,6 +256,13 @@ def test_a_users_rig_is_a_template(scene):
     for key, (frames, values) in late.items():      # measured 5e-17
         if key[0].startswith("pose.bones"):
             np.testing.assert_allclose(values, lead[key][1][:n], atol=1e-12, err_msg=str(key))
+    # so, sharing, it plays the leader's bake from frame 25, moved 2 m
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    action, strip = bake.shared_source(followers[0])
+    assert action == bake.find_bake(rig)[0]
+    assert (strip.frame_start, strip.action_frame_start, strip.frame_end) == (25, 1,
+                                                                            scene.frame_end)
+    np.testing.assert_allclose(followers[0].delta_location[:2], 2.0 * left, atol=5e-6)
 
 
 # -- Follow Path on several figures ---------------------------------------------------------------

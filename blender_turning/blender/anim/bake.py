@@ -9,6 +9,13 @@ when the user keyed one of them in the bake layer.  If the figure was playing an
 user's, that action is kept on a muted NLA track and comes back on :func:`clear_bake`
 (:mod:`.user_action`).  The action belongs to its figure (an ID pointer on it), so a duplicate
 bakes its own; a bake the user moved to another NLA track is re-baked and cleared in place.
+
+Figures whose motion is another's, moved and later by whole frames (:mod:`...mapping.shared_motion`:
+a crowd's followers strung out along the leader's track), play that figure's action instead of
+one of their own (:func:`share_bake`): an NLA strip on their own bake track, shifted, and the
+translation in their ``delta_location``.  The action stays its figure's; when that figure
+re-bakes or clears its bake while others play it, it leaves them the action as it is and makes
+a new one (:func:`_give_up`), so no figure's motion changes because another's did.
 """
 from __future__ import annotations
 
@@ -27,6 +34,12 @@ BAKED_PATHS = "turning_baked_paths"
 #: ID property on that action: the figure (object) it belongs to.  An ID pointer, so a duplicated
 #: figure's copied action points at the copy, and an action shared by two figures is the owner's.
 OWNER = "turning_figure"
+#: ID property on a bake action that other figures play too (:func:`share_bake`); once its figure
+#: gives it up (or is deleted) it is nobody's own.
+SHARED = "turning_shared"
+#: ID property on a figure playing another's bake: the translation it plays it with (its
+#: ``delta_location``, put back to zero when it stops).
+SHARE_OFFSET = "turning_share_offset"
 #: Parameter F-curves (``Object.turning.*``) the user keys; a bake copies them, never drops them.
 PARAM_PREFIX = bake_layers.PARAM_PREFIX
 
@@ -115,7 +128,39 @@ def _is_ours(action, obj) -> bool:
     if action is None or BAKED_PATHS not in action:
         return False
     owner = action.get(OWNER)
-    return owner is None or owner == obj       # None: made before owners were recorded
+    if owner is None:             # made before owners were recorded; or shared and given up
+        return SHARED not in action
+    return owner == obj
+
+
+def shared_elsewhere(action) -> bool:
+    """Do figures other than its own play the bake ``action`` (each of their strips is a user;
+    its own figure's strip is one)?"""
+    return action.get(SHARED) is not None and action.users > 1 + int(action.use_fake_user)
+
+
+def _give_up(obj, action, strip) -> None:
+    """Leave the bake ``action`` to the other figures that play it, exactly as it is: ``obj``
+    stops playing it, and it is nobody's own (renamed: ``obj``'s next bake takes the name)."""
+    if strip is not None:
+        _drop_strip(obj.animation_data, strip)
+    else:
+        obj.animation_data.action = None
+    del action[OWNER]
+    action.name = f"{obj.name} (shared)"
+
+
+def _drop_inherited(obj, track) -> None:
+    """Take ``obj`` off another figure's bake playing on ``track``: the translation it played a
+    shared bake with goes too, and a shared action nobody plays any more is deleted."""
+    actions = [s.action for s in track.strips if s.action is not None]
+    obj.animation_data.nla_tracks.remove(track)
+    if SHARE_OFFSET in obj:
+        obj.delta_location = (0.0, 0.0, 0.0)
+        del obj[SHARE_OFFSET]
+    for action in actions:
+        if SHARED in action and action.get(OWNER) is None and action.users == 0:
+            bpy.data.actions.remove(action)
 
 
 def find_bake(obj):
@@ -151,8 +196,13 @@ def _bag(obj, action, strip):
 def _figure_action(obj):
     """``(action, strip, keep)``: the figure's own action and strip (see :func:`find_bake`), made
     and assigned when there is none, and the curves ``keep`` the tweak layer takes over (the
-    user's keyed parameters).  A user's action is stashed, not touched."""
+    user's keyed parameters).  A user's action is stashed, not touched; a bake other figures
+    play too is left to them (:func:`_give_up`) and a new one made."""
     action, strip = find_bake(obj)
+    baked = action is not None and shared_elsewhere(action)
+    if baked:
+        _give_up(obj, action, strip)
+        action = strip = None
     if action is not None and _bag(obj, action, strip) is not None:
         keep = []
         current = obj.animation_data.action
@@ -166,12 +216,13 @@ def _figure_action(obj):
     current = adt.action if adt else None
     params = []
     for inherited in inherited_bakes(obj):
-        adt.nla_tracks.remove(inherited)
+        _drop_inherited(obj, inherited)
     if bake_layers.is_tweaks(current, obj):
         adt.action = None                 # played again above the new bake
     elif current is not None:
         params = _stash_users(obj, current)
-    user_action.record_rest(obj)
+    if not baked:                         # a figure that gave its bake up is still baked
+        user_action.record_rest(obj)
     # An earlier bake the user unassigned (unused, ours), found by the name it was made with: a
     # look at every action's properties costs O(actions) a figure, 30 ms at 20,000 actions.
     old = bpy.data.actions.get(obj.name)
@@ -299,6 +350,75 @@ def _kept_keys(action, todo, total: int, frames):
     return keys
 
 
+def can_share(obj) -> bool:
+    """May ``obj`` play another figure's bake, or be played by others (:func:`share_bake`)?
+    Not with a ``delta_location`` of the user's (sharing sets it), nor with a bake of the kind
+    older versions left assigned (played from an NLA strip, it is shared)."""
+    action, strip = find_bake(obj)
+    return (SHARE_OFFSET in obj or not any(obj.delta_location)) and \
+        (action is None or strip is not None)
+
+
+def share_bake(obj, source, track: PoseTrack, shift: int, translation) -> BakeResult:
+    """Let ``obj`` play ``source``'s bake instead of one of its own: a strip on its own bake
+    track, ``shift`` frames later, and ``translation`` (m) its ``delta_location``.  ``track`` is
+    what its own bake would write (:func:`...mapping.shared_motion.shares` found it to be
+    ``source``'s, moved and later).  Its own earlier bake goes (left to any figure playing it),
+    a user's action is stashed and its tweak layer plays above, as :func:`bake_pose_track`
+    does."""
+    _check_values(obj, track)
+    action, source_strip = find_bake(source)
+    if action is None or source_strip is None or not can_share(obj):
+        raise BakeError(f"{obj.name!r} cannot play the bake of {source.name!r}")
+    own, strip = find_bake(obj)
+    if own is not None:
+        if shared_elsewhere(own):
+            _give_up(obj, own, strip)
+        else:
+            _drop_strip(obj.animation_data, strip)
+            bpy.data.actions.remove(own)
+    adt = obj.animation_data or obj.animation_data_create()
+    for inherited in inherited_bakes(obj):
+        _drop_inherited(obj, inherited)
+    params = []
+    if bake_layers.is_tweaks(adt.action, obj):
+        adt.action = None                 # played again above the shared bake
+    elif adt.action is not None:
+        params = _stash_users(obj, adt.action)
+    if REST not in obj:
+        user_action.record_rest(obj)
+    for name, ch in track.bones.items():
+        if ch.rotation is not None:
+            obj.pose.bones[name].rotation_mode = "QUATERNION"
+    obj.rotation_mode = "XYZ"
+    _make_props(obj, track)
+    first, last = float(track.frames[0]), float(track.frames[-1])
+    nla = adt.nla_tracks.new()
+    nla.name = bake_layers.BAKE_TRACK
+    played = nla.strips.new(action.name, int(first), action)
+    if compat.SLOTTED_ACTIONS:
+        played.action_slot = source_strip.action_slot
+    played.action_frame_end = last - shift       # the strip ends on the figure's last frame
+    played.action_frame_start = first - shift
+    action[SHARED] = True
+    obj.delta_location = translation
+    obj[SHARE_OFFSET] = list(translation)
+    bake_layers.start_tweaks(obj)
+    bake_layers.take_parameters(obj, params)
+    bake_layers.span_tweaks(obj, (first, last))
+    return BakeResult(action, 0, len(track))
+
+
+def shared_source(obj):
+    """``(action, strip)`` of the other figure's bake ``obj`` plays (:func:`share_bake`), or
+    ``(None, None)``."""
+    if SHARE_OFFSET not in obj:
+        return None, None
+    for track in inherited_bakes(obj):
+        return track.strips[0].action, track.strips[0]
+    return None, None
+
+
 def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
     """Write ``track``'s values into the F-curves the last bake made, in place: the same
     channels, keyed on the same frames or on a run of them (a window of the range; the keys
@@ -314,7 +434,7 @@ def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
     _check_values(obj, track)
     action, strip = find_bake(obj)
     bag = None if action is None else _bag(obj, action, strip)
-    if bag is None:
+    if bag is None or shared_elsewhere(action):     # others play it: a new bake, not in place
         return None
     chans = _channel_list(obj, track)
     if set(action.get(BAKED_PATHS, "").splitlines()) != {c[0] for c in chans}:
@@ -419,8 +539,11 @@ def clear_bake(obj) -> bool:
     inherited = inherited_bakes(obj)
     if action is None and not inherited:
         return False
-    for track in inherited:               # a duplicate's copy of its template's bake: not ours
-        obj.animation_data.nla_tracks.remove(track)
+    if action is not None and shared_elsewhere(action):    # theirs to keep playing
+        _give_up(obj, action, strip)
+        action = None
+    for track in inherited:       # another figure's bake (shared, or a duplicate's copy): not ours
+        _drop_inherited(obj, track)
     user = user_action.stashed_action(obj)
     user_bag = user_action.stashed_channels(obj, user) if user is not None else None
     if action is not None:
@@ -465,10 +588,16 @@ def layers(obj) -> list:
         n = sum(len(fc.keyframe_points) for fc in bag.fcurves) if bag else 0
         out.append(("TWEAKS", tweaks.name, f"{n} keys" + (", parked (muted)" if parked else "")))
     action, strip = find_bake(obj)
+    shared, played = shared_source(obj)
     if action is not None:
         where = "NLA strip" if strip is not None else "active action"
         lo, hi = action.frame_range
         out.append(("BAKE", action.name, f"{where}, frames {lo:g}-{hi:g}"))
+    elif shared is not None:
+        owner = shared.get(OWNER)
+        whose = f"{owner.name}'s" if owner is not None else "shared"
+        out.append(("BAKE", shared.name, f"{whose} bake, frames {played.frame_start:g}-"
+                                         f"{played.frame_end:g} (moved by Delta Transform)"))
     user = user_action.stashed_action(obj)
     if user is not None:
         out.append(("USER", user.name, "kept for Clear Bake (muted)"))

@@ -1,6 +1,7 @@
 """Writing a computed bake onto a figure (keys at every frame or every n-th with smooth
-in-betweens, then its foot track), and putting a figure without keys back at its start.  Shared by
-Bake Turns, Follow Path, Follow Path on several figures and Add Crowd."""
+in-betweens, then its foot track), several figures' at once (those with another's motion playing
+its bake), and putting a figure without keys back at its start.  Shared by Bake Turns, Follow
+Path, Follow Path on several figures and Add Crowd."""
 from __future__ import annotations
 
 import math
@@ -8,8 +9,9 @@ import math
 import bpy
 import numpy as np
 
+from ...mapping import shared_motion
 from ...mapping.base import BoneChannels, PoseTrack
-from . import bake, foot_track
+from . import bake, fewer_keys, foot_track
 from ..scene import retarget_adapter
 from . import export_ready as export_ready_mod, export_state
 
@@ -82,18 +84,69 @@ def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True,
     result = bake.bake_pose_track(fig, every_nth(track, step))
     if step > 1:
         set_hermite_handles(fig, slopes)
+    _around_the_bake(fig, traj, track.frames, export_ready, export_turn_state)
+    return result
+
+
+def _around_the_bake(fig, traj, frames, export_ready, export_turn_state) -> None:
+    """What a bake writes besides the figure's keys: the foot track, the equipment's keys (or
+    none), the state Empties."""
     foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z)     # on the ground
     if export_ready:
-        export_ready_mod.bake_equipment(fig, track.frames)
+        export_ready_mod.bake_equipment(fig, frames)
     else:
         export_ready_mod.clear_equipment(fig)
     if export_turn_state is None:
         export_turn_state = bool(export_state.carriers(fig))
     if export_turn_state:
-        export_state.bake_state(fig, track.frames)
+        export_state.bake_state(fig, frames)
     else:
         export_state.clear_state(fig)
-    return result
+
+
+class BakeWriter:
+    """Write computed bakes figure by figure (:meth:`write`), in the order of their first frames
+    (:func:`...mapping.shared_motion.order`).  With ``share`` (keys on every frame, or Fewer
+    Keys), a figure whose pose track is one met before, moved and later by whole frames
+    (:class:`...mapping.shared_motion.Matcher`), plays that figure's bake
+    (:func:`.bake.share_bake`) instead of baking its own; else :func:`apply_bake` (``fewer``: a
+    :class:`...mapping.keys.KeyTolerance`, then Fewer Keys)."""
+
+    def __init__(self, step: int = 1, export_ready: bool = True,
+                 export_turn_state: bool | None = None, fewer=None, share: bool = True):
+        self.step, self.export_ready, self.export_turn_state = step, export_ready, \
+            export_turn_state
+        self.fewer = fewer
+        self.matcher = shared_motion.Matcher() if share and step == 1 else None
+        self.shared = {}                  # figure name -> the figure whose bake it plays
+        self.key_reports = {}             # figure name -> fewer_keys.KeyReport
+
+    def write(self, fig, traj, track):
+        """Bake (or share) one figure; its :class:`.bake.BakeResult` (sharing: 0 F-curves)."""
+        can = self.matcher is not None and bake.can_share(fig)
+        share = self.matcher.match(track) if can else None
+        if share is not None:
+            source = share.source
+            result = bake.share_bake(fig, source, track, share.shift, share.translation)
+            self.shared[fig.name] = source.name
+            _around_the_bake(fig, traj, track.frames, self.export_ready, self.export_turn_state)
+            return result
+        result = apply_bake(fig, traj, track, self.step, self.export_ready,
+                            self.export_turn_state)
+        if self.fewer is not None:
+            self.key_reports[fig.name] = fewer_keys.reduce_bake(fig, self.fewer)
+        if can:
+            self.matcher.add(fig, track)
+        return result
+
+
+def write_bakes(figs, trajs, tracks, writer: BakeWriter) -> list:
+    """Write the computed bakes of ``figs`` with ``writer``, the earliest-starting first (a
+    figure's motion is shared by those starting later); their results in ``figs``' order."""
+    out = [None] * len(figs)
+    for k in shared_motion.order(tracks):
+        out[k] = writer.write(figs[k], trajs[k], tracks[k])
+    return out
 
 
 def reset_pose(fig):

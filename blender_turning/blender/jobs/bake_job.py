@@ -6,9 +6,9 @@ from __future__ import annotations
 import bpy
 
 from ...mapping.keys import KeyTolerance
-from ..anim import bake, fewer_keys
+from ..anim import bake
 from ..anim import export_ready as export_ready_mod
-from ..anim.figure_bake import apply_bake
+from ..anim.figure_bake import BakeWriter, write_bakes
 from ..scene.figure_context import check_figure
 from ..scene.scene_adapters import FrameRange, start_from_object
 from .pipeline import figure_pose_track, ground_of
@@ -20,12 +20,14 @@ class BakeJob:
 
     def __init__(self, names, frames: FrameRange, step: int = 1, export_ready: bool = True,
                  root_motion: bool = False, fewer_keys: KeyTolerance | None = None,
-                 export_turn_state: bool = False):
+                 export_turn_state: bool = False, share: bool = True):
         self.names, self.frames, self.step = list(names), frames, step
         self.export_ready, self.root_motion = export_ready, root_motion
         self.export_turn_state = export_turn_state
         self.fewer_keys = fewer_keys              # None: a key on every (step-th) frame
+        self.share = share                    # figures with another's motion play its bake
         self.key_reports = {}                 # name -> fewer_keys.KeyReport
+        self.shared = {}                      # name -> the figure whose bake it plays
         self.results = []                     # (name, start or None, traj, track)
         self.grounds = {}                     # ground mesh name -> MeshGround
 
@@ -65,15 +67,16 @@ class BakeJob:
         return self.grounds[mesh.name]
 
     def write(self) -> list:
-        """Write every computed figure; ``[(name, BakeResult)]``."""
-        out = []
-        for name, start, traj, track in self.results:
-            fig = bpy.data.objects[name]
+        """Write every computed figure (:func:`.figure_bake.write_bakes`: a figure with
+        another's motion plays its bake); ``[(name, BakeResult)]``."""
+        figs = [bpy.data.objects[name] for name, *_ in self.results]
+        for fig, (_, start, _, _) in zip(figs, self.results):
             if start is not None:                 # the height where the user put it stays
                 fig.turning.start = (start[0], start[1], float(fig.location[2]))
                 fig.turning.start_heading = start[2]
-            out.append((name, apply_bake(fig, traj, track, self.step, self.export_ready,
-                                         self.export_turn_state)))
-            if self.fewer_keys is not None:
-                self.key_reports[name] = fewer_keys.reduce_bake(fig, self.fewer_keys)
-        return out
+        writer = BakeWriter(self.step, self.export_ready, self.export_turn_state,
+                            self.fewer_keys, self.share)
+        written = write_bakes(figs, [r[2] for r in self.results], [r[3] for r in self.results],
+                              writer)
+        self.key_reports, self.shared = writer.key_reports, writer.shared
+        return list(zip(self.names, written))

@@ -44,7 +44,7 @@ from ...crowd import Crowd, CrowdFigure, FollowPath
 from ...crowd.model import BODY_CLEARANCE
 from ...crowd.runner import run_crowd
 from ..anim import bake
-from ..anim.figure_bake import apply_bake
+from ..anim.figure_bake import BakeWriter, write_bakes
 from ..scene.figure_context import check_figure, end_modal, report_error, selected_figures
 from ..scene.follow_scene import prepare
 from .model_notes import follow_note, warn_distance
@@ -247,8 +247,7 @@ class CrowdFollow:
             bake.check_track(fig, track)
             computed.append((fig, traj, track))
         scene.frame_end = frames.end
-        for fig, traj, track in computed:
-            apply_bake(fig, traj, track)
+        write_bakes(*zip(*computed), BakeWriter())    # a figure with another's motion plays it
         return frames
 
 

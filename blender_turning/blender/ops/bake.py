@@ -71,6 +71,13 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
     key_length: FloatProperty(
         name="Length Tolerance", default=0.001, min=1e-5, max=0.1, unit="LENGTH", precision=4,
         description="Fewer Keys: how far a position may stray from the every-frame motion")
+    share: BoolProperty(
+        name="Share Motion", default=True,
+        description="A figure whose motion is another's, moved (a follower strung out along "
+                    "the leader's track, a synchronized line in phase), plays that figure's "
+                    "baked action from an NLA strip, moved by its Delta Transform, instead of "
+                    "baking its own: much less to bake and store. Keys on every frame or Fewer "
+                    "Keys only")
     export_ready: BoolProperty(
         name="Export-Ready Equipment", default=True,
         description="A figure made from your own rig: give its skis, poles or bicycle an "
@@ -108,6 +115,7 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
         col.active = self.fewer_keys
         col.prop(self, "key_angle")
         col.prop(self, "key_length")
+        layout.prop(self, "share")
         layout.prop(self, "export_ready")
         layout.prop(self, "export_turn_state")
         layout.prop(self, "root_motion")
@@ -129,7 +137,8 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
             self.report({"ERROR"}, f"Bake Turns: {exc}")
             return None
         return BakeJob([f.name for f in selected_figures(context)], frames, self.step,
-                       self.export_ready, self.root_motion, tolerance, self.export_turn_state)
+                       self.export_ready, self.root_motion, tolerance, self.export_turn_state,
+                       self.share)
 
     def _finish(self, job):
         try:
@@ -143,8 +152,15 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
             return {"FINISHED"}
         frames = job.frames
         every = "" if job.step == 1 else f", every {job.step} frames"
-        what = ", ".join(f"{name} ({r.fcurves} F-curves x {r.frames} keys)" for name, r in written)
+        what = ", ".join(f"{name} ({r.fcurves} F-curves x {r.frames} keys)" for name, r in written
+                         if name not in job.shared)
         self.report({"INFO"}, f"Baked {what} over frames {frames.start}-{frames.end}{every}")
+        by = {}
+        for name, source in job.shared.items():
+            by.setdefault(source, []).append(name)
+        for source, names in by.items():
+            self.report({"INFO"}, f"Bake Turns: {len(names)} figures play the bake of {source} "
+                                  f"(its motion, moved): {', '.join(names)}")
         for name, keyed in job.key_reports.items():
             self.report({"INFO"}, f"Bake Turns: {name}: Fewer Keys: {keyed.summary()}")
         for name, _, traj, _ in job.results:     # last: the status bar shows the last report
