@@ -8,6 +8,15 @@ owner (``bake.OWNER``), so :meth:`glTF2ExportUserExtension.gather_actions_hook` 
 object's actions, the bakes of other objects.  The keyed equipment of a user's rig
 (:mod:`.export_ready`) is merged into its figure's animation (one glTF animation per figure,
 which an importer plays as one).
+
+The exporter (its default *Actions* mode) samples each action as the object's active action with
+the NLA off, so a figure's tweak layer (docs/layers.md), sampled alone, would put its offsets on
+the rest pose.  The tweak layer is sampled with the NLA on instead
+(:meth:`glTF2ExportUserExtension.post_animation_switch_hook`): every bone, and each transform of
+the armature object the layer keys, as Blender plays them, the bake's strip under the tweaks.
+The bake's own animation keeps only the rest (:meth:`~glTF2ExportUserExtension.
+pre_gather_animation_hook`: the armature object's travel), and the two merge into the figure's
+one animation.
 """
 from __future__ import annotations
 
@@ -23,10 +32,22 @@ def _foreign(action, obj) -> bool:
     return owner is not None and owner != obj
 
 
-def _empty_tweaks(action, obj) -> bool:
-    """The figure's tweak layer (docs/layers.md) without a key: nothing of its own to export."""
-    return bake_layers.is_tweaks(action, obj) and \
-        not any(len(fc.keyframe_points) for fc in compat.all_fcurves(action))
+def _kept(action, obj, tweaks) -> bool:
+    """Exported as an animation of ``obj``: not another object's bake, not a tweak layer other
+    than the one ``obj`` plays (``tweaks``)."""
+    if _foreign(action, obj):
+        return False
+    return bake_layers.TWEAKS_OF not in action or action == tweaks
+
+
+#: glTF's target path of each transform property an action may key on an object.
+_PATHS = {"location": "translation", "rotation_quaternion": "rotation",
+          "rotation_euler": "rotation", "rotation_axis_angle": "rotation", "scale": "scale"}
+
+
+def _object_paths(action) -> set:
+    """The glTF paths of the armature object's own transform that ``action`` keys."""
+    return {_PATHS[fc.data_path] for fc in compat.all_fcurves(action) if fc.data_path in _PATHS}
 
 
 def _merge_name(action, obj):
@@ -41,11 +62,18 @@ def _merge_name(action, obj):
 
 
 class glTF2ExportUserExtension:  # noqa: N801 (the name the exporter looks for)
+    def __init__(self):
+        self.tweaks = {}      # object name: the tweak layer it plays (before the exporter's switches)
+
     def gather_actions_hook(self, blender_object, actions, export_settings):
+        tweaks, _ = bake_layers.tweak_layer(blender_object)
+        tweaks = tweaks if bake_layers.playing(blender_object, tweaks) and \
+            bake.find_bake(blender_object)[1] is not None else None
+        if tweaks is not None:
+            self.tweaks[blender_object.name] = tweaks
         if hasattr(actions, "actions"):                   # 4.4+: ActionsData of ActionData
             for key in list(actions.actions):
-                kept = [a for a in actions.actions[key] if not _foreign(a.action, blender_object)
-                        and not _empty_tweaks(a.action, blender_object)]
+                kept = [a for a in actions.actions[key] if _kept(a.action, blender_object, tweaks)]
                 for data in kept:
                     name = _merge_name(data.action, blender_object)
                     if name is not None:
@@ -57,16 +85,39 @@ class glTF2ExportUserExtension:  # noqa: N801 (the name the exporter looks for)
             return
         # 4.2/4.3: parallel lists of actions, NLA track names and target types; animations
         # merge by track name.
-        keep = [a for a in actions.blender_actions if not _foreign(a, blender_object)
-                and not _empty_tweaks(a, blender_object)]
+        keep = [a for a in actions.blender_actions if _kept(a, blender_object, tweaks)]
         actions.blender_actions = keep
         for act in keep:
             name = _merge_name(act, blender_object)
             if name is not None:
                 actions.blender_tracks[act.name] = name
-            elif act.get(bake.OWNER) == blender_object and _has_keyed_pieces(blender_object):
+            elif act.get(bake.OWNER) == blender_object and (
+                    tweaks is not None or _has_keyed_pieces(blender_object)):
                 actions.blender_tracks[act.name] = act.name
 
+    def post_animation_switch_hook(self, blender_object, blender_action, *args):
+        """The exporter made ``blender_action`` active with the NLA off (``args``: its slot on
+        4.4+, the NLA track's name, the target type, the settings); a figure's tweak layer is
+        sampled with the NLA on, over the bake's strip, as Blender plays it."""
+        if args[-2] == "OBJECT":
+            blender_object.animation_data.use_nla = \
+                self.tweaks.get(blender_object.name) == blender_action
+
+    def pre_gather_animation_hook(self, animation, blender_action, *args):
+        """An armature's sampled animation (``animation``: its channels on 4.4+; ``args``: the
+        slot on 4.4+, the object, the settings): a figure's bake, when its tweak layer is
+        exported too, keeps only the channels the tweak layer's animation leaves out (the merge
+        keeps the first animation's channel of a target, and the bake's name sorts first)."""
+        obj = args[-2]
+        tweaks = self.tweaks.get(obj.name)
+        if tweaks is None or blender_action is None or blender_action.get(bake.OWNER) != obj:
+            return
+        channels = getattr(animation, "channels", animation)
+        bones = {id(n.node) for n in args[-1]["vtree"].nodes.values()
+                 if getattr(n, "blender_bone", None) is not None}
+        keyed = _object_paths(tweaks)
+        channels[:] = [c for c in channels if id(c.target.node) not in bones
+                       and c.target.path not in keyed]
 
 def _has_keyed_pieces(obj) -> bool:
     """Keyed equipment or state Empties, whose animations merge into ``obj``'s."""
