@@ -302,6 +302,7 @@ def panel_labels(fig) -> list:
 
 def test_a_body_slider_step_takes_a_nearby_body_s_feasible_turns(scene):
     from blender_turning.core.controllers import feasible
+    feasible._TABLES.clear()                      # earlier tests' bodies (a jittered crowd)
     scene.frame_end = 240
     fig = live_figure()
     scene.frame_set(100)

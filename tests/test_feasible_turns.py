@@ -199,6 +199,21 @@ def test_nearby_tables_answer_with_a_close_body_s_table_only_inside_the_block(mo
     assert own.max_lean(w) == pytest.approx(base.max_lean(w), rel=0.02)
 
 
+def test_nearby_tables_take_the_nearest_body_whatever_was_built_last(monkeypatch):
+    """A drag step takes the table of the body nearest the asked one, not the newest within
+    reach: a crowd's jittered bodies built later must not stand in for the figure's own."""
+    from dataclasses import replace as rep
+    from blender_turning.core.controllers import feasible
+    from blender_turning.core.controllers.feasible import feasible_turns, nearby_tables
+    monkeypatch.setattr(feasible, "_TABLES", {})
+    fig = preset("skier")
+    near = feasible_turns(rep(fig.body, m=fig.body.m * 1.005), fig.limits)
+    later = feasible_turns(rep(fig.body, l=fig.body.l * 0.985), fig.limits)      # built last
+    with nearby_tables(0.02):
+        assert feasible_turns(fig.body, fig.limits) is near
+        assert feasible_turns(rep(fig.body, l=fig.body.l * 0.99), fig.limits) is later
+
+
 def _bisected_leans(table, omega0):
     """The slow reference: 60 rounds of plain bisection on every frequency (the bracket of
     about 1 rad closed to 1e-18 rad), what the table held before it stopped at ``LEAN_TOL``."""

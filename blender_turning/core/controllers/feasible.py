@@ -291,15 +291,22 @@ def feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
     :func:`nearby_tables`, a table already built for a nearby body."""
     rel = _NEARBY[0]
     if rel is not None:
-        for (b, lim), table in reversed(list(_TABLES.items())):
-            if lim == limits and all(abs(getattr(b, f) - getattr(body, f))
-                                     <= rel * abs(getattr(body, f)) for f in _BODY_FIELDS):
-                return table
+        near = [(_body_distance(b, body), i, table)
+                for i, ((b, lim), table) in enumerate(_TABLES.items()) if lim == limits]
+        near = [n for n in near if n[0] <= rel]
+        if near:
+            return min(near, key=lambda n: (n[0], -n[1]))[2]    # the nearest, then the newest
     table = _feasible_turns(body, limits)
     _TABLES[(body, limits)] = table
     while len(_TABLES) > 256:
         _TABLES.pop(next(iter(_TABLES)))
     return table
+
+
+def _body_distance(a: BodyParams, b: BodyParams) -> float:
+    """The largest relative difference of ``a``'s fields from ``b``'s (``_BODY_FIELDS``)."""
+    return max(abs(getattr(a, f) - getattr(b, f)) / abs(getattr(b, f)) if getattr(b, f) else
+               (0.0 if getattr(a, f) == 0 else math.inf) for f in _BODY_FIELDS)
 
 
 #: The tables built, oldest first (what :func:`nearby_tables` searches).
@@ -310,7 +317,7 @@ _TABLES: dict = {}
 def nearby_tables(rel: float):
     """Within this block :func:`feasible_turns` answers with a table built before for a body
     whose mass, height, inertia, speed and gravity are each within ``rel`` (relative) of the
-    one asked for, with the same limits, when there is one: a Body slider's drag step in Live
+    one asked for, with the same limits, when there is one (the nearest such body): a Body slider's drag step in Live
     Preview then costs no new table (one is about 60 % of it).  The turns it allows are those of
     that nearby body (its leans differ by about ``rel`` relative); the bake when the drag ends
     builds the body's own."""
