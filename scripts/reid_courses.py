@@ -55,7 +55,7 @@ def main(argv=None) -> int:
     p.add_argument("--speed", type=float, default=12.0)
     p.add_argument("--preset", default="slalom_racer")
     p.add_argument("--stages", type=int, default=10)
-    p.add_argument("--choices", type=int, default=7)
+    p.add_argument("--choices", type=int, default=9)
     p.add_argument("--stage-time", type=float, default=0.2)
     p.add_argument("--rate", type=float, default=1.0,
                    help="the planner's dC_f_max, 1/(m s): its q choices span +-rate (with the "

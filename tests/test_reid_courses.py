@@ -50,6 +50,12 @@ def test_each_inner_gate_is_one_turn_with_its_apex_radius():
     assert mean == pytest.approx(apex, rel=1e-5) and sd == pytest.approx(0.0, abs=1e-5)
 
 
+def test_a_figure_without_carving_equipment_is_refused():
+    plain = SimpleNamespace(name="skier", body=SimpleNamespace(l=1.0, m=80.0, g=10.0))
+    with pytest.raises(ValueError, match="'skier' has no carving equipment"):
+        per_turn(slalom_track(), plain, gate_positions(10.0, 6))
+
+
 def test_the_summary_is_the_mean_and_the_sample_sd_over_turns():
     got = summary({"gates": np.arange(3.0), "R_foot": np.array([3.0, 4.0, 5.0])})
     assert got == {"R_foot": (4.0, 1.0)}

@@ -100,8 +100,11 @@ def per_turn(traj, figure, gate_x, skip: int = 1) -> dict:
     :meth:`..equipment.Carving.edge_angle`, deg); ``lean``, the largest ``|theta_v|`` (deg);
     ``F_bw``, the peak leg force (Appendix A, body weights).  Arrays with one entry a turn;
     ``gates``: the turns' gate indices."""
-    R = com_radius(traj, figure.body.l)
     carving = carving_of(figure.name)
+    if carving is None:
+        raise ValueError(f"figure = {figure.name!r} has no carving equipment: the edge angle is "
+                         f"the sidecut relation's, on the racer and carver presets only")
+    R = com_radius(traj, figure.body.l)
     weight = figure.body.m * figure.body.g
     rows = [(k, R[sl].min(), 1.0 / np.abs(traj.C_f[sl]).max(),
              math.degrees(np.abs(carving.edge_angle(traj.C_f[sl])).max()),
