@@ -99,7 +99,8 @@ def on_ground(traj, ground):
     return _with_z(traj, ground.heights(traj.x, traj.y))
 
 
-def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="read"):
+def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="read",
+                    coarse_dt: float | None = None):
     """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames`` from ``start``
     (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.
     ``height``: the flat ground's height (default the Start setting's z); ``ground``: its Ground
@@ -122,13 +123,15 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
     figure = replace(figure, body=replace(figure.body, V_cm=speed(0.0)))
     controller = controller_from_settings(obj, figure, frames)
     state0 = start_state(obj, controller, start)
-    duration = frames.duration - offset + 2 * DEFAULT_DT
     skidding = skidding_from_settings(obj, frames)
+    paper = ground is None and skidding is None and speed.constant_value is not None
+    dt = coarse_dt if coarse_dt is not None and paper else DEFAULT_DT
+    duration = frames.duration - offset + 2 * dt
     if ground is None:
         if skidding is not None and speed.constant_value is None:
             raise SceneInputError("a Stop or a Style other than Carve (turning.skid) brakes the "
                                   "figure: the Speed cannot be keyed as well")
-        traj = simulate(figure, controller, duration, state0=state0, meta={"figure": obj.name},
+        traj = simulate(figure, controller, duration, dt, state0=state0, meta={"figure": obj.name},
                         speed=None if skidding is not None else speed, skidding=skidding)
         traj = with_turn(traj, controller)             # the lean reached, when not the asked
         traj = resampled(on_crowd_clock(traj, offset), shown, origin=frames.start)
@@ -138,7 +141,7 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
     if target is not None and not s.use_heading:
         raise SceneInputError("Target Speed (turning.terrain.target_speed) steers the turns "
                               "across the hill about the Heading: turn on Hold Heading")
-    traj = simulate(figure, controller, duration, state0=(*state0, speed(0.0)),
+    traj = simulate(figure, controller, duration, dt, state0=(*state0, speed(0.0)),
                     meta={"figure": obj.name, "ground_object": ground.name},
                     ground=ground.field, resistance=resistance_from_settings(s),
                     target_speed=target, skidding=skidding)
