@@ -468,16 +468,15 @@ class PoseBuilder:
         The local channels follow from the parent's current pose.  A connected bone gets no
         location (Blender ignores it: its head is its parent's tail), so pass ``head=None``.
         """
-        base = self.unposed(name)
-        target = rotation4(rotation)
-        target[:, :3, 3] = base[:, :3, 3] if head is None else head
-        local = rigid_inverse(base) @ target
         i = self.skel.i(name)
         if head is not None and self.skel.connected[i]:
             raise ValueError(f"bone {name!r} is connected: its head follows its parent's tail")
+        base = self._unposed(name)
+        # base^-1 @ [rotation, head] of rigid transforms: [R^T rotation, R^T (head - t)].
+        back = np.swapaxes(base[:, :3, :3], 1, 2)
         if head is not None:
-            self.loc[name] = local[:, :3, 3].copy()
-        self.rot[name] = quat_from_matrix(local[:, :3, :3])
+            self.loc[name] = np.einsum("nij,nj->ni", back, head - base[:, :3, 3])
+        self.rot[name] = quat_from_matrix(np.matmul(back, rotation))
         self._changed(name)
 
     def head(self, name) -> np.ndarray:
