@@ -325,7 +325,7 @@ class Skeleton:
         self.parents = tuple(parents)   # parent name or None
         self.rest = np.asarray(rest, float)            # (k, 4, 4)
         self.connected = tuple(bool(c) for c in connected)
-        self._relative = {}                             # name -> rest_relative (4, 4)
+        self._relative = {}                             # (name, frame) -> rest_in (4, 4)
         for n, p in zip(self.names, self.parents):
             if p is not None and self.index.get(p, len(self.names)) >= self.index[n]:
                 raise ValueError(f"bone {n!r}: parent {p!r} must come before it")
@@ -365,14 +365,18 @@ class Skeleton:
 
     def rest_relative(self, name: str) -> np.ndarray:
         """``rest_arm_parent^-1 @ rest_arm`` (the rest matrix itself for a root bone)."""
-        rel = self._relative.get(name)
+        return self.rest_in(name, self.parents[self.i(name)])
+
+    def rest_in(self, name: str, frame: str | None) -> np.ndarray:
+        """``rest_arm_frame^-1 @ rest_arm``: bone ``name``'s rest matrix in the rest frame of the
+        bone ``frame`` (the rest matrix itself for ``None``); computed once per skeleton and
+        shared, read-only."""
+        rel = self._relative.get((name, frame))
         if rel is None:
-            i = self.i(name)
-            p = self.parents[i]
-            rel = np.array(self.rest[i] if p is None
-                           else rigid_inverse(self.rest_of(p)) @ self.rest[i])
+            rest = self.rest_of(name)
+            rel = np.array(rest if frame is None else rigid_inverse(self.rest_of(frame)) @ rest)
             rel.setflags(write=False)                  # shared by every caller
-            self._relative[name] = rel
+            self._relative[(name, frame)] = rel
         return rel
 
     def carry(self, poses: dict, bone: str, p_rest) -> np.ndarray:

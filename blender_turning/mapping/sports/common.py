@@ -92,8 +92,7 @@ def lean(b: PoseBuilder, theta_v):
 
 def carried(b: PoseBuilder, bone: str, carrier: str) -> np.ndarray:
     """The pose ``bone`` would have if rigidly attached to ``carrier`` as in the rest pose."""
-    skel = b.skel
-    return stack_dot(b.pose(carrier), rigid_inverse(skel.rest_of(carrier)) @ skel.rest_of(bone))
+    return stack_dot(b.pose(carrier), b.skel.rest_in(bone, carrier))
 
 
 def leg_lengths(skel, upper: str, lower: str):
@@ -142,8 +141,17 @@ def ik_limb(b: PoseBuilder, upper: str, lower: str, target, pole, twist=None, re
     return end
 
 
+#: (id(spec), bone, shapes) -> (spec, corner points): :func:`mesh_points` once per rig (the spec
+#: is kept, so its id is not reused while the entry stands).
+_CORNERS = {}
+
+
 def mesh_points(spec, bone: str, shapes=("box",)):
-    """Corner points (k, 3) of ``bone``'s box meshes, in the bone's rest frame (from its head)."""
+    """Corner points (k, 3) of ``bone``'s box meshes, in the bone's rest frame (from its head);
+    computed once per rig and shared, read-only."""
+    hit = _CORNERS.get((id(spec), bone, shapes))
+    if hit is not None and hit[0] is spec:
+        return hit[1]
     pts = []
     for m in spec.meshes_of(bone):
         if m.shape not in shapes:
@@ -153,7 +161,12 @@ def mesh_points(spec, bone: str, shapes=("box",)):
         pts.append(np.asarray(m.offset) + (signs * half) @ quat_to_matrix(m.rotation).T)
     if not pts:
         raise ValueError(f"bone {bone!r} has no box mesh to put on the ground")
-    return np.concatenate(pts)
+    pts = np.concatenate(pts)
+    pts.setflags(write=False)
+    if len(_CORNERS) >= 256:                           # specs made on the fly (tests, rigs)
+        _CORNERS.clear()
+    _CORNERS[(id(spec), bone, shapes)] = (spec, pts)
+    return pts
 
 
 def place_on_ground(b: PoseBuilder, spec, bone: str, rotation, anchor_rest, anchor_xy):
