@@ -797,10 +797,10 @@ MUTANTS += [
       [T + "test_follow_problem.py"]),
     # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
     M("segment_no_parallel_axis", "mapping/anthropometry.py",
-      "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",
+      "inertia += mi * (dot(d, d) - stack_dot(d, e) ** 2) + own", "inertia += own",
       ANTHRO, "mapping"),
     M("segment_rod_axis_ignored", "mapping/anthropometry.py",
-      "own = (rg * length) ** 2 * (1.0 - (u @ e) ** 2)", "own = (rg * length) ** 2",
+      "own = (rg * length) ** 2 * (1.0 - stack_dot(u, e) ** 2)", "own = (rg * length) ** 2",
       ANTHRO, "mapping"),
     M("segment_com_from_distal", "mapping/anthropometry.py",
       "parts.append((frac * mass, a + at * seg,", "parts.append((frac * mass, b - at * seg,",
