@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["cross", "norm", "dot", "quat_mul", "quat_conj", "quat_from_axis_angle", "quat_to_matrix",
-           "quat_from_matrix", "quat_continuous", "vec_roll_to_mat3", "rest_matrix", "translation",
-           "rotation4", "rot_axis_angle", "stack_dot", "two_bone_ik", "frame_from_yx", "Skeleton",
-           "PoseBuilder"]
+__all__ = ["cross", "norm", "dot", "quat_mul", "quat_conj", "quat_from_axis_angle",
+           "quat_to_matrix", "quat_from_matrix", "quat_continuous", "vec_roll_to_mat3",
+           "rest_matrix", "translation", "rotation4", "rot_axis_angle", "stack_dot", "two_bone_ik",
+           "frame_from_yx", "Skeleton", "PoseBuilder"]
 
 IDENTITY_QUAT = np.array([1.0, 0.0, 0.0, 0.0])
 
@@ -292,8 +292,9 @@ def two_bone_ik(root, target, l1: float, l2: float, pole, reach: float = 0.9999)
 
     ``root``, ``target``, ``pole`` have shape (..., 3); ``pole`` is a direction (not a point)
     towards which the middle joint bends (a knee forward, an elbow back).  Targets farther than
-    ``reach * (l1 + l2)`` or nearer than ``|l1 - l2|`` are clamped along the same line.
-    Returns ``(mid, end)``: the middle joint and the end actually reached.
+    ``reach * (l1 + l2)`` or nearer than ``|l1 - l2|`` are clamped along the same line.  The
+    lengths are numbers or (..., 1) arrays (one per chain).  Returns ``(mid, end)``: the middle
+    joint and the end actually reached.
     """
     root = np.asarray(root, float)
     d = np.asarray(target, float) - root

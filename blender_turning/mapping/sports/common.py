@@ -110,12 +110,13 @@ def _length(skel, bone):
     raise ValueError(f"bone {bone!r} has no connected child to measure its length")
 
 
-def limb_frames(root, hinge_x, target, pole, l1: float, l2: float, twist=None, reach=0.9999):
+def limb_frames(root, hinge_x, target, pole, l1, l2, twist=None, reach=0.9999):
     """Two-bone IK (analytic) without touching a pose: the armature-space rotations (n, 3, 3) of
     the upper and lower bones whose chain from ``root`` (n, 3) reaches ``target``, bending
     towards ``pole`` rotated by ``twist`` (n,) rad about the root-target line, with the hinge
-    (each bone's X) on the side of ``hinge_x`` (the upper bone's unposed X).  Returns
-    ``(upper_rot, lower_rot, end)``, ``end`` the point reached."""
+    (each bone's X) on the side of ``hinge_x`` (the upper bone's unposed X).  The lengths
+    ``l1``, ``l2`` (m) are numbers or (n, 1) per frame.  Returns ``(upper_rot, lower_rot,
+    end)``, ``end`` the point reached."""
     pole = np.asarray(pole, float)
     if pole.shape != root.shape:
         pole = np.broadcast_to(pole, root.shape)
