@@ -11,7 +11,7 @@ threads woken by LAPACK calls show as CPU above wall).
 
 ``--against DIR`` times another tree's package (e.g. ``git archive f2c78aa | tar -x -C DIR``)
 on the same trajectories (simulated once with this tree, handed over as columns): each tree in
-a fresh process, the trees interleaved, ``--repeat`` rounds, the best round's median kept.
+a fresh process, the trees interleaved, ``--repeat`` rounds, the least CPU kept.
 """
 from __future__ import annotations
 

@@ -30,9 +30,11 @@ IDENTITY_QUAT = np.array([1.0, 0.0, 0.0, 0.0])
 # -- quaternions ---------------------------------------------------------------------------------
 def quat_mul(a, b):
     """Hamilton product ``a * b`` (rotate by ``b`` first, then ``a``)."""
-    a, b = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float))
-    w1, x1, y1, z1 = np.moveaxis(a, -1, 0)
-    w2, x2, y2, z2 = np.moveaxis(b, -1, 0)
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if a.shape != b.shape:
+        a, b = np.broadcast_arrays(a, b)
+    w1, x1, y1, z1 = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
+    w2, x2, y2, z2 = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
     return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
                      w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
                      w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
@@ -55,7 +57,7 @@ def quat_to_matrix(q):
     """(..., 4) unit quaternions -> (..., 3, 3) rotation matrices."""
     q = np.asarray(q, float)
     q = q / norm(q, keepdims=True)
-    w, x, y, z = np.moveaxis(q, -1, 0)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
     wx, wy, wz = w * x, w * y, w * z
     m = np.empty(q.shape[:-1] + (3, 3))
@@ -74,19 +76,19 @@ def quat_from_matrix(m):
     m = np.asarray(m, float)
     shape = m.shape[:-2]
     m = m.reshape(-1, 3, 3)
-    tr = np.trace(m, axis1=1, axis2=2)
-    d = np.stack([tr, m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]], axis=1)
-    k = np.argmax(d, axis=1)
+    d = np.empty((len(m), 4))                       # the pivots: trace and diagonal
+    d[:, 1], d[:, 2], d[:, 3] = m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]
+    d[:, 0] = d[:, 1] + d[:, 2] + d[:, 3]
+    k = d.argmax(axis=1)
     q = np.empty((len(m), 4))
     for case in range(4):
         s = k == case
-        if not np.any(s):
+        if not s.any():
             continue
-        s = slice(None) if s.all() else s          # one case for every frame: no copies
-        a = m[s]
+        full = s.all()                              # one case for every frame: no copies
+        a, v = (m, q) if full else (m[s], np.empty((int(s.sum()), 4)))
         if case == 0:
-            r = np.sqrt(1.0 + tr[s]) * 2.0
-            v = np.empty((len(a), 4))
+            r = np.sqrt(1.0 + d[:, 0] if full else 1.0 + d[s, 0]) * 2.0
             v[:, 0] = 0.25 * r
             v[:, 1] = (a[:, 2, 1] - a[:, 1, 2]) / r
             v[:, 2] = (a[:, 0, 2] - a[:, 2, 0]) / r
@@ -94,13 +96,13 @@ def quat_from_matrix(m):
         else:
             i, j, kk = case - 1, case % 3, (case + 1) % 3
             r = np.sqrt(1.0 + a[:, i, i] - a[:, j, j] - a[:, kk, kk]) * 2.0
-            v = np.empty((len(a), 4))
             v[:, 0] = (a[:, kk, j] - a[:, j, kk]) / r
             v[:, 1 + i] = 0.25 * r
             v[:, 1 + j] = (a[:, j, i] + a[:, i, j]) / r
             v[:, 1 + kk] = (a[:, kk, i] + a[:, i, kk]) / r
-        q[s] = v
-    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+        if not full:
+            q[s] = v
+    q[q[:, 0] < 0] *= -1.0
     q /= norm(q, keepdims=True)
     return q.reshape(shape + (4,))
 
