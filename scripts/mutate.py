@@ -560,8 +560,8 @@ MUTANTS = [
       "    cos = np.clip(cos0, np.maximum(near, -1.0), np.clip(far, -1.0, 1.0))",
       "    cos = cos0", RETARGET + SKIER_MAPPING, "mapping"),
     M("planted_hand_at_the_armpit", "mapping/sports/skier.py",
-      "                                  shoulder[idx], *reach)",
-      "                                  shoulder[idx], 0.0, reach[1])", SKIER_MAPPING, "mapping"),
+      "                              shoulder[idx], *reach)",
+      "                              shoulder[idx], 0.0, reach[1])", SKIER_MAPPING, "mapping"),
     # -- crowd staging (docs/crowds.md) -----------------------------------------------------------
     M("staging_always_waits", "crowd/staging.py",
       '    if staging == "wait":\n', "    if True:\n", STAGING),

@@ -421,11 +421,13 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
 
 
 def on_snow(place, p):
-    """The world point ``p`` moved onto the ground (vertically; the plane under the foot when
-    there is no Ground mesh, where it already is)."""
+    """The world points ``p`` (m, 3) moved onto the ground (vertically; the plane under the foot
+    when there is no Ground mesh, where they already are)."""
     if place.surface is None:
         return p
-    return np.array([p[0], p[1], float(place.surface(np.array([p[0]]), np.array([p[1]]))[0])])
+    p = np.array(p, float)
+    p[:, 2] = place.surface(p[:, 0], p[:, 1])
+    return p
 
 
 @dataclass
@@ -452,24 +454,30 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
     # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
     inside = (np.abs(d) <= hold) | ((d < 0) & (d > -hold - swing) & (tips[:, 2] < 1e-3))
     edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
-    for i0, i1 in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):   # runs [i0, i1)
-        idx = np.arange(i0, i1)
-        # The hole: where the swinging tip meets the snow.
-        P = on_snow(place,
-                    _world(place, np.array([[tips[i0, 0], tips[i0, 1], 0.0]]), [i0], scale)[0])
+    starts, ends = np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]     # runs [i0, i1)
+    if not len(starts):
+        return _Plants(held, after, u, tip_at, grip_at)
+    # Every run's frame by frame, all runs at once (the plan below does not change them).
+    # The holes: where the swinging tips meet the snow.
+    flat = tips[starts].copy()
+    flat[:, 2] = 0.0
+    holes = on_snow(place, _world(place, flat, starts, scale))
+    idx = np.concatenate([np.arange(i0, i1) for i0, i1 in zip(starts, ends)])
+    local = _local(place, np.repeat(holes, ends - starts, axis=0), idx, scale)
+    # The grip on the sphere of the pole's length about the hole: towards the free swing's
+    # grip, turned about the hole as far as needed for the hand to hold it (the pole's angle
+    # changes, the tip stays put); the plant ends where no point of it is in reach.
+    away = free[idx] - local
+    to, ok = on_sphere_within(local, length, away / norm(away, keepdims=True),
+                              shoulder[idx], *reach)
+    grips = local + length * to
+    offs = np.concatenate([[0], np.cumsum(ends - starts)])
+    for P, i0, a, e in zip(holes, starts, offs[:-1], offs[1:]):
         _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
                   grip_at, scale)
-        local = _local(place, P, idx, scale)
-        # The grip on the sphere of the pole's length about the hole: towards the free swing's
-        # grip, turned about the hole as far as needed for the hand to hold it (the pole's
-        # angle changes, the tip stays put); the plant ends where no point of it is in reach.
-        away = free[idx] - local
-        to, ok = on_sphere_within(local, length, away / norm(away, keepdims=True),
-                                  shoulder[idx], *reach)
-        grip = local + length * to
-        k = len(idx) if ok.all() else max(int(np.argmin(ok)), 1)
-        idx, local, grip = idx[:k], local[:k], grip[:k]
-        held[idx], tip_at[idx], grip_at[idx] = True, local, grip
+        k = e - a if ok[a:e].all() else max(int(np.argmin(ok[a:e])), 1)
+        idx, grip = np.arange(i0, i0 + k), grips[a:a + k]
+        held[idx], tip_at[idx], grip_at[idx] = True, local[a:a + k], grip
         # Lift off: from the last held pose to the free swing over `swing` of phase.
         r = idx[-1]
         dd = d[r + 1:] - d[r]
