@@ -20,20 +20,25 @@ __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "stat
            "body_axes", "mesh_points", "leg_lengths"]
 
 
+def _about(angle, axis: int) -> np.ndarray:
+    """(..., 3, 3) rotations by ``angle`` about the coordinate axis ``axis`` (right-handed)."""
+    a = np.asarray(angle, float)
+    m = np.zeros(a.shape + (3, 3))
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    c, s = np.cos(a), np.sin(a)
+    m[..., axis, axis] = 1.0
+    m[..., i, i], m[..., i, j], m[..., j, i], m[..., j, j] = c, -s, s, c
+    return m
+
+
 def rot_y(angle) -> np.ndarray:
     """(n, 3, 3) rotations about +Y (the travel line)."""
-    a = np.asarray(angle, float)
-    c, s, z, o = np.cos(a), np.sin(a), np.zeros_like(a), np.ones_like(a)
-    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1),
-                     np.stack([-s, z, c], -1)], -2)
+    return _about(angle, 1)
 
 
 def rot_z(angle) -> np.ndarray:
     """(n, 3, 3) rotations about +Z (yaw, counter-clockwise seen from above)."""
-    a = np.asarray(angle, float)
-    c, s, z, o = np.cos(a), np.sin(a), np.zeros_like(a), np.ones_like(a)
-    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1),
-                     np.stack([z, z, o], -1)], -2)
+    return _about(angle, 2)
 
 
 def rotate_about(v, axis, angle):
