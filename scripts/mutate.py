@@ -571,8 +571,8 @@ MUTANTS = [
       "    cos = np.clip(cos0, np.maximum(near, -1.0), np.clip(far, -1.0, 1.0))",
       "    cos = cos0", RETARGET + SKIER_MAPPING, "mapping"),
     M("planted_hand_at_the_armpit", "mapping/sports/skier.py",
-      "                                  shoulder[idx], *reach)",
-      "                                  shoulder[idx], 0.0, reach[1])", SKIER_MAPPING, "mapping"),
+      "                              shoulder[idx], *reach)",
+      "                              shoulder[idx], 0.0, reach[1])", SKIER_MAPPING, "mapping"),
     # -- crowd staging (docs/crowds.md) -----------------------------------------------------------
     M("staging_always_waits", "crowd/staging.py",
       '    if staging == "wait":\n', "    if True:\n", STAGING),
@@ -849,10 +849,10 @@ MUTANTS += [
       [T + "test_follow_problem.py"]),
     # -- the posed body from Winter's segment data (mapping/anthropometry.py), two-bone IK ------
     M("segment_no_parallel_axis", "mapping/anthropometry.py",
-      "inertia += mi * (np.sum(d * d, axis=1) - (d @ e) ** 2) + own", "inertia += own",
+      "inertia += mi * (dot(d, d) - stack_dot(d, e) ** 2) + own", "inertia += own",
       ANTHRO, "mapping"),
     M("segment_rod_axis_ignored", "mapping/anthropometry.py",
-      "own = (rg * length) ** 2 * (1.0 - (u @ e) ** 2)", "own = (rg * length) ** 2",
+      "own = (rg * length) ** 2 * (1.0 - stack_dot(u, e) ** 2)", "own = (rg * length) ** 2",
       ANTHRO, "mapping"),
     M("segment_com_from_distal", "mapping/anthropometry.py",
       "parts.append((frac * mass, a + at * seg,", "parts.append((frac * mass, b - at * seg,",

@@ -45,6 +45,48 @@ def test_arm_solver_puts_grip_and_wrist_where_the_builder_does(s):
     assert np.max(np.abs(wrist_k - wrist[idx])) < 1e-14
 
 
+def test_two_arms_joined_reach_as_each_alone():
+    """The aiming loop solves both arms in one IK over their frames (``_Arm.joined``): each
+    frame as its own arm puts it, to rounding."""
+    rng = np.random.default_rng(8)
+    n = 120
+    b = _builder(n, rng)
+    arms = [_Arm(b, B.side("upper_arm", s), B.side("forearm", s), rng.normal(size=(n, 3)),
+                 B.side("pole", s)) for s in "LR"]
+    targets = [a.root + rng.uniform(-0.8, 0.8, (n, 3)) for a in arms]
+    both = _Arm.joined(arms)
+    idx = np.concatenate([np.arange(0, n, 2), n + np.arange(1, n, 3)])   # frames of both arms
+    grip, wrist = both.reach(np.concatenate(targets)[idx], idx)
+    want_grip = np.concatenate([a.reach(t)[0] for a, t in zip(arms, targets)])[idx]
+    want_wrist = np.concatenate([a.reach(t)[1] for a, t in zip(arms, targets)])[idx]
+    assert np.max(np.abs(grip - want_grip)) < 1e-14          # measured: 2.2e-16
+    assert np.max(np.abs(wrist - want_wrist)) < 1e-14
+
+
+def test_arms_aimed_together_as_each_alone():
+    """``_aim`` runs both arms' passes together, but each arm stops on its own (within 2e-4 m
+    of its targets, or settled): the wrists and grips of each are those it gets aimed alone."""
+    from blender_turning.mapping.sports.skier import _aim, _Plants
+    rng = np.random.default_rng(9)
+    n = 60
+    b = _builder(n, rng)
+    arms = [_Arm(b, B.side("upper_arm", s), B.side("forearm", s), rng.normal(size=(n, 3)),
+                 B.side("pole", s)) for s in "LR"]
+    # Left: 0.1 mm off grips the arm reaches (within 2e-4 m after one pass, not settled: done
+    # there, where a further pass would move it); right: many out of reach (all 12 passes).
+    grip, wrist = arms[0].reach(arms[0].root + rng.uniform(-0.3, 0.3, (n, 3)))
+    frees = [grip + rng.uniform(-1e-4, 1e-4, (n, 3)),
+             arms[1].root + rng.uniform(-1.5, 1.5, (n, 3))]
+    offsets = [grip - wrist, np.subtract(*arms[1].reach(frees[1]))]
+    no = np.zeros(n, bool)
+    plans = [_Plants(no, no, np.ones(n), f.copy(), f.copy()) for f in frees]
+    together = _aim(arms, plans, frees, offsets, (1.2, 1.2))
+    for k in range(2):
+        alone = _aim([arms[k]], [plans[k]], [frees[k]], [offsets[k]], [1.2])[0]
+        for got, want in zip(together[k], alone):
+            assert np.max(np.abs(got - want)) < 1e-14               # measured: 0
+
+
 def test_stack_dot_is_matmul():
     rng = np.random.default_rng(4)
     a = rng.normal(size=(7, 5, 4, 3))

@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["cross", "norm", "dot", "quat_mul", "quat_conj", "quat_from_axis_angle", "quat_to_matrix",
-           "quat_from_matrix", "quat_continuous", "vec_roll_to_mat3", "rest_matrix", "translation",
-           "rotation4", "rot_axis_angle", "stack_dot", "two_bone_ik", "frame_from_yx", "Skeleton",
-           "PoseBuilder"]
+__all__ = ["cross", "norm", "dot", "quat_mul", "quat_conj", "quat_from_axis_angle",
+           "quat_to_matrix", "quat_from_matrix", "quat_continuous", "vec_roll_to_mat3",
+           "rest_matrix", "translation", "rotation4", "rot_axis_angle", "stack_dot", "two_bone_ik",
+           "frame_from_yx", "Skeleton", "PoseBuilder"]
 
 IDENTITY_QUAT = np.array([1.0, 0.0, 0.0, 0.0])
 
@@ -30,9 +30,11 @@ IDENTITY_QUAT = np.array([1.0, 0.0, 0.0, 0.0])
 # -- quaternions ---------------------------------------------------------------------------------
 def quat_mul(a, b):
     """Hamilton product ``a * b`` (rotate by ``b`` first, then ``a``)."""
-    a, b = np.broadcast_arrays(np.asarray(a, float), np.asarray(b, float))
-    w1, x1, y1, z1 = np.moveaxis(a, -1, 0)
-    w2, x2, y2, z2 = np.moveaxis(b, -1, 0)
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if a.shape != b.shape:
+        a, b = np.broadcast_arrays(a, b)
+    w1, x1, y1, z1 = a[..., 0], a[..., 1], a[..., 2], a[..., 3]
+    w2, x2, y2, z2 = b[..., 0], b[..., 1], b[..., 2], b[..., 3]
     return np.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
                      w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
                      w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
@@ -55,7 +57,7 @@ def quat_to_matrix(q):
     """(..., 4) unit quaternions -> (..., 3, 3) rotation matrices."""
     q = np.asarray(q, float)
     q = q / norm(q, keepdims=True)
-    w, x, y, z = np.moveaxis(q, -1, 0)
+    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
     xx, yy, zz, xy, xz, yz = x * x, y * y, z * z, x * y, x * z, y * z
     wx, wy, wz = w * x, w * y, w * z
     m = np.empty(q.shape[:-1] + (3, 3))
@@ -74,19 +76,19 @@ def quat_from_matrix(m):
     m = np.asarray(m, float)
     shape = m.shape[:-2]
     m = m.reshape(-1, 3, 3)
-    tr = np.trace(m, axis1=1, axis2=2)
-    d = np.stack([tr, m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]], axis=1)
-    k = np.argmax(d, axis=1)
+    d = np.empty((len(m), 4))                       # the pivots: trace and diagonal
+    d[:, 1], d[:, 2], d[:, 3] = m[:, 0, 0], m[:, 1, 1], m[:, 2, 2]
+    d[:, 0] = d[:, 1] + d[:, 2] + d[:, 3]
+    k = d.argmax(axis=1)
     q = np.empty((len(m), 4))
     for case in range(4):
         s = k == case
-        if not np.any(s):
+        if not s.any():
             continue
-        s = slice(None) if s.all() else s          # one case for every frame: no copies
-        a = m[s]
+        full = s.all()                              # one case for every frame: no copies
+        a, v = (m, q) if full else (m[s], np.empty((int(s.sum()), 4)))
         if case == 0:
-            r = np.sqrt(1.0 + tr[s]) * 2.0
-            v = np.empty((len(a), 4))
+            r = np.sqrt(1.0 + d[:, 0] if full else 1.0 + d[s, 0]) * 2.0
             v[:, 0] = 0.25 * r
             v[:, 1] = (a[:, 2, 1] - a[:, 1, 2]) / r
             v[:, 2] = (a[:, 0, 2] - a[:, 2, 0]) / r
@@ -94,13 +96,13 @@ def quat_from_matrix(m):
         else:
             i, j, kk = case - 1, case % 3, (case + 1) % 3
             r = np.sqrt(1.0 + a[:, i, i] - a[:, j, j] - a[:, kk, kk]) * 2.0
-            v = np.empty((len(a), 4))
             v[:, 0] = (a[:, kk, j] - a[:, j, kk]) / r
             v[:, 1 + i] = 0.25 * r
             v[:, 1 + j] = (a[:, j, i] + a[:, i, j]) / r
             v[:, 1 + kk] = (a[:, kk, i] + a[:, i, kk]) / r
-        q[s] = v
-    q *= np.where(q[:, :1] < 0, -1.0, 1.0)
+        if not full:
+            q[s] = v
+    q[q[:, 0] < 0] *= -1.0
     q /= norm(q, keepdims=True)
     return q.reshape(shape + (4,))
 
@@ -294,8 +296,9 @@ def two_bone_ik(root, target, l1: float, l2: float, pole, reach: float = 0.9999)
 
     ``root``, ``target``, ``pole`` have shape (..., 3); ``pole`` is a direction (not a point)
     towards which the middle joint bends (a knee forward, an elbow back).  Targets farther than
-    ``reach * (l1 + l2)`` or nearer than ``|l1 - l2|`` are clamped along the same line.
-    Returns ``(mid, end)``: the middle joint and the end actually reached.
+    ``reach * (l1 + l2)`` or nearer than ``|l1 - l2|`` are clamped along the same line.  The
+    lengths are numbers or (..., 1) arrays (one per chain).  Returns ``(mid, end)``: the middle
+    joint and the end actually reached.
     """
     root = np.asarray(root, float)
     d = np.asarray(target, float) - root
@@ -327,7 +330,7 @@ class Skeleton:
         self.parents = tuple(parents)   # parent name or None
         self.rest = np.asarray(rest, float)            # (k, 4, 4)
         self.connected = tuple(bool(c) for c in connected)
-        self._relative = {}                             # name -> rest_relative (4, 4)
+        self._relative = {}                             # (name, frame) -> rest_in (4, 4)
         for n, p in zip(self.names, self.parents):
             if p is not None and self.index.get(p, len(self.names)) >= self.index[n]:
                 raise ValueError(f"bone {n!r}: parent {p!r} must come before it")
@@ -367,14 +370,18 @@ class Skeleton:
 
     def rest_relative(self, name: str) -> np.ndarray:
         """``rest_arm_parent^-1 @ rest_arm`` (the rest matrix itself for a root bone)."""
-        rel = self._relative.get(name)
+        return self.rest_in(name, self.parents[self.i(name)])
+
+    def rest_in(self, name: str, frame: str | None) -> np.ndarray:
+        """``rest_arm_frame^-1 @ rest_arm``: bone ``name``'s rest matrix in the rest frame of the
+        bone ``frame`` (the rest matrix itself for ``None``); computed once per skeleton and
+        shared, read-only."""
+        rel = self._relative.get((name, frame))
         if rel is None:
-            i = self.i(name)
-            p = self.parents[i]
-            rel = np.array(self.rest[i] if p is None
-                           else rigid_inverse(self.rest_of(p)) @ self.rest[i])
+            rest = self.rest_of(name)
+            rel = np.array(rest if frame is None else rigid_inverse(self.rest_of(frame)) @ rest)
             rel.setflags(write=False)                  # shared by every caller
-            self._relative[name] = rel
+            self._relative[(name, frame)] = rel
         return rel
 
     def carry(self, poses: dict, bone: str, p_rest) -> np.ndarray:
@@ -470,16 +477,15 @@ class PoseBuilder:
         The local channels follow from the parent's current pose.  A connected bone gets no
         location (Blender ignores it: its head is its parent's tail), so pass ``head=None``.
         """
-        base = self.unposed(name)
-        target = rotation4(rotation)
-        target[:, :3, 3] = base[:, :3, 3] if head is None else head
-        local = rigid_inverse(base) @ target
         i = self.skel.i(name)
         if head is not None and self.skel.connected[i]:
             raise ValueError(f"bone {name!r} is connected: its head follows its parent's tail")
+        base = self._unposed(name)
+        # base^-1 @ [rotation, head] of rigid transforms: [R^T rotation, R^T (head - t)].
+        back = np.swapaxes(base[:, :3, :3], 1, 2)
         if head is not None:
-            self.loc[name] = local[:, :3, 3].copy()
-        self.rot[name] = quat_from_matrix(local[:, :3, :3])
+            self.loc[name] = np.einsum("nij,nj->ni", back, head - base[:, :3, 3])
+        self.rot[name] = quat_from_matrix(np.matmul(back, rotation))
         self._changed(name)
 
     def head(self, name) -> np.ndarray:

@@ -20,20 +20,25 @@ __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "stat
            "body_axes", "mesh_points", "leg_lengths"]
 
 
+def _about(angle, axis: int) -> np.ndarray:
+    """(..., 3, 3) rotations by ``angle`` about the coordinate axis ``axis`` (right-handed)."""
+    a = np.asarray(angle, float)
+    m = np.zeros(a.shape + (3, 3))
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    c, s = np.cos(a), np.sin(a)
+    m[..., axis, axis] = 1.0
+    m[..., i, i], m[..., i, j], m[..., j, i], m[..., j, j] = c, -s, s, c
+    return m
+
+
 def rot_y(angle) -> np.ndarray:
     """(n, 3, 3) rotations about +Y (the travel line)."""
-    a = np.asarray(angle, float)
-    c, s, z, o = np.cos(a), np.sin(a), np.zeros_like(a), np.ones_like(a)
-    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1),
-                     np.stack([-s, z, c], -1)], -2)
+    return _about(angle, 1)
 
 
 def rot_z(angle) -> np.ndarray:
     """(n, 3, 3) rotations about +Z (yaw, counter-clockwise seen from above)."""
-    a = np.asarray(angle, float)
-    c, s, z, o = np.cos(a), np.sin(a), np.zeros_like(a), np.ones_like(a)
-    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1),
-                     np.stack([z, z, o], -1)], -2)
+    return _about(angle, 2)
 
 
 def rotate_about(v, axis, angle):
@@ -92,8 +97,7 @@ def lean(b: PoseBuilder, theta_v):
 
 def carried(b: PoseBuilder, bone: str, carrier: str) -> np.ndarray:
     """The pose ``bone`` would have if rigidly attached to ``carrier`` as in the rest pose."""
-    skel = b.skel
-    return stack_dot(b.pose(carrier), rigid_inverse(skel.rest_of(carrier)) @ skel.rest_of(bone))
+    return stack_dot(b.pose(carrier), b.skel.rest_in(bone, carrier))
 
 
 def leg_lengths(skel, upper: str, lower: str):
@@ -111,12 +115,13 @@ def _length(skel, bone):
     raise ValueError(f"bone {bone!r} has no connected child to measure its length")
 
 
-def limb_frames(root, hinge_x, target, pole, l1: float, l2: float, twist=None, reach=0.9999):
+def limb_frames(root, hinge_x, target, pole, l1, l2, twist=None, reach=0.9999):
     """Two-bone IK (analytic) without touching a pose: the armature-space rotations (n, 3, 3) of
     the upper and lower bones whose chain from ``root`` (n, 3) reaches ``target``, bending
     towards ``pole`` rotated by ``twist`` (n,) rad about the root-target line, with the hinge
-    (each bone's X) on the side of ``hinge_x`` (the upper bone's unposed X).  Returns
-    ``(upper_rot, lower_rot, end)``, ``end`` the point reached."""
+    (each bone's X) on the side of ``hinge_x`` (the upper bone's unposed X).  The lengths
+    ``l1``, ``l2`` (m) are numbers or (n, 1) per frame.  Returns ``(upper_rot, lower_rot,
+    end)``, ``end`` the point reached."""
     pole = np.asarray(pole, float)
     if pole.shape != root.shape:
         pole = np.broadcast_to(pole, root.shape)
@@ -142,8 +147,17 @@ def ik_limb(b: PoseBuilder, upper: str, lower: str, target, pole, twist=None, re
     return end
 
 
+#: (id(spec), bone, shapes) -> (spec, corner points): :func:`mesh_points` once per rig (the spec
+#: is kept, so its id is not reused while the entry stands).
+_CORNERS = {}
+
+
 def mesh_points(spec, bone: str, shapes=("box",)):
-    """Corner points (k, 3) of ``bone``'s box meshes, in the bone's rest frame (from its head)."""
+    """Corner points (k, 3) of ``bone``'s box meshes, in the bone's rest frame (from its head);
+    computed once per rig and shared, read-only."""
+    hit = _CORNERS.get((id(spec), bone, shapes))
+    if hit is not None and hit[0] is spec:
+        return hit[1]
     pts = []
     for m in spec.meshes_of(bone):
         if m.shape not in shapes:
@@ -153,7 +167,12 @@ def mesh_points(spec, bone: str, shapes=("box",)):
         pts.append(np.asarray(m.offset) + (signs * half) @ quat_to_matrix(m.rotation).T)
     if not pts:
         raise ValueError(f"bone {bone!r} has no box mesh to put on the ground")
-    return np.concatenate(pts)
+    pts = np.concatenate(pts)
+    pts.setflags(write=False)
+    if len(_CORNERS) >= 256:                           # specs made on the fly (tests, rigs)
+        _CORNERS.clear()
+    _CORNERS[(id(spec), bone, shapes)] = (spec, pts)
+    return pts
 
 
 def place_on_ground(b: PoseBuilder, spec, bone: str, rotation, anchor_rest, anchor_xy):

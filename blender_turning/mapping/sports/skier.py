@@ -227,6 +227,7 @@ class SkierMapping(Mapping):
                   for bone in ("upper_arm", "forearm"))
         reach = (math.hypot(l1, l2), 0.98 * (l1 + l2))
         place = b.placement
+        sides = []
         for s, sx in SIDES:
             plant = o.pole_plant_L if s == "L" else o.pole_plant_R
             d = (traj.phi - plant + math.pi) % (2.0 * math.pi) - math.pi   # signed, wrapped
@@ -244,25 +245,23 @@ class SkierMapping(Mapping):
             # The free pole swings forward (and down) for the plant only: after the plant it
             # trails, as a pole dragged out of its hole does, until the swing to the next one.
             w_aim = np.where(d > 0.0, 0.0, w)
-
-            def free_axis(grip):
-                beta = POLE_AIM_TRAIL + w_aim * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
-                horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
-                dz = o.pole_lift * (1.0 - w_aim) - grip[:, 2]
-                rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
-                return (rho[:, None] * horiz + dz[:, None] * up) / length
+            swing = (w_aim, sx, length, o.pole_lift, right, fwd, up)
 
             # Free swing first; its grip sits `offset` from the wrist the IK aims.
             grip, wrist = arm.reach(hand)
             offset = grip - wrist
             free = hand + offset
             plan = _plan_plants(place, d, o.pole_hold, o.pole_swing,
-                                grip + length * free_axis(grip), free, shoulder + offset, length,
-                                reach, o.plant_scale)
-            target, aim_wrist, grip, offset = _aim(arm, plan, free, offset, length)
+                                grip + length * _free_axis(grip, *swing), free, shoulder + offset,
+                                length, reach, o.plant_scale)
+            sides.append((arm, plan, free, offset, length, swing, elbow_dir, pole))
+        # Both arms aim in one loop (each frame and side is solved on its own).
+        aimed = _aim(*zip(*(side[:5] for side in sides)))
+        for (arm, plan, _, _, length, swing, elbow_dir, pole), (aim_wrist, grip) in zip(sides,
+                                                                                         aimed):
             lift = plan.u[plan.after, None]
             ik_limb(b, arm.upper, arm.lower, aim_wrist, elbow_dir)     # the arm's pose, once
-            axis = free_axis(grip)
+            axis = _free_axis(grip, *swing)
             # Held: aim at the hole.  Lifting off: at a point moving from the hole to the free
             # swing's tip (both on or above the snow, so the tip stays out of it).
             aim = plan.tip_at.copy()
@@ -278,10 +277,19 @@ class SkierMapping(Mapping):
             b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
 
 
-def _aim(arm, plan, free, offset, length):
-    """The grip's targets of the plan ``plan`` (the free swing's grips ``free`` elsewhere) and
-    the arm aimed at them from the free swing's grip offsets ``offset``: returns ``(target,
-    wrist aimed at, grip reached, its offset from the wrist)``."""
+def _free_axis(grip, w_aim, sx, length, lift, right, fwd, up):
+    """The free pole's direction (n, 3) from its grip: trailing at ``POLE_AIM_TRAIL`` from ahead,
+    swinging to ``POLE_AIM_PLANT`` by ``w_aim`` (n,), its tip ``lift`` (m) up when trailing
+    (``sx`` the side's sign, ``length`` the pole's)."""
+    beta = POLE_AIM_TRAIL + w_aim * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
+    horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
+    dz = lift * (1.0 - w_aim) - grip[:, 2]
+    rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
+    return (rho[:, None] * horiz + dz[:, None] * up) / length
+
+
+def _targets(plan, free, length):
+    """The grip's targets of the plan ``plan`` (the free swing's grips ``free`` elsewhere)."""
     lift = plan.u[plan.after, None]
     target = free.copy()
     target[plan.held] = plan.grip_at[plan.held]
@@ -290,22 +298,43 @@ def _aim(arm, plan, free, offset, length):
     out = target[plan.after] - plan.tip_at[plan.after]
     r = norm(out, keepdims=True)
     target[plan.after] = plan.tip_at[plan.after] + out * np.maximum(r, length) / r
-    # The offset turns with the hand: aim again with the new one.  Each frame is solved on its
-    # own, so a frame whose offset no longer moves (a free swing, after one pass) would only
-    # give the same numbers again: it leaves the loop, the rest go on.
-    offset = offset.copy()
+    return target
+
+
+def _aim(arms, plans, frees, offsets, lengths):
+    """Each arm (one per side) aimed at its plan's targets (:func:`_targets`) from the free
+    swing's grip offsets ``offsets``: returns ``(wrist aimed at, grip reached)`` per arm.
+
+    The offset turns with the hand: aim again with the new one.  Each frame is solved on its
+    own, so a frame whose offset no longer moves (a free swing, after one pass) would only give
+    the same numbers again: it leaves the loop, the rest go on; an arm whose every grip is
+    within 2e-4 m of its target is done.  The arms' frames go through one IK per pass."""
+    n = len(frees[0])
+    arm = _Arm.joined(arms)
+    target = np.concatenate([_targets(*a) for a in zip(plans, frees, lengths)])
+    offset = np.concatenate(offsets)
     grip = target.copy()
-    moving_aim = np.arange(len(target))
     aim_wrist = target - offset
+    sides = [slice(k * n, (k + 1) * n) for k in range(len(arms))]
+    moving = [np.arange(k * n, (k + 1) * n) for k in range(len(arms))]
     for _ in range(12):
-        aim_wrist[moving_aim] = target[moving_aim] - offset[moving_aim]
-        g, wr = arm.reach(aim_wrist[moving_aim], moving_aim)
-        step = np.max(np.abs(g - wr - offset[moving_aim]), axis=1, initial=0.0)
-        grip[moving_aim], offset[moving_aim] = g, g - wr
-        if np.max(np.abs(grip - target), initial=0.0) < 2e-4:    # ~10x per two passes
+        live = [k for k in range(len(arms)) if moving[k] is not None]
+        if not live:
             break
-        moving_aim = moving_aim[step > SETTLED]
-    return target, aim_wrist, grip, offset
+        idx = np.concatenate([moving[k] for k in live])
+        aim_wrist[idx] = target[idx] - offset[idx]
+        g, wr = arm.reach(aim_wrist[idx], idx)
+        step = np.max(np.abs(g - wr - offset[idx]), axis=1, initial=0.0)
+        grip[idx], offset[idx] = g, g - wr
+        at = 0
+        for k in live:
+            mine = step[at:at + len(moving[k])]
+            at += len(moving[k])
+            if np.max(np.abs(grip[sides[k]] - target[sides[k]]), initial=0.0) < 2e-4:
+                moving[k] = None                                      # ~10x per two passes
+            else:
+                moving[k] = moving[k][mine > SETTLED]
+    return [(aim_wrist[k], grip[k]) for k in sides]
 
 
 class _Arm:
@@ -313,27 +342,40 @@ class _Arm:
     aiming loop of ``arms_and_poles``: only the arm moves while it aims (the chest, and the
     hand's and the pole's rest offsets from the forearm, stay put), so where a wrist target puts
     the wrist and the pole's grip follows from the two limb rotations alone, not through the
-    builder's quaternions and pose chain (the same values to rounding)."""
+    builder's quaternions and pose chain (the same values to rounding).  Everything is per
+    frame, so two arms joined (:meth:`joined`) are solved as one over both arms' frames."""
 
     def __init__(self, b, upper, lower, elbow_dir, pole):
         skel = b.skel
         base = b.unposed(upper)
+        n = b.n
         self.upper, self.lower = upper, lower
         self.root, self.hinge, self.elbow = base[:, :3, 3], base[:, :3, 0], elbow_dir
-        self.lengths = leg_lengths(skel, upper, lower)
-        self.lower_head = skel.rest_relative(lower)[:3, 3]       # in the upper bone's frame
-        self.fore = skel.length(lower)
+        self.l1, self.l2 = (np.full((n, 1), v) for v in leg_lengths(skel, upper, lower))
+        # The lower bone's head in the upper bone's frame, and the wrist along the lower's Y.
+        self.lower_head = np.repeat(skel.rest_relative(lower)[None, :3, 3], n, axis=0)
+        self.fore = np.full((n, 1), skel.length(lower))
         # The grip in the lower bone's frame (through the hand, posed or not).
         self.grip = (rigid_inverse(b.pose(lower)) @ b.unposed(pole))[:, :3, 3]
+
+    @classmethod
+    def joined(cls, arms):
+        """One solver over the frames of ``arms`` one after the other."""
+        arm = cls.__new__(cls)
+        arm.upper = arm.lower = None
+        for key in ("root", "hinge", "elbow", "l1", "l2", "lower_head", "fore", "grip"):
+            setattr(arm, key, np.concatenate([getattr(a, key) for a in arms]))
+        return arm
 
     def reach(self, wrist, idx=slice(None)):
         """Aim the wrist (the forearm's tail) of frames ``idx`` at ``wrist`` (k, 3); return
         ``(grip, wrist)``, where the pole's grip and the wrist then are (armature space)."""
-        r_up, r_low, _ = limb_frames(self.root[idx], self.hinge[idx], wrist, self.elbow[idx],
-                                     *self.lengths)
-        head = self.root[idx] + stack_dot(r_up, self.lower_head)
+        root = self.root[idx]
+        r_up, r_low, _ = limb_frames(root, self.hinge[idx], wrist, self.elbow[idx],
+                                     self.l1[idx], self.l2[idx])
+        head = root + np.einsum("nij,nj->ni", r_up, self.lower_head[idx])
         return (head + np.einsum("nij,nj->ni", r_low, self.grip[idx]),
-                head + self.fore * r_low[:, :, 1])
+                head + self.fore[idx] * r_low[:, :, 1])
 
 
 #: The last part of the swing to a plant, as a fraction of ``pole_swing``: the tip comes to rest
@@ -379,11 +421,13 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
 
 
 def on_snow(place, p):
-    """The world point ``p`` moved onto the ground (vertically; the plane under the foot when
-    there is no Ground mesh, where it already is)."""
+    """The world points ``p`` (m, 3) moved onto the ground (vertically; the plane under the foot
+    when there is no Ground mesh, where they already are)."""
     if place.surface is None:
         return p
-    return np.array([p[0], p[1], float(place.surface(np.array([p[0]]), np.array([p[1]]))[0])])
+    p = np.array(p, float)
+    p[:, 2] = place.surface(p[:, 0], p[:, 1])
+    return p
 
 
 @dataclass
@@ -410,24 +454,30 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
     # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
     inside = (np.abs(d) <= hold) | ((d < 0) & (d > -hold - swing) & (tips[:, 2] < 1e-3))
     edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
-    for i0, i1 in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):   # runs [i0, i1)
-        idx = np.arange(i0, i1)
-        # The hole: where the swinging tip meets the snow.
-        P = on_snow(place,
-                    _world(place, np.array([[tips[i0, 0], tips[i0, 1], 0.0]]), [i0], scale)[0])
+    starts, ends = np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]     # runs [i0, i1)
+    if not len(starts):
+        return _Plants(held, after, u, tip_at, grip_at)
+    # Every run's frame by frame, all runs at once (the plan below does not change them).
+    # The holes: where the swinging tips meet the snow.
+    flat = tips[starts].copy()
+    flat[:, 2] = 0.0
+    holes = on_snow(place, _world(place, flat, starts, scale))
+    idx = np.concatenate([np.arange(i0, i1) for i0, i1 in zip(starts, ends)])
+    local = _local(place, np.repeat(holes, ends - starts, axis=0), idx, scale)
+    # The grip on the sphere of the pole's length about the hole: towards the free swing's
+    # grip, turned about the hole as far as needed for the hand to hold it (the pole's angle
+    # changes, the tip stays put); the plant ends where no point of it is in reach.
+    away = free[idx] - local
+    to, ok = on_sphere_within(local, length, away / norm(away, keepdims=True),
+                              shoulder[idx], *reach)
+    grips = local + length * to
+    offs = np.concatenate([[0], np.cumsum(ends - starts)])
+    for P, i0, a, e in zip(holes, starts, offs[:-1], offs[1:]):
         _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
                   grip_at, scale)
-        local = _local(place, P, idx, scale)
-        # The grip on the sphere of the pole's length about the hole: towards the free swing's
-        # grip, turned about the hole as far as needed for the hand to hold it (the pole's
-        # angle changes, the tip stays put); the plant ends where no point of it is in reach.
-        away = free[idx] - local
-        to, ok = on_sphere_within(local, length, away / norm(away, keepdims=True),
-                                  shoulder[idx], *reach)
-        grip = local + length * to
-        k = len(idx) if ok.all() else max(int(np.argmin(ok)), 1)
-        idx, local, grip = idx[:k], local[:k], grip[:k]
-        held[idx], tip_at[idx], grip_at[idx] = True, local, grip
+        k = e - a if ok[a:e].all() else max(int(np.argmin(ok[a:e])), 1)
+        idx, grip = np.arange(i0, i0 + k), grips[a:a + k]
+        held[idx], tip_at[idx], grip_at[idx] = True, local[a:a + k], grip
         # Lift off: from the last held pose to the free swing over `swing` of phase.
         r = idx[-1]
         dd = d[r + 1:] - d[r]
