@@ -438,16 +438,17 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     moved = {None: None}          # joint -> its pose's change from rest (n, 4, 4)
     for j in poses:
         moved[j] = poses[j] @ rigid_inverse(rig.rest_of(bm.bone(j)))
-    if bm.controls:
-        keyed = [(c.bone, moved[c.joint] @ rig.rest_of(c.bone), c.parent)
-                 for c in bm.controls]
+    if bm.controls:     # (bone, pose, parent joint, location keyed)
+        keyed = [(c.bone, moved[c.joint] @ rig.rest_of(c.bone), c.parent,
+                  c.parent is None or c.location) for c in bm.controls]
     else:
-        keyed = [(bm.bone(j), poses[j], _fk_ancestor(rig, bm, bm.bone(j))) for j in poses]
-    names = [b for b, _, _ in keyed]
-    loc, q = _channels(rig, names, np.stack([p for _, p, _ in keyed]),
-                       [moved[a] for _, _, a in keyed])
-    bones = {b: BoneChannels(location=loc[k] if a is None else None, rotation=q[k])
-             for k, (b, _, a) in enumerate(keyed)}
+        keyed = [(bm.bone(j), poses[j], a, a is None) for j in poses
+                 for a in (_fk_ancestor(rig, bm, bm.bone(j)),)]
+    names = [b for b, _, _, _ in keyed]
+    loc, q = _channels(rig, names, np.stack([p for _, p, _, _ in keyed]),
+                       [moved[a] for _, _, a, _ in keyed])
+    bones = {b: BoneChannels(location=loc[k] if keys_loc else None, rotation=q[k])
+             for k, (b, _, _, keys_loc) in enumerate(keyed)}
     # Root motion: the object turns the user's facing onto the heading and puts `origin` on
     # the foot point (the built-in's object carries the foot point and theta_dir - 90 deg, and
     # on terrain stands in the local surface, mapping/surface.py).  The user's armature point
