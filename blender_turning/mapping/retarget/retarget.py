@@ -53,7 +53,7 @@ from ..base import BoneChannels, PoseTrack
 from .bone_map import JOINT_PARENT, JOINTS, BoneMap
 from ..sports.common import rot_z
 from ..kinematics import (cross, on_sphere_within, quat_continuous, quat_from_matrix,
-                          rigid_inverse, two_bone_ik)
+                          rigid_inverse, stack_dot, two_bone_ik)
 from ...core.registry import SPORTS
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
 from ..surface import euler_xyz
@@ -401,9 +401,9 @@ def _channels(rig: UserRig, bones, poses, parent_deltas):
     eye = np.eye(4)
     moved = np.stack([np.broadcast_to(eye if d is None else d, poses.shape[1:])
                       for d in parent_deltas])
-    base = moved @ rig.rest[idx][:, None]
-    local = rigid_inverse(base) @ poses
-    loc = local[..., :3, 3].copy()
+    base = np.stack([stack_dot(m, rig.rest[i]) for m, i in zip(moved, idx)])
+    rot = np.einsum("mnji,mnjk->mnik", base[..., :3, :3], poses[..., :3, :3])
+    loc = np.einsum("mnji,mnj->mni", base[..., :3, :3], poses[..., :3, 3] - base[..., :3, 3])
     far = [k for k, i in enumerate(idx) if not rig.local_location[i]]
     if far:       # Blender: the location is in the parent's posed orientation (armature.cc)
         par = np.stack([eye if rig.parents[idx[k]] is None else rig.rest_of(rig.parents[idx[k]])
@@ -411,7 +411,7 @@ def _channels(rig: UserRig, bones, poses, parent_deltas):
         par = moved[far] @ par[:, None]
         loc[far] = np.einsum("mnji,mnj->mni", par[..., :3, :3],
                              poses[far][..., :3, 3] - base[far][..., :3, 3])
-    q = quat_from_matrix(local[..., :3, :3])
+    q = quat_from_matrix(rot)
     return loc, np.swapaxes(quat_continuous(np.swapaxes(q, 0, 1)), 0, 1)
 
 
