@@ -58,6 +58,9 @@ def test_missing_joints_are_listed_all_at_once():
     ({"name": "x", "joints": {"spine": "a"}, "controls": [{"bone": "c", "joint": "thigh.L"}]},
      "joint = 'thigh.L' is not a mapped joint"),
     ({"name": "x", "joints": {"spine": "a"}, "rig_settings": [{"bone": "b"}]}, "rig setting #0"),
+    ({"name": "x", "joints": {"spine": "a"},
+      "controls": [{"bone": "c", "joint": "spine", "parent": "spine", "location": "yes"}]},
+     r"control #0 \('c'\): location = 'yes' must be true or false"),
 ])
 def test_bad_maps_are_refused_naming_the_problem(doc, match):
     with pytest.raises(ValueError, match=match):

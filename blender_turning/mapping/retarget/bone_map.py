@@ -17,8 +17,11 @@ Joints
 Controls (optional)
     For a rig animated through controls (Rigify), the bones the bake keys instead of the joints:
     each ``bone`` moves rigidly with ``joint`` from its rest pose, and its parent's frame moves
-    rigidly with ``parent`` (a joint, or ``null``: the parent stays at rest).  Without controls
-    the bake keys the mapped joints themselves (FK).
+    rigidly with ``parent`` (a joint, or ``null``: the parent stays at rest).  The bake keys a
+    control's rotation, and its location where the parent is ``null`` or ``"location": true``
+    (an FK control whose parent chain does not carry it to its joint's place: Rigify's
+    ``spine_fk.002`` hangs from the torso, the joint from the bent lower spine).  Without
+    controls the bake keys the mapped joints themselves (FK).
 Rig settings (optional)
     Pose-bone settings the figure needs on the rig, a custom ``property`` or an RNA
     ``attribute``: Rigify's ``pole_vector`` switch (so the knee and elbow poles the bake keys
@@ -67,6 +70,8 @@ class Control:
     """The joint it moves rigidly with."""
     parent: str | None = None
     """The joint its parent frame moves rigidly with (``None``: the parent stays at rest)."""
+    location: bool = False
+    """Key its location too, under a parent (a root control's location is always keyed)."""
 
 
 @dataclass(frozen=True)
@@ -115,7 +120,11 @@ def parse_bone_map(doc: dict, source: str = "bone map") -> BoneMap:
             j = c.get(key)
             if (key == "joint" or j is not None) and j not in joints:
                 raise ValueError(f"{where} ({c['bone']!r}): {key} = {j!r} is not a mapped joint")
-        controls.append(Control(c["bone"], c["joint"], c.get("parent")))
+        if not isinstance(c.get("location", False), bool):
+            raise ValueError(f"{where} ({c['bone']!r}): location = {c['location']!r} must be "
+                             f"true or false")
+        controls.append(Control(c["bone"], c["joint"], c.get("parent"),
+                                c.get("location", False)))
     settings = []
     for k, s in enumerate(doc.get("rig_settings", ())):
         try:

@@ -53,7 +53,7 @@ from ..base import BoneChannels, PoseTrack
 from .bone_map import JOINT_PARENT, JOINTS, BoneMap
 from ..sports.common import rot_z
 from ..kinematics import (cross, on_sphere_within, quat_continuous, quat_from_matrix,
-                          rigid_inverse, two_bone_ik)
+                          rigid_inverse, stack_dot, two_bone_ik)
 from ...core.registry import SPORTS
 from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_props
 from ..surface import euler_xyz
@@ -401,9 +401,9 @@ def _channels(rig: UserRig, bones, poses, parent_deltas):
     eye = np.eye(4)
     moved = np.stack([np.broadcast_to(eye if d is None else d, poses.shape[1:])
                       for d in parent_deltas])
-    base = moved @ rig.rest[idx][:, None]
-    local = rigid_inverse(base) @ poses
-    loc = local[..., :3, 3].copy()
+    base = np.stack([stack_dot(m, rig.rest[i]) for m, i in zip(moved, idx)])
+    rot = np.einsum("mnji,mnjk->mnik", base[..., :3, :3], poses[..., :3, :3])
+    loc = np.einsum("mnji,mnj->mni", base[..., :3, :3], poses[..., :3, 3] - base[..., :3, 3])
     far = [k for k, i in enumerate(idx) if not rig.local_location[i]]
     if far:       # Blender: the location is in the parent's posed orientation (armature.cc)
         par = np.stack([eye if rig.parents[idx[k]] is None else rig.rest_of(rig.parents[idx[k]])
@@ -411,7 +411,7 @@ def _channels(rig: UserRig, bones, poses, parent_deltas):
         par = moved[far] @ par[:, None]
         loc[far] = np.einsum("mnji,mnj->mni", par[..., :3, :3],
                              poses[far][..., :3, 3] - base[far][..., :3, 3])
-    q = quat_from_matrix(local[..., :3, :3])
+    q = quat_from_matrix(rot)
     return loc, np.swapaxes(quat_continuous(np.swapaxes(q, 0, 1)), 0, 1)
 
 
@@ -438,16 +438,17 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     moved = {None: None}          # joint -> its pose's change from rest (n, 4, 4)
     for j in poses:
         moved[j] = poses[j] @ rigid_inverse(rig.rest_of(bm.bone(j)))
-    if bm.controls:
-        keyed = [(c.bone, moved[c.joint] @ rig.rest_of(c.bone), c.parent)
-                 for c in bm.controls]
+    if bm.controls:     # (bone, pose, parent joint, location keyed)
+        keyed = [(c.bone, moved[c.joint] @ rig.rest_of(c.bone), c.parent,
+                  c.parent is None or c.location) for c in bm.controls]
     else:
-        keyed = [(bm.bone(j), poses[j], _fk_ancestor(rig, bm, bm.bone(j))) for j in poses]
-    names = [b for b, _, _ in keyed]
-    loc, q = _channels(rig, names, np.stack([p for _, p, _ in keyed]),
-                       [moved[a] for _, _, a in keyed])
-    bones = {b: BoneChannels(location=loc[k] if a is None else None, rotation=q[k])
-             for k, (b, _, a) in enumerate(keyed)}
+        keyed = [(bm.bone(j), poses[j], a, a is None) for j in poses
+                 for a in (_fk_ancestor(rig, bm, bm.bone(j)),)]
+    names = [b for b, _, _, _ in keyed]
+    loc, q = _channels(rig, names, np.stack([p for _, p, _, _ in keyed]),
+                       [moved[a] for _, _, a, _ in keyed])
+    bones = {b: BoneChannels(location=loc[k] if keys_loc else None, rotation=q[k])
+             for k, (b, _, _, keys_loc) in enumerate(keyed)}
     # Root motion: the object turns the user's facing onto the heading and puts `origin` on
     # the foot point (the built-in's object carries the foot point and theta_dir - 90 deg, and
     # on terrain stands in the local surface, mapping/surface.py).  The user's armature point
