@@ -2,9 +2,11 @@
 
     .venv/bin/python scripts/bench_key_size.py [--figures 10] [--seconds 60]
 
-One process: the skiers are added 4 m apart, all baked by one Bake Turns on every frame (the
-baseline), the file saved uncompressed; then baked again with Fewer Keys (the default
-tolerances) and saved again.  Prints the keys, the bake's wall time and the file's size.
+One process: the skiers are added 4 m apart, all baked by one Bake Turns on every frame, each its
+own action (*Share Motion* off: the baseline), the file saved uncompressed; then baked again with
+Fewer Keys (the default tolerances) and saved again; then both again with *Share Motion* on (the
+skiers are one motion, moved: they play one action).  Prints the keys, the bake's wall time and
+the file's size.
 """
 from __future__ import annotations
 
@@ -25,11 +27,14 @@ os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning
 import bpy  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
+from blender_turning.blender import compat  # noqa: E402
 from blender_turning.blender.anim import bake  # noqa: E402
 
 
 def keys_of(figs) -> int:
-    return sum(len(fc.keyframe_points) for f in figs for fc in bake.baked_channels(f).fcurves)
+    """Keys of the bake actions the figures play (a shared one once)."""
+    actions = {bake.figure_action(f) for f in figs}
+    return sum(len(fc.keyframe_points) for a in actions for fc in compat.all_fcurves(a))
 
 
 def main(argv=None):
@@ -55,8 +60,10 @@ def main(argv=None):
           f"{args.seconds:g} s at 24 fps ({scene.frame_end} frames)\n")
     print("| bake | keys | bake s | .blend MB |\n|---|---|---|---|")
     out = Path(tempfile.mkdtemp(prefix="turning-keys-"))
-    for label, kw in (("every frame (baseline)", {}), ("Fewer Keys (0.1 deg, 1 mm)",
-                                                      {"fewer_keys": True})):
+    for label, kw in (("every frame (baseline)", {"share": False}),
+                      ("Fewer Keys (0.1 deg, 1 mm)", {"fewer_keys": True, "share": False}),
+                      ("every frame, Share Motion", {}),
+                      ("Fewer Keys, Share Motion", {"fewer_keys": True})):
         t0 = time.perf_counter()
         assert bpy.ops.turning.bake_turns(**kw) == {"FINISHED"}
         wall = time.perf_counter() - t0

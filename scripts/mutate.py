@@ -1046,7 +1046,8 @@ def run_tests(python, tree, tests, timeout):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--only", nargs="+", metavar="NAME", help="run only these mutants")
-    ap.add_argument("--group", choices=("core", "mapping", "registry", "bake", "live"), action="append",
+    ap.add_argument("--group", choices=("core", "mapping", "registry", "bake", "live", "share"),
+                    action="append",
                     help="run only these groups (repeatable; default all)")
     ap.add_argument("--list", action="store_true", help="list the mutants and exit")
     ap.add_argument("--python", default=sys.executable, help="interpreter for pytest")
