@@ -204,6 +204,7 @@ def test_one_figure_exports_its_own_animation_only(scene, tmp_path, fmt):
 # simplification, bpy 5.0 and 4.2); FBX's default simplification drops a sample within 0.1 % of
 # its neighbours' summed magnitudes, of Euler angles up to pi here: 1e-2 rad, and 5e-3 m at the
 # end of the 0.5 m from neck to head (measured 2.1e-3 rad, 8.1e-4 m).  A tweak lost: 0.44 rad.
+@pytest.mark.installed
 @pytest.mark.parametrize("fmt, simplify, pos_tol, turn_tol", [
     ("glb", None, 1e-5, 1e-4), ("fbx", 0.0, 1e-5, 1e-4), ("fbx", None, 5e-3, 1e-2)])
 def test_the_animators_tweaks_play_in_the_file(scene, tmp_path, fmt, simplify, pos_tol,
@@ -217,6 +218,11 @@ def test_the_animators_tweaks_play_in_the_file(scene, tmp_path, fmt, simplify, p
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     untweaked = bone_world(fig)
     key_head_tweak(fig, frame=9)                      # 25 deg on the neck, held over the shot
+    other = add("SKIER", at=(5, 0, 0))                # the same bones, tweaks of its own
+    other.turning.period = 1.5
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    key_head_tweak(other, frame=17)
+    key_head_tweak(other, frame=24)                   # 50 deg at the end: not the first's
     want, bones = bone_world(fig), [pb.name for pb in fig.pose.bones]
     assert off_by(want, untweaked)[1] > 0.4
     path = str(tmp_path / f"tweaked.{fmt}")
@@ -224,14 +230,19 @@ def test_the_animators_tweaks_play_in_the_file(scene, tmp_path, fmt, simplify, p
     if simplify is None:
         export(path, [fig, *fig.children_recursive], with_tweaks=True)
     else:
+        for o in [other, *other.children_recursive]:
+            o.select_set(False)
+        for o in [fig, *fig.children_recursive]:
+            o.select_set(True)
         assert bpy.ops.turning.export_fbx(filepath=path, use_selection=True,
                                           bake_anim_simplify_factor=simplify) == {"FINISHED"}
     assert snapshot() == before, diff(before, snapshot())        # the layers given back
     name = fig.name
     reimport(path)
     arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
-    if fmt == "fbx":                    # one take: the bake's strip, the bake with the tweaks
-        assert [a.name for a in bpy.data.actions] == [f"{arm.name}|{name}"]
+    # one animation, one take (the bake's strip, the bake with the tweaks): never the other's
+    assert len(bpy.data.actions) == 1, [a.name for a in bpy.data.actions]
+    assert fmt != "fbx" or bpy.data.actions[0].name == f"{arm.name}|{name}"
     got = bone_world(arm)[:, [arm.pose.bones.find(b) for b in bones]]
     pos, turn = off_by(got, want)
     assert pos < pos_tol and turn < turn_tol, (pos, turn)

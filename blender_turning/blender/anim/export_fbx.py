@@ -11,13 +11,14 @@ it, so :func:`flattened` does it for one export (Export FBX with Tweaks, docs/ex
 - the figure's evaluated channels (every curve of its bake and of its tweak layer) are read frame
   by frame as Blender plays them, over the bake strip's frames, into a new action that plays
   from the bake's strip in the bake's place: the strip's take is the bake with the tweaks;
-- the tweak layer, unassigned, gets a curve of a property no object has (``bake.KEY_ONLY``), so
-  it fits no object and makes no take of its own (it would play the tweaks twice, over the
-  flattened strip);
+- every tweak layer of the file gets a curve of a property no object has (``bake.KEY_ONLY``), so
+  it fits no object and makes no take: the figure's own would play its tweaks twice, over the
+  flattened strip, and another figure's (the same bones) would play that figure's tweaks on this
+  one;
 
 and on leaving (also after an error) the strip plays the bake again, the tweak layer is the
-active action again without that curve, the flattened action is deleted and the scene is on
-its frame again.
+active action again, the tweak layers lose that curve, the flattened action is deleted and the
+scene is on its frame again.
 """
 from __future__ import annotations
 
@@ -51,6 +52,8 @@ def flattened(figures):
     try:
         for fig in [f for f in figures if tweaked(f)]:
             undo.append(_flatten(fig, scene))
+        for action in [a for a in bpy.data.actions if bake_layers.TWEAKS_OF in a]:
+            undo.append(_fit_nothing(action))
         scene.frame_set(frame[0], subframe=frame[1])
         yield len(undo)
     finally:
@@ -112,17 +115,8 @@ def _flatten(fig, scene):
     strip.action = flat
     if flat_slot is not None:
         strip.action_slot = flat_slot
-    take = f'["{bpy.utils.escape_identifier(bake.KEY_ONLY + fig.name)}"]'
-    tweak_bag = compat.channelbag(tweaks, compat.slot_named(tweaks, tweak_slot))
-    had_group = tweak_bag.groups.get("Turning") is not None
-    no_fit = compat.new_fcurve(tweak_bag, take, 0, "Turning")
-    no_fit.keyframe_points.insert(local[0], 0.0)
 
     def restore():
-        tweak_bag.fcurves.remove(no_fit)
-        group = tweak_bag.groups.get("Turning")
-        if not had_group and group is not None:          # 4.2 keeps an emptied group
-            tweak_bag.groups.remove(group)
         strip.action = baked
         if strip_slot is not None:
             strip.action_slot = strip_slot
@@ -132,4 +126,26 @@ def _flatten(fig, scene):
             strip.frame_start, strip.frame_end = bounds[:2]
         bpy.data.actions.remove(flat)
         compat.restore_action(fig, tweaks, tweak_slot)
+    return restore
+
+
+def _fit_nothing(action):
+    """Give ``action`` (a tweak layer) a curve of a property no object has, for FBX's *All
+    Actions*; return the function that removes it."""
+    owner = action[bake_layers.TWEAKS_OF]
+    slots = getattr(action, "slots", None)
+    bag = compat.channelbag(action, slots[0] if slots else None)
+    if bag is None:
+        return lambda: None
+    name = owner.name if owner is not None else action.name
+    path = f'["{bpy.utils.escape_identifier(bake.KEY_ONLY + name)}"]'
+    had_group = bag.groups.get("Turning") is not None
+    curve = compat.new_fcurve(bag, path, 0, "Turning")
+    curve.keyframe_points.insert(0.0, 0.0)
+
+    def restore():
+        bag.fcurves.remove(curve)
+        group = bag.groups.get("Turning")
+        if not had_group and group is not None:          # 4.2 keeps an emptied group
+            bag.groups.remove(group)
     return restore

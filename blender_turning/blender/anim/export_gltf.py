@@ -63,7 +63,7 @@ def _merge_name(action, obj):
 
 class glTF2ExportUserExtension:  # noqa: N801 (the name the exporter looks for)
     def __init__(self):
-        self.tweaks = {}      # object name: the tweak layer it plays (before the exporter's switches)
+        self.tweaks = {}      # object name: the tweak layer it plays, before any switch
 
     def gather_actions_hook(self, blender_object, actions, export_settings):
         tweaks, _ = bake_layers.tweak_layer(blender_object)
