@@ -248,6 +248,23 @@ def test_the_animators_tweaks_play_in_the_file(scene, tmp_path, fmt, simplify, p
     assert pos < pos_tol and turn < turn_tol, (pos, turn)
 
 
+def test_a_tweak_layer_short_of_the_bake_leaves_the_bake_whole_in_gltf(scene, tmp_path):
+    """glTF samples the tweak layer over its own frame range; one that the user cut short of the
+    bake's frames is left out, and the file plays the bake, every frame of it."""
+    from test_blender_layers import key_head_tweak
+    fig = add("SKIER")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    want, bones = bone_world(fig), [pb.name for pb in fig.pose.bones]
+    key_head_tweak(fig, frame=9)
+    fig.animation_data.action.frame_end = 12
+    path = str(tmp_path / "short.glb")
+    export(path, [fig, *fig.children_recursive])
+    reimport(path)
+    arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+    pos, turn = off_by(bone_world(arm)[:, [arm.pose.bones.find(b) for b in bones]], want)
+    assert pos < 1e-5 and turn < 1e-4, (pos, turn)        # float32 bones, as above
+
+
 def test_a_failed_export_with_tweaks_changes_nothing(scene, tmp_path):
     """The FBX exporter fails (a folder that does not exist) inside the flattening: the strip
     plays the bake again, the tweak layer is active again, as it was."""
