@@ -5,8 +5,8 @@ from __future__ import annotations
 import importlib
 
 _MODULES = ("props.crowd", "props.rig", "props.skid", "props.figure", "ui.presets", "ops.figure",
-            "ops.bake", "ops.layers", "ops.path", "ops.live", "ops.rig", "ops.bone_map",
-            "ops.crowd", "ui.panel", "ui.rig", "ui.crowd")
+            "ops.bake", "ops.layers", "ops.export", "ops.path", "ops.live", "ops.rig",
+            "ops.bone_map", "ops.crowd", "ui.panel", "ui.rig", "ui.crowd")
 
 
 def _modules():

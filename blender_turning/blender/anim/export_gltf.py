@@ -32,6 +32,18 @@ def _foreign(action, obj) -> bool:
     return owner is not None and owner != obj
 
 
+def _sampled_tweaks(obj):
+    """The tweak layer ``obj`` plays over its bake's NLA strip, sampled for the figure's bones
+    (over its own frame range, the bake's: ``bake_layers.span_tweaks``), or ``None``: none, or
+    one whose range leaves out some of the bake's frames (then the file has the bake alone)."""
+    baked, strip = bake.find_bake(obj)
+    tweaks, _ = bake_layers.tweak_layer(obj)
+    if strip is None or not bake_layers.playing(obj, tweaks):
+        return None
+    (lo, hi), (start, end) = tweaks.frame_range, baked.frame_range
+    return tweaks if lo <= start and hi >= end else None
+
+
 def _kept(action, obj, tweaks) -> bool:
     """Exported as an animation of ``obj``: not another object's bake, not a tweak layer other
     than the one ``obj`` plays (``tweaks``)."""
@@ -63,12 +75,10 @@ def _merge_name(action, obj):
 
 class glTF2ExportUserExtension:  # noqa: N801 (the name the exporter looks for)
     def __init__(self):
-        self.tweaks = {}      # object name: the tweak layer it plays (before the exporter's switches)
+        self.tweaks = {}      # object name: the tweak layer it plays, before any switch
 
     def gather_actions_hook(self, blender_object, actions, export_settings):
-        tweaks, _ = bake_layers.tweak_layer(blender_object)
-        tweaks = tweaks if bake_layers.playing(blender_object, tweaks) and \
-            bake.find_bake(blender_object)[1] is not None else None
+        tweaks = _sampled_tweaks(blender_object)
         if tweaks is not None:
             self.tweaks[blender_object.name] = tweaks
         if hasattr(actions, "actions"):                   # 4.4+: ActionsData of ActionData
