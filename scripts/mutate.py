@@ -332,7 +332,10 @@ MUTANTS = [
       '_BODY_FIELDS = ("m", "l", "I_v", "V_cm", "g")', '_BODY_FIELDS = ("m", "l", "I_v", "V_cm")',
       HEADING),
     M("feasible_nearby_key_without_limits", "core/controllers/feasible.py",
-      "if lim == limits and all(", "if all(", HEADING),
+      "enumerate(_TABLES.items()) if lim == limits]",
+      "enumerate(_TABLES.items())]", HEADING),
+    M("feasible_nearby_takes_newest", "core/controllers/feasible.py",
+      "min(near, key=lambda n: (n[0], -n[1]))", "max(near, key=lambda n: n[1])", HEADING),
     # -- receding-horizon following (core/planner/receding.py, Section 6.1) -------------------
     M("receding_applies_last_choice", "core/planner/receding.py",
       "np.array([plan.u[0]]), np.array([t])", "np.array([plan.u[-1]]), np.array([t])",
