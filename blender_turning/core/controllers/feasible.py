@@ -318,9 +318,9 @@ def nearby_tables(rel: float):
     """Within this block :func:`feasible_turns` answers with a table built before for a body
     whose mass, height, inertia, speed and gravity are each within ``rel`` (relative) of the
     one asked for, with the same limits, when there is one (the nearest such body): a Body
-    slider's drag step in Live Preview then costs no new table (one is about 60 % of it).  The turns it allows are those of
-    that nearby body (its leans differ by about ``rel`` relative); the bake when the drag ends
-    builds the body's own."""
+    slider's drag step in Live Preview then costs no new table (one is about 60 % of it).  The
+    turns it allows are those of that nearby body (its leans differ by about ``rel``
+    relative); the bake when the drag ends builds the body's own."""
     old, _NEARBY[0] = _NEARBY[0], float(rel)
     try:
         yield
