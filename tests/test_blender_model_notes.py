@@ -148,3 +148,31 @@ def test_follow_path_on_several_figures_says_each_ones_distance(scene, capfd):
         assert dist == pytest.approx(want, abs=0.1) and abs(frame - at) <= 1
         levels.append(level)
     assert levels == ["Info", "Warning"]       # the slalom is followed, the corner is cut
+
+
+def test_a_fall_names_the_setting_that_holds_each_bound(scene):
+    """A figure that falls with its curvature held at a bound: the report names the bound as the
+    core does (the scene files' key) and the setting the panels show for it."""
+    from types import SimpleNamespace
+    from blender_turning.blender.props.figure import TurningFigureSettings
+    from blender_turning.blender.scene.figure_context import BOUND_SETTING, report_error
+    from blender_turning.core.controllers.feasible import fall_cause
+    from blender_turning.core.errors import FellOver
+    from blender_turning.core.physics.params import Limits
+    lim = Limits(C_f_max=0.5, dC_f_max=0.8)
+    t = np.linspace(0.0, 1.0, 51)
+    C_f = np.minimum(0.8 * t, 0.5)                     # the rate bound, then the curvature bound
+    reports = []
+    op = SimpleNamespace(report=lambda kind, text: reports.append((kind, text)))
+    exc = FellOver(1.0, math.radians(61), cause=fall_cause(lim, C_f, t))
+    assert report_error(op, "Bake Turns", "Skier", exc) == {"CANCELLED"}
+    (kind, text), = reports
+    assert kind == {"ERROR"}
+    assert "C_f_max (Limits > Max Curvature) = 0.5 1/m" in text, text
+    assert "dC_f_max (Limits > Max Curvature Rate) = 0.8 1/(m s)" in text, text
+    # The settings named are the panels' labels.
+    rna = TurningFigureSettings.bl_rna.properties
+    labels = {"C_f_max": rna["curvature_max"].name, "dC_f_max": rna["curvature_rate_max"].name,
+              "theta_fall": rna["fall_angle"].name, "physical branch": rna["com_height"].name}
+    for bound, setting in BOUND_SETTING.items():
+        assert labels[bound].startswith(setting.rpartition(" > ")[2]), (bound, labels[bound])

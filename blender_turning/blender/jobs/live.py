@@ -44,7 +44,7 @@ from ...mapping.sports.snow import tilt_gain
 from .. import compat
 from ..anim import bake, export_ready, foot_track
 from ..props import figure as props
-from ..scene.figure_context import check_figure
+from ..scene.figure_context import check_figure, in_settings
 from .pipeline import figure_pose_track, ground_of
 from ..props.figure import figure_settings
 from ..props.crowd import TurningCrowdSettings
@@ -227,7 +227,7 @@ def _set_failure(fig, key: str, exc, frames: FrameRange) -> Failure:
     if isinstance(exc, FellOver):
         frame = frames.start + int(round(exc.t * frames.fps))
         frame += int(round(float(fig.turning.crowd.time_offset) * frames.fps))
-    failure = FAILURES[fig.name] = Failure(key, str(exc), frame, fig.name)
+    failure = FAILURES[fig.name] = Failure(key, in_settings(str(exc)), frame, fig.name)
     if frame is not None:
         bpy.context.scene.timeline_markers.new(failure.marker, frame=frame)
     return failure

@@ -11,15 +11,12 @@ from dataclasses import asdict
 
 from ...core.controllers.feasible import FeasibleTurn
 from ...core.course.path import path_deviation
+from ..scene.figure_context import BOUND_SETTING
 from ..scene.scene_adapters import FrameRange, controller_from_settings, figure_from_settings
 
 #: The trajectory ``meta`` key of a run's limited turn (``asdict`` of its FeasibleTurn).
 TURN_KEY = "turn_limited"
 
-#: Which setting lets the figure lean further, per bound of ``feasible.BOUNDS`` (a longer Turn
-#: Period eases every one of them).
-BOUND_SETTING = {"C_f_max": "Limits > Max Curvature", "dC_f_max": "Limits > Max Curvature Rate",
-                 "theta_fall": "Limits > Fall Angle", "physical branch": "Body > COM Height"}
 
 #: Follow Path warns when the foot strays farther than this from the drawn path, m.  The four
 #: shipped sports follow a slalom of 3 m offsets 12 m apart, the crowd tests' path and a bend of

@@ -2,6 +2,7 @@
 that a figure's rig can carry its sport's bake (run before anything is written)."""
 from __future__ import annotations
 
+import re
 import traceback
 
 from ...core.errors import TurningError
@@ -118,12 +119,24 @@ def check_figure(obj) -> None:
             f"Add Figure > {sport_label(sport)}")
 
 
+#: Which setting holds each of the core's bounds (the names its messages and scene files use).
+BOUND_SETTING = {"C_f_max": "Limits > Max Curvature", "dC_f_max": "Limits > Max Curvature Rate",
+                 "theta_fall": "Limits > Fall Angle", "physical branch": "Body > COM Height"}
+_BOUND_NAMES = re.compile(r"\b(dC_f_max|C_f_max|theta_fall)\b")
+
+
+def in_settings(msg: str) -> str:
+    """``msg`` (a core error's text) with each bound it names followed by the setting that holds
+    it, as the panels label it: ``C_f_max (Limits > Max Curvature) = 0.5 1/m``."""
+    return _BOUND_NAMES.sub(lambda m: f"{m[1]} ({BOUND_SETTING[m[1]]})", msg)
+
+
 def report_error(op, title: str, fig_name: str, exc: BaseException, note: str = "") -> set:
     """Report ``exc`` as one line and cancel.  Bad input (``ValueError``, the core's errors) says
     what is wrong; anything else is a bug: its traceback goes to the console, the report says so.
     Callers report only before they write, so either way the scene is unchanged."""
     if isinstance(exc, (ValueError, TurningError)):
-        msg = str(exc)
+        msg = in_settings(str(exc))
     else:
         traceback.print_exception(type(exc), exc, exc.__traceback__)
         msg = (f"internal error ({type(exc).__name__}: {exc}); nothing was changed. Please "
