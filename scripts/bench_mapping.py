@@ -13,7 +13,8 @@ threads woken by LAPACK calls show as CPU above wall).  And the crowd's mapping
 process's other threads (OpenBLAS's, woken by a large BLAS call: they spin, and on an idle
 machine burn a second core).
 
-``--against DIR`` times another tree's package (e.g. ``git archive f2c78aa | tar -x -C DIR``)
+``--against DIR`` times another tree's package (e.g. ``git archive f2c78aa | tar -x -C DIR``;
+trees from 2026-11-28 on)
 on the same trajectories (simulated once with this tree, handed over as columns): each tree in
 a fresh process, the trees interleaved, ``--repeat`` rounds, the least CPU kept.
 """
@@ -79,9 +80,13 @@ def one_tree(runs_path: str, poses_path: str) -> None:
     import numpy as np
 
     from blender_turning.core import Trajectory
-    from blender_turning.core.physics.trajectory import COLUMNS
     from blender_turning.mapping import MAPPINGS, map_trajectory
-    from blender_turning.mapping.sports.snow import tilt_gain
+    try:
+        from blender_turning.core.physics.trajectory import COLUMNS
+        from blender_turning.mapping.sports.snow import tilt_gain
+    except ImportError:                         # a tree from before core/ and mapping/ had folders
+        from blender_turning.core.trajectory import COLUMNS
+        from blender_turning.mapping.snow import tilt_gain
 
     out, poses = {}, {}
 
