@@ -91,9 +91,16 @@ def contact_runs(height):
     return list(zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]))
 
 
+#: Where a run on the mountain (160 m square, falling towards -y) starts.  The users' rigs carry
+#: heavier bodies than the built-in skier and drift further across the slope: from x = 0 the
+#: Rigify rig left the mountain at its +x edge (80 m) at 7.6 s; from x = -40 m both users' rigs
+#: end at x = 46-49 m, y = -13 to -17 m.
+ON_MOUNTAIN = {"RIGIFY": (-40.0, 60.0, 0.0), "MIXAMO": (-40.0, 60.0, 0.0)}
+
+
 def baked_poles(scene, sport, on_ground):
     sc, mountain = scene
-    at = (0.0, 60.0, 0.0) if on_ground else (0.0, 0.0, 0.0)
+    at = ON_MOUNTAIN.get(sport, (0.0, 60.0, 0.0)) if on_ground else (0.0, 0.0, 0.0)
     if sport in ("RIGIFY", "MIXAMO"):
         fig = user_rig(sport)
         fig.location = at
@@ -131,20 +138,34 @@ def check_plants(tracks, h):
         step_tip = np.linalg.norm(np.diff(tip, axis=0), axis=1)
         step_hand = np.linalg.norm(np.diff(grip, axis=0), axis=1)
         for a, b in runs:
+            if b == len(tip):                          # still planted at the last frame
+                continue
             after = slice(b - 1, min(b + 12, len(step_tip)))     # the half-second after
             excess = (step_tip[after] - step_hand[after]).max()
             assert excess < 0.08, (s, b, excess)
 
 
-@pytest.mark.parametrize("kind", ["RIGIFY", "MIXAMO"])
-def test_a_users_rig_keeps_a_planted_tip_in_its_hole(scene, kind):
+@pytest.mark.parametrize("kind, on_ground", [
+    ("RIGIFY", False), ("MIXAMO", False),
+    # Measured on the mountain (every plant's tip stays put and nothing goes under, except):
+    pytest.param("RIGIFY", True, marks=pytest.mark.xfail(strict=True, reason=(
+        "one approach touches the snow 24.5 cm before its hole for a frame (the approach in "
+        "mapping/sports/skier.py holds the tip on the surface, not above it); lifting out, a "
+        "tip moves up to 8.9 cm a frame more than the hand"))),
+    pytest.param("MIXAMO", True, marks=pytest.mark.xfail(strict=True, reason=(
+        "lifting out, a tip moves up to 10.8 cm a frame more than the hand: the built-in's own "
+        "mapping of this run (8.7 cm on the built-in rig) turns its chest, and the arm and pole "
+        "with it, by up to 32 deg in one frame and 1-3 deg in the next, while the leg force "
+        "jumps 324-1237 N between frames on the mesh"))),
+])
+def test_a_users_rig_keeps_a_planted_tip_in_its_hole(scene, kind, on_ground):
     """The pole is rigid in the user's hand: the hand turns as the built-in's pole, the wrist
     goes where that puts the grip on the built-in's, and the plants are planned for the
     user's size (retargeting's k, about the foot point) and arm (Rigify's is 0.86 times k
     times the built-in's, Mixamo's 0.94): the hand swings at the built-in's angles, and where
     it cannot reach the pole turns about its tip.  Without that the tips went 0.57-0.71 m into
     the snow, and later a plant was held 1-2 frames and slid 9-18 cm as it lifted out."""
-    check_plants(*baked_poles(scene, kind, False))
+    check_plants(*baked_poles(scene, kind, on_ground))
 
 
 @pytest.mark.parametrize("sport, on_ground", [("SKIER", False), ("SKIER", True),

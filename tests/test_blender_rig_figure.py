@@ -147,7 +147,7 @@ def test_rigify_shoulders_and_wrists_are_where_the_retarget_puts_them(figures, m
             want = out.location[k] + fit.scale * turn[k] @ joints[j][k, :3, 3]
             off = np.linalg.norm(world_head(obj, bm.bone(j)) - want)
             worst[j] = max(worst.get(j, 0.0), off)
-    assert max(worst.values()) < 1e-3, worst          # measured: 0.02 mm
+    assert max(worst.values()) < 1e-3, worst          # measured: 0.06 mm
 
 
 def test_rigify_fk_switch_still_shows_the_motion(figures, sampled):
