@@ -48,15 +48,43 @@ def test_process_pool_gives_the_single_process_result(serial, workers):
         _same(res, run_crowd(crowd, workers=2))
 
 
+def _worker_setup():
+    import dask
+    return (dask.config.get("distributed.worker.profile.enabled"),
+            dask.config.get("distributed.admin.tick.interval"),
+            "blender_turning.crowd.runner" in sys.modules)
+
+
 @pytest.mark.slow
 def test_dask_local_cluster_gives_the_single_process_result(serial):
     distributed = pytest.importorskip("dask.distributed")
+    from blender_turning.crowd.dask_workers import local_cluster
     crowd, res = serial
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
-        _same(res, run_crowd(crowd, scheduler=cluster.scheduler_address))
-        with distributed.Client(cluster) as client:
+    with local_cluster(2) as address:
+        with distributed.Client(address) as client:
+            # The workers run with the crowd's settings and have the runner before any task.
+            assert list(client.run(_worker_setup).values()) == [(False, "1s", True)] * 2
             _same(res, run_crowd(crowd, executor=client.get_executor()))
+        _same(res, run_crowd(crowd, scheduler=address))
+    with pytest.raises(ValueError, match="workers = 0"):
+        with local_cluster(0):
+            pass
+
+
+def test_dask_worker_environment_is_the_worker_config():
+    dask = pytest.importorskip("dask")
+    pytest.importorskip("dask.distributed")
+    from blender_turning.crowd.dask_workers import WORKER_CONFIG, WORKER_ENVIRON
+
+    def flat(d, pre=""):
+        return {k2: v2 for k, v in d.items() for k2, v2 in
+                (flat(v, f"{pre}{k}.").items() if isinstance(v, dict) else [(pre + k, v)])}
+    # What Dask reads from the variables (hyphens and underscores are one to it) ...
+    read = {k.replace("_", "-"): v for k, v in flat(dask.config.collect_env(WORKER_ENVIRON)).items()}
+    wanted = {k: v for k, v in WORKER_CONFIG.items() if not k.endswith(".preload")}
+    assert read == wanted
+    for key in WORKER_CONFIG:                      # ... and each is a key Dask knows
+        dask.config.get(key)
 
 
 def test_progress_counts_every_figure_once(serial):
