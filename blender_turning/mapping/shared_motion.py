@@ -98,9 +98,10 @@ def _translation(source: PoseTrack, track: PoseTrack) -> np.ndarray | None:
     return d if bool(np.all(np.abs(played - b) <= tol)) else None
 
 
-def shares(source: PoseTrack, track: PoseTrack) -> Share | None:
+def shares(source: PoseTrack, track: PoseTrack, channels=None) -> Share | None:
     """``Share(0, shift, translation)`` when ``track`` is ``source``'s motion, later by whole
-    frames (its first ``len(track)`` rows) and moved by a constant translation; else ``None``."""
+    frames (its first ``len(track)`` rows) and moved by a constant translation; else ``None``.
+    ``channels``: both tracks' :func:`_channels` (all rows), when the caller has them."""
     n = len(track)
     if n > len(source) or _layout(source) != _layout(track):
         return None
@@ -108,7 +109,9 @@ def shares(source: PoseTrack, track: PoseTrack) -> Share | None:
     if shift != round(shift) or \
             not np.array_equal(np.asarray(track.frames, float) - shift, source.frames[:n]):
         return None
-    if not _same_keys(_channels(source, slice(0, n)), _channels(track, slice(None))):
+    a, b = channels if channels is not None else (_channels(source, slice(None)),
+                                                  _channels(track, slice(None)))
+    if not _same_keys(a[:n], b):
         return None
     d = _translation(source, track)
     return None if d is None else Share(0, int(shift), tuple(float(v) for v in d))
@@ -149,23 +152,32 @@ class Matcher:
     def __init__(self):
         self._groups = {}                # (channel layout, head's shape) -> _Sources
         self._tracks = {}                # source key -> its track
+        self._channels = {}              # source key -> its _channels, once compared whole
+        self._last = None                # (track, its _channels): the last one matched
 
     def match(self, track: PoseTrack) -> Share | None:
         """The :class:`Share` (``source``: the key it was added with) of ``track``, or
         ``None``.  Candidates are narrowed on their first rows, for all sources at once, then
         compared whole (:func:`shares`)."""
-        head = _channels(track, slice(0, _HEAD))
+        full = _channels(track, slice(None))
+        self._last = (track, full)
+        head = full[:_HEAD]
         sources = self._groups.get((_layout(track), head.shape))
         for key in (sources.candidates(head) if sources is not None else ()):
-            share = shares(self._tracks[key], track)
+            source = self._tracks[key]
+            if key not in self._channels:
+                self._channels[key] = _channels(source, slice(None))
+            share = shares(source, track, (self._channels[key], full))
             if share is not None:
                 return Share(key, share.shift, share.translation)
         return None
 
     def add(self, key, track: PoseTrack) -> None:
-        head = _channels(track, slice(0, _HEAD))
+        full = self._last[1] if self._last is not None and self._last[0] is track \
+            else _channels(track, slice(None))
+        head = full[:_HEAD]
         sources = self._groups.setdefault((_layout(track), head.shape), _Sources(head.size))
-        sources.add(key, head, _scale(_channels(track, slice(None))))
+        sources.add(key, head, _scale(full))
         self._tracks[key] = track
 
 

@@ -109,6 +109,15 @@ def _check_unedited(obj, action, bag, keys=None) -> None:
 
 
 def _check_values(obj, track: PoseTrack) -> None:
+    _check_rig(obj, track)
+    arrays = [track.frames, track.location, track.rotation, *track.props.values()]
+    for ch in track.bones.values():
+        arrays += [a for a in (ch.location, ch.rotation) if a is not None]
+    if not all(np.all(np.isfinite(a)) for a in arrays):
+        raise BakeError("the pose track holds a value that is not a finite number")
+
+
+def _check_rig(obj, track: PoseTrack) -> None:
     if obj is None or obj.type != "ARMATURE":
         raise BakeError("the figure must be an armature object")
     missing = [b for b in track.bones if b not in obj.pose.bones]
@@ -116,11 +125,6 @@ def _check_values(obj, track: PoseTrack) -> None:
         raise BakeError(f"armature {obj.name!r} has no bone {missing[0]!r}")
     if len(track) == 0:
         raise BakeError("the pose track has no frames")
-    arrays = [track.frames, track.location, track.rotation, *track.props.values()]
-    for ch in track.bones.values():
-        arrays += [a for a in (ch.location, ch.rotation) if a is not None]
-    if not all(np.all(np.isfinite(a)) for a in arrays):
-        raise BakeError("the pose track holds a value that is not a finite number")
 
 
 def _is_ours(action, obj) -> bool:
@@ -365,8 +369,8 @@ def share_bake(obj, source, track: PoseTrack, shift: int, translation) -> BakeRe
     what its own bake would write (:func:`...mapping.shared_motion.shares` found it to be
     ``source``'s, moved and later).  Its own earlier bake goes (left to any figure playing it),
     a user's action is stashed and its tweak layer plays above, as :func:`bake_pose_track`
-    does."""
-    _check_values(obj, track)
+    does.  (Its values are the source's, which were checked finite.)"""
+    _check_rig(obj, track)
     action, source_strip = find_bake(source)
     if action is None or source_strip is None or not can_share(obj):
         raise BakeError(f"{obj.name!r} cannot play the bake of {source.name!r}")

@@ -70,11 +70,12 @@ def set_hermite_handles(fig, slopes: dict) -> None:
 
 
 def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True,
-               export_turn_state: bool | None = None):
+               export_turn_state: bool | None = None, around=None):
     """Write a computed bake: F-curves (every ``step``-th frame, smooth in between), then the
     foot track; ``export_ready``: a user rig's equipment keyed too, for glTF and FBX
     (:mod:`.export_ready`); ``export_turn_state``: the state Empties (:mod:`.export_state`;
-    ``None``: made again if the figure has them).  Returns the bake result."""
+    ``None``: made again if the figure has them).  ``around``: :class:`Around` of a crowd's
+    bake.  Returns the bake result."""
     if export_ready:
         track = export_ready_mod.with_take(fig, track)
     if step > 1:
@@ -84,24 +85,36 @@ def apply_bake(fig, traj, track, step: int = 1, export_ready: bool = True,
     result = bake.bake_pose_track(fig, every_nth(track, step))
     if step > 1:
         set_hermite_handles(fig, slopes)
-    _around_the_bake(fig, traj, track.frames, export_ready, export_turn_state)
+    (around or Around()).write(fig, traj, track.frames, export_ready, export_turn_state)
     return result
 
 
-def _around_the_bake(fig, traj, frames, export_ready, export_turn_state) -> None:
+class Around:
     """What a bake writes besides the figure's keys: the foot track, the equipment's keys (or
-    none), the state Empties."""
-    foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z)     # on the ground
-    if export_ready:
-        export_ready_mod.bake_equipment(fig, frames)
-    else:
-        export_ready_mod.clear_equipment(fig)
-    if export_turn_state is None:
-        export_turn_state = bool(export_state.carriers(fig))
-    if export_turn_state:
-        export_state.bake_state(fig, frames)
-    else:
-        export_state.clear_state(fig)
+    none), the state Empties.  For a crowd, made once (``crowd``): the guide collections are
+    read once and the figures with state Empties found in one look at every object (each is
+    O(objects) a figure otherwise)."""
+
+    def __init__(self, crowd: bool = False):
+        self.guides = foot_track.guide_collections() if crowd else None
+        self.carried = {o.get(export_state.CARRIES) for o in bpy.data.objects
+                        if export_state.CARRIES in o} if crowd else None
+
+    def write(self, fig, traj, frames, export_ready, export_turn_state) -> None:
+        foot_track.write_foot_track(fig, traj.x, traj.y, z=traj.z,       # on the ground
+                                    guides=self.guides)
+        if export_ready:
+            export_ready_mod.bake_equipment(fig, frames)
+        else:
+            export_ready_mod.clear_equipment(fig)
+        carried = fig in self.carried if self.carried is not None \
+            else bool(export_state.carriers(fig))
+        if export_turn_state is None:
+            export_turn_state = carried
+        if export_turn_state:
+            export_state.bake_state(fig, frames)
+        elif carried:
+            export_state.clear_state(fig)
 
 
 class BakeWriter:
@@ -118,6 +131,7 @@ class BakeWriter:
             export_turn_state
         self.fewer = fewer
         self.matcher = shared_motion.Matcher() if share and step == 1 else None
+        self.around = Around(crowd=True)
         self.shared = {}                  # figure name -> the figure whose bake it plays
         self.key_reports = {}             # figure name -> fewer_keys.KeyReport
 
@@ -129,10 +143,11 @@ class BakeWriter:
             source = share.source
             result = bake.share_bake(fig, source, track, share.shift, share.translation)
             self.shared[fig.name] = source.name
-            _around_the_bake(fig, traj, track.frames, self.export_ready, self.export_turn_state)
+            self.around.write(fig, traj, track.frames, self.export_ready,
+                              self.export_turn_state)
             return result
         result = apply_bake(fig, traj, track, self.step, self.export_ready,
-                            self.export_turn_state)
+                            self.export_turn_state, self.around)
         if self.fewer is not None:
             self.key_reports[fig.name] = fewer_keys.reduce_bake(fig, self.fewer)
         if can:

@@ -84,12 +84,20 @@ def _guide_collections(fig_obj):
     return shown, hidden
 
 
-def _place(fig_obj, obj, new: bool = False) -> None:
+def guide_collections():
+    """``(shown, hidden)`` for :func:`write_foot_track` of several figures of the one scene
+    there is (``None`` with several scenes: each figure's are its scenes'): read once, as
+    reading the view layers after a new object costs a resync of the view layer (O(objects))."""
+    return _guide_collections(None) if len(bpy.data.scenes) == 1 else None
+
+
+def _place(fig_obj, obj, new: bool = False, guides=None) -> None:
     """Link the track into the guide collection its figure's Show Foot Track asks for (and
     glTF's skipped one), and out of every other (a track drawn by older versions sat in the
     figure's collection).  A ``new`` track is in no collection yet: nothing to look up (a
-    lookup in a collection, and ``Object.users_collection``, cost O(objects))."""
-    shown, hidden = _guide_collections(fig_obj)
+    lookup in a collection, and ``Object.users_collection``, cost O(objects)).  ``guides``:
+    :func:`guide_collections`, when the caller has them."""
+    shown, hidden = guides or _guide_collections(fig_obj)
     home = shown if show_track(fig_obj) else hidden
     skipped = bpy.data.collections.get(GLTF_SKIPPED)
     if skipped is None:
@@ -123,16 +131,17 @@ def _new_track(fig_obj):
 LIFT = 0.01
 
 
-def write_foot_track(fig_obj, x, y, z=None):
+def write_foot_track(fig_obj, x, y, z=None, guides=None):
     """Create or refill the curve object showing the foot's path of ``fig_obj``; return it.
     ``z``: the ground's height under the foot on every point (default 0); the track is drawn
-    :data:`LIFT` above it, on a Ground mesh on its surface."""
+    :data:`LIFT` above it, on a Ground mesh on its surface.  ``guides``: the guide collections
+    (:func:`guide_collections`), when a crowd's bake has them."""
     obj = owned_track(fig_obj)
     new = obj is None or obj.type != "CURVE"
     if new:
         obj = _new_track(fig_obj)
         fig_obj.turning.foot_track = obj
-    _place(fig_obj, obj, new)
+    _place(fig_obj, obj, new, guides)
     curve = obj.data
     curve.splines.clear()
     sp = curve.splines.new("POLY")
