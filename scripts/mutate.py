@@ -720,7 +720,7 @@ MUTANTS = [
     M("fbx_tweak_layers_keep_their_takes", "blender/anim/export_fbx.py",
       "            undo.append(_fit_nothing(action))", "            pass", EXPORT, "bake"),
     M("fbx_strip_keeps_the_flattened_action", "blender/anim/export_fbx.py",
-      "        strip.action = baked\n", "", EXPORT, "bake"),
+      "        if strip.action != baked:", "        if False:", EXPORT, "bake"),
     M("fbx_tweak_layer_left_unassigned", "blender/anim/export_fbx.py",
       "        compat.restore_action(fig, tweaks, tweak_slot)", "        pass", EXPORT, "bake"),
     M("equipment_keyed_where_it_stands", "blender/anim/export_ready.py",

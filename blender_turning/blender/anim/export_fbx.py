@@ -50,12 +50,13 @@ def flattened(figures):
     frame = scene.frame_current, scene.frame_subframe
     undo = []
     try:
-        for fig in [f for f in figures if tweaked(f)]:
-            undo.append(_flatten(fig, scene))
+        figs = [f for f in figures if tweaked(f)]
+        for fig in figs:
+            _flatten(fig, scene, undo)
         for action in [a for a in bpy.data.actions if bake_layers.TWEAKS_OF in a]:
             undo.append(_fit_nothing(action))
         scene.frame_set(frame[0], subframe=frame[1])
-        yield len(undo)
+        yield len(figs)
     finally:
         for restore in reversed(undo):
             restore()
@@ -67,16 +68,18 @@ def _curves(action, slot) -> list:
     return list(bag.fcurves) if bag is not None else []
 
 
-def _frames(strip) -> np.ndarray:
-    """The scene frames the strip's action plays on whole action frames (its first repeat)."""
+def _frames(strip) -> tuple:
+    """``(action frames, scene frames)``: the whole frames of the strip's action and the scene
+    frames it plays them on (its first repeat)."""
     lo, hi = strip.action_frame_start, strip.action_frame_end
     local = np.arange(np.ceil(lo), np.floor(hi) + 1.0)
     return local, strip.frame_start + (local - lo) * strip.scale
 
 
-def _sample(fig, scene, strip, curves) -> list:
-    """``[(data_path, index, group, values)]``: each channel of ``curves`` as Blender plays it on
-    the strip's frames (a curve that resolves on nothing, the bake's take property: its keys)."""
+def _sample(fig, scene, strip, curves) -> tuple:
+    """``(action frames, [(data_path, index, group, values)])``: each channel of ``curves`` as
+    Blender plays it on the strip's frames (a curve that resolves on nothing, the bake's take
+    property: its keys)."""
     local, frames = _frames(strip)
     paths = {}
     for fc in curves:
@@ -97,8 +100,9 @@ def _sample(fig, scene, strip, curves) -> list:
                    for (path, index), (group, _) in paths.items()]
 
 
-def _flatten(fig, scene):
-    """Flatten ``fig``'s bake and tweaks into its bake strip; return the function that undoes it."""
+def _flatten(fig, scene, undo) -> None:
+    """Flatten ``fig``'s bake and tweaks into its bake strip; append to ``undo`` the function
+    that gives everything back (before changing anything)."""
     adt = fig.animation_data
     baked, strip = bake.find_bake(fig)
     tweaks = adt.action
@@ -107,6 +111,21 @@ def _flatten(fig, scene):
     curves = _curves(baked, strip_slot) + list(bake_layers.tweak_channels(fig).fcurves)
     local, channels = _sample(fig, scene, strip, curves)
     bounds = strip.frame_start, strip.frame_end, strip.action_frame_start, strip.action_frame_end
+    flat = None
+
+    def restore():
+        if strip.action != baked:
+            strip.action = baked
+            if strip_slot is not None:
+                strip.action_slot = strip_slot
+        if (strip.frame_start, strip.frame_end, strip.action_frame_start,
+                strip.action_frame_end) != bounds:
+            strip.action_frame_start, strip.action_frame_end = bounds[2:]
+            strip.frame_start, strip.frame_end = bounds[:2]
+        if flat is not None:
+            bpy.data.actions.remove(flat)
+        compat.restore_action(fig, tweaks, tweak_slot)
+    undo.append(restore)
     adt.action = None
     flat = compat.assign_new_action(fig, f"{fig.name} with tweaks")
     bake.write_channels(compat.channels(fig), channels, local)
@@ -115,18 +134,6 @@ def _flatten(fig, scene):
     strip.action = flat
     if flat_slot is not None:
         strip.action_slot = flat_slot
-
-    def restore():
-        strip.action = baked
-        if strip_slot is not None:
-            strip.action_slot = strip_slot
-        if (strip.frame_start, strip.frame_end, strip.action_frame_start,
-                strip.action_frame_end) != bounds:
-            strip.action_frame_start, strip.action_frame_end = bounds[2:]
-            strip.frame_start, strip.frame_end = bounds[:2]
-        bpy.data.actions.remove(flat)
-        compat.restore_action(fig, tweaks, tweak_slot)
-    return restore
 
 
 def _fit_nothing(action):

@@ -4,8 +4,9 @@ that offers ``glTF2ExportUserExtension``): each exported figure carries its own 
 With one armature in the export the exporter, by default, takes every action in the file that
 animates bones as one of that armature's animations: a glTF of one figure would hold every
 figure's bake (on import, the skier plays the cyclist's motion).  Every bake action records its
-owner (``bake.OWNER``), so :meth:`glTF2ExportUserExtension.gather_actions_hook` drops, from an
-object's actions, the bakes of other objects.  The keyed equipment of a user's rig
+owner (``bake.OWNER``) and every tweak layer its figure (``bake_layers.TWEAKS_OF``), so
+:meth:`glTF2ExportUserExtension.gather_actions_hook` drops, from an object's actions, the bakes
+and tweak layers of other objects.  The keyed equipment of a user's rig
 (:mod:`.export_ready`) is merged into its figure's animation (one glTF animation per figure,
 which an importer plays as one).
 
@@ -14,9 +15,9 @@ the NLA off, so a figure's tweak layer (docs/layers.md), sampled alone, would pu
 the rest pose.  The tweak layer is sampled with the NLA on instead
 (:meth:`glTF2ExportUserExtension.post_animation_switch_hook`): every bone, and each transform of
 the armature object the layer keys, as Blender plays them, the bake's strip under the tweaks.
-The bake's own animation keeps only the rest (:meth:`~glTF2ExportUserExtension.
-pre_gather_animation_hook`: the armature object's travel), and the two merge into the figure's
-one animation.
+The bake's own animation keeps only the channels the tweak layer's leaves out (the armature
+object's travel: :meth:`glTF2ExportUserExtension.pre_gather_animation_hook`), and the two merge
+into the figure's one animation.
 """
 from __future__ import annotations
 
