@@ -88,7 +88,7 @@ def quat_from_matrix(m):
         full = s.all()                              # one case for every frame: no copies
         a, v = (m, q) if full else (m[s], np.empty((int(s.sum()), 4)))
         if case == 0:
-            r = np.sqrt(1.0 + d[:, 0] if full else 1.0 + d[s, 0]) * 2.0
+            r = np.sqrt(1.0 + (d[:, 0] if full else d[s, 0])) * 2.0
             v[:, 0] = 0.25 * r
             v[:, 1] = (a[:, 2, 1] - a[:, 1, 2]) / r
             v[:, 2] = (a[:, 0, 2] - a[:, 2, 0]) / r
