@@ -167,8 +167,8 @@ class _Builtin:
     def delta(self, bone):
         """(n, 3, 3) the bone's rotation from rest, in the user's axes."""
         C = self.fit.C
-        D = self.P[bone][:, :3, :3] @ self.skel.rest_of(bone)[:3, :3].T
-        return C @ D @ C.T
+        D = stack_dot(self.P[bone][:, :3, :3], self.skel.rest_of(bone)[:3, :3].T @ C.T)
+        return np.swapaxes(stack_dot(np.swapaxes(D, 1, 2), C.T), 1, 2)     # C D C^T
 
     def head(self, bone):
         """(n, 3) the posed head, in the user's armature space."""
