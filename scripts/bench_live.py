@@ -3,6 +3,7 @@
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py [--steps 15] [--only skier-10]
         [--ways drag]      # some of the three ways only (a user rig's Bake Turns takes seconds)
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py --profile rigify-60   # cProfile
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py --parts    # where a drag step goes
 
 Each case is one figure with Live Preview on, the current frame in the middle of the range
 (a drag step re-bakes the frames around it first); a drag step sets its slider (``turning.lean``, or
@@ -144,12 +145,60 @@ def run_case(name, figs, steps, ways=WAYS):
             {way: 1000 * statistics.median(v) for way, v in cpu.items()})
 
 
+def run_parts(name, figs, steps):
+    """CPU ms of a drag step's parts, median of ``steps``: the simulation, the mapping (and a
+    user rig's retarget), writing the keys, and the whole step."""
+    from blender_turning.blender.anim import bake
+    from blender_turning.blender.jobs import pipeline
+    fig, setting, values = case_setup(name, figs)
+    for f in figs.values():
+        f.turning.live = f == fig
+    select(fig)
+    bpy.ops.turning.refresh_preview()
+    spent = {}
+    wrapped = [(pipeline, "simulate_figure", "sim"), (pipeline, "map_track", "map"),
+               (bake, "rewrite_pose_track", "keys")]
+    real = [getattr(mod, attr) for mod, attr, _ in wrapped]
+
+    def timed(fn, part):
+        def call(*a, **k):
+            c = time.process_time()
+            try:
+                return fn(*a, **k)
+            finally:
+                spent[part] = spent.get(part, 0.0) + time.process_time() - c
+        return call
+
+    rows = []
+    try:
+        for (mod, attr, part), fn in zip(wrapped, real):
+            setattr(mod, attr, timed(fn, part))
+        for k in range(1, steps + 1):
+            setattr(fig.turning, setting, values[k])
+            spent.clear()
+            c = time.process_time()
+            live.schedule()
+            rows.append({**spent, "step": time.process_time() - c})
+    finally:
+        for (mod, attr, _), fn in zip(wrapped, real):
+            setattr(mod, attr, fn)
+    if bpy.app.timers.is_registered(live._tick):
+        bpy.app.timers.unregister(live._tick)
+    live.settle()
+    setattr(fig.turning, setting, values[0])
+    fig.turning.live = False
+    return {part: 1000 * statistics.median(r.get(part, 0.0) for r in rows)
+            for part in ("sim", "map", "keys", "step")}
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=15)
     ap.add_argument("--only", nargs="*", choices=CASES, default=None)
     ap.add_argument("--ways", nargs="*", choices=WAYS, default=WAYS)
     ap.add_argument("--profile", choices=CASES, help="cProfile 20 drag steps of one case")
+    ap.add_argument("--parts", action="store_true",
+                    help="CPU ms of each drag step's simulation, mapping and keys")
     args = ap.parse_args(argv)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     addon.register()
@@ -171,6 +220,14 @@ def main(argv=None):
         print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load average "
               f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}, Python "
               f"{platform.python_version()}, bpy {bpy.app.version_string}")
+        if args.parts:
+            print(f"CPU ms per drag step, median of {args.steps}: simulation, mapping (and "
+                  "retarget), keys, the whole step")
+            for name in args.only or CASES:
+                parts = run_parts(name, figs, args.steps)
+                print(f"{name:20s} " + " ".join(f"{k} {v:6.1f}" for k, v in parts.items()),
+                      flush=True)
+            return
         print(f"median ms per drag step of {args.steps} (24 fps; goal <= 40 ms): wall (CPU)")
         heads = {"bake": "bake op", "refresh": "refresh op", "drag": "drag step"}
         print(f"{'case':20s} " + " ".join(f"{heads[w]:>15s}" for w in WAYS if w in args.ways))
