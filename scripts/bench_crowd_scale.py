@@ -12,7 +12,8 @@ them: the F-curves and the foot track, with ``--fewer-keys`` then
 Each size runs in a fresh process (its peak resident size is its own), ``count`` skiers in a
 synchronized line 3 m apart (in phase: one motion, moved; ``--body-jitter J``: each body's mass,
 height and inertia drawn within ``1 +- J``, seed 0, so every skier differs): one built, the
-others duplicated from it as Add Crowd does.  ``per figure-frame``: each step's time over figures x frames;
+others duplicated from it as Add Crowd does.  ``per figure-frame``: each step's time over
+figures x frames;
 memory: the peak resident size above the process's after the rigs were built (what the crowd's
 run, mapping and bake add), over figures x frames.  ``--profile N`` prints the N costliest
 functions of one size (cProfile, cumulative).

@@ -263,6 +263,11 @@ def test_a_users_rig_is_a_template(scene):
     assert (strip.frame_start, strip.action_frame_start, strip.frame_end) == (25, 1,
                                                                             scene.frame_end)
     np.testing.assert_allclose(followers[0].delta_location[:2], 2.0 * left, atol=5e-6)
+    # Remove Figure on it: its rig back as it was, the other follower still plays the bake
+    activate(followers[0])
+    assert bpy.ops.turning.remove_figure() == {"FINISHED"}
+    assert tuple(followers[0].delta_location) == (0.0, 0.0, 0.0)
+    assert bake.shared_source(followers[1])[0] == action == bake.find_bake(rig)[0]
 
 
 # -- Follow Path on several figures ---------------------------------------------------------------

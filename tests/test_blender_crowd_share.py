@@ -85,6 +85,8 @@ def test_followers_play_the_leaders_bake_and_move_as_their_own_bake_does(scene):
         assert f.delta_location.length > 1.0
         assert foot_track.owned_track(f) is not None        # its own foot track
         assert bake_layers.playing(f, bake_layers.tweak_layer(f)[0])    # and tweak layer
+        kind, name, state = bake.layers(f)[1]               # the Bake panel's Layers
+        assert (kind, name) == ("BAKE", "Skier") and state.startswith("Skier's bake, frames 1-72")
     shared = motion(figs)
     assert bpy.ops.turning.bake_turns(share=False) == {"FINISHED"}
     assert len(bake_actions()) == 4                         # the shared one went with its users

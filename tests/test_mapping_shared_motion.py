@@ -18,8 +18,9 @@ def track(n=40, first=1, seed=0, move=(0.0, 0.0, 0.0)) -> PoseTrack:
     rng = np.random.default_rng(seed)
     loc = np.cumsum(rng.normal(size=(n, 3)), axis=0) + np.asarray(move)
     quat = rng.normal(size=(n, 4))
+    quat /= np.linalg.norm(quat, axis=1)[:, None]
     return PoseTrack(np.arange(first, first + n, dtype=float), loc, rng.normal(size=(n, 3)),
-                     {"thigh.L": BoneChannels(rotation=quat / np.linalg.norm(quat, axis=1)[:, None]),
+                     {"thigh.L": BoneChannels(rotation=quat),
                       "spine": BoneChannels(location=rng.normal(size=(n, 3)))},
                      {"turn_lean": rng.normal(size=n)})
 

@@ -203,8 +203,8 @@ def _figure_action(obj):
     user's keyed parameters).  A user's action is stashed, not touched; a bake other figures
     play too is left to them (:func:`_give_up`) and a new one made."""
     action, strip = find_bake(obj)
-    baked = action is not None and shared_elsewhere(action)
-    if baked:
+    given_up = action is not None and shared_elsewhere(action)
+    if given_up:
         _give_up(obj, action, strip)
         action = strip = None
     if action is not None and _bag(obj, action, strip) is not None:
@@ -225,7 +225,7 @@ def _figure_action(obj):
         adt.action = None                 # played again above the new bake
     elif current is not None:
         params = _stash_users(obj, current)
-    if not baked:                         # a figure that gave its bake up is still baked
+    if not given_up:                      # a figure that gave its bake up is still baked
         user_action.record_rest(obj)
     # An earlier bake the user unassigned (unused, ours), found by the name it was made with: a
     # look at every action's properties costs O(actions) a figure, 30 ms at 20,000 actions.
