@@ -717,7 +717,7 @@ MUTANTS = [
       "    return tweaks if lo <= start and hi >= end else None", "    return tweaks", EXPORT,
       "bake"),
     M("fbx_tweaks_not_flattened", "blender/anim/export_fbx.py",
-      "            undo.append(_flatten(fig, scene))", "            pass", EXPORT, "bake"),
+      "            _flatten(fig, scene, undo)", "            pass", EXPORT, "bake"),
     M("fbx_tweak_layers_keep_their_takes", "blender/anim/export_fbx.py",
       "            undo.append(_fit_nothing(action))", "            pass", EXPORT, "bake"),
     M("fbx_strip_keeps_the_flattened_action", "blender/anim/export_fbx.py",
