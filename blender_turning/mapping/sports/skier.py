@@ -25,7 +25,7 @@ from .common import (add_local_rotation, carried, ik_limb, lean, leg_lengths, li
                      phase_window, place_on_ground, rot_y, rot_z, smoothstep)
 from ..kinematics import (PoseBuilder, frame_from_yx, norm, on_sphere_within, rigid_inverse,
                           stack_dot)
-from .skid_pose import SkidPose, knee_direction, ski_front
+from .skid_pose import SkidPose, equipment_length, knee_direction, ski_front
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
                    twist_upper_body)
@@ -147,7 +147,7 @@ class SkierMapping(Mapping):
         """The pose with the hips leaning ``extra`` (n,) rad beyond ``theta_v`` and the upper
         body ``back + extra`` rad back toward upright (angulation)."""
         skel = b.skel
-        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
+        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o, equipment_length(spec))
         skid = SkidPose(traj)       # the skis across the travel (docs/skidding.md Section 8)
         skid.lean_back(b)
         skid.turn_hips(b, up)
