@@ -411,9 +411,13 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
     world = (1.0 - s) * _world(place, tips[idx], idx, k) + s * P
     local = _local(place, world, idx, k)
     local[:, 2] = np.maximum(local[:, 2], 0.0)      # on or above the snow under the foot
-    if place.surface is not None:                   # ... and the Ground mesh under the tip
+    if place.surface is not None:                   # ... and above the Ground mesh under the tip
+        # by (1 - s) of the free swing's height over the snow under the foot: it comes down
+        # on the snow at its hole, not on a rise on the way there (and slid on to the hole).
+        above = k * np.maximum(tips[idx, 2], 0.0)
         world = _world(place, local, idx, k)
-        world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1]))
+        world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1])
+                                 + (1.0 - s[:, 0]) * above)
         local = _local(place, world, idx, k)
     away = free[idx] - local
     held[idx], tip_at[idx] = True, local
