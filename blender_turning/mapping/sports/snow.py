@@ -27,8 +27,8 @@ from ..kinematics import dot, norm
 from .common import (add_local_rotation, body_axes, carried, ik_limb, lean, leg_lengths,
                      static_force)
 
-__all__ = ["SpringLegOptions", "lean_on_spring_legs", "spring_length", "bridged_force", "tilt_gain", "set_pelvis",
-           "hip_drop", "knee_flexion",
+__all__ = ["SpringLegOptions", "lean_on_spring_legs", "spring_length", "bridged_force",
+           "tilt_gain", "set_pelvis", "hip_drop", "knee_flexion",
            "carry_vec", "bend_waist", "twist_upper_body", "level_head"]
 
 
