@@ -25,7 +25,7 @@ from .common import (add_local_rotation, carried, ik_limb, lean, leg_lengths, li
                      phase_window, place_on_ground, rot_y, rot_z, smoothstep)
 from ..kinematics import (PoseBuilder, frame_from_yx, norm, on_sphere_within, rigid_inverse,
                           stack_dot)
-from .skid_pose import SkidPose, knee_direction, ski_front
+from .skid_pose import SkidPose, equipment_length, knee_direction, ski_front
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
                    twist_upper_body)
@@ -147,7 +147,7 @@ class SkierMapping(Mapping):
         """The pose with the hips leaning ``extra`` (n,) rad beyond ``theta_v`` and the upper
         body ``back + extra`` rad back toward upright (angulation)."""
         skel = b.skel
-        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
+        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o, equipment_length(spec))
         skid = SkidPose(traj)       # the skis across the travel (docs/skidding.md Section 8)
         skid.lean_back(b)
         skid.turn_hips(b, up)
@@ -411,9 +411,13 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
     world = (1.0 - s) * _world(place, tips[idx], idx, k) + s * P
     local = _local(place, world, idx, k)
     local[:, 2] = np.maximum(local[:, 2], 0.0)      # on or above the snow under the foot
-    if place.surface is not None:                   # ... and the Ground mesh under the tip
+    if place.surface is not None:                   # ... and above the Ground mesh under the tip
+        # by (1 - s) of the free swing's height over the snow under the foot: it comes down
+        # on the snow at its hole, not on a rise on the way there (and slid on to the hole).
+        above = k * np.maximum(tips[idx, 2], 0.0)
         world = _world(place, local, idx, k)
-        world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1]))
+        world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1])
+                                 + (1.0 - s[:, 0]) * above)
         local = _local(place, world, idx, k)
     away = free[idx] - local
     held[idx], tip_at[idx] = True, local

@@ -23,7 +23,7 @@ from ...core.physics.model import Resistance
 from .. import bones as B
 from ..base import Mapping
 from .common import add_local_rotation, carried, place_on_ground, rot_y, rot_z
-from .skid_pose import SkidPose, knee_direction
+from .skid_pose import SkidPose, equipment_length, knee_direction
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
                    twist_upper_body)
@@ -67,7 +67,7 @@ class SnowboarderMapping(Mapping):
 
     def pose(self, b, traj, o, spec):
         skel = b.skel
-        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o)
+        th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o, equipment_length(spec))
         skid = SkidPose(traj)       # the board across the travel (docs/skidding.md Section 8)
         skid.lean_back(b)
         skid.turn_hips(b, up)
