@@ -6,8 +6,9 @@ batch).  A Dask worker runs it on a thread of a process whose event loop also wa
 20 ms (the tick monitor), samples the task thread's stack every 10 ms (the profiler), measures
 the process's memory every 100 ms and the machine every 500 ms; each wakeup takes the GIL from
 the task.  Measured on the 8 path figures of ``scripts/bench_crowd.py`` (2-core machine, cold
-workers): Dask's defaults cost 3.5-5 CPU s of the workers' other threads on 14 CPU s of tasks,
-:data:`WORKER_CONFIG` 0.6 s (BENCHMARKS.md).  It also imports the runner when a worker starts
+workers, load 13-20): Dask's defaults cost 3.5-5 CPU s of the workers' other threads on 14-16
+CPU s of tasks, :data:`WORKER_CONFIG` 0.6 s (BENCHMARKS.md); the timers run per second of wall
+time, so on idle cores they cost less.  It also imports the runner when a worker starts
 (``preload``), once per cluster, where a fresh worker otherwise imports it inside the first
 crowd it runs (about 0.7 CPU s).  None of it changes a result: the tasks are the same.
 

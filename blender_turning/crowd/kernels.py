@@ -5,10 +5,11 @@ floats (:mod:`..core.physics.one_figure`) or as one numpy batch (:mod:`..core.ph
 both are the
 same model, held to its reference right-hand side by ``tests/test_model_kernels.py``.  A batch
 pays numpy's dispatch once per step for all its figures, floats pay the arithmetic per figure:
-measured on the project's 2-core machine (60 s at dt = 0.02 s, CPU s), a batch costs about
-1.8 s plus 16 ms a figure and floats 35 ms a figure, so floats are cheaper below about 100
-figures (5.5x at 10, 1.15x at 80, even at 100; BENCHMARKS.md).  Both scale with the number of
-steps alike, so the crossover does not depend on the duration.
+measured on the project's 2-core machine (``scripts/bench_crowd_kernels.py``, 60 s at
+dt = 0.02 s, CPU s), a batch costs about 2.2 s plus 10 ms a figure and floats 56 ms a figure,
+so floats are cheaper below about 60 figures (4.4x at 10, 1.25x at 40, even at 60, the batch
+1.9x cheaper at 100; BENCHMARKS.md).  Both scale with the number of steps alike, so the
+crossover does not depend on the duration.
 """
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ from ..core.physics.simulate import run
 __all__ = ["BATCH_FROM", "KERNELS", "kernel_for", "run_turns"]
 
 #: Figures of one task from which the numpy batch is cheaper than floats (measured, above).
-BATCH_FROM = 100
+BATCH_FROM = 60
 KERNELS = ("floats", "batch")
 
 
