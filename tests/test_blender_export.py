@@ -17,6 +17,7 @@ from rig_fixtures import activate, mixamo_skeleton, rigify_rig  # noqa: E402
 from test_blender_operators import add  # noqa: E402
 
 from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 FRAMES = (1, 9, 17, 24)
@@ -467,3 +468,59 @@ def test_root_motion_on_rigifys_root_control(scene):
     # float32 keys through Rigify's IK chains (measured 9.5e-6 m, the equipment 4.8e-6 m)
     np.testing.assert_allclose(got[:, deform][..., :3, 3], want[..., :3, 3], atol=1e-4)
     np.testing.assert_allclose(world(gear), want_gear, atol=1e-4)
+
+
+# A crowd follower playing the leader's bake (docs/crowds.md, Shared motion): FBX at its defaults
+# simplifies its curves (the tolerances of the tweaks' test above); glTF and FBX without
+# simplification: float32 bones, 1e-5 m and 1e-4 rad.
+@pytest.mark.installed
+@pytest.mark.parametrize("route, who, pos_tol, turn_tol", [
+    ("glb", 1, 1e-5, 1e-4), ("fbx", 1, 5e-3, 1e-2), ("tweaks", 1, 1e-5, 1e-4),
+    ("glb", 0, 1e-5, 1e-4), ("fbx", 0, 5e-3, 1e-2)])
+def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, route, who,
+                                                              pos_tol, turn_tol):
+    """A follower that plays the leader's bake (later, moved) exported alone, or the leader
+    alone: the file's every animation plays that figure as Blender shows it (its time shift and
+    its Delta Transform's translation), never the other's motion; the scene is as it was."""
+    from scene_snapshot import diff, snapshot
+    from test_blender_layers import key_head_tweak
+    lead = add("SKIER")
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
+                                     lateral=1.5) == {"FINISHED"}
+    follower = bpy.data.objects["Skier 1"]
+    select_all = [lead, follower]
+    for o in select_all:
+        o.select_set(True)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert bake.shared_source(follower)[0] == bake.find_bake(lead)[0]      # it shares
+    fig, other = select_all[who], select_all[1 - who]
+    if route != "fbx":                     # FBX's first take is the bake, without tweaks
+        key_head_tweak(fig, frame=9)
+    want, name = bone_world(fig), fig.name
+    bones = [pb.name for pb in fig.pose.bones]
+    assert off_by(bone_world(other), want)[0] > 1.0            # the other's motion is elsewhere
+    path = str(tmp_path / f"shared.{'glb' if route == 'glb' else 'fbx'}")
+    before = snapshot()
+    if route == "tweaks":                  # Export FBX with Tweaks, no curve simplification
+        bpy.ops.object.select_all(action="DESELECT")
+        for o in [fig, *fig.children_recursive]:
+            o.select_set(True)
+        assert bpy.ops.turning.export_fbx(filepath=path, use_selection=True,
+                                          bake_anim_simplify_factor=0.0) == {"FINISHED"}
+    else:
+        export(path, [fig, *fig.children_recursive])
+    assert snapshot() == before, diff(before, snapshot())
+    reimport(path)
+    (arm,) = [o for o in bpy.data.objects if o.type == "ARMATURE"]
+    bone_actions = [a for a in bpy.data.actions
+                    if any(fc.data_path.startswith("pose.bones") for fc in compat.all_fcurves(a))]
+    assert arm.animation_data.action in bone_actions
+    if route == "glb":
+        assert len(bone_actions) == 1, [a.name for a in bpy.data.actions]
+    else:
+        assert arm.animation_data.action.name.startswith(f"{arm.name}|"), name
+    same = [arm.pose.bones.find(b) for b in bones]
+    for action in sorted(bone_actions, key=lambda a: a != arm.animation_data.action):
+        play(arm, action)
+        pos, turn = off_by(bone_world(arm)[:, same], want)
+        assert pos < pos_tol and turn < turn_tol, (action.name, pos, turn)
