@@ -470,12 +470,19 @@ def test_root_motion_on_rigifys_root_control(scene):
     np.testing.assert_allclose(world(gear), want_gear, atol=1e-4)
 
 
+#: Open: FBX's take of a follower's strip that starts later than the scene (it waits at the
+#: start) comes back 1.9 m off on the frames before and in it (measured); glTF is right.
+WAITING = "FBX: a follower's strip starting after the scene's first frame"
+
+
 # A crowd follower playing the leader's bake (docs/crowds.md, Shared motion): FBX at its defaults
 # simplifies its curves (the tolerances of the tweaks' test above); glTF and FBX without
 # simplification: float32 bones, 1e-5 m and 1e-4 rad.
 @pytest.mark.installed
 @pytest.mark.parametrize("route, who, pos_tol, turn_tol", [
-    ("glb", 1, 1e-5, 1e-4), ("fbx", 1, 5e-3, 1e-2), ("tweaks", 1, 1e-5, 1e-4),
+    ("glb", 1, 1e-5, 1e-4),
+    pytest.param("fbx", 1, 5e-3, 1e-2, marks=pytest.mark.xfail(strict=True, reason=WAITING)),
+    pytest.param("tweaks", 1, 1e-5, 1e-4, marks=pytest.mark.xfail(strict=True, reason=WAITING)),
     ("glb", 0, 1e-5, 1e-4), ("fbx", 0, 5e-3, 1e-2)])
 def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, route, who,
                                                               pos_tol, turn_tol):
@@ -484,15 +491,17 @@ def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, ro
     its Delta Transform's translation), never the other's motion; the scene is as it was."""
     from scene_snapshot import diff, snapshot
     from test_blender_layers import key_head_tweak
-    lead = add("SKIER")
+    lead = add("CYCLIST")                  # waiting at the start it shares, 6 frames later
     assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
-                                     lateral=1.5) == {"FINISHED"}
-    follower = bpy.data.objects["Skier 1"]
+                                     lateral=1.5, staging="WAIT") == {"FINISHED"}
+    follower = bpy.data.objects["Cyclist 1"]
     select_all = [lead, follower]
     for o in select_all:
         o.select_set(True)
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    assert bake.shared_source(follower)[0] == bake.find_bake(lead)[0]      # it shares
+    shared, strip = bake.shared_source(follower)
+    assert shared == bake.find_bake(lead)[0]                                # it shares,
+    assert strip.frame_start - strip.action_frame_start == 6                # 6 frames later
     fig, other = select_all[who], select_all[1 - who]
     if route != "fbx":                     # FBX's first take is the bake, without tweaks
         key_head_tweak(fig, frame=9)
@@ -524,3 +533,4 @@ def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, ro
         play(arm, action)
         pos, turn = off_by(bone_world(arm)[:, same], want)
         assert pos < pos_tol and turn < turn_tol, (action.name, pos, turn)
+

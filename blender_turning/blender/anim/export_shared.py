@@ -20,7 +20,7 @@ import bpy
 import numpy as np
 
 from .. import compat
-from . import bake
+from . import bake, bake_layers
 
 
 def _shift_keys(action, shift: float) -> None:
@@ -66,6 +66,11 @@ def _own_copy(fig, undo) -> None:
     strip.action_frame_start = bounds[2] + shift
     strip.action_frame_end = bounds[3] + shift
     strip.frame_start, strip.frame_end = bounds[:2]
+    tweaks = bake_layers.tweak_layer(fig)[0]
+    if tweaks is not None:          # the figure's frames (a follower waiting at the start holds)
+        copy.use_frame_range = True
+        copy.frame_end = max(tweaks.frame_range[1], copy.frame_start + 1)
+        copy.frame_start, copy.frame_end = tweaks.frame_range
 
 
 def own_copies(figures) -> list:
@@ -91,9 +96,13 @@ def restore_all(undo) -> None:
 @contextmanager
 def unshared(figures):
     """Within the block each of ``figures`` that plays another's bake plays a copy of its own;
-    everything is given back on leaving (also after an error)."""
+    everything is given back on leaving (also after an error), and the scene's frame evaluated
+    again with the shared bake."""
+    scene = bpy.context.scene
+    frame = scene.frame_current, scene.frame_subframe
     undo = own_copies(figures)
     try:
         yield
     finally:
         restore_all(undo)
+        scene.frame_set(frame[0], subframe=frame[1])
