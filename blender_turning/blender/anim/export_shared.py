@@ -67,7 +67,8 @@ def _own_copy(fig, undo) -> None:
     strip.action_frame_end = bounds[3] + shift
     strip.frame_start, strip.frame_end = bounds[:2]
     tweaks = bake_layers.tweak_layer(fig)[0]
-    if tweaks is not None:          # the figure's frames (a follower waiting at the start holds)
+    if tweaks is not None:          # the figure's frames, which its tweak layer spans: glTF
+        #                             samples the tweak layer over the bake only when they match
         copy.use_frame_range = True
         copy.frame_end = max(tweaks.frame_range[1], copy.frame_start + 1)
         copy.frame_start, copy.frame_end = tweaks.frame_range
