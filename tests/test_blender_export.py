@@ -487,7 +487,9 @@ TOL = {"glb": (1e-5, 1e-4), "fbx": (5e-3, 1e-2), "tweaks": (1e-5, 1e-4)}
     ("glb", 1, "WAIT"),
     pytest.param("fbx", 1, "WAIT", marks=pytest.mark.xfail(strict=True, reason=WAITING)),
     pytest.param("tweaks", 1, "WAIT", marks=pytest.mark.xfail(strict=True, reason=WAITING)),
-    ("glb", 0, "WAIT"), ("fbx", 0, "WAIT")])
+    # 4.2: the follower's empty tweak layer fits the leader (above), a take over frames 7-30
+    ("glb", 0, "WAIT"), pytest.param("fbx", 0, "WAIT", marks=pytest.mark.xfail(
+        not compat.SLOTTED_ACTIONS, strict=True, reason=WAITING))])
 def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, route, who,
                                                               staging):
     """A follower that plays the leader's bake (later, moved) exported alone, or the leader
