@@ -732,6 +732,8 @@ MUTANTS = [
     M("export_copy_keeps_its_frame_range", "blender/anim/export_shared.py",
       "        copy.frame_start, copy.frame_end = tweaks.frame_range", "        pass", EXPORT,
       "bake"),
+    M("export_pieces_merge_into_the_shared_bake", "blender/anim/export_shared.py",
+      "            action[bake.MERGE_INTO] = own", "            pass", EXPORT, "bake"),
     M("export_copy_left_behind", "blender/anim/export_shared.py",
       "        bpy.data.actions.remove(copy)", "        pass", EXPORT, "bake"),
     M("fbx_tweaks_shared_not_copied", "blender/ops/export.py",

@@ -541,3 +541,39 @@ def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, ro
         pos, turn = off_by(bone_world(arm)[:, same], want)
         assert pos < pos_tol and turn < turn_tol, (action.name, pos, turn)
 
+
+
+def gltf_animations(path) -> list:
+    """The names of the animations in a ``.glb`` file (its JSON chunk)."""
+    import json
+    import struct
+    with open(path, "rb") as fh:
+        data = fh.read()
+    (length,) = struct.unpack_from("<I", data, 12)
+    return [a.get("name") for a in json.loads(data[20:20 + length]).get("animations", [])]
+
+
+@pytest.mark.installed
+def test_a_user_rig_sharing_a_bake_exports_one_animation_with_its_equipment(scene, tmp_path):
+    """A follower made from the user's rig plays the leader's bake: its glTF holds one animation,
+    the figure with its equipment as its constraints move it, on every frame."""
+    rig = mixamo_skeleton("Ann")
+    activate(rig)
+    assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
+                                     lateral=1.5) == {"FINISHED"}
+    bpy.ops.object.select_all(action="SELECT")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    follower = bpy.data.objects["Ann 1"]
+    assert bake.shared_source(follower)[0] == bake.find_bake(rig)[0]
+    gear = list(follower.turning.rig.equipment.objects)
+    names, want = [o.name for o in gear], world_matrices(gear)
+    from scene_snapshot import diff, snapshot
+    path = str(tmp_path / "ann1.glb")
+    before = snapshot()
+    export(path, [follower, *gear])
+    assert snapshot() == before, diff(before, snapshot())
+    assert gltf_animations(path) == [follower.name]
+    reimport(path)
+    pos, turn = off_by(world_matrices([bpy.data.objects[n] for n in names]), want)
+    assert pos < 1e-5 and turn < 1e-5, (pos, turn)    # float32, as the equipment's test above

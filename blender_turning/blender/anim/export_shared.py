@@ -6,7 +6,8 @@ glTF's exporter (its default *Actions* mode) samples each action of an object as
 action with the NLA off, over the action's own frames: the shared bake, sampled so, is the
 other figure's motion (the strip's time shift lost), and the export hook
 (:mod:`.export_gltf`) drops another figure's bake from a figure's animations, so the follower's
-file would have none.  With the copy the follower is, to every exporter and to the hook, a
+file would have none (and its keyed equipment, merged into an animation named after the shared
+bake, would be an animation of its own).  With the copy the follower is, to every exporter and to the hook, a
 figure with its own bake on its own strip (its tweak layer above, its ``delta_location`` as it
 is): what Blender shows, and only that figure's.  FBX's *NLA Strips* takes sample every exported
 object with its strips playing (the shift kept); the copy changes nothing there, and Export FBX
@@ -66,12 +67,26 @@ def _own_copy(fig, undo) -> None:
     strip.action_frame_start = bounds[2] + shift
     strip.action_frame_end = bounds[3] + shift
     strip.frame_start, strip.frame_end = bounds[:2]
+    _merge_pieces(fig, shared.name, copy.name, undo)
     tweaks = bake_layers.tweak_layer(fig)[0]
     if tweaks is not None:          # the figure's frames, which its tweak layer spans: glTF
         #                             samples the tweak layer over the bake only when they match
         copy.use_frame_range = True
         copy.frame_end = max(tweaks.frame_range[1], copy.frame_start + 1)
         copy.frame_start, copy.frame_end = tweaks.frame_range
+
+
+def _merge_pieces(fig, shared: str, own: str, undo) -> None:
+    """The keyed equipment and state Empties of ``fig`` merge into its glTF animation, named
+    after the bake it plays (:func:`.export_ready.key_in_place`): the copy's name for the
+    export."""
+    from .export_ready import equipment
+    from .export_state import carriers
+    for obj in equipment(fig) + carriers(fig):
+        action = obj.animation_data.action if obj.animation_data else None
+        if action is not None and action.get(bake.MERGE_INTO) == shared:
+            action[bake.MERGE_INTO] = own
+            undo.append(lambda action=action: action.__setitem__(bake.MERGE_INTO, shared))
 
 
 def own_copies(figures) -> list:
