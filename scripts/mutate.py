@@ -733,6 +733,8 @@ MUTANTS = [
       "    copy.use_frame_range = True", "    pass", EXPORT, "bake"),
     M("export_pieces_merge_into_the_shared_bake", "blender/anim/export_shared.py",
       "            action[bake.MERGE_INTO] = own", "            pass", EXPORT, "bake"),
+    M("export_copy_strip_from_its_own_start", "blender/anim/export_shared.py",
+      "    if first < strip.frame_start:", "    if False:", EXPORT, "bake"),
     M("export_copy_left_behind", "blender/anim/export_shared.py",
       "        bpy.data.actions.remove(copy)", "        pass", EXPORT, "bake"),
     M("fbx_tweaks_shared_not_copied", "blender/ops/export.py",
