@@ -11,22 +11,13 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from test_blender_operators import add  # noqa: E402
+from test_blender_operators import add, scene  # noqa: E402,F401
 
 from blender_turning.blender import compat  # noqa: E402
 from blender_turning.blender.anim import bake, bake_layers, foot_track  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 FRAMES = (1, 13, 40, 72)
-
-
-@pytest.fixture
-def scene(registered):
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.frame_start, sc.frame_end = 1, 72
-    sc.render.fps = 24
-    return sc
 
 
 def crowd(count=3, **kw):
