@@ -687,6 +687,10 @@ MUTANTS = [
       "    if dev.distance > warn:", "    if False:", NOTES, "bake"),
     M("follow_frame_not_offset", "blender/jobs/model_notes.py",
       "frame = frame_start + round(dev.t * fps)", "frame = round(dev.t * fps)", NOTES, "bake"),
+    M("fall_report_names_no_setting", "blender/scene/figure_context.py",
+      "        msg = in_settings(str(exc))", "        msg = str(exc)", NOTES, "bake"),
+    M("panel_names_the_core_bound", "blender/jobs/model_notes.py",
+      "limited by {setting}\")", "limited by {turn.bound}\")", NOTES, "bake"),
     # -- the export-ready bake ---------------------------------------------------------------
     M("gltf_keeps_other_bakes", "blender/anim/export_gltf.py",
       "    return owner is not None and owner != obj", "    return False", EXPORT, "bake"),
