@@ -64,6 +64,7 @@ def bake_actions() -> list:
     return [a for a in bpy.data.actions if bake.BAKED_PATHS in a]
 
 
+@pytest.mark.installed
 def test_followers_play_the_leaders_bake_and_move_as_their_own_bake_does(scene):
     figs = crowd()
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
@@ -106,6 +107,7 @@ def test_a_delta_transform_of_the_users_is_kept_and_the_figure_bakes_its_own(sce
     assert bake.figure_action(figs[1]) == bake.find_bake(figs[0])[0]
 
 
+@pytest.mark.installed
 def test_rebaking_the_leader_alone_leaves_the_followers_as_they_were(scene):
     figs = crowd()
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}

@@ -46,6 +46,7 @@ def turns_panel_labels(context) -> list:
 
 # -- the lean -------------------------------------------------------------------------------------
 
+@pytest.mark.installed
 def test_bake_and_panel_say_the_lean_the_bounds_allow_and_why(scene, capfd):
     """The telemark's 23 deg is more than its Max Curvature allows at a 2 s period."""
     tele = add("TELEMARK")
@@ -150,6 +151,7 @@ def test_follow_path_on_several_figures_says_each_ones_distance(scene, capfd):
     assert levels == ["Info", "Warning"]       # the slalom is followed, the corner is cut
 
 
+@pytest.mark.installed
 def test_a_fall_names_the_setting_that_holds_each_bound(scene):
     """A figure that falls with its curvature held at a bound: the report names the bound as the
     core does (the scene files' key) and the setting the panels show for it."""
