@@ -32,12 +32,8 @@ WORKER_CONFIG = {
 
 #: :data:`WORKER_CONFIG` as the environment of ``dask worker`` (Dask reads ``DASK_`` variables,
 #: ``__`` for a level); the preload is ``--preload blender_turning.crowd.runner`` there.
-WORKER_ENVIRON = {
-    "DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "False",
-    "DASK_DISTRIBUTED__ADMIN__TICK__INTERVAL": "1s",
-    "DASK_DISTRIBUTED__WORKER__MEMORY__MONITOR_INTERVAL": "1s",
-    "DASK_DISTRIBUTED__ADMIN__SYSTEM_MONITOR__INTERVAL": "5s",
-}
+WORKER_ENVIRON = {"DASK_" + key.upper().replace(".", "__").replace("-", "_"): str(value)
+                  for key, value in WORKER_CONFIG.items() if not key.endswith(".preload")}
 
 
 @contextmanager

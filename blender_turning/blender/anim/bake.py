@@ -216,15 +216,7 @@ def _figure_action(obj):
         elif current is not None and not bake_layers.is_tweaks(current, obj):
             keep = _stash_users(obj, current)   # the user plays an action of theirs over the bake
         return action, strip, keep
-    adt = obj.animation_data
-    current = adt.action if adt else None
-    params = []
-    for inherited in inherited_bakes(obj):
-        _drop_inherited(obj, inherited)
-    if bake_layers.is_tweaks(current, obj):
-        adt.action = None                 # played again above the new bake
-    elif current is not None:
-        params = _stash_users(obj, current)
+    params = _make_way(obj)
     if not given_up:                      # a figure that gave its bake up is still baked
         user_action.record_rest(obj)
     # An earlier bake the user unassigned (unused, ours), found by the name it was made with: a
@@ -236,6 +228,21 @@ def _figure_action(obj):
     action[BAKED_PATHS] = ""
     action[OWNER] = obj
     return action, None, params
+
+
+def _make_way(obj) -> list:
+    """Clear ``obj``'s animation for a bake of its own or another's: another figure's bake it
+    played goes, its tweak layer stops being the active action (it plays again above the bake)
+    and a user's action is stashed.  The user's keyed parameter curves, for the tweak layer."""
+    adt = obj.animation_data
+    current = adt.action if adt else None
+    for inherited in inherited_bakes(obj):
+        _drop_inherited(obj, inherited)
+    if bake_layers.is_tweaks(current, obj):
+        adt.action = None
+    elif current is not None:
+        return _stash_users(obj, current)
+    return []
 
 
 def _stash_users(obj, current) -> list:
@@ -382,13 +389,7 @@ def share_bake(obj, source, track: PoseTrack, shift: int, translation) -> BakeRe
             _drop_strip(obj.animation_data, strip)
             bpy.data.actions.remove(own)
     adt = obj.animation_data or obj.animation_data_create()
-    for inherited in inherited_bakes(obj):
-        _drop_inherited(obj, inherited)
-    params = []
-    if bake_layers.is_tweaks(adt.action, obj):
-        adt.action = None                 # played again above the shared bake
-    elif adt.action is not None:
-        params = _stash_users(obj, adt.action)
+    params = _make_way(obj)
     if REST not in obj:
         user_action.record_rest(obj)
     for name, ch in track.bones.items():

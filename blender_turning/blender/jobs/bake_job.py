@@ -79,4 +79,4 @@ class BakeJob:
         written = write_bakes(figs, [r[2] for r in self.results], [r[3] for r in self.results],
                               writer)
         self.key_reports, self.shared = writer.key_reports, writer.shared
-        return list(zip(self.names, written))
+        return [(r[0], w) for r, w in zip(self.results, written)]
