@@ -807,6 +807,16 @@ SHARE_MUTANTS = [
 ]
 MUTANTS += SHARE_MUTANTS
 
+# -- a bake that stashes the user's action says so (Bake Turns and Follow Path) -----------------
+MUTANTS += [
+    M("stash_note_unsaid", "blender/anim/user_action.py",
+      "    if user is None or user == before.get(fig.name):\n        return None",
+      "    return None", [T + "test_blender_layers.py"], "bake"),
+    M("stash_note_every_rebake", "blender/anim/user_action.py",
+      "    if user is None or user == before.get(fig.name):", "    if user is None:",
+      [T + "test_blender_layers.py"], "bake"),
+]
+
 # -- modules that had no mutant: the open-loop law (Section 4), the phase post-pass (Section 6.2),
 # the paper's phase-ellipse law (Section 5.1), the fall table's monotonicity (Eq. 2), the free-speed
 # planner's run-away bound (Eq. 21, docs/TERRAIN.md), the free-speed stepper -----------------

@@ -78,6 +78,39 @@ def test_a_key_set_after_a_bake_survives_the_rebake(scene):
     assert {fc.data_path for fc in tweaks.fcurves} == {HEAD_PATH}
 
 
+@pytest.mark.installed
+@pytest.mark.parametrize("how", ["bake_turns", "follow_path"])
+def test_a_key_set_before_the_first_bake_is_kept_and_said(scene, capfd, how):
+    """A key of the user's from before any bake stops playing under the bake (its action is
+    stashed on a muted track): the bake says so, naming the action and the track, once."""
+    obj = add("SKIER")
+    if how == "follow_path":
+        bpy.ops.curve.primitive_bezier_curve_add(location=(0, 0, 0))
+        curve = bpy.context.view_layer.objects.active
+        curve.scale = (10, 10, 1)
+        obj.turning.path = curve
+        for o in bpy.context.selected_objects:
+            o.select_set(False)
+        bpy.context.view_layer.objects.active = obj
+        obj.select_set(True)
+    bpy.context.scene.frame_set(50)
+    obj.pose.bones[HEAD].rotation_quaternion = TWEAK
+    assert obj.pose.bones[HEAD].keyframe_insert("rotation_quaternion", frame=50)
+    user = obj.animation_data.action
+    capfd.readouterr()
+    op = getattr(bpy.ops.turning, how)
+    assert op() == {"FINISHED"}
+    out = capfd.readouterr().out
+    said = [line for line in out.splitlines() if "no longer plays" in line]
+    assert len(said) == 1, out
+    assert user.name in said[0] and "Turning: user action" in said[0] and "Clear Bake" in said[0]
+    assert angle(shown_head(obj, 50), baked_head(obj, 50)) < ANGLE_TOL   # the bake plays
+    assert op() == {"FINISHED"}                               # a rebake: already said
+    assert "no longer plays" not in capfd.readouterr().out
+    assert bake.clear_bake(obj) and obj.animation_data.action == user
+    assert angle(shown_head(obj, 50), TWEAK) < ANGLE_TOL       # given back
+
+
 def test_tweaks_survive_clear_bake_and_play_again_on_the_next_bake(scene):
     obj = add("SKIER")
     user = user_keys(obj)                     # the figure plays an action of the user's

@@ -11,7 +11,7 @@ import numpy as np
 
 from ...mapping import shared_motion
 from ...mapping.base import BoneChannels, PoseTrack
-from . import bake, fewer_keys, foot_track
+from . import bake, fewer_keys, foot_track, user_action
 from ..scene import retarget_adapter
 from . import export_ready as export_ready_mod, export_state
 
@@ -134,9 +134,18 @@ class BakeWriter:
         self.around = Around(crowd=True)
         self.shared = {}                  # figure name -> the figure whose bake it plays
         self.key_reports = {}             # figure name -> fewer_keys.KeyReport
+        self.stash_notes = {}             # figure name -> user_action.stash_note
 
     def write(self, fig, traj, track):
         """Bake (or share) one figure; its :class:`.bake.BakeResult` (sharing: 0 F-curves)."""
+        before = user_action.stashes([fig])
+        result = self._write(fig, traj, track)
+        note = user_action.stash_note(fig, before)
+        if note:
+            self.stash_notes[fig.name] = note
+        return result
+
+    def _write(self, fig, traj, track):
         can = self.matcher is not None and bake.can_share(fig)
         share = self.matcher.match(track) if can else None
         if share is not None:

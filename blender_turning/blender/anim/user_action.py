@@ -85,6 +85,24 @@ def stash(obj, current):
     obj[STASHED + "_slot"] = compat.slot_identifier(obj) or ""
 
 
+def stashes(figs) -> dict:
+    """Each of ``figs``' stashed user action (or ``None``) by name, before a bake: what
+    :func:`stash_note` tells a new stash by."""
+    return {f.name: stashed_action(f) for f in figs}
+
+
+def stash_note(fig, before: dict) -> str | None:
+    """What to tell the user when a bake has just stashed ``fig``'s action (``before``: from
+    :func:`stashes`), or ``None``: its keys stop playing while the figure is baked, so the bake
+    says where they are and how to get them back (docs/layers.md)."""
+    user = stashed_action(fig)
+    if user is None or user == before.get(fig.name):
+        return None
+    return (f"your action {user.name!r} no longer plays: it is kept, muted, on the NLA track "
+            f"{STASH_TRACK!r}; Clear Bake plays it again, and keys set now go on the tweak layer "
+            "above the bake")
+
+
 def record_rest(obj) -> None:
     """Remember the transform and pose the bake is about to override (Clear Bake restores them
     bit for bit: recomputing them from the Start settings would not be exact)."""

@@ -28,6 +28,7 @@ class BakeJob:
         self.share = share                    # figures with another's motion play its bake
         self.key_reports = {}                 # name -> fewer_keys.KeyReport
         self.shared = {}                      # name -> the figure whose bake it plays
+        self.stash_notes = {}                 # name -> a user's action the bake stashed
         self.results = []                     # (name, start or None, traj, track)
         self.grounds = {}                     # ground mesh name -> MeshGround
 
@@ -79,4 +80,5 @@ class BakeJob:
         written = write_bakes(figs, [r[2] for r in self.results], [r[3] for r in self.results],
                               writer)
         self.key_reports, self.shared = writer.key_reports, writer.shared
+        self.stash_notes = writer.stash_notes
         return [(r[0], w) for r, w in zip(self.results, written)]

@@ -111,6 +111,7 @@ class CrowdFollow:
         self._pool = self._executor = self._thread = None
         self._result = self._error = None
         self._done = 0
+        self.stash_notes = {}               # name -> a user's action the bake stashed
 
     def read(self, context) -> None:
         """Read every figure as Follow Path reads one (raises ``ValueError`` naming the bad
@@ -247,7 +248,9 @@ class CrowdFollow:
             bake.check_track(fig, track)
             computed.append((fig, traj, track))
         scene.frame_end = frames.end
-        write_bakes(*zip(*computed), BakeWriter())    # a figure with another's motion plays it
+        writer = BakeWriter()
+        write_bakes(*zip(*computed), writer)          # a figure with another's motion plays it
+        self.stash_notes = writer.stash_notes
         return frames
 
 
@@ -331,6 +334,8 @@ def complete_crowd(op, context, job) -> set:
     for name, level, note in notes:
         if level == "INFO":
             op.report({level}, f"{TITLE}: {name}: {note}")
+    for name, note in job.stash_notes.items():
+        op.report({"WARNING"}, f"{TITLE}: {name}: {note}")
     op.report({"INFO"}, f"{TITLE}: baked {len(results)} figures over frames "
                         f"{frames.start}-{frames.end} (planned {how})")
     for name, level, note in notes:             # last: the status bar shows the last report

@@ -163,6 +163,8 @@ class TURNING_OT_bake_turns(bpy.types.Operator):
                                   f"(its motion, moved): {', '.join(names)}")
         for name, keyed in job.key_reports.items():
             self.report({"INFO"}, f"Bake Turns: {name}: Fewer Keys: {keyed.summary()}")
+        for name, note in job.stash_notes.items():
+            self.report({"WARNING"}, f"Bake Turns: {name}: {note}")
         for name, _, traj, _ in job.results:     # last: the status bar shows the last report
             note = turn_note(traj)
             if note:

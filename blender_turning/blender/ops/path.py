@@ -8,6 +8,7 @@ from bpy.props import FloatProperty
 
 from ...core.errors import PlanInfeasible
 from ...core.course.obstacles import Obstacles
+from ..anim import user_action
 from ..jobs import crowd_job
 from ..scene import follow_ground
 from ..scene.figure_context import check_figure, end_modal, poll_figure, report_error
@@ -70,10 +71,14 @@ class TURNING_OT_follow_path(crowd_job.CrowdOptions, bpy.types.Operator):
             note += follow_ground.edge_note(job.error, getattr(job, "mesh_ground", None),
                                             job.problem.reach())
             return report_error(self, "Follow Path", fig.name, job.error, note)
+        before = user_action.stashes([fig])
         try:
             frames = finish(context, fig, job, job.result)
         except Exception as exc:
             return report_error(self, "Follow Path", fig.name, exc)
+        stashed = user_action.stash_note(fig, before)
+        if stashed:
+            self.report({"WARNING"}, f"Follow Path: {fig.name}: {stashed}")
         level, note = follow_note(job.path, job.result.trajectory, frames.start, frames.fps,
                                   warn_distance(self))
         if level == "INFO":
