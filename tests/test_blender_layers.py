@@ -103,7 +103,8 @@ def test_a_key_set_before_the_first_bake_is_kept_and_said(scene, capfd, how):
     out = capfd.readouterr().out
     said = [line for line in out.splitlines() if "no longer plays" in line]
     assert len(said) == 1, out
-    assert user.name in said[0] and "Turning: user action" in said[0] and "Clear Bake" in said[0]
+    assert user.name in said[0] and "Turning: user action" in said[0]
+    assert "Clear Bake" in said[0]
     assert angle(shown_head(obj, 50), baked_head(obj, 50)) < ANGLE_TOL   # the bake plays
     assert op() == {"FINISHED"}                               # a rebake: already said
     assert "no longer plays" not in capfd.readouterr().out
