@@ -66,6 +66,9 @@ def main(argv=None) -> int:
     p.add_argument("--edge-limit", action="store_true",
                    help="clip lines whose edge the lean and the angulation cannot hold "
                         "(PlannerSettings.edge_limit)")
+    p.add_argument("--line", choices=("path", "race"), default="path",
+                   help="the planner's cost: the distance to the drawn line (Section 6) or the "
+                        "racer's least time through the gates (PlannerSettings.line)")
     a = p.parse_args(argv)
     if a.angulation is not None:
         record = SPORT_PRESETS[a.preset]
@@ -73,7 +76,7 @@ def main(argv=None) -> int:
     for gap in a.gates:
         doc = course(gap, a.speed, a.preset, gates=a.count,
                      planner={"stages": a.stages, "choices": a.choices,
-                              "stage_time": a.stage_time})
+                              "stage_time": a.stage_time, "line": a.line})
         doc["figure"]["limits"] = {"dC_f_max": a.rate}
         scene = scene_from_dict(doc, f"reid {gap:g}").with_settings(
             edge_limit=a.edge_limit)
@@ -88,7 +91,7 @@ def main(argv=None) -> int:
         turn = per_turn(traj, scene.figure, gate_x)
         ext = extremes(traj, scene.figure, gate_x[0], gate_x[-1])
         print(f"gates {gap:g} m at {a.speed:g} m/s ({a.preset}, N = {a.stages}, q = {a.choices}, "
-              f"t_stage {a.stage_time:g} s, rate {scene.figure.limits.dC_f_max:.3g}, "
+              f"t_stage {a.stage_time:g} s, line {a.line}, rate {scene.figure.limits.dC_f_max:.3g}, "
               f"edge limit {'on' if a.edge_limit else 'off'}, "
               f"{time.perf_counter() - t0:.0f} s)")
         for i, k in enumerate(turn["gates"]):

@@ -136,6 +136,15 @@ class Problem:
         self._fused = not self.free and flat_stage.applies(self)
         if self.free:
             free_speed.setup(self, lean)
+        #: The racer's cost (``race.py``) for ``settings.line == "race"``, or ``None``: Section
+        #: 6's distance to the path.
+        self.race = None
+        if settings.line == "race":
+            if self.free:
+                raise ValueError("line = 'race' needs the speed held (flat ground, a speed "
+                                 "profile): on terrain the speed is a state")
+            from .race import RaceCost
+            self.race = RaceCost(self)
 
     @property
     def flat_rhs(self) -> bool:
@@ -196,8 +205,13 @@ class Problem:
 
     def lower_bound(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Admissible bound on the cost still to come after nodes at ``depth`` whose last sample
-        was ``d_last`` from the path: the sum of :meth:`sample_bounds`."""
+        was ``d_last`` from the path: the sum of :meth:`sample_bounds` (the racer's line: its
+        own, ``race.py``, given the nodes' ``state`` and ``C_f``)."""
         d_last = np.asarray(d_last, float)
+        if self.race is not None:
+            if state is None:
+                return np.zeros(d_last.shape)
+            return self.race.bound(state, C_f, depth).reshape(d_last.shape)
         terms = self.sample_bounds(d_last, depth, state, C_f, reach)
         return self.total_bound(terms, d_last, depth, state).reshape(d_last.shape)
 
@@ -379,10 +393,14 @@ class Problem:
         if self.edge_limit is not None:      # an edge the lean cannot hold (module docstring)
             fell |= ~self.edge_limit.holds(P[:, THETA_V], C).all(axis=0)
         per = st.steps_per_sample
-        D = self.distance(P[per::per, :2].transpose(0, 2, 1))      # (samples, m)
-        cost = np.zeros(m)
-        for d in D:
-            cost = cost + d
+        if self.race is not None:         # the racer's cost (race.py): the distance not made good
+            cost = self.race.stage_cost(P)
+            D = np.zeros((1, m))
+        else:
+            D = self.distance(P[per::per, :2].transpose(0, 2, 1))      # (samples, m)
+            cost = np.zeros(m)
+            for d in D:
+                cost = cost + d
         collided = np.zeros(m, bool)
         if len(self.obstacles) or self.movers is not None:
             # The foot's and the body's ground point's moves, step by step.
