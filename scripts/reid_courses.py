@@ -5,6 +5,7 @@ core/equipment.py), the largest lean and the peak leg force, their mean +- SD ov
 against Reid's (core/course/reid.py), and the whole run's extremes.
 
     python scripts/reid_courses.py [--gates 10 13] [--speed 12] [--stages 10 --choices 9]
+        [--line race] [--leg-force 5] [--rate 2.06]
 
 The courses (docs/racing.md, "The racer's line"): gates ``gap`` m apart along the fall line
 (+x), the line through them 2.5 m left and right of it, each turning pole a line from 1.5 m
@@ -69,6 +70,9 @@ def main(argv=None) -> int:
     p.add_argument("--line", choices=("path", "race"), default="path",
                    help="the planner's cost: the distance to the drawn line (Section 6) or the "
                         "racer's least time through the gates (PlannerSettings.line)")
+    p.add_argument("--leg-force", type=float, default=0.0, metavar="BW",
+                   help="clip lines whose leg force passes this many body weights "
+                        "(PlannerSettings.leg_force_max; 0: no limit)")
     a = p.parse_args(argv)
     if a.angulation is not None:
         record = SPORT_PRESETS[a.preset]
@@ -76,7 +80,8 @@ def main(argv=None) -> int:
     for gap in a.gates:
         doc = course(gap, a.speed, a.preset, gates=a.count,
                      planner={"stages": a.stages, "choices": a.choices,
-                              "stage_time": a.stage_time, "line": a.line})
+                              "stage_time": a.stage_time, "line": a.line,
+                              "leg_force_max_bw": a.leg_force})
         doc["figure"]["limits"] = {"dC_f_max": a.rate}
         scene = scene_from_dict(doc, f"reid {gap:g}").with_settings(
             edge_limit=a.edge_limit)
@@ -91,7 +96,8 @@ def main(argv=None) -> int:
         turn = per_turn(traj, scene.figure, gate_x)
         ext = extremes(traj, scene.figure, gate_x[0], gate_x[-1])
         print(f"gates {gap:g} m at {a.speed:g} m/s ({a.preset}, N = {a.stages}, q = {a.choices}, "
-              f"t_stage {a.stage_time:g} s, line {a.line}, rate {scene.figure.limits.dC_f_max:.3g}, "
+              f"t_stage {a.stage_time:g} s, line {a.line}, leg force <= {a.leg_force:g} BW, "
+              f"rate {scene.figure.limits.dC_f_max:.3g}, "
               f"edge limit {'on' if a.edge_limit else 'off'}, "
               f"{time.perf_counter() - t0:.0f} s)")
         for i, k in enumerate(turn["gates"]):

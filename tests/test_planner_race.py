@@ -49,6 +49,11 @@ def test_each_stage_costs_the_distance_its_centre_of_mass_does_not_make_good():
     still[2] = alpha
     r = p.simulate_stage(still, np.zeros(4), np.zeros(4), np.zeros(4), np.zeros(4))
     np.testing.assert_allclose(r.cost, 12.0 * 0.2 * (1 - np.cos(alpha)), atol=1e-12)
+    # The course's direction is the path's, start to end: along it a stage costs nothing.
+    p = racer(direction=(0.6, -0.8))
+    still[2] = [math.atan2(-0.8, 0.6), 0.0, math.pi, -math.pi / 2]
+    r = p.simulate_stage(still, np.zeros(4), np.zeros(4), np.zeros(4), np.zeros(4))
+    np.testing.assert_allclose(r.cost, 12.0 * 0.2 * np.array([0.0, 0.4, 1.6, 0.2]), atol=1e-12)
 
 
 @pytest.mark.parametrize("direction", [(1.0, 0.0), (0.6, -0.8)])
@@ -107,3 +112,32 @@ def test_the_paper_cost_is_the_default_and_other_lines_are_refused():
         scene_from_dict(doc, "s.json")
     doc["planner"]["line"] = "race"
     assert scene_from_dict(doc, "s.json").settings.line == "race"
+
+
+def test_the_leg_force_limit_clips_what_the_trajectory_would_show_past_it():
+    """``leg_force_max``: a branch falls when Appendix A's leg force passes the limit at a step's
+    start or the stage's end; the force the planner checks is the trajectory's ``F_leg`` at the
+    same states (to rounding), and the search with the clip stays exact."""
+    p = racer(N=3, q=5, leg_force_max=4.0)
+    state, C0 = random_nodes(p, 60, 5)
+    u = np.random.default_rng(6).choice(p.u_values, 60)
+    r = p.simulate_stage(state, C0, u, np.zeros(60), np.zeros(60), record=True)
+    S, C = np.stack(r.record["state"]), np.stack(r.record["C_f"])
+    F = p.columns(S.transpose(1, 0, 2), np.stack(r.record["alpha_v"]), C,
+                  np.stack(r.record["V_f"]))["F_leg"] / (p.body.m * p.body.g)
+    both = p.leg_force_bw(np.concatenate([S, r.state[None]]), np.concatenate([C, r.C_f[None]]))
+    np.testing.assert_allclose(both[:-1], F, rtol=1e-12, atol=1e-12)
+    over = (both > 4.0).any(axis=0)
+    assert over.any() and not over.all()
+    free = racer(N=3, q=5).simulate_stage(state, C0, u, np.zeros(60), np.zeros(60))
+    np.testing.assert_array_equal(r.fell, free.fell | over)
+    # Exact: the search returns the exhaustive optimum around a pole within 2 body weights (at
+    # the preset's own rate, 2.06 1/(m s)), which is not the optimum without the limit.
+    poles = Obstacles(segments=[((8.0, 0.6), (8.0, -12.0))], clearance=0.3)
+    p = racer(N=3, q=5, obstacles=poles, leg_force_max=2.0, rate=2.06)
+    start = np.array([0.0, 0.0, 0.3, 0.0, 0.0])
+    f, choices = exhaustive(p, start, 0.0)
+    assert branch_and_bound(p, start, 0.0).choices == choices
+    assert exhaustive(racer(N=3, q=5, obstacles=poles, rate=2.06), start, 0.0)[1] != choices
+    with pytest.raises(ValueError, match="leg_force_max = 0.5 is outside"):
+        PlannerSettings(leg_force_max=0.5)

@@ -34,7 +34,9 @@ _PLANNER = {"stages": ("n_stages", "n_stages", 10), "choices": ("q", "q", 5),
             "stage_time": ("t_stage", "t_stage", 0.3),
             "lean_bound_deg": ("theta_bound", "theta_bound", 30.0),
             "sample_dt": ("sample_dt", "sample_dt", 0.1), "dt": ("dt", "planner_dt", 0.05),
-            "batch": ("batch", "batch", 128), "warm_start": ("warm_start", None, True),
+            "batch": ("batch", "batch", 128),
+            "leg_force_max_bw": ("leg_force_max", "leg_force_max", 0.0),
+            "warm_start": ("warm_start", None, True),
             "lower_bound": ("lower_bound", None, True), "fall_table": ("fall_table", None, True)}
 
 

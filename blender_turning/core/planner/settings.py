@@ -64,6 +64,12 @@ class PlannerSettings:
     the lean and the body's angulation give (``problem.py``, core/equipment.py's
     ``EdgeLimit``); off (the default: it tightens the racers' lines on Reid's courses,
     docs/racing.md): Section 3's curvature bounds alone."""
+    leg_force_max: float = 0.0
+    """The largest leg force a branch may need, in body weights (Appendix A's ``F_leg`` over
+    ``m g`` at every integration step's end); a branch that needs more is clipped as one the
+    figure cannot ski, as a fall is (exact: clipping only removes branches).  0: no limit, the
+    paper's problem.  A racer's legs hold about 5 (Supej & Holmberg 2019's peaks; docs/racing.md,
+    "The racer's line")."""
     line: str = "path"
     """The cost: ``"path"``, Section 6's ``sum d_i`` (the foot's distance to the drawn path);
     ``"race"``, the racer's line, the least time through the course: the distance not made good
@@ -82,6 +88,8 @@ class PlannerSettings:
         if self.line not in LINES:
             raise ValueError(f"line = {self.line!r} is not one of {', '.join(LINES)}")
         check_range("t_stage", self.t_stage, 0.0, 60.0, lo_open=True)
+        if self.leg_force_max:
+            check_range("leg_force_max", self.leg_force_max, 1.0, 20.0)
         check_range("n_stages", self.n_stages, 1, 64)
         check_range("q", self.q, 2, 64)
         if self.q_near:
