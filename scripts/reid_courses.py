@@ -73,6 +73,9 @@ def main(argv=None) -> int:
     p.add_argument("--leg-force", type=float, default=0.0, metavar="BW",
                    help="clip lines whose leg force passes this many body weights "
                         "(PlannerSettings.leg_force_max; 0: no limit)")
+    p.add_argument("--edge-max", type=float, default=None, metavar="DEG",
+                   help="the skis' largest edge angle, deg: C_f_max = 1 / (R_sc cos(edge)) by "
+                        "the sidecut relation (default: the preset's)")
     a = p.parse_args(argv)
     if a.angulation is not None:
         record = SPORT_PRESETS[a.preset]
@@ -83,6 +86,10 @@ def main(argv=None) -> int:
                               "stage_time": a.stage_time, "line": a.line,
                               "leg_force_max_bw": a.leg_force})
         doc["figure"]["limits"] = {"dC_f_max": a.rate}
+        if a.edge_max is not None:
+            sidecut = carving_of(a.preset).sidecut_radius
+            doc["figure"]["limits"]["C_f_max"] = 1.0 / (sidecut * math.cos(math.radians(
+                a.edge_max)))
         scene = scene_from_dict(doc, f"reid {gap:g}").with_settings(
             edge_limit=a.edge_limit)
         t0 = time.perf_counter()
@@ -98,6 +105,7 @@ def main(argv=None) -> int:
         print(f"gates {gap:g} m at {a.speed:g} m/s ({a.preset}, N = {a.stages}, q = {a.choices}, "
               f"t_stage {a.stage_time:g} s, line {a.line}, leg force <= {a.leg_force:g} BW, "
               f"rate {scene.figure.limits.dC_f_max:.3g}, "
+              f"C_f_max {scene.figure.limits.C_f_max:.3g}, "
               f"edge limit {'on' if a.edge_limit else 'off'}, "
               f"{time.perf_counter() - t0:.0f} s)")
         for i, k in enumerate(turn["gates"]):
