@@ -1,14 +1,16 @@
 """The racer's line: the least time through the course, as the branch-and-bound's cost
 (``PlannerSettings.line = "race"``; docs/racing.md, "The racer's line").
 
-A racer does not follow a drawn line: on flat ground at a constant speed the least time through
-the gates is the shortest path around the turning poles, turns as tight as the racer can hold
-joined by straight traverses (the minimum-time ski trajectories of Hirano 2006 and of Mote &
-Louie 1983 turn this way; Reid et al. 2020 measured racers' radii on such courses).  Over the
-receding horizon's fixed time that is the plan which gets furthest down the course: the cost
-replaces Section 6's ``sum d_i`` (the distance to the drawn path) by the distance *not* made
-good along the course's direction ``e`` (the path's start to its end, a unit vector), with the
-gates the hard constraints they are (the obstacles and their clearance, as in Section 6).
+A racer does not follow a drawn line: the racer's objective is the time from the start to the
+finish through the gates (Hirano, "Quickest descent line during alpine ski racing", Sports
+Engineering 9, 2006: the quickest line by optimal control, the edging angle the control), and
+racers' lines tend to "go straight, turn short" (Reinisch, Gautier & Monjo, "The optimal
+trajectory in top-level alpine skiing", 1994).  On flat ground at a constant speed the least time
+is the shortest path around the turning poles.  Over the receding horizon's fixed time that is
+the plan which gets furthest down the course: the cost replaces Section 6's ``sum d_i`` (the
+distance to the drawn path) by the distance *not* made good along the course's direction ``e``
+(the path's start to its end, a unit vector), with the gates the hard constraints they are (the
+obstacles and their clearance, as in Section 6).
 
 Progress is the centre of mass's: it moves forward at ``V_cm`` along the heading (Eq. 21, ``V_f
 (1 - C_f l sin theta_v) = V_cm``), so over the stage's integration steps (``h = dt``, headings
@@ -28,22 +30,22 @@ Each stage's cost is non-negative, so ``f`` never decreases along a branch and t
 The bound (:meth:`RaceCost.bound`): from a node with heading ``psi0`` and curvature ``C0``, the
 heading at the end of its ``k``-th integration step lies in ``psi0 + I_k`` (``reach.py``: the
 curvature within ``C0 -+ dC_f_max (k + 1) h``, clipped to ``C_f_max``, and the heading rate
-``V_f C_f`` within its range over the lean bound).  So each term is at most ``V_cm h (c_k-1 +
-c_k) / 2`` with ``c_k = max cos(phi_e - psi)`` over ``psi`` in ``psi0 + I_k`` (``c_-1`` the
-node's own ``cos(phi_e - psi0)``), and the cost still to come, over the node's remaining
+``V_f C_f`` within its range over the lean bound).  So each step makes good at most ``V_cm h
+(c_k-1 + c_k) / 2`` with ``c_k = max cos(phi_e - psi)`` over ``psi`` in ``psi0 + I_k`` (``c_-1``
+the node's own ``cos(phi_e - psi0)``), and the cost still to come, over the node's remaining
 ``n = K t_stage / dt`` steps, is at least ``V_cm h sum (1 - (c_k-1 + c_k) / 2)``: 0 for a node
 running straight down the course, more for one heading across it that must first turn at the
 rates Section 6.1 allows.  Where the tables do not apply (a varying speed, or the physical limit
 binds: ``ReachBound.for_problem``) the bound is 0, which every non-negative cost admits.
 
 The proof reuse of ``proof.py`` stays valid: a stage's cost depends on the node and its choice
-only (``e`` and ``v_max`` are fixed for the problem), as ``sum d_i`` does.
+only (``e`` and ``V_cm`` are fixed for the problem), as ``sum d_i`` does.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..physics.dynamics import THETA_DIR, X, Y
+from ..physics.dynamics import THETA_DIR
 
 __all__ = ["LINES", "RaceCost"]
 
