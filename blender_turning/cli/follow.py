@@ -143,7 +143,8 @@ def _settings(st) -> dict:
     return {"t_stage": st.t_stage, "n_stages": st.n_stages, "q": st.q, "q_near": st.q_near,
             "theta_bound": st.theta_bound, "sample_dt": st.sample_dt, "dt": st.dt,
             "warm_start": st.warm_start, "lower_bound": st.lower_bound,
-            "lookahead": st.lookahead, "fall_table": st.fall_table, "batch": st.batch}
+            "lookahead": st.lookahead, "fall_table": st.fall_table, "batch": st.batch,
+            "line": st.line, "leg_force_max": st.leg_force_max}
 
 
 def _plot(outputs, scene, traj, failed_at=None):
