@@ -141,3 +141,21 @@ def test_the_leg_force_limit_clips_what_the_trajectory_would_show_past_it():
     assert exhaustive(racer(N=3, q=5, obstacles=poles, rate=2.06), start, 0.0)[1] != choices
     with pytest.raises(ValueError, match="leg_force_max = 0.5 is outside"):
         PlannerSettings(leg_force_max=0.5)
+
+
+def test_the_receding_horizon_plans_the_same_line_with_and_without_its_speed_ups():
+    """Past a turning pole, the receding horizon for 1.8 s: the warm start, the reused proof and
+    the bound (each exact for the racer's cost) leave every plan as the plain search's."""
+    from blender_turning.core.planner import follow
+    poles = Obstacles(segments=[((18.0, 0.6), (18.0, -12.0)), ((28.0, -0.6), (28.0, 12.0))],
+                      clearance=0.3)
+    fast = racer(N=6, q=5, obstacles=poles)
+    plain = Problem(fast.figure, fast.distance, poles, replace(
+        fast.settings, warm_start=False, reuse_proof=False, lower_bound=False))
+    a, b = (follow(p, np.zeros(5), 0.0, 1.8) for p in (fast, plain))
+    assert [r.u for r in a.replans] == [r.u for r in b.replans]
+    np.testing.assert_allclose([r.f_opt for r in a.replans], [r.f_opt for r in b.replans],
+                               rtol=1e-9)
+    tr = a.trajectory
+    assert np.interp(18.0, tr.x, tr.y) > 0.9                 # round the pole's tip, outside it
+    assert sum(r.stats.expanded for r in a.replans) < sum(r.stats.expanded for r in b.replans)
