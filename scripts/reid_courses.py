@@ -76,12 +76,15 @@ def main(argv=None) -> int:
     p.add_argument("--edge-max", type=float, default=None, metavar="DEG",
                    help="the skis' largest edge angle, deg: C_f_max = 1 / (R_sc cos(edge)) by "
                         "the sidecut relation (default: the preset's)")
+    p.add_argument("--amplitude", type=float, default=2.5, metavar="M",
+                   help="the line through the gates, m left and right of the fall line (the "
+                        "turning poles from 1.5 m inside it)")
     a = p.parse_args(argv)
     if a.angulation is not None:
         record = SPORT_PRESETS[a.preset]
         register_preset(replace(record, angulation=math.radians(a.angulation)), replace=True)
     for gap in a.gates:
-        doc = course(gap, a.speed, a.preset, gates=a.count,
+        doc = course(gap, a.speed, a.preset, gates=a.count, amplitude=a.amplitude,
                      planner={"stages": a.stages, "choices": a.choices,
                               "stage_time": a.stage_time, "line": a.line,
                               "leg_force_max_bw": a.leg_force})

@@ -12,7 +12,8 @@ from blender_turning.core import preset
 from blender_turning.core.course.obstacles import Obstacles
 from blender_turning.core.course.path import HermitePath, PathDistance
 from blender_turning.core.course.scene import scene_from_dict
-from blender_turning.core.planner import PlannerSettings, Problem, branch_and_bound, exhaustive
+from blender_turning.core.planner import (PlannerSettings, Problem, SpeedProfile, branch_and_bound,
+                                          exhaustive)
 from blender_turning.core.validate import FieldError
 
 
@@ -141,6 +142,9 @@ def test_the_leg_force_limit_clips_what_the_trajectory_would_show_past_it():
     assert exhaustive(racer(N=3, q=5, obstacles=poles, rate=2.06), start, 0.0)[1] != choices
     with pytest.raises(ValueError, match="leg_force_max = 0.5 is outside"):
         PlannerSettings(leg_force_max=0.5)
+    varying = SpeedProfile("time", [0.0, 5.0], [12.0, 14.0])
+    with pytest.raises(ValueError, match="leg_force_max needs a constant speed held"):
+        Problem(p.figure, p.distance, poles, p.settings, varying)
 
 
 def test_the_receding_horizon_plans_the_same_line_with_and_without_its_speed_ups():

@@ -141,9 +141,9 @@ class Problem:
         self._fused = not self.free and flat_stage.applies(self)
         if self.free:
             free_speed.setup(self, lean)
-        if settings.leg_force_max and self.free:
-            raise ValueError("leg_force_max needs the speed held (flat ground, a speed profile): "
-                             "on terrain the speed is a state")
+        if settings.leg_force_max and (self.free or not self.speed.is_constant):
+            raise ValueError("leg_force_max needs a constant speed held (flat ground): the leg "
+                             "force is checked at it")
         #: The racer's cost (``race.py``) for ``settings.line == "race"``, or ``None``: Section
         #: 6's distance to the path.
         self.race = None
@@ -351,7 +351,7 @@ class Problem:
         n, rows, m = P.shape
         S = P.transpose(1, 0, 2).reshape(rows, n * m)
         c = np.asarray(C, float).reshape(n * m)
-        V = float(self.speed.V[0]) if self.speed.is_constant else self.speed.max
+        V = float(self.speed.V[0])
         _, cf, alpha, _ = steer(self.body, self.limits, c, S, None, 0.0, V)
         F = leg_force(self.body, S[THETA_V], S[OMEGA_V], alpha, cf, V)[0]
         return F.reshape(n, m) / (self.body.m * self.body.g)

@@ -68,7 +68,7 @@ class RaceCost:
         self.e = e / np.hypot(*e)
         self.angle = float(np.arctan2(self.e[1], self.e[0]))
         st = problem.settings
-        self.n_stages, self.steps, self.h = st.n_stages, st.steps_per_stage, st.dt
+        self.n_stages, self.steps = st.n_stages, st.steps_per_stage
         #: ``V_cm h``, m: what one integration step makes good at most (the speed held; with a
         #: speed profile, its largest).
         self.step = problem.speed.max * st.dt
