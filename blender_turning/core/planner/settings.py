@@ -68,8 +68,8 @@ class PlannerSettings:
     """The largest leg force a branch may need, in body weights (Appendix A's ``F_leg`` over
     ``m g`` at every integration step's end; at a constant speed held); a branch that needs more
     is clipped as one the figure cannot ski, as a fall is (exact: clipping only removes
-    branches).  0: no limit, the paper's problem.  A racer's legs hold about 5 (Supej & Holmberg 2019's peaks; docs/racing.md,
-    "The racer's line")."""
+    branches).  0: no limit, the paper's problem.  A racer's legs hold about 5 (Supej &
+    Holmberg 2019's peaks; docs/racing.md, "The least-time line")."""
     line: str = "path"
     """The cost: ``"path"``, Section 6's ``sum d_i`` (the foot's distance to the drawn path);
     ``"race"``, the racer's line, the least time through the course: the distance not made good
