@@ -5,6 +5,7 @@ core/equipment.py), the largest lean and the peak leg force, their mean +- SD ov
 against Reid's (core/course/reid.py), and the whole run's extremes.
 
     python scripts/reid_courses.py [--gates 10 13] [--speed 12] [--stages 10 --choices 9]
+        [--line race] [--leg-force 5] [--rate 2.06]
 
 The courses (docs/racing.md, "The racer's line"): gates ``gap`` m apart along the fall line
 (+x), the line through them 2.5 m left and right of it, each turning pole a line from 1.5 m
@@ -66,15 +67,32 @@ def main(argv=None) -> int:
     p.add_argument("--edge-limit", action="store_true",
                    help="clip lines whose edge the lean and the angulation cannot hold "
                         "(PlannerSettings.edge_limit)")
+    p.add_argument("--line", choices=("path", "race"), default="path",
+                   help="the planner's cost: the distance to the drawn line (Section 6) or the "
+                        "racer's least time through the gates (PlannerSettings.line)")
+    p.add_argument("--leg-force", type=float, default=0.0, metavar="BW",
+                   help="clip lines whose leg force passes this many body weights "
+                        "(PlannerSettings.leg_force_max; 0: no limit)")
+    p.add_argument("--edge-max", type=float, default=None, metavar="DEG",
+                   help="the skis' largest edge angle, deg: C_f_max = 1 / (R_sc cos(edge)) by "
+                        "the sidecut relation (default: the preset's)")
+    p.add_argument("--amplitude", type=float, default=2.5, metavar="M",
+                   help="the line through the gates, m left and right of the fall line (the "
+                        "turning poles from 1.5 m inside it)")
     a = p.parse_args(argv)
     if a.angulation is not None:
         record = SPORT_PRESETS[a.preset]
         register_preset(replace(record, angulation=math.radians(a.angulation)), replace=True)
     for gap in a.gates:
-        doc = course(gap, a.speed, a.preset, gates=a.count,
+        doc = course(gap, a.speed, a.preset, gates=a.count, amplitude=a.amplitude,
                      planner={"stages": a.stages, "choices": a.choices,
-                              "stage_time": a.stage_time})
+                              "stage_time": a.stage_time, "line": a.line,
+                              "leg_force_max_bw": a.leg_force})
         doc["figure"]["limits"] = {"dC_f_max": a.rate}
+        if a.edge_max is not None:
+            sidecut = carving_of(a.preset).sidecut_radius
+            doc["figure"]["limits"]["C_f_max"] = 1.0 / (sidecut * math.cos(math.radians(
+                a.edge_max)))
         scene = scene_from_dict(doc, f"reid {gap:g}").with_settings(
             edge_limit=a.edge_limit)
         t0 = time.perf_counter()
@@ -88,7 +106,9 @@ def main(argv=None) -> int:
         turn = per_turn(traj, scene.figure, gate_x)
         ext = extremes(traj, scene.figure, gate_x[0], gate_x[-1])
         print(f"gates {gap:g} m at {a.speed:g} m/s ({a.preset}, N = {a.stages}, q = {a.choices}, "
-              f"t_stage {a.stage_time:g} s, rate {scene.figure.limits.dC_f_max:.3g}, "
+              f"t_stage {a.stage_time:g} s, line {a.line}, leg force <= {a.leg_force:g} BW, "
+              f"rate {scene.figure.limits.dC_f_max:.3g}, "
+              f"C_f_max {scene.figure.limits.C_f_max:.3g}, "
               f"edge limit {'on' if a.edge_limit else 'off'}, "
               f"{time.perf_counter() - t0:.0f} s)")
         for i, k in enumerate(turn["gates"]):

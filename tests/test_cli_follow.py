@@ -51,6 +51,20 @@ def test_follow_writes_track_stats_and_plot(tmp_path, capsys):
     assert "follow: short road" in capsys.readouterr().out
 
 
+def test_follow_plans_the_racers_line_when_asked(tmp_path, capsys):
+    """``--line race``: the least time down the road (core/planner/race.py); the road is
+    straight and the tree beside it, so the line is straight and costs nothing."""
+    stats = tmp_path / "s.json"
+    assert main(["follow", str(small_scene(tmp_path)), "--line", "race", "--stats",
+                 str(stats)]) == 0
+    doc = json.loads(stats.read_text())
+    assert doc["settings"]["line"] == "race"
+    assert all(r["f_opt"] == 0.0 for r in doc["replans"])
+    with pytest.raises(SystemExit):
+        main(["follow", str(small_scene(tmp_path)), "--line", "fastest"])
+    assert "invalid choice: 'fastest'" in capsys.readouterr().err
+
+
 def test_closed_corridor_is_one_line_with_the_position(tmp_path):
     scene = small_scene(tmp_path, wall=True)
     r = subprocess.run([sys.executable, "-m", "blender_turning", "follow", str(scene),

@@ -38,6 +38,10 @@ def register(sub):
                    help="values of dC_f/dt tried per stage with an obstacle within reach "
                         "(0: --choices; 2 q - 1 passes obstacles closer)")
     p.add_argument("--stage-time", type=float, help="t_stage, s")
+    p.add_argument("--line", choices=("path", "race"),
+                   help="the planner's cost: path, the distance to the drawn path (Section 6); "
+                        "race, the least time down the course around the obstacles (scene "
+                        "default; docs/racing.md)")
     p.add_argument("--target-speed", type=float, metavar="V",
                    help="m/s: brake at the foot, within the grip, to hold at most this speed "
                         "(and what the grip allows on the path's tightest bend; "
@@ -63,6 +67,8 @@ def run(args) -> int:
         changes["q_near"] = check("--choices-near", args.choices_near, "q_near")
     if args.stage_time is not None:
         changes["t_stage"] = check("--stage-time", args.stage_time, "t_stage")
+    if args.line is not None:
+        changes["line"] = args.line
     scene = load_scene(args.scene)
     if args.grip is not None and args.target_speed is None:
         raise ValueError("--grip needs --target-speed (the grip bounds the braking)")
@@ -137,7 +143,8 @@ def _settings(st) -> dict:
     return {"t_stage": st.t_stage, "n_stages": st.n_stages, "q": st.q, "q_near": st.q_near,
             "theta_bound": st.theta_bound, "sample_dt": st.sample_dt, "dt": st.dt,
             "warm_start": st.warm_start, "lower_bound": st.lower_bound,
-            "lookahead": st.lookahead, "fall_table": st.fall_table, "batch": st.batch}
+            "lookahead": st.lookahead, "fall_table": st.fall_table, "batch": st.batch,
+            "line": st.line, "leg_force_max": st.leg_force_max}
 
 
 def _plot(outputs, scene, traj, failed_at=None):

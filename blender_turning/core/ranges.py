@@ -116,6 +116,8 @@ RANGES: dict[str, Range] = {
                        lo_open=True),
     "planner_dt": Range(1e-4, 1.0, "s", "the planner's RK4 step"),
     "batch": Range(1, 4096, "", "nodes expanded together", integer=True),
+    "leg_force_max": Range(0.0, 20.0, "body weights", "the largest leg force a plan may need "
+                           "(0: no limit; from 1: less than the figure's weight cannot stand)"),
     "search_size": Range(1, 7.0 ** 16, "", "q^N, the leaves of the full search tree: N = 16, "
                          "q = 7 plans scenes/slalom.json in 24 s, N = 12, q = 9 in 23 s, while "
                          "N = 16, q = 9 takes 183 s and 340 MB (BENCHMARKS.md)"),

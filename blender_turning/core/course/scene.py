@@ -19,6 +19,7 @@ from .follow_problem import DEFAULT_CLEARANCE, FollowSetup, start_state
 from ..physics.params import PRESETS, Figure, preset
 from .path import HermitePath
 from ..planner import FollowResult, PlannerSettings, Problem, SpeedProfile
+from ..planner.race import LINES
 from ..ranges import RANGES
 from ..ground.scene_terrain import read_terrain
 from ..validate import FieldError, Fields, read_json
@@ -33,7 +34,9 @@ _PLANNER = {"stages": ("n_stages", "n_stages", 10), "choices": ("q", "q", 5),
             "stage_time": ("t_stage", "t_stage", 0.3),
             "lean_bound_deg": ("theta_bound", "theta_bound", 30.0),
             "sample_dt": ("sample_dt", "sample_dt", 0.1), "dt": ("dt", "planner_dt", 0.05),
-            "batch": ("batch", "batch", 128), "warm_start": ("warm_start", None, True),
+            "batch": ("batch", "batch", 128),
+            "leg_force_max_bw": ("leg_force_max", "leg_force_max", 0.0),
+            "warm_start": ("warm_start", None, True),
             "lower_bound": ("lower_bound", None, True), "fall_table": ("fall_table", None, True)}
 
 
@@ -230,8 +233,8 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
         speed = SpeedProfile.constant(fig.body.V_cm)
 
     # Planner settings (Section 6.1).
-    pl = top.table("planner", set(_PLANNER))
-    kw = {}
+    pl = top.table("planner", set(_PLANNER) | {"line"})
+    kw = {"line": pl.string("line", "path", choices=LINES)}   # the cost (planner/race.py)
     for key, (field, rng, default) in _PLANNER.items():
         if rng is None:
             kw[field] = pl.boolean(key, default)

@@ -12,6 +12,10 @@ give (:class:`..equipment.EdgeLimit`: ``R_sc |C_f| cos(min(edge_max, max(0, thet
 A))) <= 1``): the racer cannot hold that edge, so the line is not skiable (docs/racing.md, "The
 racer's line"; ``PlannerSettings.edge_limit``).
 
+With ``PlannerSettings.leg_force_max`` a branch also falls when, at the start of an integration
+step or at the stage's end, the leg force (Appendix A) passes that many body weights: the legs
+cannot hold it.
+
 A node collides when, over any integration step, the foot's straight move or that of the ground
 point under the centre of mass (:meth:`Problem.body_point`) comes within the clearance of an
 obstacle (Section 6 checks the foot; the body sways up to ``l sin(theta_bound)`` to the side of
@@ -31,7 +35,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..physics.dynamics import PHYSICAL_MARGIN, THETA_DIR, THETA_V, X, Y, leg_force, steer
+from ..physics.dynamics import (PHYSICAL_MARGIN, OMEGA_V, THETA_DIR, THETA_V, X, Y, leg_force,
+                                 steer)
 from ..physics.model import V_CM, speed_held
 from ..ground.terrain import FLAT
 from ..course.obstacles import Obstacles
@@ -136,6 +141,18 @@ class Problem:
         self._fused = not self.free and flat_stage.applies(self)
         if self.free:
             free_speed.setup(self, lean)
+        if settings.leg_force_max and (self.free or not self.speed.is_constant):
+            raise ValueError("leg_force_max needs a constant speed held (flat ground): the leg "
+                             "force is checked at it")
+        #: The racer's cost (``race.py``) for ``settings.line == "race"``, or ``None``: Section
+        #: 6's distance to the path.
+        self.race = None
+        if settings.line == "race":
+            if self.free:
+                raise ValueError("line = 'race' needs the speed held (flat ground, a speed "
+                                 "profile): on terrain the speed is a state")
+            from .race import RaceCost
+            self.race = RaceCost(self)
 
     @property
     def flat_rhs(self) -> bool:
@@ -196,8 +213,13 @@ class Problem:
 
     def lower_bound(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Admissible bound on the cost still to come after nodes at ``depth`` whose last sample
-        was ``d_last`` from the path: the sum of :meth:`sample_bounds`."""
+        was ``d_last`` from the path: the sum of :meth:`sample_bounds` (the racer's line: its
+        own, ``race.py``, given the nodes' ``state`` and ``C_f``)."""
         d_last = np.asarray(d_last, float)
+        if self.race is not None:
+            if state is None:
+                return np.zeros(d_last.shape)
+            return self.race.bound(state, C_f, depth).reshape(d_last.shape)
         terms = self.sample_bounds(d_last, depth, state, C_f, reach)
         return self.total_bound(terms, d_last, depth, state).reshape(d_last.shape)
 
@@ -321,6 +343,19 @@ class Problem:
         per = G.shape[1]
         return r[:, per - 1::per] * (1 + 1e-6) + 1e-9
 
+    def leg_force_bw(self, P, C) -> np.ndarray:
+        """Appendix A's leg force in body weights at states ``P`` (shape ``(steps + 1, rows,
+        m)``) with curvatures ``C`` (shape ``(steps + 1, m)``): ``alpha_v`` from Eq. (12) at each
+        state (:func:`..dynamics.steer`, the curvature already within its bounds), as the
+        trajectory's ``F_leg`` has it at its samples."""
+        n, rows, m = P.shape
+        S = P.transpose(1, 0, 2).reshape(rows, n * m)
+        c = np.asarray(C, float).reshape(n * m)
+        V = float(self.speed.V[0])
+        _, cf, alpha, _ = steer(self.body, self.limits, c, S, None, 0.0, V)
+        F = leg_force(self.body, S[THETA_V], S[OMEGA_V], alpha, cf, V)[0]
+        return F.reshape(n, m) / (self.body.m * self.body.g)
+
     def body_point(self, state) -> np.ndarray:
         """The ground point under the centre of mass, shape ``(2, ...)`` for ``state`` of shape
         ``(>= 4, ...)``: the foot plus ``l sin(theta_v)`` across the direction of travel, to the
@@ -366,7 +401,8 @@ class Problem:
                 st.steps_per_stage, self.limits.C_f_max, self.limits.dC_f_max, st.t_stage)
             P = flat_stage.integrate(x, CF, st.dt, float(self.speed.V[0]), self.body)
             fell = np.zeros(m, bool)
-            C = np.concatenate([CF[:, 0], cf_end[None]]) if self.edge_limit else None
+            C = np.concatenate([CF[:, 0], cf_end[None]]) \
+                if self.edge_limit or st.leg_force_max else None
         else:
             P, cf_end, fell, rec, C = self._integrate(x, C_f0, u, t0, s0, record)
         # P: the state at every step's end, shape (steps + 1, rows, m).  The distance travelled
@@ -378,11 +414,17 @@ class Problem:
         fell |= ~(np.abs(P[1:, THETA_V]) <= st.theta_bound).all(axis=0)
         if self.edge_limit is not None:      # an edge the lean cannot hold (module docstring)
             fell |= ~self.edge_limit.holds(P[:, THETA_V], C).all(axis=0)
+        if st.leg_force_max:                 # a leg force the legs cannot hold (module docstring)
+            fell |= ~(self.leg_force_bw(P, C) <= st.leg_force_max).all(axis=0)
         per = st.steps_per_sample
-        D = self.distance(P[per::per, :2].transpose(0, 2, 1))      # (samples, m)
-        cost = np.zeros(m)
-        for d in D:
-            cost = cost + d
+        if self.race is not None:         # the racer's cost (race.py): the distance not made good
+            cost = self.race.stage_cost(P)
+            D = np.zeros((1, m))
+        else:
+            D = self.distance(P[per::per, :2].transpose(0, 2, 1))      # (samples, m)
+            cost = np.zeros(m)
+            for d in D:
+                cost = cost + d
         collided = np.zeros(m, bool)
         if len(self.obstacles) or self.movers is not None:
             # The foot's and the body's ground point's moves, step by step.

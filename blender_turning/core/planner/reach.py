@@ -59,6 +59,8 @@ class ReachBound:
         hi = np.cumsum(h * r_hi, axis=1) - h * r_hi + h * np.maximum(r_hi, 0.0)
         lo = np.cumsum(h * r_lo, axis=1) - h * r_lo + h * np.minimum(r_lo, 0.0)
         lo, hi = lo[:-1], hi[1:]                       # a cell's hull: its lower and upper end
+        #: ``I_n`` of every grid cell (heading relative to the node's, rad), shape (cells, steps).
+        self.lo, self.hi = lo, hi
         per = st.steps_per_sample
         # Samples while every heading interval is narrower than pi: later the hull of where the
         # foot can be is (nearly) a disc, and the cheap Lipschitz bound says as much.
@@ -75,17 +77,21 @@ class ReachBound:
         self.L = problem.v_max * st.sample_dt * np.arange(1, H.shape[1] + 1) * (1 + 1e-9) + 1e-9
 
     @staticmethod
-    def for_problem(problem) -> "ReachBound | None":
+    def for_problem(problem, headings_only: bool = False) -> "ReachBound | None":
         """The bound, if it applies: constant speed, the physical limit cannot bind, and the
-        paper's nearest-sample distance."""
-        if (not problem.speed.is_constant or problem._physical_binds or problem.distance.exact
-                or problem.settings.reach_directions == 0):
+        paper's nearest-sample distance.  ``headings_only``: the tables of the heading intervals
+        ``I_n`` (``lo``, ``hi``), which any path distance may use (the
+        racer's line, ``race.py``)."""
+        if not problem.speed.is_constant or problem._physical_binds:
             return None
         st = problem.settings
+        directions = max(st.reach_directions, 1) if headings_only else st.reach_directions
+        if not headings_only and (problem.distance.exact or directions == 0):
+            return None
         key = (problem.body, problem.limits, st.dt, st.t_stage, st.n_stages, st.sample_dt,
-               st.theta_bound, float(problem.speed.V[0]), st.reach_directions)
+               st.theta_bound, float(problem.speed.V[0]), directions)
         if key not in _CACHE:
-            _CACHE[key] = ReachBound(problem, st.reach_directions)
+            _CACHE[key] = ReachBound(problem, directions)
             if len(_CACHE) > 64:
                 _CACHE.pop(next(iter(_CACHE)))
         return _CACHE[key]

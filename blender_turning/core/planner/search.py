@@ -200,6 +200,9 @@ def _bound(problem, r, depth, togo, reach, cols, pairs=None, direct=None):
     st = problem.settings
     if not st.lower_bound:
         return (np.zeros(len(cols)) if togo is None else togo), None
+    if problem.race is not None:      # the racer's line (race.py); its last stage costs >= 0
+        h = problem.race.bound(r.state[:, cols], r.C_f[cols], depth[cols])
+        return (h if togo is None else np.maximum(h, togo)), None
     depth = depth[cols]
     state = r.state[:, cols]
     n = int(np.max(st.n_stages - depth, initial=0)) * st.samples_per_stage
@@ -383,13 +386,14 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
         prio = np.full(len(par), np.inf)
         i = np.flatnonzero(inner)
         pairs = problem.pair_floors(r.state[:, i], (N - depth[i]) * st.samples_per_stage) \
-            if st.lower_bound and len(i) else None
+            if st.lower_bound and len(i) and problem.race is None else None
         h, direct = _bound(problem, r, depth, None if togo is None else togo[i], False, i, pairs)
         prio[i] = f[i] + h
         # What this search proves about each child (proof.py): f + h, f for a leaf, inf if none.
         nodes.child_f[par, ch] = f
         keep = inner & ~(prio > ub + tol())
-        if st.lower_bound and keep.any() and problem.reach_bound() is not None:
+        if (st.lower_bound and keep.any() and problem.race is None
+                and problem.reach_bound() is not None):
             sub = np.flatnonzero(keep[i])
             k = i[sub]
             prio[k] = np.maximum(prio[k], f[k] + _bound(

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.params import check_range
+from .race import LINES
 
 __all__ = ["PlannerSettings", "SpeedProfile"]
 
@@ -63,6 +64,16 @@ class PlannerSettings:
     the lean and the body's angulation give (``problem.py``, core/equipment.py's
     ``EdgeLimit``); off (the default: it tightens the racers' lines on Reid's courses,
     docs/racing.md): Section 3's curvature bounds alone."""
+    leg_force_max: float = 0.0
+    """The largest leg force a branch may need, in body weights (Appendix A's ``F_leg`` over
+    ``m g`` at every integration step's end; at a constant speed held); a branch that needs more
+    is clipped as one the figure cannot ski, as a fall is (exact: clipping only removes
+    branches).  0: no limit, the paper's problem.  A racer's legs hold about 5 (Supej &
+    Holmberg 2019's peaks; docs/racing.md, "The least-time line")."""
+    line: str = "path"
+    """The cost: ``"path"``, Section 6's ``sum d_i`` (the foot's distance to the drawn path);
+    ``"race"``, the racer's line, the least time through the course: the distance not made good
+    along the course's direction, around the obstacles (``race.py``; docs/racing.md)."""
     batch: int = 128
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
     one node at a time; a long search grows its batches up to 4 times this, ``search.py``).  Any
@@ -74,7 +85,11 @@ class PlannerSettings:
     proven optimal and says so in its statistics."""
 
     def __post_init__(self):
+        if self.line not in LINES:
+            raise ValueError(f"line = {self.line!r} is not one of {', '.join(LINES)}")
         check_range("t_stage", self.t_stage, 0.0, 60.0, lo_open=True)
+        if self.leg_force_max:
+            check_range("leg_force_max", self.leg_force_max, 1.0, 20.0)
         check_range("n_stages", self.n_stages, 1, 64)
         check_range("q", self.q, 2, 64)
         if self.q_near:
