@@ -652,7 +652,7 @@ MUTANTS = [
     M("angulation_com_uncorrected", "mapping/sports/skier.py",
       "            extra = extra + step\n", "            pass\n", RACING, "mapping"),
     M("angulation_com_no_secant", "mapping/sports/skier.py",
-      "            if last is None:\n", "            if True:\n", RACING, "mapping"),
+      "            if last is not None:\n", "            if False:\n", RACING, "mapping"),
     M("angulation_upper_body_leans", "mapping/sports/skier.py",
       "add_local_rotation(b, B.HIPS, fwd, back + extra)", "add_local_rotation(b, B.HIPS, fwd, extra)",
       RACING, "mapping"),

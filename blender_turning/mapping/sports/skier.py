@@ -5,6 +5,9 @@ from two-bone IK on the resulting leg length and the waist bend is tied to the k
 ski tilt is linear in ``C_f`` with the outside (weight-bearing) ski tilted slightly more; when
 ``theta_v`` and the ski tilt disagree the leg is twisted in or out; the poles are planted at
 ``phi`` = 30 and 210 deg, just before each turn; the upper body twists in phase with the turn.
+On a preset's carving skis the skier angulates as racers do (docs/racing.md): shins on the
+skis' edge angle, hips and knees inside the turn, the upper body more upright, the centre of
+mass of the posed figure on ``theta_v``.
 """
 from __future__ import annotations
 
@@ -43,8 +46,8 @@ POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
 #: would give the same numbers to rounding, so it leaves the loop.
 SETTLED = 1e-12
 #: Poses tried before the angulated one (SkierMapping.pose): the centre of mass's lean from the
-#: first (the legs on theta_v), then the secant's; the third leaves it within 0.01 deg of theta_v
-#: at the apexes (measured, tests/test_mapping_racing.py).
+#: first (the legs on theta_v), then the secant's; the third leaves it within 0.003 deg of
+#: theta_v at every frame of a racer's slalom (measured, tests/test_mapping_racing.py).
 COM_PASSES = 2
 
 
@@ -88,12 +91,12 @@ class SkierOptions(SpringLegOptions):
     angulate inside; 0: none).  1.5 puts Reid et al.'s 65 deg of edge on a 55 deg lean at about
     20 deg between the legs' and the trunk's lines (docs/racing.md)."""
     angulation_max: float = math.radians(25.0)
-    """The most the upper body stands more upright than the lean, rad (the legs' line then
-    leans further, the hip joints take about 30 deg between them: the hip's range of
-    adduction, 30 deg)."""
+    """The most the upper body stands more upright than the lean, rad: with the legs' line
+    leaning further, the hip joints then take about 30 deg between legs and trunk, the hip's
+    range of adduction (30 deg, AAOS normal ranges)."""
     knee_in_max: float = math.radians(35.0)
     """With angulation: the largest turn of a knee in or out about its hip-to-ankle line, rad
-    (the hip's internal and external rotation, 35-45 deg)."""
+    (within the hip's 45 deg of internal and external rotation, AAOS normal ranges)."""
 
     def __post_init__(self):
         super().__post_init__()
@@ -192,12 +195,12 @@ class SkierMapping(Mapping):
             P = {name: trial.pose(name) for name in b.skel.names}
             com, _ = centre_and_roll_inertia(P, b.skel, 1.0)
             miss = np.arctan2(-com[:, 0], com[:, 2]) - th
-            if last is None:
-                step = -miss               # the first step as if the centre leaned with the legs
-            else:
-                slope = (miss - last[1]) / np.where(extra != last[0], extra - last[0], 1.0)
-                step = np.where((extra != last[0]) & (np.abs(slope) > 1e-3),
-                                -miss / np.where(np.abs(slope) > 1e-3, slope, 1.0), -miss)
+            slope = np.ones_like(th)      # the first step as if the centre leaned with the legs
+            if last is not None:
+                moved = extra - last[0]
+                np.divide(miss - last[1], moved, out=slope, where=moved != 0.0)
+                slope[np.abs(slope) < 1e-3] = 1.0
+            step = -miss / slope
             last = (extra, miss)
             extra = extra + step
         self._pose(b, traj, o, spec, back, extra)
