@@ -68,7 +68,8 @@ def angles(obj, frame: int) -> dict:
     line = h("upper_arm.L") - h("upper_arm.R")
     return {"lean": lean, "edge": math.degrees(math.atan2(P["ski.L"][2, 0], P["ski.L"][0, 0])),
             "shin": _incl(h(f"shin.{out}") - h(f"foot.{out}")),
-            "legs": _incl(mid("thigh") - mid("foot")), "trunk": _incl(mid("upper_arm") - mid("thigh")),
+            "legs": _incl(mid("thigh") - mid("foot")),
+            "trunk": _incl(mid("upper_arm") - mid("thigh")),
             "counter": math.copysign(math.degrees(math.atan2(line[1], -line[0])), lean)}
 
 
