@@ -1,5 +1,5 @@
 """A racer in Blender (docs/racing.md): the Sport Presets menu's Slalom Racer on a skier figure
-bakes the racer's lean and stands the skis on the sidecut relation's edge angle."""
+bakes the racer's lean, stands the skis on the sidecut relation's edge angle and angulates."""
 import math
 import os
 import tempfile
@@ -41,6 +41,15 @@ def test_the_racer_bakes_its_lean_and_carving_skis(racer):
     roll = np.arctan2(P["ski.L"][:, 2, 0], P["ski.L"][:, 0, 0])
     np.testing.assert_allclose(roll, carving_of("slalom_racer").edge_angle(traj.C_f), atol=1e-9)
     assert math.degrees(np.abs(roll).max()) > 65.0
+    # It angulates (docs/racing.md): at its deepest lean the shins stand on the skis' edge
+    # (measured 1e-12 deg) and the trunk, hips to shoulders, more upright than the lean.
+    k = int(np.argmax(np.abs(traj.theta_v)))
+    head = lambda b: P[b][k, :3, 3]                                     # noqa: E731
+    for s in "LR":
+        shin = head(f"shin.{s}") - head(f"foot.{s}")
+        assert math.atan2(-shin[0], shin[2]) == pytest.approx(roll[k], abs=1e-4)
+    trunk = (head("upper_arm.L") + head("upper_arm.R") - head("thigh.L") - head("thigh.R"))
+    assert abs(math.atan2(-trunk[0], trunk[2])) < abs(traj.theta_v[k]) - math.radians(10.0)
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
 
 

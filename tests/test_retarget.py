@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from blender_turning.core import preset, simulate
+from blender_turning.core import preset, simulate, slalom_start
 from blender_turning.core.controllers import PhaseEllipse
 from blender_turning.mapping import map_trajectory
 from blender_turning.mapping.retarget.bone_map import load_bone_map, parse_bone_map
@@ -71,11 +71,16 @@ BM = parse_bone_map({"name": "u", "joints": {j: PREFIX + j for j in load_bone_ma
     "builtin").joints}})
 
 
-@pytest.fixture(scope="module")
-def run():
-    fig = preset("skier")
-    traj = simulate(fig, PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(23),
-                                      heading=0.3), duration=6.0)
+@pytest.fixture(scope="module", params=["skier", "slalom_racer"])
+def run(request):
+    """The skier's turns at 23 deg; the slalom racer's at 60 deg, angulated (the pelvis turned
+    at the hip joints, the knees in: the same bones, retargeted the same way)."""
+    fig = preset(request.param)
+    lean = 23.0 if request.param == "skier" else 60.0
+    ctl = PhaseEllipse(fig.body, omega0=math.pi, theta_max=math.radians(lean), heading=0.3,
+                       limits=fig.limits)
+    w, tm = ctl.target(0.0)
+    traj = simulate(fig, ctl, duration=6.0, state0=slalom_start(fig.body, w, tm))
     track = map_trajectory("skier", traj, fps=24)
     return track
 
@@ -171,7 +176,7 @@ def test_feet_lean_and_equipment_follow_the_builtin(run, scale, shin_ratio):
         assert np.max(np.abs(rot_u - rot_b)) < 1e-6
 
 
-def test_knee_flexion_follows_within_5_deg(run):
+def test_knee_flexion_follows_within_5_deg(run, request):
     rig = user_rig()
     out = retarget(run, "skier", rig, BM)
     P, Pb = user_fk(rig, out), builtin_fk(run)
@@ -180,8 +185,10 @@ def test_knee_flexion_follows_within_5_deg(run):
         fu, fb = _flex(P, PREFIX, s), _flex(Pb, "", s)
         assert np.ptp(fb) > math.radians(5)
         # The hips slide along the lean line until the knees bend as the built-in's: measured
-        # 0.004 deg (the two legs share one pelvis: the mean of their bends is matched).
-        assert np.max(np.abs(fu - fb)) < math.radians(0.05), np.degrees(np.max(np.abs(fu - fb)))
+        # 0.004 deg (the two legs share one pelvis: the mean of their bends is matched); the
+        # angulated racer's knees, bent up to 112 deg and each on its own edge, 0.52 deg.
+        tol = 0.05 if request.node.callspec.params["run"] == "skier" else 1.0
+        assert np.max(np.abs(fu - fb)) < math.radians(tol), np.degrees(np.max(np.abs(fu - fb)))
 
 
 def _flex(P, pre, s):

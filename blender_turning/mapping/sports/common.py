@@ -17,7 +17,7 @@ from ..kinematics import (PoseBuilder, cross, dot, frame_from_yx, norm, quat_fro
 
 __all__ = ["rot_y", "rot_z", "rotate_about", "smoothstep", "phase_window", "static_force",
            "add_local_rotation", "lean", "carried", "limb_frames", "ik_limb", "place_on_ground",
-           "body_axes", "mesh_points", "leg_lengths"]
+           "body_axes", "mesh_points", "leg_lengths", "height_on_ground"]
 
 
 def _about(angle, axis: int) -> np.ndarray:
@@ -178,15 +178,28 @@ def mesh_points(spec, bone: str, shapes=("box",)):
 def place_on_ground(b: PoseBuilder, spec, bone: str, rotation, anchor_rest, anchor_xy):
     """Pose equipment ``bone`` with armature-space ``rotation`` (n, 3, 3) so that its lowest box
     corner touches z = 0 and the rest point ``anchor_rest`` lands at ``anchor_xy`` (n, 2)."""
+    anchor, lowest = _grounded(b, spec, bone, rotation, anchor_rest)
+    head = np.empty((b.n, 3))
+    head[:, :2] = anchor_xy - stack_dot(rotation, anchor)[:, :2]
+    head[:, 2] = -lowest
+    b.set_pose(bone, rotation, head)
+    return head
+
+
+def height_on_ground(b: PoseBuilder, spec, bone: str, rotation, anchor_rest) -> np.ndarray:
+    """The height (n,) of the rest point ``anchor_rest`` of equipment ``bone`` that
+    :func:`place_on_ground` puts on the ground with ``rotation`` (n, 3, 3), m."""
+    anchor, lowest = _grounded(b, spec, bone, rotation, anchor_rest)
+    return stack_dot(rotation, anchor)[:, 2] - lowest
+
+
+def _grounded(b, spec, bone, rotation, anchor_rest):
+    """``(anchor in the bone's frame (3,), the lowest box corner's height (n,) from the head)``
+    of ``bone`` rotated by ``rotation``."""
     rest = b.skel.rest_of(bone)
     corners = mesh_points(spec, bone)                           # bone frame
     anchor = rest[:3, :3].T @ (np.asarray(anchor_rest, float) - rest[:3, 3])
-    cz = rotation[:, 2, :] @ corners.T                          # the corners' heights (n, k)
-    head = np.empty((b.n, 3))
-    head[:, :2] = anchor_xy - stack_dot(rotation, anchor)[:, :2]
-    head[:, 2] = -cz.min(axis=1)
-    b.set_pose(bone, rotation, head)
-    return head
+    return anchor, (rotation[:, 2, :] @ corners.T).min(axis=1)   # the corners' heights (n, k)
 
 
 def tyre_radius(spec, bone: str = B.WHEEL_R) -> float:

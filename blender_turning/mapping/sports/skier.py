@@ -5,6 +5,9 @@ from two-bone IK on the resulting leg length and the waist bend is tied to the k
 ski tilt is linear in ``C_f`` with the outside (weight-bearing) ski tilted slightly more; when
 ``theta_v`` and the ski tilt disagree the leg is twisted in or out; the poles are planted at
 ``phi`` = 30 and 210 deg, just before each turn; the upper body twists in phase with the turn.
+On a preset's carving skis the skier angulates as racers do (docs/racing.md): shins on the
+skis' edge angle, hips and knees inside the turn, the upper body more upright, the centre of
+mass of the posed figure on ``theta_v``.
 """
 from __future__ import annotations
 
@@ -21,10 +24,10 @@ from ...core.physics.model import Resistance
 from .. import bones as B
 from ..base import Mapping
 from ..anthropometry import centre_and_roll_inertia
-from .common import (add_local_rotation, carried, ik_limb, lean, leg_lengths, limb_frames,
-                     phase_window, place_on_ground, rot_y, rot_z, smoothstep)
+from .common import (add_local_rotation, carried, height_on_ground, ik_limb, lean, leg_lengths,
+                     limb_frames, phase_window, place_on_ground, rot_y, rot_z, smoothstep)
 from ..kinematics import (PoseBuilder, frame_from_yx, norm, on_sphere_within, rigid_inverse,
-                          stack_dot)
+                          stack_dot, two_bone_ik)
 from .skid_pose import SkidPose, equipment_length, knee_direction, ski_front
 from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
                    lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
@@ -42,6 +45,10 @@ POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
 #: An arm whose grip offset moved less than this (m) in an aiming pass has settled: another pass
 #: would give the same numbers to rounding, so it leaves the loop.
 SETTLED = 1e-12
+#: Poses tried before the angulated one (SkierMapping.pose): the centre of mass's lean from the
+#: first (the legs on theta_v), then the secant's; the third leaves it within 0.003 deg of
+#: theta_v at every frame of a racer's slalom (measured, tests/test_mapping_racing.py).
+COM_PASSES = 2
 
 
 @dataclass(frozen=True)
@@ -78,9 +85,18 @@ class SkierOptions(SpringLegOptions):
     """Amplitude of the upper-body counter-twist (against the turn), rad."""
     twist_phase: float = 0.0
     """Phase offset of the upper-body twist relative to phi, rad."""
-    angulation: float = 0.5
-    """On a preset's carving skis: the share of the skis' edge angle over the lean that the
-    upper body takes back toward upright (the hips and knees angulate inside; 0: none)."""
+    angulation: float = 1.5
+    """On a preset's carving skis: how much more upright than the lean the pelvis and the upper
+    body stand, per radian of the skis' edge angle over the lean, rad/rad (the hips and knees
+    angulate inside; 0: none).  1.5 puts Reid et al.'s 65 deg of edge on a 55 deg lean at about
+    20 deg between the legs' and the trunk's lines (docs/racing.md)."""
+    angulation_max: float = math.radians(25.0)
+    """The most the upper body stands more upright than the lean, rad: with the legs' line
+    leaning further, the hip joints then take about 30 deg between legs and trunk, the hip's
+    range of adduction (30 deg, AAOS normal ranges)."""
+    knee_in_max: float = math.radians(35.0)
+    """With angulation: the largest turn of a knee in or out about its hip-to-ankle line, rad
+    (within the hip's 45 deg of internal and external rotation, AAOS normal ranges)."""
 
     def __post_init__(self):
         super().__post_init__()
@@ -96,7 +112,9 @@ class SkierOptions(SpringLegOptions):
         check_range("plant_reach", self.plant_reach, 0.1, 10.0)
         check_range("twist_amp", self.twist_amp, -math.pi / 2, math.pi / 2)
         check_range("twist_phase", self.twist_phase, -2 * math.pi, 2 * math.pi)
-        check_range("angulation", self.angulation, 0.0, 1.0)
+        check_range("angulation", self.angulation, 0.0, 3.0)
+        check_range("angulation_max", self.angulation_max, 0.0, math.radians(45.0))
+        check_range("knee_in_max", self.knee_in_max, 0.0, math.pi / 2)
 
 
 def ski_tilts(traj, o) -> dict:
@@ -114,6 +132,34 @@ def ski_tilts(traj, o) -> dict:
                        -o.tilt_max, o.tilt_max) for s, _ in SIDES}
 
 
+def shank_twist(b, s: str, ankle, pole, edge) -> np.ndarray:
+    """The twist (n,) rad of leg ``s``'s knee about its hip-to-ankle line (``common.ik_limb``'s
+    ``twist``, from the knee's ``pole``) that stands its shin, knee to ankle, at ``edge`` (n,)
+    from vertical across the travel, as the ski's base stands (a ski boot holds the shin square
+    to the ski across it): the knee moves on the circle the two-bone IK allows; of the two
+    twists that reach the angle the smaller; where none does, the one nearest it."""
+    thigh, shin = B.side("thigh", s), B.side("shin", s)
+    base = b.unposed(thigh)
+    root = base[:, :3, 3]
+    l1, l2 = leg_lengths(b.skel, thigh, shin)
+    mid, end = two_bone_ik(root, ankle, l1, l2, pole)
+    k = (end - root) / norm(end - root, keepdims=True)
+    centre = root + np.sum((mid - root) * k, axis=1, keepdims=True) * k
+    h = norm(mid - centre, keepdims=True)
+    u = (mid - centre) / np.maximum(h, 1e-12)
+    v = np.cross(k, u)
+    # The shin (knee - ankle) at `edge` across the travel is square to n = (cos e, 0, sin e).
+    n = np.stack([np.cos(edge), np.zeros_like(edge), np.sin(edge)], 1)
+    A, Bv, C = (h[:, 0] * np.sum(u * n, 1), h[:, 0] * np.sum(v * n, 1),
+                np.sum((centre - end) * n, 1))
+    r = np.hypot(A, Bv)
+    alpha = np.arctan2(Bv, A)
+    spread = np.arccos(np.clip(-C / np.maximum(r, 1e-12), -1.0, 1.0))
+    wrap = lambda x: (x + np.pi) % (2.0 * np.pi) - np.pi      # noqa: E731
+    a, c = wrap(alpha + spread), wrap(alpha - spread)
+    return np.where(np.abs(a) <= np.abs(c), a, c)
+
+
 class SkierMapping(Mapping):
     sport = "skier"
     Options = SkierOptions
@@ -125,37 +171,54 @@ class SkierMapping(Mapping):
         return {s: (z, z, z) for s, _ in SIDES}
 
     def pose(self, b, traj, o, spec):
-        """Section 7's pose; on a preset's carving skis with angulation: the upper body takes
-        back ``angulation`` of the skis' edge over the lean toward upright, the legs and hips
-        lean further by the amount that keeps the centre of mass of the posed figure (Winter's
-        segments, :mod:`.anthropometry`) leaning ``theta_v`` (one correction from a first pose:
-        the centre's lean is linear in the hips' to within 0.05 deg, measured)."""
+        """Section 7's pose; on a preset's carving skis with angulation, a racer's: the skis on
+        the edge angle ``edge`` that carves C_f stand further on edge than the body leans
+        ``theta_v``; the shins stand on the skis' edge angle (square to the ski's base across
+        it, :func:`shank_twist`), the pelvis and the upper body stand ``angulation`` times the
+        edge's excess over the lean more upright than ``theta_v`` (at most ``angulation_max``),
+        turned at the hip joints, and the legs lean further by the amount that keeps the centre
+        of mass of the posed figure (Winter's segments, :mod:`.anthropometry`) on ``theta_v``:
+        the centre's lean is close to linear in the legs' (measured), solved by the secant
+        from two trial poses (:data:`COM_PASSES`)."""
         carving = carving_of(traj.meta.get("preset"))
         if carving is None or o.angulation == 0.0:
             return self._pose(b, traj, o, spec)
         th = np.asarray(traj.theta_v, float)
         edge = carving.edge_angle(traj.C_f)
-        back = o.angulation * np.sign(th) * np.maximum(np.abs(edge) - np.abs(th), 0.0)
-        first = PoseBuilder(b.skel, b.n)
-        first.placement = b.placement
-        self._pose(first, traj, o, spec, back)
-        P = {name: first.pose(name) for name in b.skel.names}
-        com, _ = centre_and_roll_inertia(P, b.skel, 1.0)
-        self._pose(b, traj, o, spec, back, th - np.arctan2(-com[:, 0], com[:, 2]))
+        back = np.sign(th) * np.minimum(o.angulation * np.maximum(np.abs(edge) - np.abs(th), 0.0),
+                                        o.angulation_max)
+        extra, last = np.zeros_like(th), None
+        for _ in range(COM_PASSES):
+            trial = PoseBuilder(b.skel, b.n)
+            trial.placement = b.placement
+            self._pose(trial, traj, o, spec, back, extra)
+            P = {name: trial.pose(name) for name in b.skel.names}
+            com, _ = centre_and_roll_inertia(P, b.skel, 1.0)
+            miss = np.arctan2(-com[:, 0], com[:, 2]) - th
+            slope = np.ones_like(th)      # the first step as if the centre leaned with the legs
+            if last is not None:
+                moved = extra - last[0]
+                np.divide(miss - last[1], moved, out=slope, where=moved != 0.0)
+                slope[np.abs(slope) < 1e-3] = 1.0
+            step = -miss / slope
+            last = (extra, miss)
+            extra = extra + step
+        self._pose(b, traj, o, spec, back, extra)
 
-    def _pose(self, b, traj, o, spec, back=0.0, extra=0.0):
-        """The pose with the hips leaning ``extra`` (n,) rad beyond ``theta_v`` and the upper
-        body ``back + extra`` rad back toward upright (angulation)."""
+    def _pose(self, b, traj, o, spec, back=None, extra=0.0):
+        """The pose; with angulation (``back`` (n,) rad, not None) the legs lean ``extra`` (n,)
+        rad beyond ``theta_v``, the pelvis and the upper body ``back + extra`` rad back toward
+        upright about the hip joints, the shins on the skis' edge angle."""
         skel = b.skel
         th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o, equipment_length(spec))
         skid = SkidPose(traj)       # the skis across the travel (docs/skidding.md Section 8)
         skid.lean_back(b)
         skid.turn_hips(b, up)
-        extra = np.broadcast_to(np.asarray(extra, float), th.shape)
-        back = np.broadcast_to(np.asarray(back, float), th.shape)
-        if np.any(extra) or np.any(back):
+        angulated = back is not None
+        if angulated:
             lean(b, extra)
             th = th + extra
+            add_local_rotation(b, B.HIPS, fwd, back + extra)  # the pelvis at the hip joints
         ankle_z = float(skel.rest_of("foot.L")[2, 3])
         tilts = skid.tilts(ski_tilts(traj, o))
         layout = skid.layout(self.ski_layout(traj, o))
@@ -163,26 +226,29 @@ class SkierMapping(Mapping):
         for _ in range(3):      # the hips drop if a leg cannot reach its boot (Section 7 IK)
             set_pelvis(b, th, length, ankle_z, drop)
             ankles = self.place_skis(b, spec, th, tilts, layout, skid)
-            extra = hip_drop(b, ankles, 0.97)
-            if not np.any(extra > 1e-9):
+            more = hip_drop(b, ankles, 0.97)
+            if not np.any(more > 1e-9):
                 break
-            drop = drop + extra
+            drop = drop + more
         knee_fwd = carry_vec(b, B.LEAN, fwd)
         if skid.active:                                 # the knees point along the skis
             knee_fwd = knee_direction(knee_fwd, skid.body_skid())
-        # Leg twist: when the ski is on edge more than the body leans, the knee turns in.
-        twist = {s: np.clip(-o.leg_twist_gain * (tilts[s] - th), -o.leg_twist_max,
-                            o.leg_twist_max) for s, _ in SIDES}
+        if angulated:   # the knees in: each shin on its ski's edge angle where that is the
+            # further (a ski flatter than the legs lean, at the edge change: along the legs)
+            twist = {s: np.clip(shank_twist(b, s, ankles[s], knee_fwd,
+                                            np.where(tilts[s] * th > th * th, tilts[s], th)),
+                                -o.knee_in_max, o.knee_in_max) for s, _ in SIDES}
+        else:   # Leg twist: when the ski is on edge more than the body leans, the knee turns in.
+            twist = {s: np.clip(-o.leg_twist_gain * (tilts[s] - th), -o.leg_twist_max,
+                                o.leg_twist_max) for s, _ in SIDES}
         legs_to(b, ankles, knee_fwd, twist, {s: B.side("ski", s) for s, _ in SIDES})
         self.feet(b, layout)
         knee = 0.5 * (knee_flexion(b, "L") + knee_flexion(b, "R"))
         bend_waist(b, right, o.waist_ratio * knee)
-        if np.any(extra) or np.any(back):           # angulation: the upper body more upright
-            add_local_rotation(b, B.SPINE, fwd, back + extra)
         # Upper-body counter-twist in phase with the turn (phase 0..180 deg is a left turn).
         twist_upper_body(b, up, -o.twist_amp * np.sin(traj.phi + o.twist_phase))
         skid.counter_rotate(b, up)
-        level_head(b, th - back - extra, o.head_level)     # the upper body's own lean
+        level_head(b, th - (back + extra if angulated else 0.0), o.head_level)  # its own lean
         self.arms_and_poles(b, traj, o, right, fwd, up)
 
     def place_skis(self, b, spec, th, tilts, layout, skid=None) -> dict:
@@ -195,11 +261,13 @@ class SkierMapping(Mapping):
             hip = b.unposed(B.side("thigh", s))[:, :3, 3]
             a_rest = skel.rest_of(foot)[:3, 3]
             dy, yaw, _ = layout[s]
-            # The foot goes where the leaned body axis through the hip meets the ankle height.
-            xy = np.stack([hip[:, 0] + np.tan(th) * (hip[:, 2] - a_rest[2]), a_rest[1] + dy], 1)
+            # The foot goes where the leaned body axis through the hip meets the ankle's height
+            # on its ski (on edge, the ski's lowest edge on the snow).
+            R = stack_dot(rot_z(yaw) @ rot_y(-tilts[s]), skel.rest_of(ski)[:3, :3])
+            z = height_on_ground(b, spec, ski, R, a_rest)
+            xy = np.stack([hip[:, 0] + np.tan(th) * (hip[:, 2] - z), a_rest[1] + dy], 1)
             if skid is not None and skid.active:
                 xy[:, 0] += skid.spread(ski_front(skel, spec, ski, a_rest), abs(a_rest[0]))[s]
-            R = stack_dot(rot_z(yaw) @ rot_y(-tilts[s]), skel.rest_of(ski)[:3, :3])
             place_on_ground(b, spec, ski, R, a_rest, xy)
             ankles[s] = self.ankle_on_ski(b, s, layout)
         return ankles
