@@ -82,6 +82,24 @@ def test_a_lean_as_asked_is_not_remarked(scene, capfd, sport):
     assert math.degrees(np.abs(baked).max()) == pytest.approx(23.0, abs=0.02)
 
 
+def test_a_lean_past_the_fall_angle_is_refused_as_on_the_command_line(scene):
+    """Lean 65 deg (the property goes to the racers' 85): the skier's range is the command
+    line's (core/ranges.py ``lean_range``), named with the value, the frame and the reason, and
+    nothing is baked; the slalom racer bakes it."""
+    from scene_snapshot import snapshot
+    obj = add("SKIER")
+    obj.turning.lean = math.radians(65.0)
+    before = snapshot()
+    with pytest.raises(RuntimeError, match=r"Lean \(turning.lean\) = 65 deg at frame 1 is "
+                       r"outside the allowed range \[1, 60\) deg: the skier's fall angle "
+                       r"theta_fall \(Limits > Fall Angle\) is 60 deg"):
+        bpy.ops.turning.bake_turns()
+    assert snapshot() == before
+    assert bpy.ops.turning.apply_figure_preset(sport="SLALOM_RACER") == {"FINISHED"}
+    obj.turning.lean = math.radians(65.0)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+
+
 # -- the path -------------------------------------------------------------------------------------
 
 def farthest(obj):
