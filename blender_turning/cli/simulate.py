@@ -147,7 +147,7 @@ def run(args) -> int:
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg, |C_f| max "
           f"{abs(traj.C_f).max():.3f} 1/m, distance {traj.s[-1]:.1f} m"
           f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if terrain else ''}"
-          f"{'; turn ' + ctl.achieved.describe() if getattr(ctl, 'achieved', None) else ''}"
+          f"{'; turn ' + ctl.report.describe() if getattr(ctl, 'report', None) else ''}"
           f"{_round_summary(rounds)}"
           f"{_skid_summary(traj)}"
           f"{f' -> {args.out}' if args.out else ''}")
