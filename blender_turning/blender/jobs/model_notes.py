@@ -65,14 +65,17 @@ def panel_turn(obj, scene) -> FeasibleTurn | None:
     return ctl.commanded_turn(0.0)
 
 
-def panel_text(turn: FeasibleTurn) -> str:
-    """The Turns panel's line, naming the bound by the setting's label the panel shows."""
+def panel_text(turn: FeasibleTurn) -> list[str]:
+    """The Turns panel's lines, naming the bound by the setting's label the panel shows; a
+    second line when the bound is that of a half-turn Hold Heading keeps room to steer with."""
     setting = BOUND_SETTING.get(turn.bound, turn.bound).rpartition(" > ")[2]
     if turn.bound == "physical branch":
         setting = "the physical branch"
-    room = ", keeping room to Hold Heading" if turn.beta != 1.0 else ""
-    return (f"Leans {math.degrees(turn.lean):.1f}\u00b0, "
-            f"not {math.degrees(turn.commanded_lean):.1f}\u00b0: limited by {setting}{room}")
+    lines = [f"Leans {math.degrees(turn.lean):.1f}\u00b0, "
+             f"not {math.degrees(turn.commanded_lean):.1f}\u00b0: limited by {setting}"]
+    if turn.beta != 1.0:
+        lines.append("in the room Hold Heading keeps to steer")
+    return lines
 
 
 def warn_distance(op) -> float:
