@@ -1,8 +1,9 @@
 """What the model changed, said to the user: the lean a bake reached when the figure's bounds
 or its tyre's grip kept it below the asked one (the core's
 :class:`~..core.controllers.feasible.TurnsFollowed` report), and how far a Follow Path run
-strayed from its drawn path (the core's :func:`~..core.course.path.path_deviation`).  Bake Turns, Follow Path (one figure and several) and
-the Turns panel all take their words from here; nothing is recomputed in an operator.
+strayed from its drawn path (the core's :func:`~..core.course.path.path_deviation`).  Bake
+Turns, Follow Path (one figure and several) and the Turns panel all take their words from here;
+nothing is recomputed in an operator.
 """
 from __future__ import annotations
 
