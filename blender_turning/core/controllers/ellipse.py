@@ -240,16 +240,15 @@ class PhaseEllipse(Controller):
         return self._turn(t, w, tm, self.feasible_lean(w, tm))
 
     def _turn(self, t, w, tm, tmf) -> FeasibleTurn:
-        bound = None
-        if self._feasible is not None and tmf < tm:
-            # The turn's own bound, or, when the steering room limits it, the modified
-            # half-turn's (:meth:`.FeasibleTurns.steerable_lean`).
-            f = self._feasible
-            steer = [b for b in self.steer_betas if self.heading is not None and
-                     tmf >= f.max_lean(w / b) / b * (1 - 1e-12)]
-            beta = steer[0] if steer and tmf < f.max_lean(w) * (1 - 1e-12) else 1.0
-            return FeasibleTurn(tm, tmf, 2 * math.pi / w, f.bound(w / beta), t, beta)
-        return FeasibleTurn(tm, tmf, 2 * math.pi / w, bound, t)
+        if self._feasible is None or tmf >= tm:
+            return FeasibleTurn(tm, tmf, 2 * math.pi / w, None, t)
+        # The turn's own bound (beta 1) or, when the steering room limits it, that of the
+        # modified half-turn at its bound (:meth:`.FeasibleTurns.steerable_lean`).
+        f = self._feasible
+        steer = [b for b in self.steer_betas if self.heading is not None and
+                 tmf >= f.max_lean(w / b) / b * (1 - 1e-12)]
+        beta = steer[0] if steer and tmf < f.max_lean(w) * (1 - 1e-12) else 1.0
+        return FeasibleTurn(tm, tmf, 2 * math.pi / w, f.bound(w / beta), t, beta)
 
     def _note(self, t, w, tm, tmf):
         if np.ndim(tmf):           # a batch of per-figure ellipses: no single report
