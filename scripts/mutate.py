@@ -675,10 +675,11 @@ MUTANTS = [
       "        controller.steer_betas = BRAKE_BETAS\n", "", [T + "test_braking.py"]),
     M("lean_input_stops_at_60", "core/ranges.py",
       '"theta_max": Range(1 * _DEG, 85 * _DEG,', '"theta_max": Range(1 * _DEG, 60 * _DEG,',
-      [T + "test_racing_lean.py"]),
+      [T + "test_lean_range.py"]),
     # -- one lean range per figure, and the run's lean report -------------------------------
     M("lean_range_reaches_the_fall", "core/ranges.py",
-      "hi=theta_fall, hi_open=True, explain=True,", "hi=theta_fall, explain=True,", LEAN_RANGE),
+      "hi=theta_fall, hi_open=True, explain=True,",
+      "hi=theta_fall, hi_open=False, explain=True,", LEAN_RANGE),
     M("lean_error_without_reason", "core/validate.py",
       'why = f": {rng.reason}" if rng.explain else ""', 'why = ""', LEAN_RANGE),
     M("cli_lean_global_range", "cli/simulate.py",
