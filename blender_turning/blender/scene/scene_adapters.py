@@ -235,12 +235,11 @@ def controller_from_settings(obj, figure: Figure, frames: FrameRange) -> PhaseEl
     values = {name: sampled_setting(obj, name, frames) for name in ("period", "lean", "heading")}
     if np.any(values["period"] <= 0):
         raise ValueError("turn period must stay positive over the frame range")
-    leans = lean_range(figure.limits.theta_fall, f"the {figure.name}").deg()
-    lean = np.degrees(values["lean"])
-    for k in np.flatnonzero([not leans.contains(v) for v in lean])[:1]:
-        raise SceneInputError(f"Lean (turning.lean) = {lean[k]:.6g} deg at frame "
-                              f"{frames.start + k} is outside the allowed range {leans}: "
-                              f"{leans.reason}")
+    leans = lean_range(figure.limits.theta_fall, f"the {figure.name}")
+    for k in np.flatnonzero([not leans.contains(v) for v in values["lean"]])[:1]:
+        raise SceneInputError(f"Lean (turning.lean) = {math.degrees(values['lean'][k]):.6g} deg "
+                              f"at frame {frames.start + k} is outside the allowed range "
+                              f"{leans.deg()}: {leans.reason}")
 
     def schedule(v):
         return Schedule.constant(v[0]) if np.all(v == v[0]) else Schedule.sampled(t, v)
