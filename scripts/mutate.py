@@ -76,6 +76,8 @@ POLES = [T + "test_blender_poles.py"]
 SKIER_MAPPING = [T + "test_mapping_skier.py"]
 RACING = [T + "test_racing_presets.py", T + "test_mapping_racing.py"]
 LEAN_ROOM = [T + "test_racing_lean.py", T + "test_feasible_turns.py"]
+LEAN_RANGE = [T + "test_lean_range.py", T + "test_cli_robust.py"]
+LEAN_REPORT = [T + "test_lean_report.py", T + "test_feasible_turns.py"]
 
 
 @dataclass(frozen=True)
@@ -699,8 +701,48 @@ MUTANTS = [
     M("braking_keeps_the_held_heading_room", "core/controllers/braking.py",
       "        controller.steer_betas = BRAKE_BETAS\n", "", [T + "test_braking.py"]),
     M("lean_input_stops_at_60", "core/ranges.py",
-      '"theta_max": Range(1 * _DEG, 77 * _DEG,', '"theta_max": Range(1 * _DEG, 60 * _DEG,',
-      [T + "test_racing_lean.py"]),
+      '"theta_max": Range(1 * _DEG, 85 * _DEG,', '"theta_max": Range(1 * _DEG, 60 * _DEG,',
+      [T + "test_lean_range.py"]),
+    # -- one lean range per figure, and the run's lean report -------------------------------
+    M("lean_range_reaches_the_fall", "core/ranges.py",
+      "hi=theta_fall, hi_open=True, explain=True,",
+      "hi=theta_fall, hi_open=False, explain=True,", LEAN_RANGE),
+    M("lean_error_without_reason", "core/validate.py",
+      'why = f": {rng.reason}" if rng.explain else ""', 'why = ""', LEAN_RANGE),
+    M("cli_lean_global_range", "cli/simulate.py",
+      "                                  leans, deg=True))",
+      '                                  "theta_max", deg=True))', LEAN_RANGE),
+    M("schedule_lean_global_range", "core/controllers/schedule.py",
+      'rng = lean if name == "lean_deg" and lean is not None else RANGES[_COLUMNS[name]]',
+      "rng = RANGES[_COLUMNS[name]]", LEAN_RANGE),
+    M("crowd_lean_global_range", "crowd/reader.py",
+      'math.radians(t.number("lean_deg", leans.deg())),',
+      'math.radians(t.number("lean_deg", RANGES["theta_max"].deg())),', LEAN_RANGE),
+    M("render_job_lean_global_range", "blender/render/config.py",
+      '    lean = lean_range(SPORTS[sport].figure.limits.theta_fall, f"the {sport}").deg()',
+      '    lean = RANGES["theta_max"].deg()', [T + "test_render_job_config.py"]),
+    M("report_keeps_the_first_turn", "core/controllers/ellipse.py",
+      "        if last is None or replace(last, t=t) != turn:", "        if last is None:",
+      LEAN_REPORT),
+    M("report_without_the_other_turn", "core/controllers/feasible.py",
+      "other = followed[-1] if followed[-1] is not worst else followed[0]",
+      "other = followed[0]", LEAN_REPORT),
+    M("report_names_the_turn_s_own_bound", "core/controllers/ellipse.py",
+      "beta = steer[0] if steer and tmf < f.max_lean(w) * (1 - 1e-12) else 1.0",
+      "beta = 1.0", LEAN_REPORT),
+    M("report_names_the_first_steering_beta", "core/controllers/ellipse.py",
+      "beta = steer[0] if steer and tmf < f.max_lean(w) * (1 - 1e-12) else 1.0",
+      "beta = self.steer_betas[0] if steer and tmf < f.max_lean(w) * (1 - 1e-12) else 1.0",
+      LEAN_REPORT),
+    M("bake_lean_range_global", "blender/scene/scene_adapters.py",
+      '    leans = lean_range(figure.limits.theta_fall, f"the {figure.name}")',
+      '    leans = RANGES["theta_max"]', NOTES, "bake"),
+    M("bake_note_drops_the_grip", "blender/jobs/model_notes.py",
+      '    notes = [traj.meta.get("grip_limited", "")] + \\', "    notes = [] + \\", NOTES,
+      "bake"),
+    M("panel_drops_the_steering_line", "blender/jobs/model_notes.py",
+      "    if turn.beta != 1.0:\n        lines.append(", "    if False:\n        lines.append(",
+      NOTES, "bake"),
     M("commanded_turn_unlimited", "core/controllers/ellipse.py",
       "return self._turn(t, w, tm, self.feasible_lean(w, tm))", "return self._turn(t, w, tm, tm)",
       [T + "test_feasible_turns.py"]),
@@ -717,7 +759,7 @@ MUTANTS = [
     M("fall_report_names_no_setting", "blender/scene/figure_context.py",
       "        msg = in_settings(str(exc))", "        msg = str(exc)", NOTES, "bake"),
     M("panel_names_the_core_bound", "blender/jobs/model_notes.py",
-      "limited by {setting}\")", "limited by {turn.bound}\")", NOTES, "bake"),
+      "limited by {setting}\"]", "limited by {turn.bound}\"]", NOTES, "bake"),
     # -- the export-ready bake ---------------------------------------------------------------
     M("gltf_keeps_other_bakes", "blender/anim/export_gltf.py",
       "    return owner is not None and owner != obj", "    return False", EXPORT, "bake"),

@@ -100,7 +100,8 @@ def test_one_bad_figure_bakes_nothing(scene):
     bad.turning.lean = bad.turning.fall_angle
     select([good, bad], good)
     before = snapshot()
-    with pytest.raises(RuntimeError, match=f"{bad.name}: lean must stay"):
+    with pytest.raises(RuntimeError, match=f"{bad.name}: Lean \\(turning.lean\\) = 60 deg at "
+                       r"frame 1 is outside the allowed range \[1, 60\) deg"):
         bpy.ops.turning.bake_turns()
     assert snapshot() == before
 

@@ -24,7 +24,8 @@ from blender_turning.core.course.path import HermitePath  # noqa: E402
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 
 LEAN = re.compile(r"Warning: Bake Turns: (\S+): lean ([\d.]+) deg at period [\d.]+ s "
-                  r"\(asked ([\d.]+) deg; limited by (\S+) from")
+                  r"\(asked ([\d.]+) deg; limited by (\S+)(| of the half-turn \w+ to [\d.]+ "
+                  r"\(heading control's room\)) from")
 FAR = re.compile(r"(Info|Warning): Follow Path: (\S+): the foot is at most ([\d.]+) m from the "
                  r"drawn path \(at frame (\d+), (\d+) m along it\)")
 
@@ -52,15 +53,19 @@ def test_bake_and_panel_say_the_lean_the_bounds_allow_and_why(scene, capfd):
     tele = add("TELEMARK")
     assert math.degrees(tele.turning.lean) == pytest.approx(23.0)
     text = turns_panel_labels(bpy.context)
-    assert [t for t in text if t.startswith("Leans")] == \
-        ["Leans 19.6\u00b0, not 23.0\u00b0: limited by Max Curvature"], text
+    at = text.index("Leans 19.6\u00b0, not 23.0\u00b0: limited by Max Curvature")
+    assert text[at + 1] == "in the room Hold Heading keeps to steer"
+    assert len([t for t in text if t.startswith("Leans")]) == 1, text
     capfd.readouterr()
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     out = capfd.readouterr().out
     found = LEAN.findall(out)
     assert len(found) == 1, out
-    name, lean, asked, bound = found[0]
+    name, lean, asked, bound, room = found[0]
+    # Hold Heading: the half-turn flattened to 0.8 (faster, so it asks more curvature) is at
+    # Max Curvature (the turn itself would lean 20.02 deg).
     assert (name, float(asked), bound) == ("Telemark", 23.0, "C_f_max")
+    assert room == " of the half-turn flattened to 0.8 (heading control's room)"
     assert "Max Curvature" in out.split("Warning: Bake Turns")[1]
     # What was said is what was baked: the keyed lean peaks at the reported value (printed to
     # 0.01 deg) within the frames' sampling of the apex: a frame at most half a frame from it
@@ -80,6 +85,56 @@ def test_a_lean_as_asked_is_not_remarked(scene, capfd, sport):
     assert "Warning" not in capfd.readouterr().out
     _, baked = keyed(obj, '["turn_lean"]')       # measured 22.9995 and 22.9898 deg
     assert math.degrees(np.abs(baked).max()) == pytest.approx(23.0, abs=0.02)
+
+
+def test_bake_says_the_tyre_s_grip_held_the_lean(scene, capfd):
+    """The cyclist's 50 deg is more than dry asphalt's grip (mu 0.9) holds: Bake Turns says so
+    in the command line's words (the core's ``grip_limited``), and the baked lean is the
+    grip's 42.0 deg."""
+    obj = add("CYCLIST")
+    obj.turning.period, obj.turning.lean = 4.0, math.radians(50.0)
+    capfd.readouterr()
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    out = capfd.readouterr().out
+    assert ("Warning: Bake Turns: Cyclist: the lean asked (50.0 deg at t = 0 s) is more than "
+            "the tyre's grip holds (mu 0.9): limited to 42.0 deg") in out, out
+    _, baked = keyed(obj, '["turn_lean"]')
+    assert math.degrees(np.abs(baked).max()) == pytest.approx(42.0, abs=0.2)
+
+
+def test_the_note_says_the_leans_reached_over_the_run():
+    """A run whose lean followed changes (the slalom racer gathering speed down 19 deg) is noted
+    with the leans reached and from when, as the command line says it."""
+    from blender_turning.blender.jobs import model_notes
+    from blender_turning.core import PhaseEllipse, preset, simulate, slalom_start
+    from blender_turning.core.ground.terrain import Plane
+    fig = preset("slalom_racer")
+    ctl = PhaseEllipse(fig.body, math.pi, math.radians(70.0), -math.pi / 2, limits=fig.limits)
+    w, tm = ctl.target(0.0)
+    tr = simulate(fig, ctl, 6.0, state0=slalom_start(fig.body, w, tm, -math.pi / 2),
+                  ground=Plane(math.radians(19), -math.pi / 2))
+    note = model_notes.turn_note(model_notes.with_turn(tr, ctl))
+    assert note == (f"{ctl.report.describe()}: a longer Turn Period or a higher Limits > Max "
+                    "Curvature leans further")
+    assert note.startswith("lean 61.77-70.00 deg over the run: ") and "(as asked) from" in note
+
+
+def test_a_lean_past_the_fall_angle_is_refused_as_on_the_command_line(scene):
+    """Lean 65 deg (the property goes to the racers' 85): the skier's range is the command
+    line's (core/ranges.py ``lean_range``), named with the value, the frame and the reason, and
+    nothing is baked; the slalom racer bakes it."""
+    from scene_snapshot import snapshot
+    obj = add("SKIER")
+    obj.turning.lean = math.radians(65.0)
+    before = snapshot()
+    with pytest.raises(RuntimeError, match=r"Lean \(turning.lean\) = 65 deg at frame 1 is "
+                       r"outside the allowed range \[1, 60\) deg: the skier's fall angle "
+                       r"theta_fall \(Limits > Fall Angle\) is 60 deg"):
+        bpy.ops.turning.bake_turns()
+    assert snapshot() == before
+    assert bpy.ops.turning.apply_figure_preset(sport="SLALOM_RACER") == {"FINISHED"}
+    obj.turning.lean = math.radians(65.0)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
 
 
 # -- the path -------------------------------------------------------------------------------------

@@ -2,13 +2,14 @@
 file, field, row and column) and exit 2, with no traceback, no numpy warning and the output folder
 as it was; outputs are checked before the work and written all together or not at all."""
 import json
+import math
 import os
 import stat
 
 import pytest
 
 from blender_turning.cli import main
-from blender_turning.core.ranges import RANGES
+from blender_turning.core.ranges import RANGES, lean_range
 from cli_helpers import ROOT, one_line_error, read_only_folder, run, snapshot
 
 SCENES = ROOT / "scenes"
@@ -63,12 +64,14 @@ def test_a_search_that_would_explode_is_refused(tmp_path, flag, value, bound):
 @pytest.mark.parametrize("flag, value, key", [
     ("--period", "1e-300", "period"), ("--mass", "1e-300", "m"), ("--speed", "1e-300", "V_cm"),
     ("--inertia", "100000", "I_v"), ("--com-height", "1e-300", "l"), ("--gravity", "1e300", "g"),
-    ("--omega0", "1e300", "omega0"), ("--lean-deg", "nan", "theta_max"),
+    ("--omega0", "1e300", "omega0"), ("--lean-deg", "nan", "lean"),
     ("--heading-deg", "inf", "heading"), ("--theta0-deg", "-90", "theta_v0"),
     ("--dt", "0", "dt"), ("--fps", "0", "fps"), ("--duration", "-1", "duration"),
 ])
 def test_values_outside_the_models_range_name_the_flag_and_range(tmp_path, flag, value, key):
-    rng = RANGES[key].deg() if flag.endswith("-deg") else RANGES[key]
+    """(``lean``: the default preset's lean range, below the skier's fall angle.)"""
+    rng = lean_range(math.radians(60), "the skier") if key == "lean" else RANGES[key]
+    rng = rng.deg() if flag.endswith("-deg") else rng
     r = run("simulate", flag, value, "--duration" if flag != "--duration" else "--dt", "2"
             if flag != "--duration" else "0.02", "--out", tmp_path / "o.csv")
     one_line_error(r, flag, str(rng))
@@ -165,7 +168,7 @@ def schedule(tmp_path, text, raw=None):
     ("t,period,lean_deg,heading_deg\n0,2,20,0\n5,2\n", ["s.csv", "row 2 (line 3)", "2 values"]),
     ("t,period,lean_deg\n0,2,20\n5,fast,20\n", ["s.csv", "row 2 (line 3), column period",
                                                "'fast' is not a number"]),
-    ("t,period,lean_deg\n0,2,95\n", ["s.csv", "column lean_deg = 95.0", "[1, 77] deg"]),
+    ("t,period,lean_deg\n0,2,95\n", ["s.csv", "column lean_deg = 95.0", "[1, 60) deg"]),
     ("t,period,lean_deg\n0,2,20\n0,2,25\n", ["s.csv", "column t = 0.0", "does not come after"]),
     ("t,perod,lean_deg\n0,2,20\n", ["s.csv", "'perod'", "did you mean 'period'"]),
     ("t,period,lean_deg,heading_deg\n0,2,20,0\n5,2,20,\n", ["s.csv", "heading_deg is blank"]),

@@ -157,7 +157,7 @@ def test_the_render_job_takes_the_sport_from_the_registry(own, tmp_path):
     (fig,) = load_config(cfg, flags)["figures"]
     assert fig["sport"] == fx.SPORT and fig["name"] == "Ski Bike"
     cfg.write_text(f'[[figures]]\nsport = "{fx.SPORT}"\nlean_deg = 56\n')   # its fall: 55 deg
-    with pytest.raises(ValueError, match="below the skibike's fall angle"):
+    with pytest.raises(ValueError, match=r"\[1, 55\) deg: the skibike's fall angle"):
         load_config(cfg, flags)
 
 
@@ -280,4 +280,4 @@ def test_register_brings_the_users_sport_to_the_command_line_and_the_job(tmp_pat
     r = subprocess.run([sys.executable, str(ROOT / "scripts" / "render_job.py"), "--register",
                         str(module), "--config", str(cfg), "--output", str(tmp_path / "o")],
                        capture_output=True, text=True, env=env, timeout=120)
-    one_line_error(r, "figures[0].lean_deg = 56", "skibike's fall angle (55 deg)")
+    one_line_error(r, "figures[0].lean_deg = 56", "skibike's fall angle theta_fall is 55 deg")

@@ -6,7 +6,7 @@ import sys
 
 from ..core import CONTROLLERS, PRESETS, preset, read_schedule_csv, simulate, slalom_start
 from ..core.controllers.braking import round_turns
-from ..core.ranges import RANGES
+from ..core.ranges import RANGES, Range, lean_range
 from ..core.controllers.schedule import Schedule
 from ..core.ground.terrain import Plane
 from ..core.physics.simulate import DEFAULT_DT
@@ -54,9 +54,11 @@ def register(sub):
     p.set_defaults(func=run)
 
 
-def _flag(name: str, value, key: str, deg: bool = False) -> float:
-    """The flag ``--name``'s value checked against ``RANGES[key]`` (in degrees if ``deg``)."""
-    rng = RANGES[key].deg() if deg else RANGES[key]
+def _flag(name: str, value, key: str | Range, deg: bool = False) -> float:
+    """The flag ``--name``'s value checked against ``RANGES[key]`` or the range ``key`` (in
+    degrees if ``deg``)."""
+    rng = RANGES[key] if isinstance(key, str) else key
+    rng = rng.deg() if deg else rng
     return check(f"--{name.replace('_', '-')}", value, rng)
 
 
@@ -81,6 +83,7 @@ def run(args) -> int:
     if args.plot:
         require_matplotlib("--plot")
     terrain = terrain_options(args, fig.name)
+    leans = lean_range(fig.limits.theta_fall, f"the {fig.name}")   # the preset's fall angle
 
     if args.schedule:
         given = [f for f in ("period", "omega0", "lean_deg", "heading_deg")
@@ -88,7 +91,7 @@ def run(args) -> int:
         if given:
             raise ValueError(f"--schedule replaces --{given[0].replace('_', '-')}; give one or "
                              "the other")
-        sched = read_schedule_csv(args.schedule)
+        sched = read_schedule_csv(args.schedule, leans)
         omega0, theta_max = sched.omega0, sched.theta_max
         # No heading_deg column: the heading is held at 0 deg, as without --heading-deg.
         heading = sched.heading or Schedule.constant(0.0)
@@ -101,7 +104,7 @@ def run(args) -> int:
             w = 2 * math.pi / _flag("period", 2.0 if args.period is None else args.period,
                                     "period")
         lean = math.radians(_flag("lean_deg", 23.0 if args.lean_deg is None else args.lean_deg,
-                                  "theta_max", deg=True))
+                                  leans, deg=True))
         head = _flag("heading_deg", _default_heading(terrain) if args.heading_deg is None
                      else args.heading_deg, "heading", deg=True)
         rounds = _round_turns(args, fig, terrain, x0, y0)
@@ -144,7 +147,7 @@ def run(args) -> int:
           f"{math.degrees(abs(traj.theta_v).max()):.1f} deg, |C_f| max "
           f"{abs(traj.C_f).max():.3f} 1/m, distance {traj.s[-1]:.1f} m"
           f"{f', speed {traj.V_cm.min():.1f}-{traj.V_cm.max():.1f} m/s' if terrain else ''}"
-          f"{'; turn ' + ctl.achieved.describe() if getattr(ctl, 'achieved', None) else ''}"
+          f"{'; turn ' + ctl.report.describe() if getattr(ctl, 'report', None) else ''}"
           f"{_round_summary(rounds)}"
           f"{_skid_summary(traj)}"
           f"{f' -> {args.out}' if args.out else ''}")

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-__all__ = ["Range", "RANGES", "CROWD_RANGES", "MAX_STEPS", "MAX_SAMPLES"]
+__all__ = ["Range", "RANGES", "CROWD_RANGES", "MAX_STEPS", "MAX_SAMPLES", "lean_range"]
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,8 @@ class Range:
     hi_open: bool = False
     integer: bool = False
     """Only whole numbers (counts: stages, choices, pixels)."""
+    explain: bool = False
+    """An error names the reason too (a range that depends on the figure)."""
 
     def contains(self, v: float) -> bool:
         if not math.isfinite(v) and not (math.isinf(v) and v in (self.lo, self.hi)):
@@ -84,10 +86,10 @@ RANGES: dict[str, Range] = {
     # -- the parametric controller (Section 5) ---------------------------------------------------
     "period": Range(0.3, 20.0, "s", "a quick edge change to a long carve; 2 pi / omega0"),
     "omega0": Range(2 * math.pi / 20.0, 2 * math.pi / 0.3, "rad/s", "2 pi / period"),
-    "theta_max": Range(1 * _DEG, 77 * _DEG, "rad", "a gentle wiggle to a racer's 70 deg "
+    "theta_max": Range(1 * _DEG, 85 * _DEG, "rad", "a gentle wiggle to a racer's 70 deg "
                        "(Reid et al. 2020: edge angles 66-71 deg in slalom; a Eurocarver's hip "
-                       "on the snow): the largest fall angle, 85 deg, less the 8 deg the "
-                       "controller keeps from it (controllers/feasible.py LEAN_MARGIN)"),
+                       "on the snow), below the largest fall angle, 85 deg; each figure's own "
+                       "range ends below its fall angle (lean_range)", hi_open=True),
     "heading": Range(-3600 * _DEG, 3600 * _DEG, "rad", "ten full turns either way"),
     # -- the start state --------------------------------------------------------------------------
     "theta_v0": Range(-89 * _DEG, 89 * _DEG, "rad", "the body must start above the ground"),
@@ -221,6 +223,19 @@ CROWD_RANGES = {
     "timing_jitter_s": Range(0.0, 1e3, "s", "random difference of the start time (at most "
                              "half the gap)"),
 }
+
+def lean_range(theta_fall: float, who: str = "the figure") -> Range:
+    """The lean ``theta_max`` (rad) that ``who`` may be asked for: from ``RANGES["theta_max"]``'s
+    bottom up to, not including, its fall angle ``theta_fall`` (Section 3: the pendulum of
+    Fig. 2 has fallen there).  Every lean input is checked against it once the figure is known
+    (``--lean-deg`` and a schedule's, a crowd's and a render job's ``lean_deg``, Blender's Lean);
+    the turn followed then stays 8 deg below the fall angle, and within the other bounds, and
+    the run says so (:class:`.controllers.feasible.FeasibleTurn`)."""
+    deg = _round(math.degrees(theta_fall))
+    return replace(RANGES["theta_max"], hi=theta_fall, hi_open=True, explain=True,
+                   reason=f"{who}'s fall angle theta_fall is {deg:g} deg: leaning that far, "
+                          "the body lies on the ground")
+
 
 MAX_STEPS = 200_000
 """Most integration steps (``duration / dt``) or output samples of one run: 4000 s of motion at

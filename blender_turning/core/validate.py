@@ -4,7 +4,7 @@ came from::
 
     --mass = 1e-300 is outside the allowed range [1, 1000] kg
     scene.json: figure.body.m = 1e-300 is outside the allowed range [1, 1000] kg
-    job.toml: figures[0].lean_deg = 89 is outside the allowed range [1, 60] deg
+    job.toml: figures[0].period = 89 is outside the allowed range [0.3, 20] s
     schedule.csv: row 2 (line 3), column period = 'fast' is not a number
 
 The ranges come from :mod:`.ranges`.  :class:`Fields` reads one table of a parsed document
@@ -45,7 +45,8 @@ def check(name: str, value, rng: Range | str, source: str = ""):
         raise FieldError(f"{label} = {value!r} is not a number; allowed range {rng}")
     v = float(value)
     if not rng.contains(v):
-        raise FieldError(f"{label} = {value!r} is outside the allowed range {rng}")
+        why = f": {rng.reason}" if rng.explain else ""
+        raise FieldError(f"{label} = {value!r} is outside the allowed range {rng}{why}")
     return int(v) if rng.integer else v
 
 

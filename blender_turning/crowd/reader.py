@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from ..core.ranges import CROWD_RANGES, RANGES
+from ..core.ranges import CROWD_RANGES, RANGES, lean_range
 from ..core.course.scene import read_figure, scene_from_dict
 from ..core.validate import FieldError, Fields, read_json
 from .formations import FORMATIONS
@@ -80,11 +80,13 @@ def _figure(f: Fields, base: Path) -> CrowdFigure:
         t = f.table("turns", {"period", "lean_deg", "heading_deg"}, required=True)
         heading = t.number("heading_deg", RANGES["heading"].deg(), 0.0) \
             if t.value("heading_deg", 0.0) is not None else None
+        figure = read_figure(f)
+        leans = lean_range(figure.limits.theta_fall, f"the {figure.name}")
         turns = Turns(t.number("period", "period"),
-                      math.radians(t.number("lean_deg", RANGES["theta_max"].deg())),
+                      math.radians(t.number("lean_deg", leans.deg())),
                       None if heading is None else math.radians(heading))
         s = f.table("start", {"position", "first_turn"})
-        return CrowdFigure(name, read_figure(f), turns, tuple(s.xy("position", [0.0, 0.0])),
+        return CrowdFigure(name, figure, turns, tuple(s.xy("position", [0.0, 0.0])),
                            s.string("first_turn", "left", FIRST_TURNS), offset)
     except FieldError:
         raise

@@ -1,15 +1,16 @@
 """What the model changed, said to the user: the lean a bake reached when the figure's bounds
-kept it below the asked one (the core's :class:`~..core.controllers.feasible.FeasibleTurn`
-report), and how far a Follow Path run strayed from its drawn path (the core's
-:func:`~..core.course.path.path_deviation`).  Bake Turns, Follow Path (one figure and several) and
-the Turns panel all take their words from here; nothing is recomputed in an operator.
+or its tyre's grip kept it below the asked one (the core's
+:class:`~..core.controllers.feasible.TurnsFollowed` report), and how far a Follow Path run
+strayed from its drawn path (the core's :func:`~..core.course.path.path_deviation`).  Bake
+Turns, Follow Path (one figure and several) and the Turns panel all take their words from here;
+nothing is recomputed in an operator.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import asdict
 
-from ...core.controllers.feasible import FeasibleTurn
+from ...core.controllers.feasible import FeasibleTurn, TurnsFollowed
 from ...core.course.path import path_deviation
 from ..scene.figure_context import BOUND_SETTING
 from ..scene.scene_adapters import FrameRange, controller_from_settings, figure_from_settings
@@ -26,25 +27,30 @@ WARN_DISTANCE = 3.0
 
 
 def with_turn(traj, controller):
-    """``traj`` with the core's report of a limited turn in its meta (unchanged when the turn
-    was the one asked for, or the controller reports none)."""
-    turn = getattr(controller, "achieved", None)
-    if turn is None or not turn.limited:
+    """``traj`` with the core's report of the turns a run followed in its meta when one was
+    limited (unchanged when each turn was the one asked for, or the controller reports none)."""
+    report = getattr(controller, "report", None)
+    if report is None or not report.limited:
         return traj
-    return type(traj)(traj.data, {**traj.meta, TURN_KEY: asdict(turn)})
+    return type(traj)(traj.data, {**traj.meta, TURN_KEY: asdict(report)})
 
 
-def _why(turn: FeasibleTurn) -> str:
-    setting = BOUND_SETTING.get(turn.bound)
-    more = f" or a higher {setting}" if setting and turn.bound != "physical branch" else ""
-    return f"{turn.describe()}: a longer Turn Period{more} leans further"
+def _why(report: TurnsFollowed) -> str:
+    bound = report.worst.bound
+    setting = BOUND_SETTING.get(bound)
+    more = f" or a higher {setting}" if setting and bound != "physical branch" else ""
+    return f"{report.describe()}: a longer Turn Period{more} leans further"
 
 
 def turn_note(traj) -> str:
     """``"lean 17.01 deg at period ... (asked 23.00 deg; limited by C_f_max ...)"`` and what to
-    change, for a bake whose lean its bounds limited; ``""`` when it leaned as asked."""
+    change, for a bake whose lean its bounds limited, and the tyre's grip's report
+    (``meta["grip_limited"]``, :func:`...core.physics.simulate.simulate`); ``""`` when it
+    leaned as asked."""
     turn = traj.meta.get(TURN_KEY)
-    return "" if turn is None else _why(FeasibleTurn(**turn))
+    notes = [traj.meta.get("grip_limited", "")] + \
+        ([] if turn is None else [_why(TurnsFollowed.from_dict(turn))])
+    return "; ".join(n for n in notes if n)
 
 
 def panel_turn(obj, scene) -> FeasibleTurn | None:
@@ -60,13 +66,17 @@ def panel_turn(obj, scene) -> FeasibleTurn | None:
     return ctl.commanded_turn(0.0)
 
 
-def panel_text(turn: FeasibleTurn) -> str:
-    """The Turns panel's line, naming the bound by the setting's label the panel shows."""
+def panel_text(turn: FeasibleTurn) -> list[str]:
+    """The Turns panel's lines, naming the bound by the setting's label the panel shows; a
+    second line when the bound is that of a half-turn Hold Heading keeps room to steer with."""
     setting = BOUND_SETTING.get(turn.bound, turn.bound).rpartition(" > ")[2]
     if turn.bound == "physical branch":
         setting = "the physical branch"
-    return (f"Leans {math.degrees(turn.lean):.1f}\u00b0, "
-            f"not {math.degrees(turn.commanded_lean):.1f}\u00b0: limited by {setting}")
+    lines = [f"Leans {math.degrees(turn.lean):.1f}\u00b0, "
+             f"not {math.degrees(turn.commanded_lean):.1f}\u00b0: limited by {setting}"]
+    if turn.beta != 1.0:
+        lines.append("in the room Hold Heading keeps to steer")
+    return lines
 
 
 def warn_distance(op) -> float:

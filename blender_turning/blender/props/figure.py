@@ -143,8 +143,8 @@ class TurningFigureSettings(bpy.types.PropertyGroup):
     lean: FloatProperty(name="Lean", default=math.radians(23), **_range("theta_max"),
                         soft_min=math.radians(3),
                         soft_max=math.radians(45), subtype="ANGLE",
-                        description="How far the body leans at the apex of a turn (theta_max); "
-                                    "animatable")
+                        description="How far the body leans at the apex of a turn (theta_max), "
+                                    "below the Fall Angle; animatable")
     use_heading: BoolProperty(name="Hold Heading", default=True, options=_STATIC,
                               description="Steer so the turns keep to the Heading on average "
                                           "(directional control, Section 5.2)")

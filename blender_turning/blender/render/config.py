@@ -4,12 +4,11 @@ uses; a bad value is a :class:`ConfigError` naming its key.  Crowds' tables are 
 :mod:`.crowds`."""
 from __future__ import annotations
 
-import math
 import tomllib
 from pathlib import Path
 
 from ...core.files import temp_beside
-from ...core.ranges import RANGES, Range
+from ...core.ranges import RANGES, Range, lean_range
 from ...core.registry import SPORTS
 from ...core.validate import Fields, check, nearest, read_text
 from . import crowds
@@ -141,10 +140,11 @@ def _cli_choice(given, flag, choices):
 def read_figure(f, earlier, paths, obstacles, terrains) -> dict:
     """One ``[[figures]]`` table (or a crowd's leader), checked against the config's paths,
     obstacle groups, terrains and the ``earlier`` figures' names."""
-    lean, heading = RANGES["theta_max"].deg(), RANGES["heading"].deg()
+    heading = RANGES["heading"].deg()
     sport = f.string("sport").lower()
     if sport not in SPORTS:
         f.fail("sport", f"= {sport!r} is not one of {', '.join(SPORTS)}")
+    lean = lean_range(SPORTS[sport].figure.limits.theta_fall, f"the {sport}").deg()
     fig = {"sport": sport, "control": f.string("control", "turns", choices=("turns", "path")),
            "name": f.string("name", SPORTS[sport].label),
            "start": tuple(float(v) for v in f.xy("start", [0.0, 0.0])),
@@ -165,10 +165,6 @@ def read_figure(f, earlier, paths, obstacles, terrains) -> dict:
            "body": None, "crowd": None, "time_offset": 0.0}
     if fig["ground"] is not None and fig["ground"] not in terrains:
         f.fail("ground", f"= {fig['ground']!r} is not a [terrain.<name>] of the config")
-    fall = math.degrees(SPORTS[sport].figure.limits.theta_fall)
-    if fig["lean_deg"] >= fall:
-        f.fail("lean_deg", f"= {fig['lean_deg']:g} is not below the {sport}'s fall angle "
-                           f"({fall:g} deg)")
     if not fig["name"].strip():
         f.fail("name", "= '' is empty")
     if any(fig["name"] == g["name"] for g in earlier):

@@ -14,7 +14,7 @@ from ...core.registry import SPORT_PRESETS, SPORTS
 from ...core.sports import sport as sport_record
 from ...core.physics.grip import SNOW
 from ...core.physics.model import Resistance
-from ...core.ranges import RANGES
+from ...core.ranges import RANGES, lean_range
 from ...core.physics.skidding import Skidding
 from ...core.validate import check
 from .. import compat
@@ -235,9 +235,11 @@ def controller_from_settings(obj, figure: Figure, frames: FrameRange) -> PhaseEl
     values = {name: sampled_setting(obj, name, frames) for name in ("period", "lean", "heading")}
     if np.any(values["period"] <= 0):
         raise ValueError("turn period must stay positive over the frame range")
-    if np.any(values["lean"] <= 0) or np.any(values["lean"] >= figure.limits.theta_fall):
-        raise ValueError(f"lean must stay in (0, {math.degrees(figure.limits.theta_fall):.0f}) deg"
-                         " (the fall angle) over the frame range")
+    leans = lean_range(figure.limits.theta_fall, f"the {figure.name}")
+    for k in np.flatnonzero([not leans.contains(v) for v in values["lean"]])[:1]:
+        raise SceneInputError(f"Lean (turning.lean) = {math.degrees(values['lean'][k]):.6g} deg "
+                              f"at frame {frames.start + k} is outside the allowed range "
+                              f"{leans.deg()}: {leans.reason}")
 
     def schedule(v):
         return Schedule.constant(v[0]) if np.all(v == v[0]) else Schedule.sampled(t, v)

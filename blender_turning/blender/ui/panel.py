@@ -73,7 +73,8 @@ class VIEW3D_PT_turning_controller(FigurePanel, bpy.types.Panel):
         s, col = self.draw_props(context, ("period", "lean"))
         turn = model_notes.panel_turn(context_figure(context), context.scene)
         if turn is not None and turn.limited:      # what a bake will lean to, and why
-            col.label(text=model_notes.panel_text(turn), icon="ERROR")
+            for line, icon in zip(model_notes.panel_text(turn), ("ERROR", "NONE")):
+                col.label(text=line, icon=icon)
         row = col.row(heading="Heading")
         row.prop(s, "use_heading", text="")
         sub = row.row()

@@ -59,7 +59,7 @@ from ..physics.xp import Scalar, backend
 from .base import Controller
 from .registry import ControllerType, register_controller
 from .ellipse_paper import paper_alpha, paper_alpha_one
-from .feasible import STEER_BETAS, FeasibleTurn, feasible_turns
+from .feasible import STEER_BETAS, FeasibleTurn, TurnsFollowed, feasible_turns
 
 GAIN = 3.0
 SPEED_GRID = 0.5
@@ -136,6 +136,8 @@ class PhaseEllipse(Controller):
         self._rates = {}            # mean_heading_rate at the nominal speed, per table and turn
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
+        self.followed: list[FeasibleTurn] = []
+        """The turns followed so far, each when it began (:attr:`report`)."""
         self._steer_betas = STEER_BETAS
 
     @property
@@ -190,6 +192,12 @@ class PhaseEllipse(Controller):
         self._planned = False
         self._forget()
         self.achieved = None
+        self.followed = []
+
+    @property
+    def report(self) -> TurnsFollowed | None:
+        """What the run's report says of the turns it followed (:class:`.TurnsFollowed`)."""
+        return TurnsFollowed.of(self.followed)
 
     def follow_speed(self, V_cm: float) -> BodyParams:
         """Steer at ``V_cm`` (:meth:`.Controller.follow_speed`) and keep the turn feasible at it.
@@ -232,15 +240,15 @@ class PhaseEllipse(Controller):
         return self._turn(t, w, tm, self.feasible_lean(w, tm))
 
     def _turn(self, t, w, tm, tmf) -> FeasibleTurn:
-        bound = None
-        if self._feasible is not None and tmf < tm:
-            # The turn's own bound, or, when the steering room limits it, the modified
-            # half-turn's (:meth:`.FeasibleTurns.steerable_lean`).
-            f = self._feasible
-            steer = [b for b in self.steer_betas if self.heading is not None and
-                     tmf >= f.max_lean(w / b) / b * (1 - 1e-12)]
-            bound = f.bound(w / steer[0] if steer else w)
-        return FeasibleTurn(tm, tmf, 2 * math.pi / w, bound, t)
+        if self._feasible is None or tmf >= tm:
+            return FeasibleTurn(tm, tmf, 2 * math.pi / w, None, t)
+        # The turn's own bound (beta 1) or, when the steering room limits it, that of the
+        # modified half-turn at its bound (:meth:`.FeasibleTurns.steerable_lean`).
+        f = self._feasible
+        steer = [b for b in self.steer_betas if self.heading is not None and
+                 tmf >= f.max_lean(w / b) / b * (1 - 1e-12)]
+        beta = steer[0] if steer and tmf < f.max_lean(w) * (1 - 1e-12) else 1.0
+        return FeasibleTurn(tm, tmf, 2 * math.pi / w, f.bound(w / beta), t, beta)
 
     def _note(self, t, w, tm, tmf):
         if np.ndim(tmf):           # a batch of per-figure ellipses: no single report
@@ -249,6 +257,9 @@ class PhaseEllipse(Controller):
         a = self.achieved
         if a is None or (turn.limited and tmf / tm < a.lean / a.commanded_lean):
             self.achieved = turn
+        last = self.followed[-1] if self.followed else None
+        if last is None or replace(last, t=t) != turn:
+            self.followed.append(turn)
 
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):

@@ -77,17 +77,87 @@ class FeasibleTurn:
     """The bound that limits the lean (one of ``BOUNDS``), ``None`` when not limited."""
     t: float = 0.0
     """When it was (first) followed, s."""
+    beta: float = 1.0
+    """Whose bound it is: 1 the turn's own; else the half-turn directional control may sharpen
+    (beta > 1) or flatten (beta < 1) to, ``(beta theta_max, omega0 / beta)``, whose room to
+    steer the lean gives up (:meth:`FeasibleTurns.steerable_lean`)."""
 
     @property
     def limited(self) -> bool:
         return self.bound is not None
 
+    def why(self) -> str:
+        """``"C_f_max"``, ``"theta_fall (less 8 deg)"``, and for a modified half-turn's bound
+        ``" of the half-turn sharpened to 1.1 (heading control's room)"`` after it."""
+        text = self.bound + (" (less 8 deg)" if self.bound == "theta_fall" else "")
+        if self.beta != 1.0:
+            text += (f" of the half-turn {'sharpened' if self.beta > 1 else 'flattened'} to "
+                     f"{self.beta:g} (heading control's room)")
+        return text
+
+    def brief(self) -> str:
+        """``"61.77 deg at period 2.000 s (asked 70.00 deg; limited by C_f_max ...)"`` or
+        ``"... (as asked)"``."""
+        text = f"{math.degrees(self.lean):.2f} deg at period {self.period:.3f} s"
+        if not self.limited:
+            return text + " (as asked)"
+        return text + (f" (asked {math.degrees(self.commanded_lean):.2f} deg; limited by "
+                       f"{self.why()})")
+
     def describe(self) -> str:
         text = f"lean {math.degrees(self.lean):.2f} deg at period {self.period:.3f} s"
         if self.limited:
             text += (f" (asked {math.degrees(self.commanded_lean):.2f} deg; limited by "
-                     f"{self.bound} from t = {self.t:.2f} s)")
+                     f"{self.why()} from t = {self.t:.2f} s)")
         return text
+
+
+@dataclass(frozen=True)
+class TurnsFollowed:
+    """What a run's report says of the turns it followed (:attr:`.ellipse.PhaseEllipse.report`):
+    the most limited turn and, where the lean followed changed over the run (what the bounds
+    allow depends on the speed: a figure gathering speed down a slope holds more lean), the one
+    it ended on -- or, when it ended on the most limited, the one it started on -- in time
+    order; ``lo``-``hi`` the leans followed over the run, rad."""
+
+    turns: tuple
+    lo: float
+    hi: float
+
+    @classmethod
+    def of(cls, followed) -> "TurnsFollowed | None":
+        """From the turns a run followed, each when it began (``None`` for none)."""
+        if not followed:
+            return None
+        worst = min(followed, key=lambda f: f.lean / f.commanded_lean)  # the first of equals
+        other = followed[-1] if followed[-1] is not worst else followed[0]
+        turns = (worst,) if other is worst else tuple(sorted((worst, other), key=lambda f: f.t))
+        leans = [f.lean for f in followed]
+        return cls(turns, min(leans), max(leans))
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "TurnsFollowed":
+        """The inverse of ``dataclasses.asdict`` (a trajectory's meta holds it)."""
+        return cls(tuple(FeasibleTurn(**t) for t in d["turns"]), d["lo"], d["hi"])
+
+    @property
+    def limited(self) -> bool:
+        return any(t.limited for t in self.turns)
+
+    @property
+    def worst(self) -> FeasibleTurn:
+        """The most limited turn (the one whose bound the report names first)."""
+        return min(self.turns, key=lambda f: f.lean / f.commanded_lean)
+
+    def describe(self) -> str:
+        """One turn: :meth:`FeasibleTurn.describe`.  Two: ``"lean 61.77-70.00 deg over the run:
+        61.77 deg at period 2.000 s (asked 70.00 deg; limited by C_f_max ...) from t = 0.00 s,
+        70.00 deg at period 2.000 s (as asked) from t = 2.96 s on"``."""
+        if len(self.turns) == 1:
+            return self.turns[0].describe()
+        a, b = self.turns
+        return (f"lean {math.degrees(self.lo):.2f}-{math.degrees(self.hi):.2f} deg over the run: "
+                f"{a.brief()} from t = {a.t:.2f} s, {b.brief()} from t = {b.t:.2f} s on")
 
 
 def fall_cause(limits: Limits, C_f, t, window: float = 1.0) -> str:

@@ -9,7 +9,7 @@ from typing import Callable
 
 import numpy as np
 
-from ..ranges import RANGES
+from ..ranges import RANGES, Range
 from ..validate import FieldError, check, nearest, read_text
 
 
@@ -76,13 +76,14 @@ _COLUMNS = {"t": "schedule_t", "period": "period", "lean_deg": "theta_max",
             "heading_deg": "heading"}
 
 
-def read_schedule_csv(path: str | Path) -> TurnSchedule:
+def read_schedule_csv(path: str | Path, lean: Range | None = None) -> TurnSchedule:
     """Read a CSV with the header ``t, period, lean_deg[, heading_deg]`` (s, s, deg, deg).
 
     Spaces around names and values and a UTF-8 byte-order mark are allowed; ``heading_deg`` is
     optional (absent or blank on every row: ``heading`` is None).  Each value is checked against
-    the table of ranges; an error names the file, the row (and its line), the column and the
-    value.
+    the table of ranges (``lean``, when given, is the figure's lean range, rad:
+    :func:`..ranges.lean_range`); an error names the file, the row (and its line), the column
+    and the value.
     """
     src = str(path)
     lines = read_text(path, "schedule file").splitlines()
@@ -120,7 +121,7 @@ def read_schedule_csv(path: str | Path) -> TurnSchedule:
                 value = float(text)
             except ValueError:
                 value = text
-            rng = RANGES[_COLUMNS[name]]
+            rng = lean if name == "lean_deg" and lean is not None else RANGES[_COLUMNS[name]]
             cols[name].append(check(f"{where}, column {name}", value,
                                     rng.deg() if name.endswith("_deg") else rng, src))
     heading = cols.get("heading_deg")
