@@ -40,6 +40,7 @@ from ...core import DEFAULT_DT
 from ...core.controllers.feasible import nearby_tables
 from ...core.errors import FellOver, TurningError
 from ...mapping import MAPPINGS
+from ...mapping.retarget.retarget import path_length
 from ...mapping.sports.snow import tilt_gain
 from .. import compat
 from ..anim import bake, export_ready, foot_track
@@ -266,19 +267,6 @@ def _rebake_turns(fig, frames, grounds, with_track: bool) -> None:
         _state["tracks_due"][fig.name] = (traj.x, traj.y, traj.z)
 
 
-def _track_rows(track, a: int, b: int):
-    """Rows ``a:b`` of a pose track."""
-    from ...mapping.base import BoneChannels, PoseTrack
-
-    def take(v):
-        return None if v is None else v[a:b]
-
-    return PoseTrack(take(track.frames), take(track.location), take(track.rotation),
-                     {k: BoneChannels(take(ch.location), take(ch.rotation))
-                      for k, ch in track.bones.items()},
-                     {k: take(v) for k, v in track.props.items()})
-
-
 def _rebake_window(fig, frames: FrameRange) -> bool:
     """A drag step: the keys within :data:`WINDOW` frames of the current frame, in place
     (raises as :func:`_rebake_turns`, nothing written).  ``False`` when a window is no cheaper
@@ -300,15 +288,19 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
         traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground,
                                coarse_dt=coarse)
     # What the mapping reads of the whole run, from the part simulated: the edge tilt's fit
-    # (Section 7), the distance the wheels turn from.
-    part = type(traj)(traj.data[:, mlo - frames.start:],
-                      {**traj.meta, "s_start": float(traj.s[0])})
+    # (Section 7), the distance the wheels turn from (the built-in's from the arc length, a
+    # user's rig's from the foot point's chords of one frame).
+    k = mlo - frames.start
+    part = type(traj)(traj.data[:, k:], {
+        **traj.meta, "s_start": float(traj.s[0]),
+        "path_start": float(path_length(np.stack([traj.x[:k + 1], traj.y[:k + 1]], 1))[-1])})
     options = MAPPINGS[s.sport.lower()].Options()
     if hasattr(options, "tilt_gain") and options.tilt_gain is None:
         options = replace(options, tilt_gain=tilt_gain(traj, None))
+    # The mapping over the window and its context, the retarget over the window only.
     track = map_track(s.sport, part, FrameRange(mlo, mhi, frames.fps), options, fig,
-                      surface_normals(part, ground))
-    track = export_ready.with_take(fig, _track_rows(track, lo - mlo, hi - mlo + 1))
+                      surface_normals(part, ground), rows=(lo - mlo, hi - mlo + 1))
+    track = export_ready.with_take(fig, track)
     if bake.rewrite_pose_track(fig, track) is None:       # checks the track first
         return False
     export_ready.clear_equipment(fig)

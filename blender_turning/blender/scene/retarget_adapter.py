@@ -155,13 +155,15 @@ def facing(obj) -> float:
                    mirrored(obj)).travel
 
 
-def figure_track(obj, traj, frames, options=None, normal=None, surface=None):
+def figure_track(obj, traj, frames, options=None, normal=None, surface=None, rows=None):
     """The pose track of ``obj`` for ``traj`` (one sample per frame of ``frames``) when it is a
     user's rig or rides goofy: the built-in figure's Section 7 mapping (of the mirrored run for
     a goofy stance), retargeted onto the user's rig, or mirrored onto the built-in rig itself.
     ``normal`` ((n, 3)): the surface normal at the foot on a Ground mesh; the figure then stands
     in the local surface as the built-in figures do (:mod:`..mapping.surface`); ``surface``: the
-    ground's height, where the built-in's poles are planted."""
+    ground's height, where the built-in's poles are planted.  ``rows`` ``(a, b)``: only frames
+    ``a:b`` of it (the rest mapped as their context); a part of a run (``traj.meta``
+    ``"path_start"``: the foot point's path length at its first frame) turns the wheels on."""
     sport, mirror = obj.turning.sport.lower(), mirrored(obj)
     fit = None
     if is_user_rig(obj):
@@ -171,8 +173,9 @@ def figure_track(obj, traj, frames, options=None, normal=None, surface=None):
     track = map_trajectory(sport, mirrored_trajectory(traj) if mirror else traj, options,
                            frame_start=frames.start, normal=normal, surface=surface)
     if fit is None:
-        return goofy_track(sport, track)
-    return retarget(track, sport, rig, bm, fit, mirror=mirror)
+        return goofy_track(sport, track if rows is None else track.rows(*rows))
+    return retarget(track, sport, rig, bm, fit, mirror=mirror, rows=rows,
+                    distance=float(traj.meta.get("path_start", 0.0)))
 
 
 def plants_for(sport: str, options, k: float, reach: float = 1.0):

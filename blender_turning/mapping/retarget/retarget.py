@@ -59,7 +59,7 @@ from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_p
 from ..surface import euler_xyz
 from .user_rig import RigFit, UserRig, fit_rig
 
-__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SLIDE", "SEATED",
+__all__ = ["retarget", "path_length", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SLIDE", "SEATED",
            "ANCHOR"]
 
 # Each sport's retargeting data is its record's ``retarget`` (:class:`..core.sports.Retarget`);
@@ -424,14 +424,29 @@ def _fk_ancestor(rig, bm, bone):
     return None if p is None else owner[p]
 
 
+def path_length(location) -> np.ndarray:
+    """(n,) how far the foot point ``location`` ((n, 3), m) has gone from its first row: the
+    chords of one frame, summed."""
+    step = np.linalg.norm(np.diff(np.asarray(location)[:, :2], axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(step)])
+
+
 def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
-             fit: RigFit | None = None, mirror: bool = False) -> PoseTrack:
+             fit: RigFit | None = None, mirror: bool = False, rows: tuple | None = None,
+             distance: float = 0.0) -> PoseTrack:
     """The built-in figure's ``track`` (from ``map_trajectory(sport, ...)``) on the user's rig:
     a :class:`PoseTrack` of the user's bones (or controls) and the object's root motion.  With
     ``mirror`` the track is of the mirrored trajectory and the user's rig takes its mirror
-    image (a goofy snowboarder); the state properties are given back unmirrored."""
+    image (a goofy snowboarder); the state properties are given back unmirrored.
+
+    ``rows`` ``(a, b)``: only frames ``a:b`` of ``track`` (a window of it; the frames around were
+    the mapping's context), each frame's pose being its own; ``distance``: how far the foot
+    point had gone before ``track``'s first frame (a part of a run: the wheels turn on)."""
     if sport not in ATTACH:
         raise ValueError(f"sport = {sport!r}: retargeting supports {', '.join(ATTACH)}")
+    a, b = (0, len(track)) if rows is None else rows
+    travelled = distance + path_length(track.location)[a:b] if sport in SPIN else None
+    track = track.rows(a, b) if rows is not None else track
     fit = fit_rig(rig, bm, sport, mirror) if fit is None else fit
     bi = _Builtin(sport, track, fit, mirror)
     poses = solve_joints(bi, rig, bm, sport)
@@ -459,9 +474,8 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     location = track.location - fit.scale * np.einsum("nij,j->ni", R, fit.origin)
     rotation = euler_xyz(R, psi)
     props = unmirror_props(track.props) if mirror else dict(track.props)
-    if sport in SPIN:       # the foot point's path length (chords of one frame), m
-        step = np.linalg.norm(np.diff(track.location[:, :2], axis=0), axis=1)
-        props["turn_distance"] = np.concatenate([[0.0], np.cumsum(step)])
+    if sport in SPIN:       # the foot point's path length, m
+        props["turn_distance"] = travelled
     for piece, (along, prop) in SLIDE.get(sport, {}).items():
         # The built-in keys the slide as the piece's location along the axis (a unit vector in
         # the piece's rest frame); the user's figure is k times the size.
