@@ -59,8 +59,8 @@ from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_p
 from ..surface import euler_xyz
 from .user_rig import RigFit, UserRig, fit_rig
 
-__all__ = ["retarget", "path_length", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SLIDE", "SEATED",
-           "ANCHOR"]
+__all__ = ["retarget", "path_length", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN",
+           "SLIDE", "SEATED", "ANCHOR"]
 
 # Each sport's retargeting data is its record's ``retarget`` (:class:`..core.sports.Retarget`);
 # these are live views of the sport registry, by sport.
