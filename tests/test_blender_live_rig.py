@@ -79,3 +79,29 @@ def test_a_drag_step_on_a_users_rig_keys_the_whole_bakes_window(scene, sport, mo
         # The same rotations (q and -q are one), to the keys' float32.
         assert np.abs(np.sum(new * whole, axis=1)).min() > 1 - 1e-6, path
     assert any(not np.array_equal(step[k][w], before[k][w]) for k in step)
+
+
+def test_a_drag_reads_the_users_rig_once_and_again_when_its_map_changes(scene, monkeypatch):
+    from blender_turning.blender.scene import retarget_adapter as ra
+    scene.frame_end = 240
+    rig = users_figure("SKIER")
+    scene.frame_set(100)
+    reads, read = [], ra.user_rig
+    monkeypatch.setattr(ra, "user_rig", lambda obj: reads.append(1) or read(obj))
+    for k in range(3):                              # three steps of a drag: one read
+        rig.turning.lean += math.radians(0.5)
+        live.schedule()
+        assert rig.name not in live.FAILURES
+    assert len(reads) == 1
+    # The map changed between two steps (a joint left unmapped): the next step sees it.
+    ra.fill_custom_map(rig, ra.figure_bone_map(rig))
+    rig.turning.rig.bone_map = "CUSTOM"
+    next(r for r in rig.turning.rig.custom_map if r.name == "thigh.L").bone = ""
+    rig.turning.lean += math.radians(0.5)
+    live.schedule()                                 # refused before a read
+    assert "thigh.L" in live.FAILURES[rig.name].message and len(reads) == 1
+    rig.turning.rig.bone_map = "MIXAMO"
+    live._state["last_change"] -= live.SETTLE       # the drag ended: the release reads it anew
+    assert live._tick() is None and not live.is_pending(rig)
+    # The timer's drag step (the map changed back) and the release: one read each.
+    assert len(reads) == 3 and rig.name not in live._RIGS

@@ -45,6 +45,7 @@ from ...mapping.sports.snow import tilt_gain
 from .. import compat
 from ..anim import bake, export_ready, foot_track
 from ..props import figure as props
+from ..scene import retarget_adapter
 from ..scene.figure_context import check_figure, in_settings
 from .pipeline import figure_pose_track, ground_of
 from ..props.figure import figure_settings
@@ -87,6 +88,9 @@ _MSGBUS_OWNER = object()
 _state = {"last_change": 0.0, "tracks_due": {}}
 #: figure name -> the digest of the settings its window was last re-baked for (the rest waits).
 _WINDOWS: dict = {}
+#: figure name -> (what :func:`_drag_rig` keys it by, its rig's read): a drag's steps read a user's
+#: rig once; the next whole re-bake (the release) reads it anew.
+_RIGS: dict = {}
 #: Ground mesh name -> (what the digest reads of it, its read): a drag step reads the mesh only
 #: when the digest sees it changed (a read takes ~15 ms on a 200 x 200 grid, most of it in
 #: evaluating the mesh to tell whether it changed); the release reads it anew.
@@ -280,7 +284,7 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
     mlo, mhi = max(frames.start, lo - MARGIN), min(frames.end, hi + MARGIN)
     if mlo == frames.start and mhi == frames.end:
         return False
-    check_figure(fig)
+    fitted = _drag_rig(fig)
     ground = _window_ground(fig)
     period = float(sampled_setting(fig, "period", frames).min())
     coarse = min(2 * DEFAULT_DT, max(DEFAULT_DT, period / PREVIEW_STEPS))
@@ -299,12 +303,28 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
         options = replace(options, tilt_gain=tilt_gain(traj, None))
     # The mapping over the window and its context, the retarget over the window only.
     track = map_track(s.sport, part, FrameRange(mlo, mhi, frames.fps), options, fig,
-                      surface_normals(part, ground), rows=(lo - mlo, hi - mlo + 1))
+                      surface_normals(part, ground), rows=(lo - mlo, hi - mlo + 1),
+                      fitted=fitted)
     track = export_ready.with_take(fig, track)
     if bake.rewrite_pose_track(fig, track) is None:       # checks the track first
         return False
     export_ready.clear_equipment(fig)
     return True
+
+
+def _drag_rig(fig):
+    """A drag step's check of ``fig``'s rig (:func:`..scene.figure_context.check_figure`) and its
+    read of a user's rig (:func:`..scene.retarget_adapter.fitted_rig`, ``None`` for a built-in
+    figure; ~2 ms of a step on a Rigify rig): once a drag (:data:`_RIGS`), again when its Sport
+    or Your Rig settings, its scale or its armature change."""
+    h = hashlib.blake2b(digest_size=16)
+    _group_digest(h, fig.turning.rig, "rig.", {}, [])
+    key = (h.digest(), fig.turning.sport, tuple(fig.scale), fig.data.as_pointer())
+    kept = _RIGS.get(fig.name)
+    if kept is None or kept[0] != key:
+        check_figure(fig)
+        kept = _RIGS[fig.name] = (key, retarget_adapter.fitted_rig(fig))
+    return kept[1]
 
 
 def _window_ground(fig):
@@ -362,6 +382,7 @@ def refresh(scene=None, with_tracks: bool = True, paths: bool = True,
             continue
         clear_failure(fig)
         _WINDOWS.pop(fig.name, None)
+        _RIGS.pop(fig.name, None)
         bake.figure_action(fig)[KEY] = fingerprint(fig)
         out[fig.name] = None
     if with_tracks:
@@ -433,6 +454,7 @@ def on_load_post(*_args) -> None:
     FAILURES.clear()
     _EDITS.clear()
     _WINDOWS.clear()
+    _RIGS.clear()
     _GROUNDS.clear()
     _subscribe()
 
@@ -488,5 +510,6 @@ def unregister():
     FAILURES.clear()
     _EDITS.clear()
     _WINDOWS.clear()
+    _RIGS.clear()
     _GROUNDS.clear()
     _state["tracks_due"] = {}
