@@ -490,7 +490,7 @@ def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
         buf[2 * i0 + 1:2 * (i0 + n):2] = -values if signs.get(path, 0.0) < 0 else values
         if by_key:
             for point, v in zip(points[k], buf[2 * i0 + 1:2 * (i0 + n):2].tolist()):
-                point[1] = v
+                point.y = v                 # (2 us a key; point[1] = v takes 5)
         else:
             fc.keyframe_points.foreach_set("co", buf)
     _make_props(obj, track)
