@@ -64,7 +64,8 @@ SETTLE = 0.3
 #: MARGIN frames on either side are mapped too (a pole plant, a quaternion's sign depend on the
 #: frames around: from 12 frames of context on, a window's rotations agree with the whole
 #: range's to 5e-6 given the same edge tilt, measured on the four sports; the tilt is fitted
-#: over the part simulated).  The mapping's cost goes with the frames mapped: 29 here.
+#: over the part simulated).  The mapping's cost goes with the frames mapped: 29 here; a user's
+#: rig is retargeted on the window's 5 (each frame's own).
 WINDOW, MARGIN = 2, 12
 #: A drag step on the paper's own model (flat ground, a Speed that is not keyed, no skidding:
 #: :func:`.pipeline.simulate_figure`'s ``coarse_dt``) integrates with PREVIEW_STEPS steps a turn
