@@ -781,6 +781,12 @@ LIVE_MUTANTS = [
       "key = (h.digest(), fig.turning.sport,", "key = (fig.turning.sport,", LIVE_RIG, "live"),
     M("live_drag_rig_kept_after_release", "blender/jobs/live.py",
       "        _RIGS.pop(fig.name, None)\n", "", LIVE_RIG, "live"),
+    M("retarget_rest_kept_for_any_map", "mapping/retarget/retarget.py",
+      "    key = (id(bm), id(bi.fit), sport, type(bi.skel).__name__)\n"
+      "    kept = rig._at_rest.get(key)\n"
+      "    if kept is not None and kept[0] is bm and kept[1] is bi.fit:",
+      "    key = (sport, type(bi.skel).__name__)\n    kept = rig._at_rest.get(key)\n"
+      "    if kept is not None:", RETARGET, "live"),
     M("live_crc_polynomial", "blender/anim/key_crc.py",
       "POLY = 0xEDB88320", "POLY = 0xEDB88321", KEY_CRC, "live"),
     M("live_crc_bits_for_bytes", "blender/anim/key_crc.py",

@@ -279,12 +279,34 @@ def _knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankle):
     return -wu + np.sqrt(np.maximum(wu * wu - np.sum(w * w, axis=-1) + d * d, 0.0))
 
 
+def _at_rest(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str):
+    """What :func:`solve_joints` and :func:`retarget` read of the two rigs at rest: the user's
+    mapped joints' rest ``{joint: (4, 4)}``, their rest orientations turned by ``A``
+    (:func:`_rest_differences`), the rest offset of each from its parent joint's frame
+    ``{joint: (parent joint, (4,))}`` and the inverse rests.  Kept on ``rig`` for the bone map
+    and fit it was made with (a Live Preview drag retargets onto one read of the rig)."""
+    key = (id(bm), id(bi.fit), sport, type(bi.skel).__name__)
+    kept = rig._at_rest.get(key)
+    if kept is not None and kept[0] is bm and kept[1] is bi.fit:
+        return kept[2]
+    rest = {j: rig.rest_of(bm.bone(j)) for j in JOINTS if _mapped(bm, rig, j)}
+    A = _rest_differences(bm, rig, bi.skel, bi.fit, rest)
+    turned = {j: A[j] @ rest[j][:3, :3] for j in rest}
+    carry = {}
+    for j in rest:
+        pj = _parent_joint(bm, rig, j)
+        if pj is not None:
+            carry[j] = (pj, rigid_inverse(rest[pj]) @ np.append(rest[j][:3, 3], 1.0))
+    out = (rest, turned, carry, {j: rigid_inverse(rest[j]) for j in rest})
+    rig._at_rest[key] = (bm, bi.fit, out)
+    return out
+
+
 def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
     """Armature-space poses (n, 4, 4) of the user's mapped joints (see the module doc)."""
     fit, n = bi.fit, bi.n
-    rest = {j: rig.rest_of(bm.bone(j)) for j in JOINTS if _mapped(bm, rig, j)}
-    A = _rest_differences(bm, rig, bi.skel, fit, rest)
-    rot = {j: bi.delta(j) @ (A[j] @ rest[j][:3, :3]) for j in rest}
+    rest, turned, carry, _ = _at_rest(bi, rig, bm, sport)
+    rot = {j: bi.delta(j) @ turned[j] for j in rest}
     poses = {}
 
     def place(j, head, R=None):
@@ -295,9 +317,8 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         poses[j] = m
 
     def carried(j):
-        pj = _parent_joint(bm, rig, j)
-        p = np.append(rest[j][:3, 3], 1.0)
-        return (poses[pj] @ (rigid_inverse(rest[pj]) @ p))[:, :3]
+        pj, offset = carry[j]
+        return (poses[pj] @ offset)[:, :3]
 
     def aimed(j, target_vec, rest_vec):
         """``rot[j]`` swung so the rest vector ``rest_vec`` (armature space) points along
@@ -360,7 +381,7 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
             target, S = _turn_about_tip(bi, pole, root,
                                         bi.head(pole) - np.einsum("nij,j->ni", turn, grip),
                                         REACH * (l1 + l2))
-            rot[c] = S @ turn @ (A[c] @ rest[c][:3, :3])
+            rot[c] = S @ turn @ turned[c]
         mid, end = two_bone_ik(root, target, l1, l2, _pole(bi, a, b, c))
         place(a, root, aimed(a, mid - root, rest[b][:3, 3] - rest[a][:3, 3]))
         place(b, mid, aimed(b, end - mid, rest[c][:3, 3] - rest[b][:3, 3]))
@@ -451,8 +472,9 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     bi = _Builtin(sport, track, fit, mirror)
     poses = solve_joints(bi, rig, bm, sport)
     moved = {None: None}          # joint -> its pose's change from rest (n, 4, 4)
+    inverse = _at_rest(bi, rig, bm, sport)[3]
     for j in poses:
-        moved[j] = poses[j] @ rigid_inverse(rig.rest_of(bm.bone(j)))
+        moved[j] = poses[j] @ inverse[j]
     if bm.controls:     # (bone, pose, parent joint, location keyed)
         keyed = [(c.bone, moved[c.joint] @ rig.rest_of(c.bone), c.parent,
                   c.parent is None or c.location) for c in bm.controls]
