@@ -787,6 +787,11 @@ LIVE_MUTANTS = [
       "    if kept is not None and kept[0] is bm and kept[1] is bi.fit:",
       "    key = (sport, type(bi.skel).__name__)\n    kept = rig._at_rest.get(key)\n"
       "    if kept is not None:", RETARGET, "live"),
+    M("live_release_keys_dropped", "blender/anim/bake.py",
+      "    _WINDOW_KEYS[action.as_pointer()] = (action[bake_layers.FINGERPRINTS], keys, crcs)",
+      "    if by_key:\n"
+      "        _WINDOW_KEYS[action.as_pointer()] = (action[bake_layers.FINGERPRINTS], keys, crcs)",
+      LIVE, "live"),
     M("live_crc_polynomial", "blender/anim/key_crc.py",
       "POLY = 0xEDB88320", "POLY = 0xEDB88321", KEY_CRC, "live"),
     M("live_crc_bits_for_bytes", "blender/anim/key_crc.py",
