@@ -776,7 +776,7 @@ LIVE_MUTANTS = [
     M("live_rig_wheels_from_the_context", "blender/scene/retarget_adapter.py",
       'distance=float(traj.meta.get("path_start", 0.0)))', "distance=0.0)", LIVE_RIG, "live"),
     M("live_rig_window_rows_shifted", "blender/jobs/live.py",
-      "rows=(lo - mlo, hi - mlo + 1))", "rows=(lo - mlo + 1, hi - mlo + 2))", LIVE_RIG, "live"),
+      "rows=(lo - mlo, hi - mlo + 1),", "rows=(lo - mlo + 1, hi - mlo + 2),", LIVE_RIG, "live"),
     M("live_drag_rig_blind_to_its_map", "blender/jobs/live.py",
       "key = (h.digest(), fig.turning.sport,", "key = (fig.turning.sport,", LIVE_RIG, "live"),
     M("live_drag_rig_kept_after_release", "blender/jobs/live.py",
