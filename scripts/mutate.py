@@ -70,6 +70,8 @@ BLENDER_REGISTRY = [T + "test_blender_registry.py"]
 NOTES = [T + "test_blender_model_notes.py"]
 EXPORT = [T + "test_blender_export.py"]
 LIVE = [T + "test_blender_live.py", T + "test_mapping_cyclist.py"]
+LIVE_RIG = [T + "test_blender_live_rig.py"]
+KEY_CRC = [T + "test_key_crc.py", T + "test_blender_live.py"]
 LAYERS = [T + "test_blender_layers.py", T + "test_blender_robustness.py"]
 STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
 POLES = [T + "test_blender_poles.py"]
@@ -840,6 +842,35 @@ LIVE_MUTANTS = [
       "with nearby_tables(NEARBY_BODY):", "with nearby_tables(0.0):", LIVE, "live"),
     M("live_handlers_left", "blender/jobs/live.py",
       "        while fn in handlers:\n            handlers.remove(fn)", "        pass", LIVE, "live"),
+    M("live_rig_wheels_from_the_context", "blender/scene/retarget_adapter.py",
+      'distance=float(traj.meta.get("path_start", 0.0)))', "distance=0.0)", LIVE_RIG, "live"),
+    M("live_rig_window_rows_shifted", "blender/jobs/live.py",
+      "rows=(lo - mlo, hi - mlo + 1),", "rows=(lo - mlo + 1, hi - mlo + 2),", LIVE_RIG, "live"),
+    M("live_drag_rig_blind_to_its_map", "blender/jobs/live.py",
+      "key = (h.digest(), fig.turning.sport,", "key = (fig.turning.sport,", LIVE_RIG, "live"),
+    M("live_drag_rig_kept_after_release", "blender/jobs/live.py",
+      "        _RIGS.pop(fig.name, None)\n", "", LIVE_RIG, "live"),
+    M("retarget_rest_kept_for_any_map", "mapping/retarget/retarget.py",
+      "    key = (id(bm), id(bi.fit), sport, type(bi.skel).__name__)\n"
+      "    kept = rig._at_rest.get(key)\n"
+      "    if kept is not None and kept[0] is bm and kept[1] is bi.fit:",
+      "    key = (sport, type(bi.skel).__name__)\n    kept = rig._at_rest.get(key)\n"
+      "    if kept is not None:", RETARGET, "live"),
+    M("live_release_keys_dropped", "blender/anim/bake.py",
+      "    _WINDOW_KEYS[action.as_pointer()] = (action[bake_layers.FINGERPRINTS], keys, crcs)",
+      "    if by_key:\n"
+      "        _WINDOW_KEYS[action.as_pointer()] = (action[bake_layers.FINGERPRINTS], keys, crcs)",
+      LIVE, "live"),
+    M("live_crc_polynomial", "blender/anim/key_crc.py",
+      "POLY = 0xEDB88320", "POLY = 0xEDB88321", KEY_CRC, "live"),
+    M("live_crc_bits_for_bytes", "blender/anim/key_crc.py",
+      "    for _ in range(3):                           # 2, 4, 8 bits: a byte",
+      "    for _ in range(2):", KEY_CRC, "live"),
+    M("live_crc_tail_short", "blender/anim/bake.py",
+      "4 * 2 * (total - i0 - n)", "4 * 2 * (total - i0 - n - 1)", LIVE, "live"),
+    M("live_crc_of_the_old_keys", "blender/anim/bake.py",
+      "        after = np.stack([old[fc][window] for fc, _, _ in todo])",
+      "        after = before", LIVE, "live"),
 ]
 MUTANTS += LIVE_MUTANTS
 
@@ -985,6 +1016,10 @@ MUTANTS += [
     M("telemark_inside_ski_leads", "mapping/sports/telemark.py",
       'for s, sign in (("L", -1.0), ("R", 1.0)):', 'for s, sign in (("L", 1.0), ("R", -1.0)):',
       TELEMARK, "mapping"),
+    M("fk_turns_of_the_wrong_bones", "mapping/kinematics.py",
+      "np.stack([channels[b].rotation for b in turned])",
+      "np.stack([channels[b].rotation for b in turned][::-1])",
+      [T + "test_kinematics.py", T + "test_retarget.py"], "mapping"),
     M("two_bone_ik_lengths_swapped", "mapping/kinematics.py",
       "a = (l1 * l1 - l2 * l2 + dist * dist) / (2.0 * dist)",
       "a = (l2 * l2 - l1 * l1 + dist * dist) / (2.0 * dist)", [T + "test_kinematics.py"],

@@ -484,6 +484,24 @@ def test_a_drag_step_after_another_writes_and_reads_back_only_the_window(scene, 
     assert fc.keyframe_points[180].co.y == edited
 
 
+def test_a_drag_after_a_release_reads_back_only_the_window(scene, monkeypatch):
+    from blender_turning.blender.anim import bake_layers
+    scene.frame_end = 240
+    fig = live_figure()
+    scene.frame_set(100)
+    fig.turning.lean = math.radians(24)
+    assert bpy.ops.turning.refresh_preview() == {"FINISHED"}   # a release: every key, in place
+    reads, read = [], bake._read_keys
+    monkeypatch.setattr(bake, "_read_keys", lambda *a: reads.append(1) or read(*a))
+    fig.turning.lean = math.radians(25)
+    live.schedule()                                # the next drag's first step
+    assert reads == [] and fig.name not in live.FAILURES
+    assert bake_layers.edited_curves(bake.figure_action(fig), bake.baked_channels(fig)) == []
+    live._state["last_change"] -= live.SETTLE
+    assert live._tick() is None and not live.is_pending(fig)
+    assert reads == [1]                            # the release reads them all
+
+
 @pytest.mark.parametrize("sport", ["SKIER", "CYCLIST"])
 def test_a_drag_step_on_the_papers_model_takes_fewer_steps_within_its_measured_error(
         scene, sport, monkeypatch):

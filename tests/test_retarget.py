@@ -510,3 +510,33 @@ def test_a_control_keyed_with_its_location_lands_on_its_joint(run):
         off[keyed] = np.abs(got - want).max()
     assert off[True] < 1e-9, off          # measured 7e-16
     assert off[False] > 0.01, off         # measured 0.16 m
+
+
+def test_a_rig_read_once_retargets_through_other_maps_and_windows_as_a_fresh_read(run):
+    """The retarget keeps what it reads of the rigs at rest on the rig for the bone map and fit
+    it was made with (a Live Preview drag reads the user's rig once): another map gets its own,
+    and a window of the track is that window of the whole track's retarget, bit for bit."""
+    rig = user_rig()
+    optional = {"shoulder.L", "shoulder.R", "spine.001", "spine.002", "spine.004", "spine.005"}
+    less = parse_bone_map({"name": "u2", "joints": {j: b for j, b in BM.joints.items()
+                                                   if j not in optional}})
+    for bm in (BM, less, BM):
+        fit = fit_rig(rig, bm, "skier")
+        out = retarget(run, "skier", rig, bm, fit)
+        fresh = user_rig()
+        want = retarget(run, "skier", fresh, bm, fit_rig(fresh, bm, "skier"))
+        window = retarget(run, "skier", rig, bm, fit, rows=(40, 45))
+        assert out.bones.keys() == want.bones.keys() == window.bones.keys()
+        for name, ch in out.bones.items():
+            for got, exp, win in ((ch.location, want.bones[name].location,
+                                   window.bones[name].location),
+                                  (ch.rotation, want.bones[name].rotation,
+                                   window.bones[name].rotation)):
+                if exp is not None:
+                    np.testing.assert_array_equal(got, exp, err_msg=name)
+                    # A window's quaternions may take the other sign (each frame's own).
+                    w = got[40:45]
+                    np.testing.assert_array_equal(win * np.sign(np.sum(win * w, axis=-1,
+                                                                       keepdims=True)), w,
+                                                  err_msg=name)
+    assert len(rig._at_rest) == 3                   # one per map and fit it was given

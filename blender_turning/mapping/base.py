@@ -70,6 +70,16 @@ class PoseTrack:
     def __len__(self) -> int:
         return len(self.frames)
 
+    def rows(self, a: int, b: int) -> "PoseTrack":
+        """Frames ``a:b`` of the track (a window of it)."""
+        def take(v):
+            return None if v is None else v[a:b]
+
+        return PoseTrack(take(self.frames), take(self.location), take(self.rotation),
+                         {k: BoneChannels(take(ch.location), take(ch.rotation))
+                          for k, ch in self.bones.items()},
+                         {k: take(v) for k, v in self.props.items()})
+
 
 class Mapping:
     """Base of the sport mappings (Section 7): one subclass per sport, registered in

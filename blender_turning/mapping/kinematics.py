@@ -396,6 +396,10 @@ class Skeleton:
         ``channels`` maps a bone name to an object with ``location`` (n, 3) or None and
         ``rotation`` (n, 4) or None (a :class:`~blender_turning.mapping.base.BoneChannels`).
         """
+        turned = [b for b in self.names
+                  if channels.get(b) is not None and channels[b].rotation is not None]
+        turns = dict(zip(turned, rotation4(quat_to_matrix(
+            np.stack([channels[b].rotation for b in turned]))))) if turned else {}
         out = {}
         for i, name in enumerate(self.names):
             p = self.parents[i]
@@ -403,11 +407,10 @@ class Skeleton:
             if p is not None:
                 m = out[p] @ m
             ch = channels.get(name)
-            if ch is not None:
-                if ch.location is not None and not self.connected[i]:
-                    m = m @ translation(ch.location)
-                if ch.rotation is not None:
-                    m = m @ rotation4(quat_to_matrix(ch.rotation))
+            if ch is not None and ch.location is not None and not self.connected[i]:
+                m = m @ translation(ch.location)
+            if name in turns:             # every bone's turn in one pass
+                m = m @ turns[name]
             out[name] = np.array(m)
         return out
 

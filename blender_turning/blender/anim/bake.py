@@ -25,7 +25,7 @@ import bpy
 import numpy as np
 
 from .. import compat
-from . import bake_layers, user_action
+from . import bake_layers, key_crc, user_action
 from .user_action import PROP_GROUP, REST, STASHED
 from ...mapping.base import PoseTrack
 
@@ -321,10 +321,13 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
 #: A window of fewer keys than 1/WINDOW_KEYS of a curve's is written key by key (a key costs ~4 us,
 #: a whole curve's ``foreach_set`` ~0.1 us a key: measured on a 1,441-key bake).
 WINDOW_KEYS = 40
-#: ``action.as_pointer() -> (its fingerprints, {(data_path, index): keys (2 n,) float32})``: the
-#: keys the last window rewrite (a Live Preview drag step) left, so the next one reads only the
-#: window's keys back from Blender (whole curves cost ~70 us each to read).  Any other write
-#: drops it; it holds while the action's fingerprints are the ones written with it.
+#: ``action.as_pointer() -> (its fingerprints, {(data_path, index): keys (2 n,) float32},
+#: {(data_path, index): crc})``: the keys the last rewrite in place (a Live Preview drag step,
+#: or the release before a drag) left and their fingerprints, so a window rewrite reads only the
+#: window's keys back from Blender (whole curves cost ~70 us each to read: 12 ms a step on a
+#: Rigify rig's 60 s) and updates the fingerprints from the keys it changes
+#: (:func:`.key_crc.crc_after_change`; a whole curve's CRC costs with its length).  Any other
+#: write drops it; it holds while the action's fingerprints are the ones written with it.
 _WINDOW_KEYS: dict = {}
 
 
@@ -337,11 +340,21 @@ def _read_keys(todo, total: int) -> dict:
     return keys
 
 
+def _window_points(todo, i0: int, n: int) -> list:
+    """Per curve of ``todo``, the ``co`` of its keys ``i0:i0 + n`` (written through)."""
+    out = []
+    for fc, _, _ in todo:
+        kp = fc.keyframe_points
+        out.append([kp[j].co for j in range(i0, i0 + n)])
+    return out
+
+
 def _kept_keys(action, todo, total: int, frames):
-    """The keys :data:`_WINDOW_KEYS` holds for ``action`` when they are still good and
-    Blender's keys on ``frames`` (the window about to be written) are theirs; else ``None``.
-    A key the user changed outside the window is found by the next whole rewrite (a release),
-    which reads every key; this window write leaves it as it is."""
+    """``(keys, crcs, points)``: what :data:`_WINDOW_KEYS` holds for ``action`` when it is still
+    good and Blender's keys on ``frames`` (the window about to be written) are its own, with
+    those keys' ``co`` (:func:`_window_points`); else ``None``.  A key the user changed outside
+    the window is found by the next whole rewrite (a release), which reads every key; this
+    window write leaves it as it is."""
     kept = _WINDOW_KEYS.get(action.as_pointer())
     if kept is None or kept[0] != action.get(bake_layers.FINGERPRINTS):
         return None
@@ -350,15 +363,15 @@ def _kept_keys(action, todo, total: int, frames):
     if first is None:
         return None
     i0, n = int(np.searchsorted(first[0::2], frames[0])), len(frames)
-    for fc, _, _ in todo:
-        buf = keys.get((fc.data_path, fc.array_index))
-        if buf is None or len(buf) != 2 * total:
+    if i0 + n > total or any(len(keys.get((fc.data_path, fc.array_index), ())) != 2 * total
+                             for fc, _, _ in todo):
+        return None
+    points = _window_points(todo, i0, n)
+    for (fc, _, _), cos in zip(todo, points):
+        buf = keys[(fc.data_path, fc.array_index)][2 * i0:2 * (i0 + n)].tolist()
+        if [v for co in cos for v in co] != buf:
             return None
-        kp = fc.keyframe_points
-        for j in range(i0, min(i0 + n, total)):
-            if tuple(kp[j].co) != (float(buf[2 * j]), float(buf[2 * j + 1])):
-                return None
-    return keys
+    return keys, kept[2], points
 
 
 def can_share(obj) -> bool:
@@ -453,37 +466,45 @@ def rewrite_pose_track(obj, track: PoseTrack) -> BakeResult | None:
         return None
     frames, n = np.asarray(track.frames, np.float32), len(track)
     by_key = n * WINDOW_KEYS < total
-    keys = _kept_keys(action, todo, total, frames) if by_key else None
+    kept = _kept_keys(action, todo, total, frames) if by_key else None
     _WINDOW_KEYS.pop(action.as_pointer(), None)
-    fresh = keys is None
-    if fresh:
-        # Each curve's keys are read once: the user's edits are checked on them, the window
-        # goes into them and their fingerprint is taken from what is written.
-        keys = _read_keys(todo, total)
+    # Each curve's keys are read once (unless kept): the user's edits are checked on them, the
+    # window goes into them and their fingerprint is taken from what is written.
+    keys, crcs, points = (_read_keys(todo, total), None, None) if kept is None else kept
     co = keys[(todo[0][0].data_path, todo[0][0].array_index)]
     i0 = int(np.searchsorted(co[0::2], frames[0]))
     if i0 + n > total or not np.array_equal(co[0::2][i0:i0 + n], frames):
         return None
-    if fresh:
+    if kept is None:
         _check_unedited(obj, action, bag, keys)
     old = {fc: keys[(fc.data_path, fc.array_index)] for fc, _, _ in todo}
     signs = {}
     for fc, path, values in todo:   # w, x, y, z of one bone: the dot with the keys replaced
         if n < total and path.endswith(".rotation_quaternion"):
             signs[path] = signs.get(path, 0.0) + float(old[fc][2 * i0 + 1]) * float(values[0])
-    for fc, path, values in todo:       # frames stay; LINEAR keys ignore their handles
+    window = slice(2 * i0, 2 * (i0 + n))
+    before = None if kept is None else np.stack([old[fc][window] for fc, _, _ in todo])
+    if by_key and points is None:
+        points = _window_points(todo, i0, n)
+    for k, (fc, path, values) in enumerate(todo):   # frames stay; LINEAR keys ignore handles
         buf = old[fc]
         buf[2 * i0 + 1:2 * (i0 + n):2] = -values if signs.get(path, 0.0) < 0 else values
         if by_key:
-            kp = fc.keyframe_points
-            for j, v in enumerate(buf[2 * i0 + 1:2 * (i0 + n):2].tolist(), i0):
-                kp[j].co[1] = v
+            for point, v in zip(points[k], buf[2 * i0 + 1:2 * (i0 + n):2].tolist()):
+                point.y = v                 # (2 us a key; point[1] = v takes 5)
         else:
             fc.keyframe_points.foreach_set("co", buf)
     _make_props(obj, track)
-    bake_layers.fingerprint(action, bag, keys)  # the bake's own keys now: not the user's edits
-    if by_key:
-        _WINDOW_KEYS[action.as_pointer()] = (action[bake_layers.FINGERPRINTS], keys)
+    # The bake's own keys now, not the user's edits.
+    if kept is None:
+        crcs = bake_layers.fingerprint(action, bag, keys)
+    else:                   # the fingerprints of the keys written, from the ones before
+        ids = [(fc.data_path, fc.array_index) for fc, _, _ in todo]
+        after = np.stack([old[fc][window] for fc, _, _ in todo])
+        crcs.update(zip(ids, key_crc.crc_after_change([crcs[i] for i in ids], before, after,
+                                                       4 * 2 * (total - i0 - n)).tolist()))
+        bake_layers.keep_fingerprints(action, crcs)
+    _WINDOW_KEYS[action.as_pointer()] = (action[bake_layers.FINGERPRINTS], keys, crcs)
     action.update_tag()                 # re-evaluate the animation, relations unchanged
     return BakeResult(action, len(todo), n)
 

@@ -68,13 +68,22 @@ def _key_crc(fc, keys=None) -> int:
     return zlib.crc32(co.tobytes())
 
 
-def fingerprint(action, bag, keys=None) -> None:
+def fingerprint(action, bag, keys=None) -> dict:
     """Remember the keys of every curve the bake wrote (positions only: a stepped bake sets the
     handles afterwards, and a user's key always moves or adds a position); ``keys`` as in
-    :func:`_key_crc`."""
+    :func:`_key_crc`.  Returns ``{(data_path, index): crc}`` as :func:`keep_fingerprints`
+    takes it."""
     paths = set(action.get("turning_baked_paths", "").splitlines())
-    action[FINGERPRINTS] = "\n".join(f"{fc.data_path}|{fc.array_index}|{_key_crc(fc, keys)}"
-                                     for fc in bag.fcurves if fc.data_path in paths)
+    crcs = {(fc.data_path, fc.array_index): _key_crc(fc, keys)
+            for fc in bag.fcurves if fc.data_path in paths}
+    keep_fingerprints(action, crcs)
+    return crcs
+
+
+def keep_fingerprints(action, crcs: dict) -> None:
+    """Store the fingerprints ``{(data_path, index): crc}`` of the bake's curves on ``action``
+    (:func:`.key_crc.crc_after_change` updates them for a few keys written)."""
+    action[FINGERPRINTS] = "\n".join(f"{path}|{index}|{crc}" for (path, index), crc in crcs.items())
 
 
 def edited_curves(action, bag, keys=None) -> list:

@@ -40,10 +40,12 @@ from ...core import DEFAULT_DT
 from ...core.controllers.feasible import nearby_tables
 from ...core.errors import FellOver, TurningError
 from ...mapping import MAPPINGS
+from ...mapping.retarget.retarget import path_length
 from ...mapping.sports.snow import tilt_gain
 from .. import compat
 from ..anim import bake, export_ready, foot_track
 from ..props import figure as props
+from ..scene import retarget_adapter
 from ..scene.figure_context import check_figure, in_settings
 from .pipeline import figure_pose_track, ground_of
 from ..props.figure import figure_settings
@@ -62,7 +64,8 @@ SETTLE = 0.3
 #: MARGIN frames on either side are mapped too (a pole plant, a quaternion's sign depend on the
 #: frames around: from 12 frames of context on, a window's rotations agree with the whole
 #: range's to 5e-6 given the same edge tilt, measured on the four sports; the tilt is fitted
-#: over the part simulated).  The mapping's cost goes with the frames mapped: 29 here.
+#: over the part simulated).  The mapping's cost goes with the frames mapped: 29 here; a user's
+#: rig is retargeted on the window's 5 (each frame's own).
 WINDOW, MARGIN = 2, 12
 #: A drag step on the paper's own model (flat ground, a Speed that is not keyed, no skidding:
 #: :func:`.pipeline.simulate_figure`'s ``coarse_dt``) integrates with PREVIEW_STEPS steps a turn
@@ -86,6 +89,9 @@ _MSGBUS_OWNER = object()
 _state = {"last_change": 0.0, "tracks_due": {}}
 #: figure name -> the digest of the settings its window was last re-baked for (the rest waits).
 _WINDOWS: dict = {}
+#: figure name -> (what :func:`_drag_rig` keys it by, its rig's read): a drag's steps read a user's
+#: rig once; the next whole re-bake (the release) reads it anew.
+_RIGS: dict = {}
 #: Ground mesh name -> (what the digest reads of it, its read): a drag step reads the mesh only
 #: when the digest sees it changed (a read takes ~15 ms on a 200 x 200 grid, most of it in
 #: evaluating the mesh to tell whether it changed); the release reads it anew.
@@ -266,19 +272,6 @@ def _rebake_turns(fig, frames, grounds, with_track: bool) -> None:
         _state["tracks_due"][fig.name] = (traj.x, traj.y, traj.z)
 
 
-def _track_rows(track, a: int, b: int):
-    """Rows ``a:b`` of a pose track."""
-    from ...mapping.base import BoneChannels, PoseTrack
-
-    def take(v):
-        return None if v is None else v[a:b]
-
-    return PoseTrack(take(track.frames), take(track.location), take(track.rotation),
-                     {k: BoneChannels(take(ch.location), take(ch.rotation))
-                      for k, ch in track.bones.items()},
-                     {k: take(v) for k, v in track.props.items()})
-
-
 def _rebake_window(fig, frames: FrameRange) -> bool:
     """A drag step: the keys within :data:`WINDOW` frames of the current frame, in place
     (raises as :func:`_rebake_turns`, nothing written).  ``False`` when a window is no cheaper
@@ -292,7 +285,7 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
     mlo, mhi = max(frames.start, lo - MARGIN), min(frames.end, hi + MARGIN)
     if mlo == frames.start and mhi == frames.end:
         return False
-    check_figure(fig)
+    fitted = _drag_rig(fig)
     ground = _window_ground(fig)
     period = float(sampled_setting(fig, "period", frames).min())
     coarse = min(2 * DEFAULT_DT, max(DEFAULT_DT, period / PREVIEW_STEPS))
@@ -300,19 +293,39 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
         traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground,
                                coarse_dt=coarse)
     # What the mapping reads of the whole run, from the part simulated: the edge tilt's fit
-    # (Section 7), the distance the wheels turn from.
-    part = type(traj)(traj.data[:, mlo - frames.start:],
-                      {**traj.meta, "s_start": float(traj.s[0])})
+    # (Section 7), the distance the wheels turn from (the built-in's from the arc length, a
+    # user's rig's from the foot point's chords of one frame).
+    k = mlo - frames.start
+    part = type(traj)(traj.data[:, k:], {
+        **traj.meta, "s_start": float(traj.s[0]),
+        "path_start": float(path_length(np.stack([traj.x[:k + 1], traj.y[:k + 1]], 1))[-1])})
     options = MAPPINGS[s.sport.lower()].Options()
     if hasattr(options, "tilt_gain") and options.tilt_gain is None:
         options = replace(options, tilt_gain=tilt_gain(traj, None))
+    # The mapping over the window and its context, the retarget over the window only.
     track = map_track(s.sport, part, FrameRange(mlo, mhi, frames.fps), options, fig,
-                      surface_normals(part, ground))
-    track = export_ready.with_take(fig, _track_rows(track, lo - mlo, hi - mlo + 1))
+                      surface_normals(part, ground), rows=(lo - mlo, hi - mlo + 1),
+                      fitted=fitted)
+    track = export_ready.with_take(fig, track)
     if bake.rewrite_pose_track(fig, track) is None:       # checks the track first
         return False
     export_ready.clear_equipment(fig)
     return True
+
+
+def _drag_rig(fig):
+    """A drag step's check of ``fig``'s rig (:func:`..scene.figure_context.check_figure`) and its
+    read of a user's rig (:func:`..scene.retarget_adapter.fitted_rig`, ``None`` for a built-in
+    figure; ~2 ms of a step on a Rigify rig): once a drag (:data:`_RIGS`), again when its Sport
+    or Your Rig settings, its scale or its armature change."""
+    h = hashlib.blake2b(digest_size=16)
+    _group_digest(h, fig.turning.rig, "rig.", {}, [])
+    key = (h.digest(), fig.turning.sport, tuple(fig.scale), fig.data.as_pointer())
+    kept = _RIGS.get(fig.name)
+    if kept is None or kept[0] != key:
+        check_figure(fig)
+        kept = _RIGS[fig.name] = (key, retarget_adapter.fitted_rig(fig))
+    return kept[1]
 
 
 def _window_ground(fig):
@@ -370,6 +383,7 @@ def refresh(scene=None, with_tracks: bool = True, paths: bool = True,
             continue
         clear_failure(fig)
         _WINDOWS.pop(fig.name, None)
+        _RIGS.pop(fig.name, None)
         bake.figure_action(fig)[KEY] = fingerprint(fig)
         out[fig.name] = None
     if with_tracks:
@@ -441,6 +455,7 @@ def on_load_post(*_args) -> None:
     FAILURES.clear()
     _EDITS.clear()
     _WINDOWS.clear()
+    _RIGS.clear()
     _GROUNDS.clear()
     _subscribe()
 
@@ -496,5 +511,6 @@ def unregister():
     FAILURES.clear()
     _EDITS.clear()
     _WINDOWS.clear()
+    _RIGS.clear()
     _GROUNDS.clear()
     _state["tracks_due"] = {}

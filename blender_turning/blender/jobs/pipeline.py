@@ -28,17 +28,21 @@ from ..scene.scene_adapters import (FrameRange, SceneInputError, controller_from
 
 
 def map_track(sport: str, traj, frames: FrameRange, options=None, obj=None, normal=None,
-              surface=None):
+              surface=None, rows=None, fitted="read"):
     """The sport's Section 7 mapping of ``traj`` (already at ``frames.fps``) to a pose track;
     retargeted onto ``obj`` when it is a figure made from the user's own rig.
     ``normal`` ((n, 3)): the surface normal at the foot on every frame (terrain); ``surface``:
-    the ground's height (:func:`surface_heights`)."""
+    the ground's height (:func:`surface_heights`); ``rows`` ``(a, b)``: the track's frames
+    ``a:b`` only, the others mapped as their context (a user's rig is retargeted on those);
+    ``fitted``: ``obj``'s :func:`..scene.retarget_adapter.fitted_rig` when already read."""
     from ...mapping import map_trajectory      # the mapping layer's entry point
     from ..scene import retarget_adapter
     if obj is not None and (retarget_adapter.is_user_rig(obj) or retarget_adapter.mirrored(obj)):
-        return retarget_adapter.figure_track(obj, traj, frames, options, normal, surface)
-    return map_trajectory(sport.lower(), traj, options, frame_start=frames.start,
-                          normal=normal, surface=surface)
+        return retarget_adapter.figure_track(obj, traj, frames, options, normal, surface, rows,
+                                             fitted)
+    track = map_trajectory(sport.lower(), traj, options, frame_start=frames.start,
+                           normal=normal, surface=surface)
+    return track if rows is None else track.rows(*rows)
 
 
 def first_frame(offset: float, fps: float) -> int:

@@ -7,8 +7,9 @@ Reads ``bone.matrix_local``, parents and ``use_local_location`` into a
 from __future__ import annotations
 
 import json
-from dataclasses import replace
 import math
+from dataclasses import replace
+from typing import NamedTuple
 
 import bpy
 import numpy as np
@@ -149,30 +150,50 @@ def mirrored(obj) -> bool:
 def facing(obj) -> float:
     """The figure's direction of travel in its armature's axes, rad CCW from +X: measured for a
     user's rig, +Y (pi/2) for the built-in figures."""
+    fitted = fitted_rig(obj)
+    return math.pi / 2 if fitted is None else fitted.fit.travel
+
+
+class FittedRig(NamedTuple):
+    """What a bake reads of a user's rig: its armature at rest, its bone map, how it sits
+    against the built-in figure and its arms' reach over the built-in's (:func:`arm_ratio`)."""
+
+    rig: UserRig
+    bone_map: BoneMap
+    fit: object
+    reach: float
+
+
+def fitted_rig(obj) -> FittedRig | None:
+    """``obj``'s :class:`FittedRig` when it is a user's rig, else ``None``."""
     if not is_user_rig(obj):
-        return math.pi / 2
-    return fit_rig(user_rig(obj), figure_bone_map(obj), obj.turning.sport.lower(),
-                   mirrored(obj)).travel
+        return None
+    sport, rig, bm = obj.turning.sport.lower(), user_rig(obj), figure_bone_map(obj)
+    fit = fit_rig(rig, bm, sport, mirrored(obj))
+    return FittedRig(rig, bm, fit, arm_ratio(rig, bm, sport, fit))
 
 
-def figure_track(obj, traj, frames, options=None, normal=None, surface=None):
+def figure_track(obj, traj, frames, options=None, normal=None, surface=None, rows=None,
+                 fitted="read"):
     """The pose track of ``obj`` for ``traj`` (one sample per frame of ``frames``) when it is a
     user's rig or rides goofy: the built-in figure's Section 7 mapping (of the mirrored run for
     a goofy stance), retargeted onto the user's rig, or mirrored onto the built-in rig itself.
     ``normal`` ((n, 3)): the surface normal at the foot on a Ground mesh; the figure then stands
     in the local surface as the built-in figures do (:mod:`..mapping.surface`); ``surface``: the
-    ground's height, where the built-in's poles are planted."""
+    ground's height, where the built-in's poles are planted.  ``rows`` ``(a, b)``: only frames
+    ``a:b`` of it (the rest mapped as their context); a part of a run (``traj.meta``
+    ``"path_start"``: the foot point's path length at its first frame) turns the wheels on.
+    ``fitted``: :func:`fitted_rig` of ``obj`` when already read."""
     sport, mirror = obj.turning.sport.lower(), mirrored(obj)
-    fit = None
-    if is_user_rig(obj):
-        rig, bm = user_rig(obj), figure_bone_map(obj)
-        fit = fit_rig(rig, bm, sport, mirror)
-        options = plants_for(sport, options, fit.k, arm_ratio(rig, bm, sport, fit))
+    fitted = fitted_rig(obj) if isinstance(fitted, str) else fitted
+    if fitted is not None:
+        options = plants_for(sport, options, fitted.fit.k, fitted.reach)
     track = map_trajectory(sport, mirrored_trajectory(traj) if mirror else traj, options,
                            frame_start=frames.start, normal=normal, surface=surface)
-    if fit is None:
-        return goofy_track(sport, track)
-    return retarget(track, sport, rig, bm, fit, mirror=mirror)
+    if fitted is None:
+        return goofy_track(sport, track if rows is None else track.rows(*rows))
+    return retarget(track, sport, fitted.rig, fitted.bone_map, fitted.fit, mirror=mirror,
+                    rows=rows, distance=float(traj.meta.get("path_start", 0.0)))
 
 
 def plants_for(sport: str, options, k: float, reach: float = 1.0):

@@ -59,8 +59,8 @@ from .stance import MirroredSkeleton, builtin_skeleton, mirror_poses, unmirror_p
 from ..surface import euler_xyz
 from .user_rig import RigFit, UserRig, fit_rig
 
-__all__ = ["retarget", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN", "SLIDE", "SEATED",
-           "ANCHOR"]
+__all__ = ["retarget", "path_length", "solve_joints", "swing", "ATTACH", "TRACKS", "SPIN",
+           "SLIDE", "SEATED", "ANCHOR"]
 
 # Each sport's retargeting data is its record's ``retarget`` (:class:`..core.sports.Retarget`);
 # these are live views of the sport registry, by sport.
@@ -279,12 +279,34 @@ def _knee_slide(bi, rest, DA, hips_b, hips_u, axis, s, ankle):
     return -wu + np.sqrt(np.maximum(wu * wu - np.sum(w * w, axis=-1) + d * d, 0.0))
 
 
+def _at_rest(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str):
+    """What :func:`solve_joints` and :func:`retarget` read of the two rigs at rest: the user's
+    mapped joints' rest ``{joint: (4, 4)}``, their rest orientations turned by ``A``
+    (:func:`_rest_differences`), the rest offset of each from its parent joint's frame
+    ``{joint: (parent joint, (4,))}`` and the inverse rests.  Kept on ``rig`` for the bone map
+    and fit it was made with (a Live Preview drag retargets onto one read of the rig)."""
+    key = (id(bm), id(bi.fit), sport, type(bi.skel).__name__)
+    kept = rig._at_rest.get(key)
+    if kept is not None and kept[0] is bm and kept[1] is bi.fit:
+        return kept[2]
+    rest = {j: rig.rest_of(bm.bone(j)) for j in JOINTS if _mapped(bm, rig, j)}
+    A = _rest_differences(bm, rig, bi.skel, bi.fit, rest)
+    turned = {j: A[j] @ rest[j][:3, :3] for j in rest}
+    carry = {}
+    for j in rest:
+        pj = _parent_joint(bm, rig, j)
+        if pj is not None:
+            carry[j] = (pj, rigid_inverse(rest[pj]) @ np.append(rest[j][:3, 3], 1.0))
+    out = (rest, turned, carry, {j: rigid_inverse(rest[j]) for j in rest})
+    rig._at_rest[key] = (bm, bi.fit, out)
+    return out
+
+
 def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
     """Armature-space poses (n, 4, 4) of the user's mapped joints (see the module doc)."""
     fit, n = bi.fit, bi.n
-    rest = {j: rig.rest_of(bm.bone(j)) for j in JOINTS if _mapped(bm, rig, j)}
-    A = _rest_differences(bm, rig, bi.skel, fit, rest)
-    rot = {j: bi.delta(j) @ (A[j] @ rest[j][:3, :3]) for j in rest}
+    rest, turned, carry, _ = _at_rest(bi, rig, bm, sport)
+    rot = {j: bi.delta(j) @ turned[j] for j in rest}
     poses = {}
 
     def place(j, head, R=None):
@@ -295,9 +317,8 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
         poses[j] = m
 
     def carried(j):
-        pj = _parent_joint(bm, rig, j)
-        p = np.append(rest[j][:3, 3], 1.0)
-        return (poses[pj] @ (rigid_inverse(rest[pj]) @ p))[:, :3]
+        pj, offset = carry[j]
+        return (poses[pj] @ offset)[:, :3]
 
     def aimed(j, target_vec, rest_vec):
         """``rot[j]`` swung so the rest vector ``rest_vec`` (armature space) points along
@@ -360,7 +381,7 @@ def solve_joints(bi: _Builtin, rig: UserRig, bm: BoneMap, sport: str) -> dict:
             target, S = _turn_about_tip(bi, pole, root,
                                         bi.head(pole) - np.einsum("nij,j->ni", turn, grip),
                                         REACH * (l1 + l2))
-            rot[c] = S @ turn @ (A[c] @ rest[c][:3, :3])
+            rot[c] = S @ turn @ turned[c]
         mid, end = two_bone_ik(root, target, l1, l2, _pole(bi, a, b, c))
         place(a, root, aimed(a, mid - root, rest[b][:3, 3] - rest[a][:3, 3]))
         place(b, mid, aimed(b, end - mid, rest[c][:3, 3] - rest[b][:3, 3]))
@@ -424,20 +445,36 @@ def _fk_ancestor(rig, bm, bone):
     return None if p is None else owner[p]
 
 
+def path_length(location) -> np.ndarray:
+    """(n,) how far the foot point ``location`` ((n, 3), m) has gone from its first row: the
+    chords of one frame, summed."""
+    step = np.linalg.norm(np.diff(np.asarray(location)[:, :2], axis=0), axis=1)
+    return np.concatenate([[0.0], np.cumsum(step)])
+
+
 def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
-             fit: RigFit | None = None, mirror: bool = False) -> PoseTrack:
+             fit: RigFit | None = None, mirror: bool = False, rows: tuple | None = None,
+             distance: float = 0.0) -> PoseTrack:
     """The built-in figure's ``track`` (from ``map_trajectory(sport, ...)``) on the user's rig:
     a :class:`PoseTrack` of the user's bones (or controls) and the object's root motion.  With
     ``mirror`` the track is of the mirrored trajectory and the user's rig takes its mirror
-    image (a goofy snowboarder); the state properties are given back unmirrored."""
+    image (a goofy snowboarder); the state properties are given back unmirrored.
+
+    ``rows`` ``(a, b)``: only frames ``a:b`` of ``track`` (a window of it; the frames around were
+    the mapping's context), each frame's pose being its own; ``distance``: how far the foot
+    point had gone before ``track``'s first frame (a part of a run: the wheels turn on)."""
     if sport not in ATTACH:
         raise ValueError(f"sport = {sport!r}: retargeting supports {', '.join(ATTACH)}")
+    a, b = (0, len(track)) if rows is None else rows
+    travelled = distance + path_length(track.location)[a:b] if sport in SPIN else None
+    track = track.rows(a, b) if rows is not None else track
     fit = fit_rig(rig, bm, sport, mirror) if fit is None else fit
     bi = _Builtin(sport, track, fit, mirror)
     poses = solve_joints(bi, rig, bm, sport)
     moved = {None: None}          # joint -> its pose's change from rest (n, 4, 4)
+    inverse = _at_rest(bi, rig, bm, sport)[3]
     for j in poses:
-        moved[j] = poses[j] @ rigid_inverse(rig.rest_of(bm.bone(j)))
+        moved[j] = poses[j] @ inverse[j]
     if bm.controls:     # (bone, pose, parent joint, location keyed)
         keyed = [(c.bone, moved[c.joint] @ rig.rest_of(c.bone), c.parent,
                   c.parent is None or c.location) for c in bm.controls]
@@ -459,9 +496,8 @@ def retarget(track: PoseTrack, sport: str, rig: UserRig, bm: BoneMap,
     location = track.location - fit.scale * np.einsum("nij,j->ni", R, fit.origin)
     rotation = euler_xyz(R, psi)
     props = unmirror_props(track.props) if mirror else dict(track.props)
-    if sport in SPIN:       # the foot point's path length (chords of one frame), m
-        step = np.linalg.norm(np.diff(track.location[:, :2], axis=0), axis=1)
-        props["turn_distance"] = np.concatenate([[0.0], np.cumsum(step)])
+    if sport in SPIN:       # the foot point's path length, m
+        props["turn_distance"] = travelled
     for piece, (along, prop) in SLIDE.get(sport, {}).items():
         # The built-in keys the slide as the piece's location along the axis (a unit vector in
         # the piece's rest frame); the user's figure is k times the size.

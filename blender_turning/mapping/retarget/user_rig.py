@@ -44,6 +44,7 @@ class UserRig:
         if self.local_location is None:
             object.__setattr__(self, "local_location", (True,) * k)
         object.__setattr__(self, "_index", {n: i for i, n in enumerate(self.names)})
+        object.__setattr__(self, "_at_rest", {})     # the retarget's constants (retarget.py)
 
     def i(self, name: str) -> int:
         from ..bones import MissingBoneError
