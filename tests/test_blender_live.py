@@ -407,6 +407,7 @@ def test_unregister_removes_the_handlers(scene):
 
 
 def test_drag_steps_read_the_ground_mesh_again_only_once_it_changed(scene, monkeypatch):
+    monkeypatch.setattr(live, "PREVIEW_STRIDE", 1)        # the step integrates as the bake
     fig = ground_figure()
     fig.turning.live = True
     bpy.ops.turning.refresh_preview()

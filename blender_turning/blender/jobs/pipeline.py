@@ -100,7 +100,8 @@ def on_ground(traj, ground):
 
 
 def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="read",
-                    coarse_dt: float | None = None):
+                    coarse_dt: float | None = None, stride: int = 1,
+                    sampled: FrameRange | None = None):
     """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames`` from ``start``
     (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.
     ``height``: the flat ground's height (default the Start setting's z); ``ground``: its Ground
@@ -111,12 +112,19 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
     own clock from that many seconds after the first frame, as the core's crowd does
     (:mod:`..crowd.runner`): its trajectory is ``t = offset`` + its own time, sampled at the
     frames from the first at or after its start (:func:`started`), its keyed settings read on
-    its own clock (the value keyed at frame ``f`` acts ``offset`` s later)."""
+    its own clock (the value keyed at frame ``f`` acts ``offset`` s later).
+
+    A preview (Live Preview's drag step): ``coarse_dt``, the step on the paper's own model (flat
+    ground, a Speed that is not keyed, no skidding); ``stride``, on a Ground mesh without a
+    Target Speed or skidding, the core's coarse steps about the lean's zero crossings
+    (:func:`...core.physics.terrain_sim.simulate_free`).  Elsewhere both are ignored.
+    ``sampled``: the frames of ``frames`` the trajectory is wanted at (default every frame the
+    figure is keyed on; a figure without a Start Offset)."""
     s = obj.turning
     if isinstance(ground, str):
         ground = ground_of(obj)
     offset = float(s.crowd.time_offset)
-    shown = started(frames, offset)
+    shown = started(frames, offset) if sampled is None else sampled
     speed = speed_schedule(obj, frames)
     figure = figure_from_settings(s)
     # The body at the first frame's speed (a keyed speed's property value is the current frame's).
@@ -141,10 +149,12 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
     if target is not None and not s.use_heading:
         raise SceneInputError("Target Speed (turning.terrain.target_speed) steers the turns "
                               "across the hill about the Heading: turn on Hold Heading")
-    traj = simulate(figure, controller, duration, dt, state0=(*state0, speed(0.0)),
+    stride = stride if target is None and skidding is None else 1
+    traj = simulate(figure, controller, duration + 2 * (stride - 1) * dt, dt,
+                    state0=(*state0, speed(0.0)),
                     meta={"figure": obj.name, "ground_object": ground.name},
                     ground=ground.field, resistance=resistance_from_settings(s),
-                    target_speed=target, skidding=skidding)
+                    target_speed=target, skidding=skidding, stride=stride)
     traj = resampled(on_crowd_clock(with_turn(traj, controller), offset), shown, ground.field,
                      frames.start)
     return on_ground(traj, ground)

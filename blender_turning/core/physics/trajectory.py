@@ -140,6 +140,9 @@ class Trajectory:
             return Trajectory(self.data[:, at], meta)
         j = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 1)  # frame's step
         i = np.minimum(j, len(t) - 2)
+        if len(tn):                 # the samples the frames lie between (a window: a few)
+            lo, hi = int(i[0]), int(i[-1]) + 2
+            t, c, i, j = t[lo:hi], {k: v[lo:hi] for k, v in c.items()}, i - lo, j - lo
         u = (tn - t[i]) / (t[i + 1] - t[i])
         ran_on = self.meta.get("ground")          # None: the paper's flat model
         if ran_on is not None or ground is not None or resistance is not None:
