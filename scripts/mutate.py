@@ -819,6 +819,7 @@ FREE_PLAN = TERMS + [T + "test_planner_terrain.py"]
 ANTHRO = TERMS + [T + "test_telemark_body.py"]
 TELEMARK = [T + "test_mapping_telemark.py", T + "test_telemark_body.py"]
 FREE_SIM = TERMS + [T + "test_terrain_sim.py", T + "test_energy.py", T + "test_speed_is_physics.py"]
+PREVIEW = [T + "test_terrain_preview.py"]
 MUTANTS += [
     M("open_loop_phase_frozen_in_step", "core/controllers/open_loop.py",
       "phi = self._phi + 0.5 * (self.omega0(self._t) + w) * tau", "phi = self._phi", OPEN_LOOP),
@@ -863,9 +864,24 @@ MUTANTS += [
     M("free_sim_s_at_body_speed", "core/physics/terrain_sim.py",
       "ds = 0.5 * (V_f[1:] + V_f[:-1]) * dt", "ds = 0.5 * (V[1:] + V[:-1]) * dt", FREE_SIM),
     M("free_sim_lean_euler", "core/physics/terrain_sim.py",
-      "x3 += w6 * (a3 + 2.0 * (b3 + c3) + d3)", "x3 += dt * a3", FREE_SIM),
+      "x3 + w6 * (a3 + 2.0 * (b3 + c3) + d3)", "x3 + step * a3", FREE_SIM),
     M("free_sim_speed_euler", "core/physics/terrain_sim.py",
-      "x5 += w6 * (a5 + 2.0 * (b5 + c5) + d5)", "x5 += dt * a5", FREE_SIM),
+      "x5 + w6 * (a5 + 2.0 * (b5 + c5) + d5)", "x5 + step * a5", FREE_SIM),
+    # -- the preview's stride (Live Preview's drag step on a Ground mesh) -----------------------
+    M("preview_coarse_across_crossings", "core/physics/terrain_sim.py",
+      "if rel * rel_y <= 0.0 or rel_y * (rel_y + y[4] * coarse[0]) <= 0.0:", "if False:",
+      PREVIEW),
+    M("preview_no_reach", "core/physics/terrain_sim.py",
+      "and rel * (rel + x4 * reach) > 0.0:", "and True:", PREVIEW),
+    M("preview_first_stage_by_this_step", "core/physics/terrain_sim.py",
+      "a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,",
+      "a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, 3 * dt,",
+      PREVIEW),
+    M("preview_tables_ignored", "core/controllers/ellipse.py",
+      "return self._limits is not None and _table_speed(V_a) != _table_speed(V_b)",
+      "return False", PREVIEW),
+    M("preview_rows_at_fine_steps", "core/physics/terrain_sim.py",
+      "row = stride == 1 or i % stride == 0", "row = True", PREVIEW),
     M("free_sim_fall_from_normal", "core/physics/terrain_sim.py",
       "if abs(rel) > fall:", "if abs(x3) > fall:", FREE_SIM),
     M("terrain_law_lean_from_normal", "core/physics/model.py",

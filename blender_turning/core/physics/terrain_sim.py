@@ -185,14 +185,14 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     the coming half-turn at the step before one (Section 5.2,
     :meth:`.PhaseEllipse.begin_step`: a crossing within the step, ``theta_v + omega_v dt``
     across zero) and the law switches to its ellipse there (a jump in ``alpha_v`` inside a
-    step); so do Section 3's bounds on ``C_f`` (its rate is bounded per step) and a controller
-    taking new feasible turns at a speed it passes (:meth:`.Controller.changes_between`).
-    Stepped with ``dt`` on the same grid, those steps are the ``stride = 1`` run's.  A coarse
-    step is tried where the lean's rate carries it across zero within no fewer than
-    :data:`REACH` coarse steps, and kept only if no stage of it meets a bound, the controller
-    does not change over it, and it ends on the same side with no crossing within ``stride dt``
-    ahead (where ``begin_step``, seeing the long step behind it, would plan).  The fall and a
-    stop are checked at the rows."""
+    step), and so does a controller taking new feasible turns at a speed it passes
+    (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same grid, those steps
+    are the ``stride = 1`` run's.  A coarse step is tried where the lean's rate carries it
+    across zero within no fewer than :data:`REACH` coarse steps, and kept only if the
+    controller does not change over it and it ends on the same side with no crossing within
+    ``stride dt`` ahead (where ``begin_step``, seeing the long step behind it, would plan).
+    A step's first stage bounds the rate of ``C_f`` relative to the last step's, ``last`` s
+    before (Section 3).  The fall and a stop are checked at the rows."""
     controller.begin_run(limits)
     foot = rhs.foot
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
@@ -203,35 +203,26 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     coarse = (stride * dt, 0.5 * (stride * dt), (stride * dt) / 6.0)
     reach = REACH * stride * dt
     changes = controller.changes_between
-    cmax, rate = limits.C_f_max * (1.0 - 1e-9), limits.dC_f_max * (1.0 - 1e-9)
-
-    def bounded(anchor, ca, cb, cc, cd, step):
-        """Does a stage of a coarse step meet Section 3's bounds (the magnitude, the rate
-        relative to the step's start: discretised per step)?"""
-        return max(abs(ca), abs(cb), abs(cc), abs(cd)) >= cmax or (
-            (anchor is not None and abs(ca - anchor) >= rate * step) or
-            max(abs(cb - ca), abs(cc - ca)) >= rate * 0.5 * step or abs(cd - ca) >= rate * step)
 
     def advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf):
-        """RK4's stages 2-4: the state a step on, and the stages' ``C_f``."""
-        b0, b1, b2, b3, b4, b5, _, _, cb = stage(
+        """RK4's stages 2-4 and the step."""
+        b0, b1, b2, b3, b4, b5, _, _, _ = stage(
             t + h, x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4,
             x5 + h * a5, cf, h)
-        c0, c1, c2, c3, c4, c5, _, _, cc = stage(
+        c0, c1, c2, c3, c4, c5, _, _, _ = stage(
             t + h, x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4,
             x5 + h * b5, cf, h)
-        d0, d1, d2, d3, d4, d5, _, _, cd = stage(
+        d0, d1, d2, d3, d4, d5, _, _, _ = stage(
             t + step, x0 + step * c0, x1 + step * c1, x2 + step * c2, x3 + step * c3,
             x4 + step * c4, x5 + step * c5, cf, step)
         return (x0 + w6 * (a0 + 2.0 * (b0 + c0) + d0), x1 + w6 * (a1 + 2.0 * (b1 + c1) + d1),
                 x2 + w6 * (a2 + 2.0 * (b2 + c2) + d2), x3 + w6 * (a3 + 2.0 * (b3 + c3) + d3),
-                x4 + w6 * (a4 + 2.0 * (b4 + c4) + d4), x5 + w6 * (a5 + 2.0 * (b5 + c5) + d5),
-                cb, cc, cd)
+                x4 + w6 * (a4 + 2.0 * (b4 + c4) + d4), x5 + w6 * (a5 + 2.0 * (b5 + c5) + d5))
 
     rows = []
     append = rows.append
     V_now = body.V_cm
-    i, ahead = 0, None
+    i, ahead, last = 0, None, dt
     while True:
         t = i * dt
         if x5 != V_now:
@@ -254,29 +245,21 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
             ahead = None
         begin(t, (x0, x1, x2, rel, x4))
         row = stride == 1 or i % stride == 0
-        k, y = 1, None
+        a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,
+                                                       dv)
+        (step, h, w6), k, y = fine, 1, None
         if stride > 1 and row and i + stride < n and rel * (rel + x4 * reach) > 0.0:
-            step, h, w6 = coarse
-            a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor,
-                                                           step, dv)
             try:
-                y = advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf)
-                if bounded(anchor, cf, y[6], y[7], y[8], step) or \
-                        changes(max(x5, MIN_SPEED), max(y[5], MIN_SPEED)):
+                y = advance(t, *coarse, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf)
+                if changes(max(x5, MIN_SPEED), max(y[5], MIN_SPEED)):
                     raise _Fine
                 dv_y = derivatives(y[0], y[1])
-                rel_y = lean(t + step, *y[:4], dv_y)
-                if rel * rel_y <= 0.0 or rel_y * (rel_y + y[4] * step) <= 0.0:
+                rel_y = lean(t + coarse[0], *y[:4], dv_y)
+                if rel * rel_y <= 0.0 or rel_y * (rel_y + y[4] * coarse[0]) <= 0.0:
                     raise _Fine
-                k, ahead = stride, (dv_y, rel_y)
+                (step, h, w6), k, ahead = coarse, stride, (dv_y, rel_y)
             except (_Fine, OffTerrain):
                 y = None
-            if y is None:                       # steps of dt from here: the lean as it was
-                rel = lean(t, x0, x1, x2, x3, dv)
-        step, h, w6 = coarse if k > 1 else fine
-        if y is None:
-            a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor,
-                                                           step, dv)
         if row:
             skid_b = skid_a = 0.0
             if skid is not None:
@@ -294,8 +277,8 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
                 y = advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf)
             except OffTerrain:
                 return rows, "left"
-        x0, x1, x2, x3, x4, x5, _, _, _ = y
-        anchor = cf
+        x0, x1, x2, x3, x4, x5 = y
+        anchor, last = cf, step
         i += k
     return rows, None
 
