@@ -95,6 +95,26 @@ def test_a_step_bounds_the_rate_of_c_f_over_the_time_since_the_last():
     assert _off(_run(stride=3, limits=limits, duration=20.0), exact)[0] < 3e-3
 
 
+@pytest.mark.parametrize("speed, coarse", [(8.0, False), (4.0, True)])
+def test_a_coarse_step_moves_at_most_a_cell_and_a_quarter(speed, coarse):
+    """On a field of 0.25 m cells (a Ground mesh of 1 m faces as Blender reads it) a coarse
+    step of 0.06 s is taken below 5.2 m/s only: at 8 m/s the preview's states are the bake's,
+    row for row (stepped coarsely, a snowboarder at 12 m/s on such ground ended 12 m away 20 s in)."""
+    fine = ski_slope(length=60.0, width=60.0, slope_deg=0.0, cell=0.25)
+    fig = replace(CYCLIST, body=replace(CYCLIST.body, V_cm=speed))
+
+    def run(stride):
+        return simulate(fig, PhaseEllipse(fig.body, W, TM, heading=0.0), 3.0, 0.02,
+                        state0=(-25.0, 0.0, 0.0, 0.0, W * TM, speed), ground=fine,
+                        resistance=RESISTANCE["cyclist"], stride=stride)
+
+    exact, preview = run(1), run(3)
+    assert (exact.V_cm.min() > 5.2) == (not coarse)
+    same = [np.array_equal(getattr(preview, k), getattr(exact, k)[::3])
+            for k in ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm", "C_f")]
+    assert all(same) == (not coarse) and any(same) == (not coarse)
+
+
 def test_stride_is_checked():
     with pytest.raises(ValueError, match=r"stride = 0 is not a whole number of steps in \[1, 10\]"):
         _run(stride=0)

@@ -306,14 +306,13 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
     fit = hasattr(options, "tilt_gain") and options.tilt_gain is None
     # Sampled from the first frame where the edge tilt is fitted over the run so far, else at
     # the mapped frames only.
-    first = frames.start if fit else mlo
+    skip = 0 if fit else mlo - frames.start
     with nearby_tables(NEARBY_BODY):      # a Body slider's step: no new feasibility table
         traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground,
-                               coarse_dt=coarse, stride=PREVIEW_STRIDE,
-                               sampled=FrameRange(first, mhi, frames.fps))
+                               coarse_dt=coarse, stride=PREVIEW_STRIDE, skip=skip)
     # What the mapping reads of the whole run, from the part simulated: the edge tilt's fit
     # (Section 7), the distance the wheels turn from (the run's at its first frame, t = 0).
-    part = type(traj)(traj.data[:, mlo - first:], {**traj.meta, "s_start": 0.0})
+    part = type(traj)(traj.data[:, mlo - frames.start - skip:], {**traj.meta, "s_start": 0.0})
     if fit:
         options = replace(options, tilt_gain=tilt_gain(traj, None))
     track = map_track(s.sport, part, FrameRange(mlo, mhi, frames.fps), options, fig,

@@ -45,6 +45,14 @@ REACH = 2.0
 across zero within REACH coarse steps (the rate of the lean from the equilibrium lean is not
 ``omega_v`` on terrain: the margin catches most of what the linear guess misses)."""
 
+SPAN = 1.25
+"""A coarse step (:func:`_loop`) moves at most SPAN cells of a height field: the spline rounds a
+mesh's creases over about a cell (Blender's Ground mesh is sampled at a quarter of its faces),
+and a step whose stages lie further apart misses them.  The benchmark's cyclist (3 m/s, 0.25 m
+cells) takes its coarse steps at 0.7 cells; a snowboarder at 12 m/s on such ground, stepped
+coarsely, ended 12 m from the bake 20 s in (here: the bake's steps throughout).
+docs/live-preview.md has the errors measured."""
+
 
 def describe_ground(ground) -> str:
     """The ``meta["ground"]`` entry of a trajectory: ``"flat"`` or what the surface was."""
@@ -188,9 +196,10 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     step), and so does a controller taking new feasible turns at a speed it passes
     (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same grid, those steps
     are the ``stride = 1`` run's.  A coarse step is tried where the lean's rate carries it
-    across zero within no fewer than :data:`REACH` coarse steps, and kept only if the
-    controller does not change over it and it ends on the same side with no crossing within
-    ``stride dt`` ahead (where ``begin_step``, seeing the long step behind it, would plan).
+    across zero within no fewer than :data:`REACH` coarse steps and it moves at most
+    :data:`SPAN` cells of a height field, and kept only if the controller does not change over
+    it and it ends on the same side with no crossing within ``stride dt`` ahead (where
+    ``begin_step``, seeing the long step behind it, would plan).
     A step's first stage bounds the rate of ``C_f`` relative to the last step's, ``last`` s
     before (Section 3).  The fall and a stop are checked at the rows."""
     controller.begin_run(limits)
@@ -202,6 +211,7 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     fine = (dt, 0.5 * dt, dt / 6.0)
     coarse = (stride * dt, 0.5 * (stride * dt), (stride * dt) / 6.0)
     reach = REACH * stride * dt
+    fastest = SPAN * getattr(ground, "cell", math.inf) / (stride * dt)   # m/s, coarse steps
     changes = controller.changes_between
 
     def advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf):
@@ -248,7 +258,8 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,
                                                        dv)
         (step, h, w6), k, y = fine, 1, None
-        if stride > 1 and row and i + stride < n and rel * (rel + x4 * reach) > 0.0:
+        if stride > 1 and row and i + stride < n and x5 <= fastest and \
+                rel * (rel + x4 * reach) > 0.0:
             try:
                 y = advance(t, *coarse, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf)
                 if changes(max(x5, MIN_SPEED), max(y[5], MIN_SPEED)):
