@@ -883,7 +883,7 @@ MUTANTS += [
     M("preview_across_cells", "core/physics/terrain_sim.py",
       "and x5 <= fastest and", "and", PREVIEW),
     M("preview_no_reach", "core/physics/terrain_sim.py",
-      "and rel * (rel + x4 * reach) > 0.0:", "and True:", PREVIEW),
+      "rel * (rel + x4 * reach) > 0.0:", "True:", PREVIEW),
     M("preview_first_stage_by_this_step", "core/physics/terrain_sim.py",
       "a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,",
       "a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, 3 * dt,",
