@@ -47,7 +47,6 @@ feasible.  At a zero crossing the old and the modified ellipse share the rate in
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -206,8 +205,7 @@ class PhaseEllipse(Controller):
         if self._limits is not None:
             grid = _table_speed(V_cm)
             if grid != self._table_speed:       # on terrain the speed changes every step
-                self._feasible = feasible_turns(replace(self.nominal_body, V_cm=grid),
-                                                self._limits)
+                self._feasible = feasible_turns(self.nominal_body.at_speed(grid), self._limits)
                 self._table_speed = grid
                 self._forget()                  # the ellipses made feasible by the old table
         return body
