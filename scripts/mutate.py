@@ -1033,7 +1033,8 @@ SKID_MUTANTS = [
 ]
 MUTANTS += SKID_MUTANTS + [
     M("bake_skidding_dropped", "blender/jobs/pipeline.py",
-      "target_speed=target, skidding=skidding)", "target_speed=target)",
+      "target_speed=target, skidding=skidding, stride=stride)",
+      "target_speed=target, stride=stride)",
       [T + "test_blender_skidding.py"], group="bake"),
     M("follow_path_ignores_target", "blender/scene/follow_ground.py",
       "    if target > 0.0:                      # the planner brakes", "    if False:",

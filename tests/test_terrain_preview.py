@@ -1,7 +1,8 @@
 """A preview run on terrain (``simulate(..., stride=3)``, Live Preview's drag step on a Ground
 mesh, core/physics/terrain_sim.py): one RK4 step of 3 dt where nothing discrete happens, steps of
 dt on the bake's own grid about the lean's zero crossings (where directional control plans its
-half-turns) and where the controller takes a new feasibility table.  The case: the cyclist of ``scripts/bench_live.py`` on the rolls of
+half-turns), where the controller takes a new feasibility table and where a coarse step would
+move more than 1.25 cells.  The case: the cyclist of ``scripts/bench_live.py`` on the rolls of
 ``ski_slope`` (no slope), 3 m/s, 3 s turns, 4 deg, 30 s."""
 import math
 
