@@ -44,6 +44,23 @@ def test_resample_matches_a_fine_simulation(traj, fps):
     assert np.abs(np.angle(np.exp(1j * (rc.phi - r.phi)))).max() < 1e-3
 
 
+@pytest.mark.parametrize("ground", [None, "rolls"])
+def test_a_resample_from_a_later_frame_is_the_whole_ones_tail(traj, ground):
+    """``first``: the later frames only (a Live Preview window), bit for bit the whole
+    resample's (computed from the samples about them alone)."""
+    if ground is not None:
+        from blender_turning.core import preset
+        from blender_turning.core.ground.terrain_gen import ski_slope
+        ground = ski_slope(length=200.0, width=200.0, slope_deg=0.0, cell=1.0)
+        fig = preset("cyclist")
+        traj = simulate(fig, PhaseEllipse(fig.body, 2.0, math.radians(4), heading=0.0), 8.0,
+                        state0=(-95.0, 10.0, 0.0, 0.0, 0.14, 3.0), ground=ground)
+    whole = traj.resample(24, ground=ground)
+    tail = traj.resample(24, ground=ground, first=150)
+    assert len(whole) == 193 and len(tail) == 43
+    np.testing.assert_array_equal(tail.data, whole.data[:, 150:])
+
+
 def test_resampled_phase_is_continuous(traj):
     r = traj.resample(24)
     step = np.abs(np.angle(np.exp(1j * np.diff(r.phi))))

@@ -71,13 +71,15 @@ def started(frames: FrameRange, offset: float) -> FrameRange:
     return FrameRange(frames.start + k0, frames.end, frames.fps)
 
 
-def resampled(traj, frames: FrameRange, ground=None, origin: int | None = None):
-    """``traj`` at every frame of ``frames`` (exactly ``end - start + 1`` samples); ``ground``:
-    the surface it ran on (terrain).  ``traj``'s ``t = 0`` is frame ``origin`` (default
-    ``frames.start``; a figure with a start offset is keyed from a later frame)."""
+def resampled(traj, frames: FrameRange, ground=None, origin: int | None = None, skip: int = 0):
+    """``traj`` at every frame of ``frames`` (exactly ``end - start + 1`` samples) but the first
+    ``skip``; ``ground``: the surface it ran on (terrain).  ``traj``'s ``t = 0`` is frame
+    ``origin`` (default ``frames.start``; a figure with a start offset is keyed from a later
+    frame)."""
     origin = frames.start if origin is None else origin
-    out = traj.resample(frames.fps, start=(frames.start - origin) / frames.fps, ground=ground)
-    n = frames.end - frames.start + 1
+    out = traj.resample(frames.fps, start=(frames.start - origin) / frames.fps, ground=ground,
+                        first=skip)
+    n = frames.end - frames.start + 1 - skip
     if len(out) < n:
         raise ValueError(f"the trajectory covers {len(out)} of {n} frames")
     return type(out)(out.data[:, :n], out.meta)
@@ -104,7 +106,7 @@ def on_ground(traj, ground):
 
 
 def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="read",
-                    coarse_dt: float | None = None):
+                    coarse_dt: float | None = None, stride: int = 1, skip: int = 0):
     """Simulate the figure ``obj`` (its ``turning`` settings) over ``frames`` from ``start``
     (``(x, y, theta_dir)``, default its Start settings); the trajectory at every frame.
     ``height``: the flat ground's height (default the Start setting's z); ``ground``: its Ground
@@ -115,7 +117,14 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
     own clock from that many seconds after the first frame, as the core's crowd does
     (:mod:`..crowd.runner`): its trajectory is ``t = offset`` + its own time, sampled at the
     frames from the first at or after its start (:func:`started`), its keyed settings read on
-    its own clock (the value keyed at frame ``f`` acts ``offset`` s later)."""
+    its own clock (the value keyed at frame ``f`` acts ``offset`` s later).
+
+    A preview (Live Preview's drag step): ``coarse_dt``, the step on the paper's own model (flat
+    ground, a Speed that is not keyed, no skidding); ``stride``, on a Ground mesh without a
+    Target Speed or skidding, the core's coarse steps about the lean's zero crossings
+    (:func:`...core.physics.terrain_sim.simulate_free`).  Elsewhere both are ignored.
+    ``skip``: the first frames the trajectory leaves out (as the whole range's samples after
+    them, bit for bit)."""
     s = obj.turning
     if isinstance(ground, str):
         ground = ground_of(obj)
@@ -138,19 +147,21 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
         traj = simulate(figure, controller, duration, dt, state0=state0, meta={"figure": obj.name},
                         speed=None if skidding is not None else speed, skidding=skidding)
         traj = with_turn(traj, controller)             # the lean reached, when not the asked
-        traj = resampled(on_crowd_clock(traj, offset), shown, origin=frames.start)
+        traj = resampled(on_crowd_clock(traj, offset), shown, origin=frames.start, skip=skip)
         z0 = float(s.start[2]) if height is None else float(height)
         return _with_z(traj, np.full(len(traj), z0))
     target = target_schedule(obj, frames)
     if target is not None and not s.use_heading:
         raise SceneInputError("Target Speed (turning.terrain.target_speed) steers the turns "
                               "across the hill about the Heading: turn on Hold Heading")
-    traj = simulate(figure, controller, duration, dt, state0=(*state0, speed(0.0)),
+    stride = stride if target is None and skidding is None else 1
+    traj = simulate(figure, controller, duration + 2 * (stride - 1) * dt, dt,
+                    state0=(*state0, speed(0.0)),
                     meta={"figure": obj.name, "ground_object": ground.name},
                     ground=ground.field, resistance=resistance_from_settings(s),
-                    target_speed=target, skidding=skidding)
+                    target_speed=target, skidding=skidding, stride=stride)
     traj = resampled(on_crowd_clock(with_turn(traj, controller), offset), shown, ground.field,
-                     frames.start)
+                     frames.start, skip)
     return on_ground(traj, ground)
 
 

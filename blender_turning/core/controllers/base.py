@@ -45,6 +45,12 @@ class Controller:
         self.body = self.nominal_body.at_speed(float(V_cm))
         return self.body
 
+    def changes_between(self, V_a: float, V_b: float) -> bool:
+        """Does following the speed from ``V_a`` to ``V_b`` change the controller at a speed
+        in between (beyond the speed itself: a table taken anew)?  A run stepping coarsely
+        (:func:`..physics.terrain_sim.simulate_free`'s ``stride``) steps finely there."""
+        return False
+
     def begin_run(self, limits) -> None:
         """Called once before the first step with the figure's :class:`..params.Limits` (a
         controller may keep its demand within them)."""

@@ -47,7 +47,6 @@ feasible.  At a zero crossing the old and the modified ellipse share the rate in
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -65,6 +64,11 @@ GAIN = 3.0
 SPEED_GRID = 0.5
 """m/s: a speed that varies is followed by feasibility tables at multiples of this (rounded
 down)."""
+
+
+def _table_speed(V_cm: float) -> float:
+    """The speed whose feasibility table serves ``V_cm``: rounded down to :data:`SPEED_GRID`."""
+    return max(SPEED_GRID, math.floor(V_cm / SPEED_GRID) * SPEED_GRID)
 
 
 def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=0.05):
@@ -207,13 +211,16 @@ class PhaseEllipse(Controller):
         (never promising more than the current speed allows; a few tables, not one a step)."""
         body = super().follow_speed(V_cm)
         if self._limits is not None:
-            grid = max(SPEED_GRID, math.floor(V_cm / SPEED_GRID) * SPEED_GRID)
+            grid = _table_speed(V_cm)
             if grid != self._table_speed:       # on terrain the speed changes every step
-                self._feasible = feasible_turns(replace(self.nominal_body, V_cm=grid),
-                                                self._limits)
+                self._feasible = feasible_turns(self.nominal_body.at_speed(grid), self._limits)
                 self._table_speed = grid
                 self._forget()                  # the ellipses made feasible by the old table
         return body
+
+    def changes_between(self, V_a: float, V_b: float) -> bool:
+        """The feasibility table changes between the two speeds (:meth:`follow_speed`)."""
+        return self._limits is not None and _table_speed(V_a) != _table_speed(V_b)
 
     # -- the feasible ellipse -------------------------------------------------------------------
     def feasible_lean(self, omega0: float, theta_max: float) -> float:

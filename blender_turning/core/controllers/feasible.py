@@ -359,6 +359,9 @@ def feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
     down a slope passes through a table per 0.5 m/s of speed (10 to 27.5 m/s: 36), and a
     cache smaller than one run's sweep would rebuild every table on every run.  Inside
     :func:`nearby_tables`, a table already built for a nearby body."""
+    table = _TABLES.get((body, limits))
+    if table is not None:                         # built already (nearest of all: the same)
+        return table
     rel = _NEARBY[0]
     if rel is not None:
         near = [(_body_distance(b, body), i, table)

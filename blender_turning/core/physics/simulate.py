@@ -147,7 +147,7 @@ def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: flo
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
              state0=None, C_f0=None, meta: dict | None = None, speed=None, ground=FLAT,
              resistance: Resistance | None = None, target_speed=None,
-             skidding=None) -> Trajectory:
+             skidding=None, stride: int = 1) -> Trajectory:
     """Simulate one figure on ``ground`` (:mod:`.model`: ``Flat()``, the default, a
     :class:`.terrain.Plane` or a :class:`.terrain.HeightField`); raise a
     :class:`.errors.RunEnded` (:class:`.errors.FellOver`, :class:`.errors.Stopped`,
@@ -164,19 +164,22 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
     (docs/skidding.md).  The trajectory's ``z`` is the ground under the foot.
 
     A tyre (the sport's grip, or ``skidding``'s) holds the lean to what its grip allows
-    (:func:`.skidding.lean_within_grip`); ``meta["grip_limited"]`` then says so."""
+    (:func:`.skidding.lean_within_grip`); ``meta["grip_limited"]`` then says so.
+
+    ``stride`` > 1: a preview on terrain, steps of ``stride dt`` away from the lean's zero
+    crossings (:func:`.terrain_sim.simulate_free`); the paper's model takes a coarser ``dt``."""
     grip = skidding.grip if skidding is not None else getattr(
         SPORTS.get(figure.name), "grip", None)
     with lean_within_grip(controller, grip) as report:
         traj = _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, ground,
-                         resistance, target_speed, skidding)
+                         resistance, target_speed, skidding, stride)
     if report:
         traj.meta["grip_limited"] = report[0]
     return traj
 
 
 def _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, ground, resistance,
-              target_speed, skidding) -> Trajectory:
+              target_speed, skidding, stride=1) -> Trajectory:
     """:func:`simulate` with the lean as given."""
     ground = FLAT if ground is None else ground
     res = NO_RESISTANCE if resistance is None else resistance
@@ -186,7 +189,10 @@ def _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, groun
             raise ValueError("speed is a state on terrain (it follows the slope): give a "
                              "speed schedule or a ground, not both")
         return simulate_free(figure, controller, duration, dt, state0, ground, res, C_f0, meta,
-                             target_speed, skidding)
+                             target_speed, skidding, stride)
+    if stride != 1:
+        raise ValueError(f"stride = {stride!r}: the paper's model (flat ground, the speed held) "
+                         "steps every dt; give it a coarser dt instead")
     if ground.z0 != 0.0:                                  # flat ground at a height
         traj = _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, FLAT,
                          None, None, None)

@@ -33,14 +33,25 @@ from .model import NO_RESISTANCE, Resistance
 from .terrain_one_figure import TerrainStage
 from .trajectory import Trajectory, body_meta, resistance_meta
 
-__all__ = ["simulate_free", "describe_ground", "MIN_SPEED"]
+__all__ = ["simulate_free", "describe_ground", "MIN_SPEED", "REACH"]
 
 MIN_SPEED = 0.5
 """m/s: below it the run stops (:class:`.errors.Stopped`).  The turning model is a body carried
 by its speed (Eq. 1 needs ``V^2 cos th`` to balance gravity); near rest it asks for curvatures no
 ski or wheel has."""
 
+REACH = 2.0
+"""A run with ``stride`` > 1 (:func:`_loop`) steps with ``dt`` while the lean's rate carries it
+across zero within REACH coarse steps (the rate of the lean from the equilibrium lean is not
+``omega_v`` on terrain: the margin catches most of what the linear guess misses)."""
 
+SPAN = 1.25
+"""A coarse step (:func:`_loop`) moves at most SPAN cells of a height field: the spline rounds a
+mesh's creases over about a cell (Blender's Ground mesh is sampled at a quarter of its faces),
+and a step whose stages lie further apart misses them.  The benchmark's cyclist (3 m/s, 0.25 m
+cells) takes its coarse steps at 0.7 cells; a snowboarder at 12 m/s on such ground, stepped
+coarsely, ended 12 m from the bake 20 s in (here: the bake's steps throughout).
+docs/live-preview.md has the errors measured."""
 
 
 def describe_ground(ground) -> str:
@@ -59,7 +70,7 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
                   state0=None, ground=FLAT, resistance: Resistance = NO_RESISTANCE,
                   C_f0=None, meta: dict | None = None,
                   target_speed: TargetSpeed | float | None = None,
-                  skidding: Skidding | None = None) -> Trajectory:
+                  skidding: Skidding | None = None, stride: int = 1) -> Trajectory:
     """Simulate one figure on ``ground`` with ``resistance``; returns a :class:`Trajectory`
     whose ``z`` is the ground under the foot and ``V_cm`` the speed (a state).
 
@@ -75,7 +86,11 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     ``skidding`` (:class:`.skidding.Skidding`, docs/skidding.md) brakes at the foot within the
     grip: a style other than ``carve`` skids for what turning across the hill leaves of
     ``target_speed``; a stop skids to rest, and the figure then stands still across the fall line
-    to the end of ``duration`` (no :class:`.errors.Stopped`)."""
+    to the end of ``duration`` (no :class:`.errors.Stopped`).
+
+    ``stride`` > 1 (a preview, :func:`_loop`): steps of ``stride dt`` away from the zero
+    crossings of the lean (from the equilibrium lean), steps of ``dt`` on the same grid about
+    them, a sample every ``stride dt``; not with ``target_speed`` or ``skidding``."""
     body, limits = figure.body, figure.limits
     check_range("duration", duration, 0.0, 1e6, lo_open=True)
     check_range("dt", dt, 1e-5, 1.0)
@@ -111,9 +126,16 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
             raise ValueError("target_speed steers the heading: the controller needs a heading "
                              "(the course, e.g. the fall line)")
         brake = _Braking(rule, controller, figure, ground, resistance, st, schedule)
-    n = int(math.floor(duration / dt + 1e-9)) + 1
-    info = {"preset": figure.name, "dt": dt, **body_meta(body), "ground": describe_ground(ground),
-            **resistance_meta(resistance), **(meta or {})}
+    if type(stride) is not int or not 1 <= stride <= 10:
+        raise ValueError(f"stride = {stride!r} is not a whole number of steps in [1, 10]")
+    if stride > 1 and (target_speed is not None or skidding is not None):
+        raise ValueError("stride > 1 steps the carved model only: give no target_speed or "
+                         "skidding with it")
+    n = (int(math.floor(duration / (stride * dt) + 1e-9))) * stride + 1
+    info = {"preset": figure.name, "dt": stride * dt, **body_meta(body),
+            "ground": describe_ground(ground), **resistance_meta(resistance), **(meta or {})}
+    if stride > 1:
+        info["fine_dt"] = dt
     if brake is not None:
         info["target_speed"] = brake.rule.speed
     if skidding is not None:
@@ -128,7 +150,7 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         if skid is not None:
             skid.stage = stage
         rows, stop = _loop(body, limits, controller, ground, st, n, dt, C_f0, brake, stage,
-                           skid)
+                           skid, stride)
     finally:
         if brake is not None:
             controller.heading = course
@@ -136,7 +158,7 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
             skid.restore()
     if stop == "halted":
         rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None
-    traj = _trajectory(body, ground, np.array(rows, float), dt, info)
+    traj = _trajectory(body, ground, np.array(rows, float), stride * dt, info)
     if stop == "fell":
         raise FellOver(float(traj.t[-1]), float(rows[-1][11]), traj,
                        fall_cause(limits, traj.C_f, traj.t))
@@ -155,25 +177,63 @@ def _checked(schedule: Schedule):
     return Schedule(at)
 
 
-def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid):
+def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid, stride=1):
     """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean from
     the controller's equilibrium lean, F_brake / m, skid)``.  Classical RK4 on Python floats,
     written out (``rhs``, a :class:`.terrain_one_figure.TerrainStage`, for the stages), ``C_f``
     bounded at every stage relative to the curvature at the step's start, as
     :func:`.model.rk4_step` does; ``skid`` (:class:`.skidding._Skid`) sets the braking
     command of each step.  Returns ``(rows, None | "fell" | "stopped" | "halted" | "left")``
-    (``halted``: a commanded stop came to rest)."""
+    (``halted``: a commanded stop came to rest).
+
+    ``stride`` > 1 (a preview; no ``brake``, no ``skid``): a row every ``stride`` steps of the
+    grid ``i dt``, and between two rows one RK4 step of ``stride dt`` where the lean (from the
+    equilibrium lean) keeps its sign, else steps of ``dt``.  What makes a run's error first
+    order in ``dt`` on terrain happens at the lean's zero crossings: directional control plans
+    the coming half-turn at the step before one (Section 5.2,
+    :meth:`.PhaseEllipse.begin_step`: a crossing within the step, ``theta_v + omega_v dt``
+    across zero) and the law switches to its ellipse there (a jump in ``alpha_v`` inside a
+    step), and so does a controller taking new feasible turns at a speed it passes
+    (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same grid, those steps
+    are the ``stride = 1`` run's.  A coarse step is tried where the lean's rate carries it
+    across zero within no fewer than :data:`REACH` coarse steps and it moves at most
+    :data:`SPAN` cells of a height field, and kept only if the controller does not change over
+    it and it ends on the same side with no crossing within ``stride dt`` ahead (where
+    ``begin_step``, seeing the long step behind it, would plan).
+    A step's first stage bounds the rate of ``C_f`` relative to the last step's, ``last`` s
+    before (Section 3).  The fall and a stop are checked at the rows."""
     controller.begin_run(limits)
     foot = rhs.foot
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
     begin, target, fall = controller.begin_step, controller.target, limits.theta_fall
     anchor = None if anchor is None else float(anchor)
     x0, x1, x2, x3, x4, x5 = (float(v) for v in st)
-    h, w6 = 0.5 * dt, dt / 6.0
+    fine = (dt, 0.5 * dt, dt / 6.0)
+    coarse = (stride * dt, 0.5 * (stride * dt), (stride * dt) / 6.0)
+    reach = REACH * stride * dt
+    fastest = SPAN * getattr(ground, "cell", math.inf) / (stride * dt)   # m/s, coarse steps
+    changes = controller.changes_between
+
+    def advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf):
+        """RK4's stages 2-4 and the step."""
+        b0, b1, b2, b3, b4, b5, _, _, _ = stage(
+            t + h, x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4,
+            x5 + h * a5, cf, h)
+        c0, c1, c2, c3, c4, c5, _, _, _ = stage(
+            t + h, x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4,
+            x5 + h * b5, cf, h)
+        d0, d1, d2, d3, d4, d5, _, _, _ = stage(
+            t + step, x0 + step * c0, x1 + step * c1, x2 + step * c2, x3 + step * c3,
+            x4 + step * c4, x5 + step * c5, cf, step)
+        return (x0 + w6 * (a0 + 2.0 * (b0 + c0) + d0), x1 + w6 * (a1 + 2.0 * (b1 + c1) + d1),
+                x2 + w6 * (a2 + 2.0 * (b2 + c2) + d2), x3 + w6 * (a3 + 2.0 * (b3 + c3) + d3),
+                x4 + w6 * (a4 + 2.0 * (b4 + c4) + d4), x5 + w6 * (a5 + 2.0 * (b5 + c5) + d5))
+
     rows = []
     append = rows.append
     V_now = body.V_cm
-    for i in range(n):
+    i, ahead, last = 0, None, dt
+    while True:
         t = i * dt
         if x5 != V_now:
             # Below MIN_SPEED the run stops at this row (a body slower than the table of ranges
@@ -184,45 +244,58 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid)
             brake.update(t, (x0, x1, x2, x3, x4, x5))
         if skid is not None:
             skid.update(t, (x0, x1, x2, x3, x4, x5), foot)
-        try:
-            dv = derivatives(x0, x1)
-        except OffTerrain:                      # the step ended past the edge
-            return rows, "left"
-        rel = lean(t, x0, x1, x2, x3, dv)
+        if ahead is None:
+            try:
+                dv = derivatives(x0, x1)
+            except OffTerrain:                  # the step ended past the edge
+                return rows, "left"
+            rel = lean(t, x0, x1, x2, x3, dv)
+        else:                                   # found by the coarse step that led here
+            dv, rel = ahead
+            ahead = None
         begin(t, (x0, x1, x2, rel, x4))
-        a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, dt,
+        row = stride == 1 or i % stride == 0
+        a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,
                                                        dv)
-        skid_b = skid_a = 0.0
-        if skid is not None:
-            skid_b = foot[0]
-            skid_a = skid.skid(skid_b, foot[1], foot[2], x3)
-        append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel, skid_b, skid_a))
-        if abs(rel) > fall:
-            return rows, "fell"
-        if x5 < MIN_SPEED:
-            return rows, "halted" if skid is not None and skid.stopping else "stopped"
-        if i + 1 == n:
+        (step, h, w6), k, y = fine, 1, None
+        if stride > 1 and row and i + stride < n and x5 <= fastest and \
+                rel * (rel + x4 * reach) > 0.0:
+            try:
+                y = advance(t, *coarse, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf)
+                if changes(max(x5, MIN_SPEED), max(y[5], MIN_SPEED)):
+                    raise _Fine
+                dv_y = derivatives(y[0], y[1])
+                rel_y = lean(t + coarse[0], *y[:4], dv_y)
+                if rel * rel_y <= 0.0 or rel_y * (rel_y + y[4] * coarse[0]) <= 0.0:
+                    raise _Fine
+                (step, h, w6), k, ahead = coarse, stride, (dv_y, rel_y)
+            except (_Fine, OffTerrain):
+                y = None
+        if row:
+            skid_b = skid_a = 0.0
+            if skid is not None:
+                skid_b = foot[0]
+                skid_a = skid.skid(skid_b, foot[1], foot[2], x3)
+            append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel, skid_b, skid_a))
+            if abs(rel) > fall:
+                return rows, "fell"
+            if x5 < MIN_SPEED:
+                return rows, "halted" if skid is not None and skid.stopping else "stopped"
+        if i + 1 >= n:
             break
-        try:
-            b0, b1, b2, b3, b4, b5, _, _, _ = stage(
-                t + h, x0 + h * a0, x1 + h * a1, x2 + h * a2, x3 + h * a3, x4 + h * a4,
-                x5 + h * a5, cf, h)
-            c0, c1, c2, c3, c4, c5, _, _, _ = stage(
-                t + h, x0 + h * b0, x1 + h * b1, x2 + h * b2, x3 + h * b3, x4 + h * b4,
-                x5 + h * b5, cf, h)
-            d0, d1, d2, d3, d4, d5, _, _, _ = stage(
-                t + dt, x0 + dt * c0, x1 + dt * c1, x2 + dt * c2, x3 + dt * c3, x4 + dt * c4,
-                x5 + dt * c5, cf, dt)
-        except OffTerrain:
-            return rows, "left"
-        x0 += w6 * (a0 + 2.0 * (b0 + c0) + d0)
-        x1 += w6 * (a1 + 2.0 * (b1 + c1) + d1)
-        x2 += w6 * (a2 + 2.0 * (b2 + c2) + d2)
-        x3 += w6 * (a3 + 2.0 * (b3 + c3) + d3)
-        x4 += w6 * (a4 + 2.0 * (b4 + c4) + d4)
-        x5 += w6 * (a5 + 2.0 * (b5 + c5) + d5)
-        anchor = cf
+        if y is None:
+            try:
+                y = advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf)
+            except OffTerrain:
+                return rows, "left"
+        x0, x1, x2, x3, x4, x5 = y
+        anchor, last = cf, step
+        i += k
     return rows, None
+
+
+class _Fine(Exception):
+    """A coarse step of :func:`_loop` that steps of ``dt`` must take instead."""
 
 
 def _trajectory(body, ground, rec, dt, info) -> Trajectory:

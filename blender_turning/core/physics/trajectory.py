@@ -78,8 +78,9 @@ class Trajectory:
     # -- frame output --------------------------------------------------------------------------
     def resample(self, fps: float, start: float | None = None,
                  body: BodyParams | None = None, ground=None,
-                 resistance=None) -> "Trajectory":
-        """Samples at ``start + k / fps`` over the trajectory's span, each a state of the model.
+                 resistance=None, first: int = 0) -> "Trajectory":
+        """Samples at ``start + k / fps`` over the trajectory's span, each a state of the model;
+        ``k`` from ``first`` (the later samples of the whole span's, bit for bit).
 
         The state ``(x, y, theta_dir, theta_v, omega_v)`` and ``s`` between two samples is the
         integrator's dense output: the cubic Hermite interpolant through both samples with the
@@ -133,13 +134,16 @@ class Trajectory:
             raise ValueError("a trajectory to resample needs samples at increasing times")
         t0 = t[0] if start is None else float(start)
         n = int(math.floor((t[-1] - t0) * fps + 1e-9)) + 1
-        tn = t0 + np.arange(max(n, 0)) / fps
+        tn = t0 + np.arange(min(first, max(n, 0)), max(n, 0)) / fps
         meta = dict(self.meta, fps=float(fps))
         if len(t) == 1:
             at = np.zeros(int(np.sum(np.abs(tn - t[0]) <= 1e-9)), int)     # the one sample
             return Trajectory(self.data[:, at], meta)
         j = np.clip(np.searchsorted(t, tn, side="right") - 1, 0, len(t) - 1)  # frame's step
         i = np.minimum(j, len(t) - 2)
+        if len(tn):                 # the samples the frames lie between (a window: a few)
+            lo, hi = int(i[0]), int(i[-1]) + 2
+            t, c, i, j = t[lo:hi], {k: v[lo:hi] for k, v in c.items()}, i - lo, j - lo
         u = (tn - t[i]) / (t[i + 1] - t[i])
         ran_on = self.meta.get("ground")          # None: the paper's flat model
         if ran_on is not None or ground is not None or resistance is not None:

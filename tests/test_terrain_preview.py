@@ -1,0 +1,126 @@
+"""A preview run on terrain (``simulate(..., stride=3)``, Live Preview's drag step on a Ground
+mesh, core/physics/terrain_sim.py): one RK4 step of 3 dt where nothing discrete happens, steps of
+dt on the bake's own grid about the lean's zero crossings (where directional control plans its
+half-turns), where the controller takes a new feasibility table and where a coarse step would
+move more than 1.25 cells.  The case: the cyclist of ``scripts/bench_live.py`` on the rolls of
+``ski_slope`` (no slope), 3 m/s, 3 s turns, 4 deg, 30 s."""
+import math
+
+import numpy as np
+import pytest
+from dataclasses import replace
+
+from blender_turning.core import PhaseEllipse, preset, simulate
+from blender_turning.core.controllers import ellipse
+from blender_turning.core.ground.terrain_gen import ski_slope
+from blender_turning.core.physics.model import RESISTANCE
+
+ROLLS = ski_slope(length=200.0, width=200.0, slope_deg=0.0, cell=1.0)
+CYCLIST = preset("cyclist")
+W, TM, V = 2 * math.pi / 3.0, math.radians(4.0), 3.0
+START = (-95.0, 10.0, 0.0, 0.0, W * TM, V)
+
+
+def _run(stride=1, dt=0.02, limits=None, duration=30.0):
+    fig = replace(CYCLIST, body=replace(CYCLIST.body, V_cm=V),
+                  limits=limits or CYCLIST.limits)
+    return simulate(fig, PhaseEllipse(fig.body, W, TM, heading=0.0), duration, dt,
+                    state0=START, ground=ROLLS, resistance=RESISTANCE["cyclist"], stride=stride)
+
+
+def _off(a, b):
+    """The largest distance of the foot (m) and difference of heading (deg) of ``a`` from
+    ``b`` at ``a``'s rows."""
+    x, y = np.interp(a.t, b.t, b.x), np.interp(a.t, b.t, b.y)
+    heading = np.interp(a.t, b.t, b.theta_dir)
+    return (np.hypot(a.x - x, a.y - y).max(),
+            math.degrees(np.abs(a.theta_dir - heading).max()))
+
+
+def _with_events(monkeypatch, stride):
+    """The run, and where its controller planned a half-turn (Section 5.2) and took a new
+    feasibility table: ``[(t, "plan" or the table's speed)]``, recorded at the steps' starts."""
+    log, table = [], [None]
+    plan, begin = ellipse.PhaseEllipse._plan, ellipse.PhaseEllipse.begin_step
+
+    def planned(self, t, *a):
+        log.append((t, "plan"))
+        return plan(self, t, *a)
+
+    def began(self, t, state):
+        if table[0] != self._table_speed:
+            table[0] = self._table_speed
+            log.append((t, table[0]))
+        return begin(self, t, state)
+
+    with monkeypatch.context() as m:
+        m.setattr(ellipse.PhaseEllipse, "_plan", planned)
+        m.setattr(ellipse.PhaseEllipse, "begin_step", began)
+        return _run(stride), log
+
+
+def test_a_preview_plans_and_switches_tables_at_the_bakes_steps(monkeypatch):
+    calls, slopes = [], ROLLS.slopes_one
+    monkeypatch.setattr(ROLLS, "slopes_one", lambda x, y: calls.append(x) or slopes(x, y))
+    exact, bake_events = _with_events(monkeypatch, 1)
+    n_exact = len(calls)
+    preview, events = _with_events(monkeypatch, 3)
+    # The work: the ground read 2,525 times for the bake's 6,001 (2,690 trying coarse steps up
+    # to the crossings).
+    assert len(calls) - n_exact < 0.43 * n_exact
+    assert np.allclose(np.diff(preview.t), 0.06) and preview.t[-1] == pytest.approx(30.0)
+    assert preview.meta["dt"] == pytest.approx(0.06) and preview.meta["fine_dt"] == 0.02
+    assert sum(e[1] == "plan" for e in bake_events) == 22             # each half-turn
+    assert sum(e[1] != "plan" for e in bake_events) == 19             # the speed's tables
+    # The same events, each at the bake's step or the one next to it (two of them: the states
+    # differ by a few mm there).
+    assert [e[1] for e in events] == [e[1] for e in bake_events]
+    late = np.abs([a[0] - b[0] for a, b in zip(events, bake_events)])
+    assert late.max() < 0.021 and np.sum(late > 1e-9) <= 3
+    # The foot within 3 cm and the heading within 0.2 deg of the bake's over 30 s (measured
+    # 1.1 cm, 0.02 deg; the bench's cyclist at 3.4-4 deg: at most 4.3 cm, 0.13 deg): with coarse
+    # steps everywhere a run is 20 cm off.
+    foot, heading = _off(preview, exact)
+    assert foot < 0.03 and heading < 0.2
+    assert _off(_run(dt=0.06), exact)[0] > 0.1
+
+
+def test_a_step_bounds_the_rate_of_c_f_over_the_time_since_the_last():
+    """Section 3's bound on the rate of ``C_f`` (0.3 1/(m s) here: it holds ``C_f`` over the
+    first half second and at times after) relative to the last step's first stage: a coarse
+    step after a step of dt allows dt's change, not three: the foot within 3 mm of the bake's
+    over 20 s (measured 1.2 mm; 2.8 cm with a coarse step's own length)."""
+    limits = replace(CYCLIST.limits, dC_f_max=0.3)
+    exact = _run(limits=limits, duration=20.0)
+    assert np.mean(np.abs(np.diff(exact.C_f)) > 0.999 * 0.3 * 0.02) > 0.03
+    assert _off(_run(stride=3, limits=limits, duration=20.0), exact)[0] < 3e-3
+
+
+@pytest.mark.parametrize("speed, coarse", [(8.0, False), (4.0, True)])
+def test_a_coarse_step_moves_at_most_a_cell_and_a_quarter(speed, coarse):
+    """On a field of 0.25 m cells (a Ground mesh of 1 m faces as Blender reads it) a coarse
+    step of 0.06 s is taken below 5.2 m/s only: at 8 m/s the preview's states are the bake's,
+    row for row (stepped coarsely, a snowboarder at 12 m/s on such ground ended 12 m away 20 s in)."""
+    fine = ski_slope(length=60.0, width=60.0, slope_deg=0.0, cell=0.25)
+    fig = replace(CYCLIST, body=replace(CYCLIST.body, V_cm=speed))
+
+    def run(stride):
+        return simulate(fig, PhaseEllipse(fig.body, W, TM, heading=0.0), 3.0, 0.02,
+                        state0=(-25.0, 0.0, 0.0, 0.0, W * TM, speed), ground=fine,
+                        resistance=RESISTANCE["cyclist"], stride=stride)
+
+    exact, preview = run(1), run(3)
+    assert (exact.V_cm.min() > 5.2) == (not coarse)
+    same = [np.array_equal(getattr(preview, k), getattr(exact, k)[::3])
+            for k in ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm", "C_f")]
+    assert all(same) == (not coarse) and any(same) == (not coarse)
+
+
+def test_stride_is_checked():
+    with pytest.raises(ValueError, match=r"stride = 0 is not a whole number of steps in \[1, 10\]"):
+        _run(stride=0)
+    with pytest.raises(ValueError, match="stride > 1 steps the carved model only"):
+        simulate(CYCLIST, PhaseEllipse(CYCLIST.body, W, TM, heading=0.0), 5.0, 0.02,
+                 state0=START, ground=ROLLS, target_speed=3.0, stride=3)
+    with pytest.raises(ValueError, match="the paper's model"):
+        simulate(CYCLIST, PhaseEllipse(CYCLIST.body, W, TM), 5.0, 0.02, stride=3)
