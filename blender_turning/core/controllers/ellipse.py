@@ -47,6 +47,7 @@ feasible.  At a zero crossing the old and the modified ellipse share the rate in
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
