@@ -195,8 +195,9 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
             return report_error(self, "Add Crowd", template.name, exc)
         coll = crowd_scene.new_crowd_collection(context)
         figs = []
+        led = FORMATIONS.lookup(v.formation.lower()).template == "leader"
         try:
-            if FORMATIONS.lookup(v.formation.lower()).template == "leader":
+            if led:
                 coll.objects.link(template)          # the leader is one of the crowd
                 figs.append(template)
             children = template.children_recursive
@@ -212,11 +213,15 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
             return report_error(self, "Add Crowd", template.name, exc)
         for obj in context.selected_objects:
             obj.select_set(False)
+        if not led:                                  # a pattern, not one of the crowd
+            crowd_scene.set_aside(template)
         for fig in figs:
             fig.select_set(True)
         context.view_layer.objects.active = figs[0]
         staged = "strung out along the track" if v.staging == "ALONG_TRACK" \
             else "waiting at the start"
+        if not led:
+            staged += f"; the template {template.name!r} is hidden, Alt+H shows it"
         if end is not None:
             context.scene.frame_end = end
             staged += f", the scene's range now ends at frame {end} to fit them"
