@@ -97,3 +97,29 @@ def test_pairs_that_start_apart_plan_bit_for_bit_as_with_one_clearance():
                                       shift=f.time_offset)
     again = f.controller.scene.run(scalar)
     np.testing.assert_array_equal(again.trajectory.data, res[f.name].trajectory.data)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_each_body_keeps_its_own_clearance(seed):
+    """``collides`` with a clearance per body is, column by column, the OR over the bodies of
+    ``collides`` with that body alone and its clearance (the box tests, the bisection of steps
+    in doubt and ``near`` each use the body's own); ``near`` keeps each kept body's."""
+    rng = np.random.default_rng(seed)
+    n, S, m, dt = 6, 30, 40, 0.05
+    foot = np.cumsum(rng.normal(0, 0.3, (n, S, 2)), axis=1) + rng.uniform(-6, 6, (n, 1, 2))
+    cm = foot + rng.normal(0, 0.4, (n, S, 2))
+    cl = rng.uniform(0.05, 1.5, n)
+    names = tuple(f"b{j}" for j in range(n))
+    every = MovingBodies(names, dt, 0, foot, cm, cl)
+    mine_foot = np.cumsum(rng.normal(0, 0.3, (2, 9, m)), axis=1) + rng.uniform(-6, 6, (2, 1, m))
+    mine_body = mine_foot + rng.normal(0, 0.3, (2, 9, m))
+    t0 = dt * rng.integers(0, S - 9, m)
+    got = every.collides(mine_foot, mine_body, t0, dt)
+    want = np.zeros(m, bool)
+    for j in range(n):
+        one = MovingBodies(names[j:j + 1], dt, 0, foot[j:j + 1], cm[j:j + 1], float(cl[j]))
+        want |= one.collides(mine_foot, mine_body, t0, dt)
+    np.testing.assert_array_equal(got, want)
+    assert 0 < want.sum() < m                          # some columns collide, some do not
+    kept = every.near((0.0, 0.0), 2.0, 0.0, 0.5)
+    np.testing.assert_array_equal(kept.clearances(), cl[[names.index(k) for k in kept.names]])
