@@ -619,6 +619,17 @@ MUTANTS = [
       "- late * leader.figure.body.V_cm * d", "+ late * leader.figure.body.V_cm * d", STAGING),
     M("staging_keeps_the_offset", "crowd/staging.py",
       "time_offset=leader.time_offset))", "time_offset=m.time_offset))", STAGING),
+    # -- formations made from a template, followed with a path (docs/crowds.md) ----------------
+    M("add_crowd_template_left_standing", "blender/ops/crowd.py",
+      "            crowd_scene.set_aside(template)\n", "            pass\n",
+      [T + "test_blender_crowd_path_formations.py"], "bake"),
+    M("set_aside_leaves_the_body", "blender/scene/crowd_scene.py",
+      "    for obj in [template, *template.children_recursive,",
+      "    for obj in [template, *(),", [T + "test_blender_crowd_path_formations.py"], "bake"),
+    M("synchronized_turns_only", "crowd/formations.py",
+      'name="synchronized", label="Synchronized", number=1, template="any",',
+      'name="synchronized", label="Synchronized", number=1, template="turns",',
+      [T + "test_blender_crowd_path_formations.py"], "bake"),
     # -- Follow Path on a Ground mesh -------------------------------------------------
     M("follow_ground_is_an_obstacle", "blender/scene/follow_scene.py",
       "(s.foot_track, s.path, s.ground)", "(s.foot_track, s.path)", FOLLOW_GROUND, "bake"),

@@ -58,6 +58,9 @@ def test_every_formation_with_a_road_is_followed_avoiding(scene, formation):
     figs = sorted(bpy.context.selected_objects, key=lambda o: o.name)
     shown = [o for o in scene.objects if o.type == "ARMATURE" and o.visible_get()]
     assert sorted(o.name for o in shown) == [f.name for f in figs]   # no template among them
+    if lead not in figs:                                # a pattern: hidden with its body
+        assert all(not o.visible_get() and o.hide_render for o in [lead,
+                                                                   *lead.children_recursive])
     assert bpy.ops.turning.follow_path() == {"FINISHED"}
     frames = np.arange(scene.frame_start, scene.frame_end + 1)
     foot, cm = bodies(figs, frames)

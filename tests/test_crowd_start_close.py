@@ -123,3 +123,15 @@ def test_each_body_keeps_its_own_clearance(seed):
     assert 0 < want.sum() < m                          # some columns collide, some do not
     kept = every.near((0.0, 0.0), 2.0, 0.0, 0.5)
     np.testing.assert_array_equal(kept.clearances(), cl[[names.index(k) for k in kept.names]])
+
+
+def test_a_synchronized_line_from_a_path_template_rides_it_side_by_side():
+    from blender_turning.crowd import offset_path
+    template = peloton()["formations"][0]["template"]
+    crowd = crowd_from_dict({"name": "line", "duration": 10, "formations": [
+        {"type": "synchronized", "count": 3, "spacing_m": 1.5, "template": template}]})
+    road = crowd_from_dict({"name": "one", "duration": 10, "figures": [template]}).figures[0]
+    for k, f in enumerate(crowd.figures):
+        want = offset_path(road.controller.scene.path, (k - 1) * 1.5)
+        np.testing.assert_allclose(f.controller.scene.path.knots, want.knots, atol=1e-9)
+        np.testing.assert_allclose(f.state0()[:2], want.knots[0], atol=1e-9)
