@@ -264,7 +264,7 @@ def _read_peloton(f, template, seed, name):
 def _peloton_start(k, v):
     """Rows from the back, as :func:`peloton` places them: member ``k``'s row's distance."""
     rows = -(-v.count // v.abreast)
-    return (rows - 1 - (k - 1) // v.abreast) * v.gap_distance
+    return (rows - 1 - (k - 1) // v.abreast) * v.row_gap
 
 
 register_formation(Formation(
@@ -289,7 +289,7 @@ register_formation(Formation(
                 "following a road)",
     keys={"count", "gap_m", "abreast", "spacing_m", "body_jitter", "seed"},
     read=_read_peloton,
-    build=lambda lead, v, name: peloton(lead, v.count, v.gap_distance, v.abreast,
+    build=lambda lead, v, name: peloton(lead, v.count, v.row_gap, v.abreast,
                                         v.row_spacing, v.seed, v.body_jitter, name),
-    fields=lambda v: ("gap_distance", "abreast", "row_spacing", "seed", "body_jitter"),
+    fields=lambda v: ("row_gap", "abreast", "row_spacing", "seed", "body_jitter"),
     start_along=_peloton_start))
