@@ -2,11 +2,14 @@
 synchronised line) keep half their start distance from each other instead of having no feasible
 start (crowd/priority.py, docs/crowds.md "Figures that start close"); every other pair keeps the
 clearance, as before."""
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from blender_turning.core.course.moving import MovingBodies
-from blender_turning.crowd import crowd_from_dict, run_crowd
+from blender_turning.core.course.obstacles import segment_distance
+from blender_turning.crowd import FollowPath, crowd_from_dict, run_crowd
 from blender_turning.crowd import priority as priority_
 
 PLANNER = {"stages": 6, "choices": 5, "stage_time": 0.3, "lean_bound_deg": 35}
@@ -30,7 +33,6 @@ def pair_closest(crowd, result, a, b, dt=0.005) -> float:
     sampled every ``dt`` (the planner's rule holds between its 0.05 s steps)."""
     tracks = [(n, result[n].trajectory, crowd[n].figure.body.l) for n in (a, b)]
     bodies = MovingBodies.from_tracks(tracks, dt=dt)
-    from blender_turning.core.course.obstacles import segment_distance
     d = segment_distance(bodies.foot[0], bodies.cm[0], bodies.foot[1], bodies.cm[1])
     return float(np.nanmin(d))
 
@@ -70,6 +72,20 @@ def test_pair_clearances_shrink_only_for_pairs_that_start_inside_the_clearance(b
     late = [(n, type(tr)(tr.data[:, tr.t > 0.5], tr.meta), l)   # not in the shot at its start
             for n, tr, l in tracks]
     assert priority_.pair_clearances(f, late, 1.0).tolist() == [1.0] * 3
+    # read when f starts: 1 s later the others are 7 m on, and f keeps the clearance
+    later = replace(f, time_offset=1.0)
+    assert priority_.pair_clearances(later, tracks, 1.0).tolist() == [1.0] * 3
+    # from its body, foot to CM ground point: leaning 30 deg right, towards its row-mate
+    state0 = np.array(f.controller.scene.state0, float)
+    state0[3] = np.radians(-30.0)
+    leaning = replace(f, controller=FollowPath(replace(f.controller.scene, state0=state0)))
+    x, y, head = state0[:3]
+    foot = np.array([x, y])
+    cm = foot - f.figure.body.l * 0.5 * np.array([-np.sin(head), np.cos(head)])
+    mate = crowd.figures[2].state0()[:2]                 # upright at the start
+    want = priority_.START_SHARE * float(segment_distance(foot, cm, mate, mate))
+    assert want < 0.3
+    assert priority_.pair_clearances(leaning, tracks, 1.0)[2] == pytest.approx(want, abs=1e-12)
     bodies = priority_.bodies_for(f, tracks, 1.0)
     np.testing.assert_array_equal(bodies.clearances(), got)
     assert bodies.near(crowd.figures[2].state0()[:2], 0.1, 0.0, 0.1).clearances().tolist() \
