@@ -73,8 +73,9 @@ def test_every_formation_with_a_road_is_followed_avoiding(scene, formation):
             both = np.flatnonzero(moving[a] & moving[b])
             d = segment_distance(foot[a, both], cm[a, both], foot[b, both], cm[b, both])
             keep = BODY_CLEARANCE if d[0] > BODY_CLEARANCE else START_SHARE * d[0]
-            # the rule holds between the planner's 0.05 s steps; the 24 fps heading from the
-            # foot's steps errs by its curve within one frame (measured: under 2 mm)
+            # the planner's rule holds in continuous time; 5 mm allows for this reading of it
+            # (the heading from the foot's 24 fps steps, float32 keys).  Measured closest:
+            # row-mates 0.44 and 0.55 m (keeping 0.40), others 1.15 m and more (keeping 1 m)
             assert d.min() >= keep - 5e-3, (formation, figs[a].name, figs[b].name,
                                             float(d[0]), float(d.min()))
             assert keep > 0.3                            # side by side, not on top
