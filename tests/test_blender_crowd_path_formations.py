@@ -50,6 +50,7 @@ def bodies(figs, frames) -> tuple:
     return foot, cm
 
 
+@pytest.mark.installed
 @pytest.mark.parametrize("formation", sorted(FORMATIONS))
 def test_every_formation_with_a_road_is_followed_avoiding(scene, formation):
     lead = add("CYCLIST")
