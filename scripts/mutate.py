@@ -54,6 +54,7 @@ TERRAIN = [T + "test_terrain.py", T + "test_terrain_symbolic.py", T + "test_terr
 MODEL = [T + "test_model_kernels.py", T + "test_energy.py", T + "test_speed_is_physics.py",
          T + "test_terrain.py", T + "test_terrain_symbolic.py"]
 MOVING = [T + "test_crowd_moving.py", T + "test_crowd_priority.py"]
+START_CLOSE = [T + "test_crowd_start_close.py"] + MOVING
 BAKE = [T + "test_blender_mutation_guards.py", T + "test_blender_bake.py",
         T + "test_blender_operators.py", T + "test_blender_robustness.py",
         T + "test_blender_layers.py"]
@@ -470,7 +471,26 @@ MUTANTS = [
     M("groups_never_see_each_other", "crowd/priority.py",
       "            if body.seen_by(region).any():", "            if False:", MOVING),
     M("bodies_on_the_crowds_clock", "crowd/priority.py",
-      "clearance, shift=f.time_offset,", "clearance, shift=0.0,", MOVING),
+      "shift=f.time_offset, log=log)", "shift=0.0, log=log)", MOVING),
+    # -- figures that start close (crowd/priority.py, docs/crowds.md) -------------------------
+    M("start_close_keeps_the_clearance", "crowd/priority.py",
+      "            out[k] = START_SHARE * d", "            pass", START_CLOSE),
+    M("start_close_keeps_all_of_it", "crowd/priority.py",
+      "START_SHARE = 0.5", "START_SHARE = 1.0", START_CLOSE),
+    M("start_close_every_pair", "crowd/priority.py",
+      "        if d <= clearance:", "        if d <= 10.0 * clearance:", START_CLOSE),
+    M("start_close_at_the_crowds_start", "crowd/priority.py",
+      "float(np.interp(f.time_offset, tr.t, v))", "float(np.interp(tr.t[0], tr.t, v))",
+      START_CLOSE),
+    M("start_close_body_upright", "crowd/priority.py",
+      "    side = f.figure.body.l * np.sin(lean)", "    side = 0.0 * lean", START_CLOSE),
+    M("movers_one_clearance_for_all", "core/course/moving.py",
+      "cl = cl[near]                                     # (B, 1)",
+      "cl = cl[near].max() + 0.0 * cl[near]              # (B, 1)", START_CLOSE),
+    M("movers_near_drops_the_clearances", "core/course/moving.py",
+      "else self.clearance[keep]", "else self.clearance", START_CLOSE),
+    M("movers_in_doubt_other_pairs_clearance", "core/course/moving.py",
+      "        c = cl[idx]\n", "        c = cl[::-1][idx]\n", START_CLOSE),
     # -- mapping (Section 7) -------------------------------------------------------------------
     M("retarget_swing_small_angle", "mapping/retarget/retarget.py",
       "vx @ vx / np.where(opp, 1.0, 1.0 + c)", "vx @ vx / np.where(opp, 1.0, 2.0)", RETARGET,
@@ -603,6 +623,17 @@ MUTANTS = [
       "- late * leader.figure.body.V_cm * d", "+ late * leader.figure.body.V_cm * d", STAGING),
     M("staging_keeps_the_offset", "crowd/staging.py",
       "time_offset=leader.time_offset))", "time_offset=m.time_offset))", STAGING),
+    # -- formations made from a template, followed with a path (docs/crowds.md) ----------------
+    M("add_crowd_template_left_standing", "blender/ops/crowd.py",
+      "            crowd_scene.set_aside(template)\n", "            pass\n",
+      [T + "test_blender_crowd_path_formations.py"], "bake"),
+    M("set_aside_leaves_the_body", "blender/scene/crowd_scene.py",
+      "    for obj in [template, *template.children_recursive,",
+      "    for obj in [template, *(),", [T + "test_blender_crowd_path_formations.py"], "bake"),
+    M("synchronized_turns_only", "crowd/formations.py",
+      'name="synchronized", label="Synchronized", number=1, template="any",',
+      'name="synchronized", label="Synchronized", number=1, template="turns",',
+      [T + "test_blender_crowd_path_formations.py"], "bake"),
     # -- Follow Path on a Ground mesh -------------------------------------------------
     M("follow_ground_is_an_obstacle", "blender/scene/follow_scene.py",
       "(s.foot_track, s.path, s.ground)", "(s.foot_track, s.path)", FOLLOW_GROUND, "bake"),

@@ -481,7 +481,7 @@ def test_a_peloton_starts_where_the_core_places_its_rows(scene):
     road = path_of(lead)
     member = crowd_scene.template_member(bpy.context, lead, path=True)
     want = peloton(member, 5, 4.0, abreast=2, spacing=0.8, name="m")
-    assert bpy.ops.turning.add_crowd(formation="PELOTON", count=5, gap_distance=4.0, abreast=2,
+    assert bpy.ops.turning.add_crowd(formation="PELOTON", count=5, row_gap=4.0, abreast=2,
                                      row_spacing=0.8) == {"FINISHED"}
     for k, m in enumerate(want, start=1):
         fig = bpy.data.objects[f"Cyclist {k}"]

@@ -4,7 +4,8 @@ file, a render job and Blender's Add Crowd read and make it, :mod:`.registry`) a
 - :func:`follow_leader`: ``count`` figures on the leader's track, each ``gap`` seconds (or metres)
   further behind, with a lateral offset and small random differences of body and timing.
 - :func:`synchronized`: a pair or a line turning in phase or in antiphase (the figure-8s of the
-  paper's Fig. 10, track 1: two figures on one line, out of phase).
+  paper's Fig. 10, track 1: two figures on one line, out of phase), or riding a path side by
+  side.
 - :func:`peloton`: riders on a road path in rows of ``abreast``, rows ``gap`` metres apart.
 
 Random choices come from ``random.Random`` seeded by the formation's seed and name, drawn in a
@@ -152,10 +153,9 @@ def synchronized(template: CrowdFigure, count: int = 2, spacing: float = 0.0,
     opposite turn (``count = 2, spacing = 0``: the figure-8s of Fig. 10, track 1).  ``gap``
     (s): each one starts that much after the one before, in the same place (synchronised
     skiers drawing figure-8s ski one behind the other; ``gap = 0`` starts them together, on
-    top of each other when ``spacing`` is 0).  Named ``<name>1 ...`` (default: the template's
-    name)."""
-    if template.is_path:
-        raise ValueError("synchronized needs a turns template (the parametric controller)")
+    top of each other when ``spacing`` is 0).  A path template: each figure rides the
+    template's path offset by its place in the line (its first turn is the path's).  Named
+    ``<name>1 ...`` (default: the template's name)."""
     check("count", count, CROWD_RANGES["count"])
     check("spacing", spacing, CROWD_RANGES["spacing_m"])
     check("gap", gap, CROWD_RANGES["sync_gap_s"])
@@ -264,7 +264,7 @@ def _read_peloton(f, template, seed, name):
 def _peloton_start(k, v):
     """Rows from the back, as :func:`peloton` places them: member ``k``'s row's distance."""
     rows = -(-v.count // v.abreast)
-    return (rows - 1 - (k - 1) // v.abreast) * v.gap_distance
+    return (rows - 1 - (k - 1) // v.abreast) * v.row_gap
 
 
 register_formation(Formation(
@@ -275,9 +275,9 @@ register_formation(Formation(
           "period_jitter", "seed"},
     read=_read_follow_leader, build=_build_follow_leader, fields=_fields_follow_leader))
 register_formation(Formation(
-    name="synchronized", label="Synchronized", number=1, template="turns",
+    name="synchronized", label="Synchronized", number=1, template="any",
     description="A pair or a line turning together, in phase or in antiphase (the figure-8s of "
-                "Fig. 10); the template's turns",
+                "Fig. 10); the template's turns, or its path side by side",
     keys={"count", "spacing_m", "antiphase", "gap_s"},
     read=_read_synchronized,
     build=lambda lead, v, name: synchronized(lead, v.count, v.spacing, v.antiphase, name,
@@ -289,7 +289,7 @@ register_formation(Formation(
                 "following a road)",
     keys={"count", "gap_m", "abreast", "spacing_m", "body_jitter", "seed"},
     read=_read_peloton,
-    build=lambda lead, v, name: peloton(lead, v.count, v.gap_distance, v.abreast,
+    build=lambda lead, v, name: peloton(lead, v.count, v.row_gap, v.abreast,
                                         v.row_spacing, v.seed, v.body_jitter, name),
-    fields=lambda v: ("gap_distance", "abreast", "row_spacing", "seed", "body_jitter"),
+    fields=lambda v: ("row_gap", "abreast", "row_spacing", "seed", "body_jitter"),
     start_along=_peloton_start))

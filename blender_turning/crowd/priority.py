@@ -26,16 +26,54 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.course.moving import MovingBodies
+from ..core.course.obstacles import segment_distance
 
-__all__ = ["bodies_for", "initial_groups", "conflicts", "merge"]
+__all__ = ["START_SHARE", "pair_clearances", "bodies_for", "initial_groups", "conflicts", "merge"]
+
+
+#: The share of their distance at the start that two figures starting closer than the
+#: clearance keep (docs/crowds.md, "Figures that start close").
+START_SHARE = 0.5
+
+
+def start_segment(f) -> np.ndarray:
+    """The path figure ``f``'s body at its start: foot and CM ground point, shape ``(2, 2)``
+    (:meth:`..core.planner.Problem.body_point` of its start state)."""
+    x, y, head, lean = np.asarray(f.controller.scene.state0, float)[:4]
+    side = f.figure.body.l * np.sin(lean)
+    return np.array([[x, y], [x - side * np.sin(head), y + side * np.cos(head)]])
+
+
+def pair_clearances(f, tracks, clearance: float) -> np.ndarray:
+    """The clearance ``f`` keeps from each of ``tracks`` (``(name, trajectory, l)``, on the
+    crowd's clock): ``clearance``, but where a body is in the shot when ``f`` starts and its
+    segment is then within ``clearance`` of ``f``'s (riders of a peloton side by side, a
+    synchronised pair), :data:`START_SHARE` of that distance: they keep most of the room they
+    start with instead of an infeasible start."""
+    mine = start_segment(f)
+    out = np.full(len(tracks), float(clearance))
+    for k, (_, tr, l) in enumerate(tracks):
+        if tr is None or not len(tr) or not tr.t[0] <= f.time_offset <= tr.t[-1]:
+            continue
+        x, y, head, lean = (float(np.interp(f.time_offset, tr.t, v))
+                            for v in (tr.x, tr.y, tr.theta_dir, tr.theta_v))
+        side = l * np.sin(lean)
+        d = float(segment_distance(mine[0], mine[1], np.array([x, y]),
+                                   np.array([x - side * np.sin(head), y + side * np.cos(head)])))
+        if d <= clearance:
+            out[k] = START_SHARE * d
+    return out
 
 
 def bodies_for(f, tracks, clearance: float, log: list | None = None) -> MovingBodies:
     """``tracks`` (``(name, trajectory, l)``, on the crowd's clock) as the path figure ``f``
-    plans around them: sampled at its planner's step, on its own clock."""
+    plans around them: sampled at its planner's step, on its own clock, each kept at its
+    :func:`pair_clearances`."""
     sc = f.controller.scene
-    return MovingBodies.from_tracks(tracks, sc.settings.dt, clearance, shift=f.time_offset,
-                                    log=log)
+    tracks = list(tracks)
+    return MovingBodies.from_tracks(tracks, sc.settings.dt,
+                                    pair_clearances(f, tracks, clearance),
+                                    shift=f.time_offset, log=log)
 
 
 def _box(f, clearance: float) -> np.ndarray:

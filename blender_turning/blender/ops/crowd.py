@@ -65,8 +65,7 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
                             description="Time between successive followers (s)")
     gap_distance: FloatProperty(name="Gap", default=6.0, **_r("gap_m", soft_max=50.0),
                                 unit="LENGTH",
-                                description="Distance between successive followers, or rows "
-                                            "of a peloton (m)")
+                                description="Distance between successive followers (m)")
     lateral: FloatProperty(name="Lateral Offset", default=0.0,
                            **_r("lateral_m", soft_min=-10.0, soft_max=10.0), unit="LENGTH",
                            description="How far to the left of the leader's track the "
@@ -101,7 +100,11 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
                          description="Riders in a row")
     row_spacing: FloatProperty(name="Row Spacing", default=0.8, **_r("spacing_m", soft_max=3.0),
                                unit="LENGTH",
-                               description="Distance between riders of a row")
+                               description="Distance between riders of a row, centre to centre")
+    row_gap: FloatProperty(name="Row Gap", default=2.0, **_r("gap_m", soft_max=20.0),
+                           unit="LENGTH",
+                           description="Distance between rows along the road, centre to centre "
+                                       "(2 m: half a wheel between one bicycle and the next)")
     staging: EnumProperty(name="Staging", items=STAGING, default="ALONG_TRACK",
                           description="Where the followers are at the first frame")
     fit_range: BoolProperty(name="Fit Scene Range", default=True,
@@ -134,7 +137,8 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
                           ("lateral", "lateral_m"), ("seed", "seed"), ("body_jitter", "jitter"),
                           ("timing_jitter", "timing_jitter_s"), ("period_jitter", "jitter"),
                           ("spacing", "spacing_m"), ("sync_gap", "sync_gap_s"),
-                          ("abreast", "abreast"), ("row_spacing", "spacing_m")):
+                          ("abreast", "abreast"), ("row_spacing", "spacing_m"),
+                          ("row_gap", "gap_m")):
             v = getattr(self, name)
             if isinstance(v, float):
                 v = float(np.format_float_positional(np.float32(v), unique=True, trim="0"))
@@ -195,8 +199,9 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
             return report_error(self, "Add Crowd", template.name, exc)
         coll = crowd_scene.new_crowd_collection(context)
         figs = []
+        led = FORMATIONS.lookup(v.formation.lower()).template == "leader"
         try:
-            if FORMATIONS.lookup(v.formation.lower()).template == "leader":
+            if led:
                 coll.objects.link(template)          # the leader is one of the crowd
                 figs.append(template)
             children = template.children_recursive
@@ -212,11 +217,15 @@ class TURNING_OT_add_crowd(bpy.types.Operator):
             return report_error(self, "Add Crowd", template.name, exc)
         for obj in context.selected_objects:
             obj.select_set(False)
+        if not led:                                  # a pattern, not one of the crowd
+            crowd_scene.set_aside(template)
         for fig in figs:
             fig.select_set(True)
         context.view_layer.objects.active = figs[0]
         staged = "strung out along the track" if v.staging == "ALONG_TRACK" \
             else "waiting at the start"
+        if not led:
+            staged += f"; the template {template.name!r} is hidden, Alt+H shows it"
         if end is not None:
             context.scene.frame_end = end
             staged += f", the scene's range now ends at frame {end} to fit them"

@@ -174,6 +174,19 @@ def place(obj, member: CrowdFigure, template_start, path_obj=None) -> None:
     reset_pose(obj)
 
 
+def set_aside(template) -> None:
+    """Hide the template of a formation it is not a member of (a synchronised line, a peloton)
+    in the viewport and the render, with its children and (a user's rig) its equipment: a
+    pattern, as a crowd file's ``template`` is, not a figure standing among the crowd it made
+    (Alt+H shows it again)."""
+    equipment = template.turning.rig.equipment if retarget_adapter.is_user_rig(template) \
+        else None
+    for obj in [template, *template.children_recursive,
+                *(equipment.all_objects if equipment is not None else ())]:
+        obj.hide_set(True)
+        obj.hide_render = True
+
+
 def new_crowd_collection(context, name: str = "Crowd"):
     coll = bpy.data.collections.new(name)
     coll[CROWD_TAG] = True

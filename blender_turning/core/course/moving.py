@@ -54,7 +54,9 @@ _ON_GRID = 1e-6
 class MovingBodies:
     """``foot[j, k]`` and ``cm[j, k]`` (shape ``(n_bodies, n, 2)``, m): body ``j``'s foot and CM
     ground point at ``t = (m0 + k) dt``; NaN where body ``j`` is not in the shot.
-    ``clearance``: the distance kept from every body, m.  ``log``: when a list, every
+    ``clearance``: the distance kept from every body, m: one number, or one per body (shape
+    ``(n_bodies,)``: a pair that starts closer than a crowd's clearance keeps less,
+    ``crowd/priority.py``).  ``log``: when a list, every
     :meth:`near` appends ``(x, y, radius, t_lo, t_hi)`` of its query to it (the region a
     figure's searches looked at: ``crowd/runner.py``)."""
 
@@ -63,7 +65,7 @@ class MovingBodies:
     m0: int
     foot: np.ndarray
     cm: np.ndarray
-    clearance: float = 0.0
+    clearance: float | np.ndarray = 0.0
     log: list | None = None
 
     @classmethod
@@ -72,15 +74,20 @@ class MovingBodies:
         """``tracks``: ``(name, trajectory, l)`` triples (``l``: the body's CM height, m;
         trajectories without samples are left out).  Sampled at ``m dt`` on a clock reading
         ``t - shift`` (``shift``: a planning figure's time offset, to put the bodies on its own
-        clock)."""
+        clock).  ``clearance``: one number, or one per track."""
         if not (dt > 0 and math.isfinite(dt)):
             raise ValueError(f"dt = {dt!r} is outside the allowed range (0, inf)")
-        if not (clearance >= 0 and math.isfinite(clearance)):
+        tracks = list(tracks)
+        cl = np.asarray(clearance, float)
+        if cl.ndim and cl.shape != (len(tracks),):
+            raise ValueError(f"clearance: {cl.shape[0]} values for {len(tracks)} tracks")
+        if not (np.all(cl >= 0) and np.all(np.isfinite(cl))):
             raise ValueError(f"clearance = {clearance!r} is outside the allowed range [0, inf)")
-        tracks = [(n, tr, l) for n, tr, l in tracks if tr is not None and len(tr)]
+        keep = [tr is not None and len(tr) for _, tr, _ in tracks]
+        tracks = [t for t, k in zip(tracks, keep) if k]
+        cl = cl[np.array(keep, bool)] if cl.ndim else float(cl)
         if not tracks:
-            return cls((), float(dt), 0, np.zeros((0, 1, 2)), np.zeros((0, 1, 2)),
-                       float(clearance), log)
+            return cls((), float(dt), 0, np.zeros((0, 1, 2)), np.zeros((0, 1, 2)), cl, log)
         times = [np.asarray(tr.t, float) - shift for _, tr, _ in tracks]
         m0 = int(math.floor(min(float(t[0]) for t in times) / dt + 1e-9))
         m1 = int(math.ceil(max(float(t[-1]) for t in times) / dt - 1e-9))
@@ -94,8 +101,11 @@ class MovingBodies:
             foot[j, :, 0], foot[j, :, 1] = x, y
             side = l * np.sin(lean)                          # to the left of the heading
             cm[j, :, 0], cm[j, :, 1] = x - side * np.sin(head), y + side * np.cos(head)
-        return cls(tuple(n for n, _, _ in tracks), float(dt), m0, foot, cm, float(clearance),
-                   log)
+        return cls(tuple(n for n, _, _ in tracks), float(dt), m0, foot, cm, cl, log)
+
+    def clearances(self) -> np.ndarray:
+        """The clearance kept from each body, m, shape ``(n_bodies,)``."""
+        return np.broadcast_to(np.asarray(self.clearance, float), (len(self.names),))
 
     @property
     def t0(self) -> float:
@@ -132,7 +142,7 @@ class MovingBodies:
             lo = np.minimum(lo[:, 1:], lo[:, :-1])
             hi = np.maximum(hi[:, 1:], hi[:, :-1])
         c = np.asarray(center, float)
-        r = radius + self.clearance
+        r = (radius + self.clearances())[:, None, None]
         return np.any(np.all((lo <= c + r) & (hi >= c - r), axis=2), axis=1)
 
     def near(self, center, radius: float, t_lo: float | None = None,
@@ -144,8 +154,9 @@ class MovingBodies:
                              -math.inf if t_lo is None else float(t_lo),
                              math.inf if t_hi is None else float(t_hi)))
         keep = self._seen(center, radius, t_lo, t_hi)
+        cl = self.clearance if np.ndim(self.clearance) == 0 else self.clearance[keep]
         return replace(self, names=tuple(n for n, k in zip(self.names, keep) if k),
-                       foot=self.foot[keep], cm=self.cm[keep])
+                       foot=self.foot[keep], cm=self.cm[keep], clearance=cl)
 
     def seen_by(self, queries) -> np.ndarray:
         """Which bodies any of ``queries`` (rows ``(x, y, radius, t_lo, t_hi)`` of a
@@ -183,8 +194,9 @@ class MovingBodies:
         theirs = np.concatenate([self.foot[:, a:b], self.cm[:, a:b]], axis=1)
         body = np.asarray(body, float)
         mine = np.concatenate([foot.reshape(2, -1), body.reshape(2, -1)], axis=1)
-        near = np.all((np.fmin.reduce(theirs, axis=1) <= mine.max(axis=1) + self.clearance) &
-                      (np.fmax.reduce(theirs, axis=1) >= mine.min(axis=1) - self.clearance),
+        cl = self.clearances()[:, None]
+        near = np.all((np.fmin.reduce(theirs, axis=1) <= mine.max(axis=1) + cl) &
+                      (np.fmax.reduce(theirs, axis=1) >= mine.min(axis=1) - cl),
                       axis=1)                            # all NaN (absent): False
         if not near.any():
             return np.zeros(m, bool)
@@ -198,24 +210,27 @@ class MovingBodies:
         F, C = self.foot[near], self.cm[near]
         R0, R1 = F[:, kk.ravel()], F[:, kk.ravel() + 1]                     # (B, S m, 2)
         S0, S1 = C[:, kk.ravel()], C[:, kk.ravel() + 1]
-        cl = self.clearance
+        cl = cl[near]                                     # (B, 1): each body's clearance
         mine = np.stack([P0, P1, Q0, Q1])
-        lo, hi = mine.min(axis=0) - cl, mine.max(axis=0) + cl
+        lo, hi = mine.min(axis=0), mine.max(axis=0)
         theirs = np.stack([R0, R1, S0, S1])
-        box = np.all((theirs.min(axis=0) <= hi) & (theirs.max(axis=0) >= lo), axis=2)
+        box = np.all((theirs.min(axis=0) <= hi + cl[..., None]) &
+                     (theirs.max(axis=0) >= lo - cl[..., None]), axis=2)
         j, i = np.nonzero(box & inside.ravel()[None, :])
         if len(i):
             hit[i[_pair_collides(P0[i], P1[i], Q0[i], Q1[i], R0[j, i], R1[j, i], S0[j, i],
-                                 S1[j, i], cl)]] = True
+                                 S1[j, i], cl[j, 0])]] = True
         return hit.reshape(steps, m).any(axis=0)
 
 
 def _pair_collides(P0, P1, Q0, Q1, R0, R1, S0, S1, cl) -> np.ndarray:
-    """The rule of the module doc for pairs of moving segments ``P Q`` and ``R S`` (rows)."""
+    """The rule of the module doc for pairs of moving segments ``P Q`` and ``R S`` (rows),
+    each pair keeping its clearance ``cl`` (one number or one per row)."""
     dP, dQ, dR, dS = P1 - P0, Q1 - Q0, R1 - R0, S1 - S0
     L = np.max([np.hypot(*(a - b).T) for a in (dP, dQ) for b in (dR, dS)], axis=0)
     d0 = segment_distance(P0, Q0, R0, S0)
     d1 = segment_distance(P1, Q1, R1, S1)
+    cl = np.broadcast_to(cl, d0.shape)
     hit = (d0 <= cl) | (d1 <= cl)
     # Parts of steps still in doubt: (pair, a, b, d(a), d(b)).
     idx = np.flatnonzero(~hit & (0.5 * (d0 + d1 - L) <= cl))
@@ -228,10 +243,11 @@ def _pair_collides(P0, P1, Q0, Q1, R0, R1, S0, S1, cl) -> np.ndarray:
         w = mid[:, None]
         dm = segment_distance(P0[idx] + w * dP[idx], Q0[idx] + w * dQ[idx],
                               R0[idx] + w * dR[idx], S0[idx] + w * dS[idx])
-        hit[idx[dm <= cl]] = True
+        c = cl[idx]
+        hit[idx[dm <= c]] = True
         half = 0.5 * (b - a) * L[idx]
-        left = ~hit[idx] & (0.5 * (da + dm - half) <= cl)
-        right = ~hit[idx] & (0.5 * (dm + db - half) <= cl)
+        left = ~hit[idx] & (0.5 * (da + dm - half) <= c)
+        right = ~hit[idx] & (0.5 * (dm + db - half) <= c)
         idx = np.concatenate([idx[left], idx[right]])
         a, b = np.concatenate([a[left], mid[right]]), np.concatenate([mid[left], b[right]])
         da, db = np.concatenate([da[left], dm[right]]), np.concatenate([dm[left], db[right]])
