@@ -272,7 +272,9 @@ class SkierMapping(Mapping):
             moving = plan.held | plan.after
             to = aim[moving] - grip[moving]
             axis[moving] = to / norm(to, keepdims=True)
-            axis = _out_of_snow(place, grip, axis, length, o.plant_scale, plan.hole)
+            free_tip = ~plan.planted          # a planted tip is in its hole, on the snow
+            axis[free_tip] = _out_of_snow(place, grip[free_tip], axis[free_tip], length,
+                                          o.plant_scale, plan.hole[free_tip], free_tip)
             b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
 
 
@@ -412,21 +414,22 @@ def _ground(place, P, idx):
 
 def _clearance(place, P, idx, hole):
     """How high world points ``P`` (m, 3) of frames ``idx`` must be: the snow under them, plus
-    ``STEEP`` times their horizontal distance from ``hole`` ((m, 3) world, NaN rows: none), at
-    most ``RISE``."""
+    ``STEEP`` times their horizontal distance from ``hole`` ((m, 3) world, NaN rows: none;
+    infinite: ``RISE`` everywhere), at most ``RISE``."""
     r = np.nan_to_num(np.hypot(P[:, 0] - hole[:, 0], P[:, 1] - hole[:, 1]), nan=0.0)
     return _ground(place, P, idx) + np.minimum(STEEP * r, RISE)
 
 
-def _out_of_snow(place, grip, axis, length, k, hole):
-    """The pole's directions ``axis`` (n, 3) from its grips ``grip`` (armature space, the
-    built-in's size; the figure shown ``k`` times it) turned up about the grip wherever the tip
-    would be lower than :func:`_clearance` (``hole`` (n, 3) world, NaN rows: none) allows: the
+def _out_of_snow(place, grip, axis, length, k, hole, frames):
+    """The pole's directions ``axis`` (m, 3) of ``frames`` (a mask or indices) from its grips
+    ``grip`` (armature space, the built-in's size; the figure shown ``k`` times it) turned up
+    about the grip wherever the tip would be lower than :func:`_clearance` (``hole`` (m, 3)
+    world, NaN rows: none) allows: the
     tip keeps its bearing from the grip and rises on the sphere of the pole's length (a fixed
     point of a few passes; a grip too low for any turn to clear it points the pole up)."""
-    idx = np.arange(len(grip))
+    idx = np.arange(len(place.origin))[frames]
     g = _world(place, grip, idx, k)
-    a = np.einsum("nij,nj->ni", place.R, axis)
+    a = np.einsum("nij,nj->ni", place.R[idx], axis)
     L = k * length
     for _ in range(4):
         need = _clearance(place, g + L * a, idx, hole)
@@ -436,7 +439,7 @@ def _out_of_snow(place, grip, axis, length, k, hole):
         z = np.clip((need[low] - g[low, 2]) / L, -1.0, 1.0)
         flat = a[low, :2] / np.maximum(np.hypot(a[low, 0], a[low, 1]), 1e-12)[:, None]
         a[low] = np.column_stack([flat * np.sqrt(1.0 - z * z)[:, None], z])
-    return np.einsum("nji,nj->ni", place.R, a)
+    return np.einsum("nji,nj->ni", place.R[idx], a)
 
 
 def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at, hole,
@@ -479,6 +482,7 @@ class _Plants:
     tip_at: np.ndarray    # (n, 3) armature-space hole in the snow while held and lifting off
     grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
     hole: np.ndarray      # (n, 3) world: the hole coming down, held and lifting off; NaN else
+    planted: np.ndarray   # (n,) bool: the tip in its hole (held, not coming down to it)
 
 
 def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
@@ -501,7 +505,7 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
     edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
     starts, ends = np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]     # runs [i0, i1)
     if not len(starts):
-        return _Plants(held, after, u, tip_at, grip_at, hole)
+        return _Plants(held, after, u, tip_at, grip_at, hole, held.copy())
     # Every run's frame by frame, all runs at once (the plan below does not change them).
     # The holes: where the swinging tips meet the snow.
     flat = tips[starts].copy()
@@ -517,19 +521,23 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
                               shoulder[idx], *reach)
     grips = local + length * to
     offs = np.concatenate([[0], np.cumsum(ends - starts)])
+    planted = np.zeros(n, bool)
     for P, i0, a, e in zip(holes, starts, offs[:-1], offs[1:]):
+        # The whole swing forward keeps clear of the snow but over its hole (a rise on the way
+        # would catch the tip), the last part of it comes to rest there; a swing to a plant not
+        # made keeps RISE clear of the snow throughout (an infinitely far hole).
+        aim = P if ok[a] else np.inf
+        j = i0 - 1
+        while j >= 0 and d[i0] - swing - hold < d[j] <= d[j + 1] and not after[j]:
+            j -= 1
+        hole[j + 1:i0] = aim
         if ok[a]:
-            # The whole swing forward keeps clear of the snow but over its hole (a rise on the
-            # way would catch the tip), the last part of it comes to rest there.
-            j = i0 - 1
-            while j >= 0 and d[i0] - swing - hold < d[j] <= d[j + 1] and not after[j]:
-                j -= 1
-            hole[j + 1:i0] = P
             _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after,
                       tip_at, grip_at, hole, scale)
             k = e - a if ok[a:e].all() else int(np.argmin(ok[a:e]))
             idx, grip = np.arange(i0, i0 + k), grips[a:a + k]
             held[idx], tip_at[idx], grip_at[idx], hole[idx] = True, local[a:a + k], grip, P
+            planted[idx] = True
             r = idx[-1]
         else:
             # Not made: the swing forward ends where its tip is the frame before the plant
@@ -542,12 +550,11 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
         j = r + 1 + (int(stop[0]) if len(stop) else len(dd))
         u[r + 1:j] = smoothstep(dd[:j - r - 1] / swing)
         after[r + 1:j], grip_at[r + 1:j] = True, grip[-1]
-        if ok[a]:
-            hole[r + 1:j] = P
+        hole[i0:j][np.isnan(hole[i0:j, 0])] = aim
         # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
         # rises off the snow along that line) while it swings free.
         tip_at[r + 1:j] = _local(place, P, np.arange(r + 1, j), scale)
-    return _Plants(held, after, u, tip_at, grip_at, hole)
+    return _Plants(held, after, u, tip_at, grip_at, hole, planted)
 
 
 #: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
