@@ -1,10 +1,9 @@
 """The Blender tests' mountain: a factory scene with the add-on registered, its frame range set to
-``seconds`` at ``fps``, and the rolling ``ski_slope`` (seed 3 unless told, 1 m cells) as a Ground mesh named
+``seconds`` at ``fps``, and the rolling ``ski_slope`` (seed 3, 1 m cells) as a Ground mesh named
 "Mountain".  A module fixture yields from :func:`mountain_scene`: ``(scene, mountain object)``."""
 
 
-def mountain_scene(seconds: float, fps: int, length: float = 160.0, width: float = 160.0,
-                   seed: int = 3):
+def mountain_scene(seconds: float, fps: int, length: float = 160.0, width: float = 160.0):
     import bpy
 
     from blender_turning import blender as addon
@@ -15,7 +14,7 @@ def mountain_scene(seconds: float, fps: int, length: float = 160.0, width: float
     addon.register()
     sc = bpy.context.scene
     sc.render.fps, sc.frame_start, sc.frame_end = fps, 1, 1 + int(seconds * fps)
-    mountain = ski_slope(length=length, width=width, cell=1.0, seed=seed)
+    mountain = ski_slope(length=length, width=width, cell=1.0, seed=3)
     obj = bpy.data.objects.new("Mountain", mesh_from_height_field(bpy, mountain, "Mountain"))
     sc.collection.objects.link(obj)
     yield sc, obj

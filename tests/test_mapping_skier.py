@@ -279,22 +279,26 @@ def _plants(tip, grip, ground):
     step_tip, step_grip = (np.linalg.norm(np.diff(p, axis=0), axis=1) for p in (tip, grip))
     excess = max((step_tip[b - 1:b + 12] - step_grip[b - 1:b + 12]).max()
                  for a, b in runs if b < len(tip))
-    return travel, under, excess, len(runs)
+    return travel, under, excess, runs
 
 
 @pytest.mark.parametrize("sport", ["skier", "telemark"])
-@pytest.mark.parametrize("period, theta", [(1.2, 15.0), (1.0, 12.0)])
+@pytest.mark.parametrize("period, theta", [(1.2, 15.0), (1.0, 12.0), (0.8, 8.0), (0.75, 6.0)])
 @pytest.mark.parametrize("bumpy", [False, True])
 def test_plants_at_a_quick_rhythm_stay_put_and_lift_out_smoothly(sport, period, theta, bumpy):
-    """Quick turns (1.0-1.2 s, 12-15 phase deg a frame at 24 fps, as the Ground mesh's slopes
+    """Quick turns (0.75-1.2 s, 12-24 phase deg a frame at 24 fps, as the Ground mesh's slopes
     give at 12 m/s) leave a plant's window (+-20 deg) one or two frames: the hole is where the
-    swing forward meets the snow even on a frame past the plant phase, the tip comes down onto
+    swing forward meets the snow even on a frame past the plant phase (ahead of the foot),
+    the tip comes down onto
     it and lifts out of it steeply (a tip within 10 cm of the snow is over its hole), a plant
     the arm cannot hold from its touch-down is not made (the pole swings back from where it
     got to), and no tip is pushed under the snow by a grip the arm could not bring to it.
     Before: holes behind the figure (the trailing pole's), tips sliding 8-125 cm in contact,
     6-11 cm under the bumps, lifting out 26-111 cm a frame more than the hand.  Measured now:
-    travel <= 1 mm, nothing under, excess <= 4.4 cm (the pole's own turn about the grip)."""
+    travel <= 1 mm, nothing under, excess <= 4.4 cm (the pole's own turn about the grip) at
+    1.0-1.2 s; below 1 s the swing forward itself, 70 deg of phase, comes within the half-second
+    after a lift-out and moves the tip 36-103 cm a frame more than the hand: not checked there
+    (docs/animator-guide.md)."""
     traj = run(sport, period=period, theta_max=theta)
 
     def ground(x, y):
@@ -307,8 +311,15 @@ def test_plants_at_a_quick_rhythm_stay_put_and_lift_out_smoothly(sport, period, 
     for s in ("L", "R"):
         tip = world_points(track, sk.carry(P, f"pole.{s}", spec.bone(f"pole.{s}").tail))
         grip = world_points(track, P[f"pole.{s}"][:, :3, 3])
-        travel, under, excess, plants = _plants(tip, grip, ground)
-        assert plants >= 0.4 * traj.t[-1] / period, (s, plants)   # most turns plant
+        travel, under, excess, runs = _plants(tip, grip, ground)
+        assert len(runs) >= 0.4 * traj.t[-1] / period, (s, runs)   # most turns plant
+        # ... ahead of the foot as it touches down (measured: 0.19-0.93 m; a hole taken from
+        # the trailing pole's tip is 0.4 m behind it)
+        touch = np.array([a for a, _ in runs])
+        heading = track.rotation[touch, 2] + math.pi / 2
+        ahead = ((tip[touch, 0] - track.location[touch, 0]) * np.cos(heading)
+                 + (tip[touch, 1] - track.location[touch, 1]) * np.sin(heading))
+        assert ahead.min() > 0.0, (s, ahead.min())
         assert travel < 0.03, (s, travel)
         assert under > -1e-3, (s, under)
-        assert excess < 0.08, (s, excess)
+        assert period < 1.0 or excess < 0.08, (s, excess)
