@@ -114,9 +114,10 @@ def baked_poles(scene, sport, on_ground):
     return poles(fig, frames), surface(mountain if on_ground else None)
 
 
-def check_plants(tracks, h, release=True):
+def check_plants(tracks, h, after=12):
     """Every plant of ``tracks`` (:func:`poles`) on the snow ``h`` (:func:`surface`) stays in its
-    hole, lifts out smoothly, and no part of a pole is ever under the snow."""
+    hole, lifts out smoothly (over ``after`` frames from the last in contact), and no part of a
+    pole is ever under the snow."""
     for s, (grip, tip) in tracks.items():
         height = tip[:, 2] - h(tip[:, :2])
         runs = [(a, b) for a, b in contact_runs(height) if a > 0]
@@ -138,15 +139,13 @@ def check_plants(tracks, h, release=True):
         # cm the users' rigs on it); a tip snatched out of its hole jumped 0.6-0.7 m more than
         # the hand, and one following a chest jerked 30 deg a frame by the mesh's creases
         # (mapping/sports/snow.py) 8.9-10.8 cm.
-        if not release:
-            continue
         step_tip = np.linalg.norm(np.diff(tip, axis=0), axis=1)
         step_hand = np.linalg.norm(np.diff(grip, axis=0), axis=1)
         for a, b in runs:
             if b == len(tip):                          # still planted at the last frame
                 continue
-            after = slice(b - 1, min(b + 12, len(step_tip)))     # the half-second after
-            excess = (step_tip[after] - step_hand[after]).max()
+            out = slice(b - 1, min(b + after, len(step_tip)))    # 12: the half-second after
+            excess = (step_tip[out] - step_hand[out]).max()
             assert excess < 0.08, (s, b, excess)
 
 
@@ -190,6 +189,8 @@ def test_plants_stay_put_and_out_of_the_snow_on_other_mountains(other_mountain, 
     window is one or two frames.  Before, holes were taken behind the figure (the trailing
     pole's) and tips slid 65-88 cm in contact, went 8.6 cm under, or were pushed into the snow
     by a grip the arm could not bring to its place; measured now: at most 5 mm of travel,
-    nothing under.  (The tip's excess over the hand in the half-second after a lift-out is
-    8.1-13.2 cm here, from the swings of a quick rhythm: not checked, docs/animator-guide.md.)"""
-    check_plants(*baked_poles(other_mountain, sport, True), release=False)
+    nothing under, and lifting out (the 3 frames from the last in contact, the tip 20-60 cm up
+    by then) the tip moves at most 4.8 cm a frame more than the hand (the skier, the telemark,
+    Rigify and Mixamo on seeds 3, 7, 11).  Later in the half-second after, the trailing swing of
+    a quick rhythm moves it up to 13.2 cm more: not checked here (docs/own-rigs.md)."""
+    check_plants(*baked_poles(other_mountain, sport, True), after=2)
