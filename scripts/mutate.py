@@ -572,7 +572,7 @@ MUTANTS = [
     # -- poles that plant (Section 7) -------------------------------------------------------------
     M("pole_lands_at_speed", "mapping/sports/skier.py",
       "            _approach(place, d, swing * APPROACH,",
-      "            0 and _approach(place, d, swing * APPROACH,", POLES, "bake"),
+      "            0 and _approach(place, d, swing * APPROACH,", SKIER_MAPPING, "mapping"),
     M("pole_comes_down_skimming_the_snow", "mapping/sports/skier.py",
       "STEEP, RISE = 1.0, 0.10", "STEEP, RISE = 0.0, 0.10", SKIER_MAPPING, "mapping"),
     M("pole_hole_from_the_trailing_swing", "mapping/sports/skier.py",
