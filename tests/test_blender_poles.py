@@ -114,9 +114,10 @@ def baked_poles(scene, sport, on_ground):
     return poles(fig, frames), surface(mountain if on_ground else None)
 
 
-def check_plants(tracks, h):
+def check_plants(tracks, h, after=12):
     """Every plant of ``tracks`` (:func:`poles`) on the snow ``h`` (:func:`surface`) stays in its
-    hole, lifts out smoothly, and no part of a pole is ever under the snow."""
+    hole, lifts out smoothly (over ``after`` frames from the last in contact), and no part of a
+    pole is ever under the snow."""
     for s, (grip, tip) in tracks.items():
         height = tip[:, 2] - h(tip[:, :2])
         runs = [(a, b) for a, b in contact_runs(height) if a > 0]
@@ -143,8 +144,8 @@ def check_plants(tracks, h):
         for a, b in runs:
             if b == len(tip):                          # still planted at the last frame
                 continue
-            after = slice(b - 1, min(b + 12, len(step_tip)))     # the half-second after
-            excess = (step_tip[after] - step_hand[after]).max()
+            out = slice(b - 1, min(b + after, len(step_tip)))    # 12: the half-second after
+            excess = (step_tip[out] - step_hand[out]).max()
             assert excess < 0.08, (s, b, excess)
 
 
@@ -165,3 +166,31 @@ def test_a_users_rig_keeps_a_planted_tip_in_its_hole(scene, kind, on_ground):
 def test_planted_tips_stay_put_lift_out_smoothly_and_stay_out_of_the_snow(scene, sport,
                                                                           on_ground):
     check_plants(*baked_poles(scene, sport, on_ground))
+
+
+@pytest.fixture(params=[7, 11])
+def other_mountain(scene, request):
+    """The module's scene with the mountain's mesh made from another seed of ``ski_slope``."""
+    from blender_turning.blender.scene.ground import mesh_from_height_field
+    from blender_turning.core.ground.terrain_gen import ski_slope
+
+    sc, mountain = scene
+    rest = mountain.data
+    mountain.data = mesh_from_height_field(
+        bpy, ski_slope(length=160.0, width=160.0, cell=1.0, seed=request.param),
+        f"Mountain {request.param}")
+    yield sc, mountain
+    mountain.data = rest
+
+
+@pytest.mark.parametrize("sport", ["SKIER", "MIXAMO"])
+def test_plants_stay_put_and_out_of_the_snow_on_other_mountains(other_mountain, sport):
+    """Other seeds of the mountain turn the figures quicker (15-26 phase deg a frame): a plant's
+    window is one or two frames.  Before, holes were taken behind the figure (the trailing
+    pole's) and tips slid 65-88 cm in contact, went 8.6 cm under, or were pushed into the snow
+    by a grip the arm could not bring to its place; measured now: at most 5 mm of travel,
+    nothing under, and lifting out (the 3 frames from the last in contact, the tip 20-60 cm up
+    by then) the tip moves at most 4.8 cm a frame more than the hand (the skier, the telemark,
+    Rigify and Mixamo on seeds 3, 7, 11).  Later in the half-second after, the trailing swing of
+    a quick rhythm moves it up to 13.2 cm more: not checked here (docs/own-rigs.md)."""
+    check_plants(*baked_poles(other_mountain, sport, True), after=2)

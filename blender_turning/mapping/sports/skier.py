@@ -319,9 +319,11 @@ class SkierMapping(Mapping):
             grip, wrist = arm.reach(hand)
             offset = grip - wrist
             free = hand + offset
+            # The holes and touch-downs from the swing forward to the plant (a frame past the
+            # plant phase at a quick rhythm has the free pole trailing already).
             plan = _plan_plants(place, d, o.pole_hold, o.pole_swing,
-                                grip + length * _free_axis(grip, *swing), free, shoulder + offset,
-                                length, reach, o.plant_scale)
+                                grip + length * _free_axis(grip, w, *swing[1:]), free,
+                                shoulder + offset, length, reach, o.plant_scale)
             sides.append((arm, plan, free, offset, length, swing, elbow_dir, pole))
         # Both arms aim in one loop (each frame and side is solved on its own).
         aimed = _aim(*zip(*(side[:5] for side in sides)))
@@ -338,10 +340,9 @@ class SkierMapping(Mapping):
             moving = plan.held | plan.after
             to = aim[moving] - grip[moving]
             axis[moving] = to / norm(to, keepdims=True)
-            # Where that would still dip the tip into the snow, it stays on the line to the hole.
-            dip = plan.after & (grip[:, 2] + length * axis[:, 2] < 0.0)
-            to = plan.tip_at[dip] - grip[dip]
-            axis[dip] = to / norm(to, keepdims=True)
+            free_tip = ~plan.planted          # a planted tip is in its hole, on the snow
+            axis[free_tip] = _out_of_snow(place, grip[free_tip], axis[free_tip], length,
+                                          o.plant_scale, plan.hole[free_tip], free_tip)
             b.set_pose(pole, frame_from_yx(axis, np.cross(axis, up)), grip)
 
 
@@ -449,6 +450,12 @@ class _Arm:
 #: The last part of the swing to a plant, as a fraction of ``pole_swing``: the tip comes to rest
 #: in its hole over it (world space), instead of landing at the figure's speed and sliding.
 APPROACH = 0.5
+#: A tip coming down to its hole or lifting out of it is at least ``STEEP`` times its horizontal
+#: distance from the hole above the snow, up to ``RISE`` (m) (1: within 45 deg of straight down
+#: onto it): within ``RISE`` of the snow it is over its hole, so it goes in and comes out there,
+#: not skimming the snow at the figure's speed (a quick rhythm gives the swing in and the
+#: lift-off 1-3 frames).
+STEEP, RISE = 1.0, 0.10
 
 
 def _world(place, p, idx, k):
@@ -464,11 +471,51 @@ def _local(place, P, idx, k):
     return place.to_local(place.origin[idx] + (P - place.origin[idx]) / k, idx)
 
 
-def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at,
+def _ground(place, P, idx):
+    """The height (m,) of the snow under world points ``P`` (m, 3) of frames ``idx``: the Ground
+    mesh's, or without one the plane under the foot (through the origin, normal to its +Z)."""
+    if place.surface is not None:
+        return np.asarray(place.surface(P[:, 0], P[:, 1]), float)
+    o, nrm = place.origin[idx], place.R[idx][:, :, 2]
+    return o[:, 2] - (nrm[:, 0] * (P[:, 0] - o[:, 0]) + nrm[:, 1] * (P[:, 1] - o[:, 1])) / nrm[:, 2]
+
+
+def _clearance(place, P, idx, hole):
+    """How high world points ``P`` (m, 3) of frames ``idx`` must be: the snow under them, plus
+    ``STEEP`` times their horizontal distance from ``hole`` ((m, 3) world, NaN rows: none;
+    infinite: ``RISE`` everywhere), at most ``RISE``."""
+    r = np.nan_to_num(np.hypot(P[:, 0] - hole[:, 0], P[:, 1] - hole[:, 1]), nan=0.0)
+    return _ground(place, P, idx) + np.minimum(STEEP * r, RISE)
+
+
+def _out_of_snow(place, grip, axis, length, k, hole, frames):
+    """The pole's directions ``axis`` (m, 3) of ``frames`` (a mask or indices) from its grips
+    ``grip`` (armature space, the built-in's size; the figure shown ``k`` times it) turned up
+    about the grip wherever the tip would be lower than :func:`_clearance` (``hole`` (m, 3)
+    world, NaN rows: none) allows: the
+    tip keeps its bearing from the grip and rises on the sphere of the pole's length (a fixed
+    point of a few passes; a grip too low for any turn to clear it points the pole up)."""
+    idx = np.arange(len(place.origin))[frames]
+    g = _world(place, grip, idx, k)
+    a = np.einsum("nij,nj->ni", place.R[idx], axis)
+    L = k * length
+    for _ in range(4):
+        need = _clearance(place, g + L * a, idx, hole)
+        low = g[:, 2] + L * a[:, 2] < need - 1e-9
+        if not low.any():
+            break
+        z = np.clip((need[low] - g[low, 2]) / L, -1.0, 1.0)
+        flat = a[low, :2] / np.maximum(np.hypot(a[low, 0], a[low, 1]), 1e-12)[:, None]
+        a[low] = np.column_stack([flat * np.sqrt(1.0 - z * z)[:, None], z])
+    return np.einsum("nji,nj->ni", place.R[idx], a)
+
+
+def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at, hole,
               k=1.0) -> None:
     """The frames before the plant at ``i0`` within ``phase`` of it: the tip goes from the free
-    swing's to the hole ``P`` (world) along a smoothstep, so that it arrives at rest; the grip is
-    the pole's length from it towards the free swing's grip.  Frames of an earlier plant stay."""
+    swing's to the hole ``P`` (world) along a smoothstep, so that it arrives at rest, and comes
+    down onto the hole (:func:`_clearance`); the grip is the pole's length from it towards the
+    free swing's grip.  Frames of an earlier plant stay."""
     j = i0 - 1
     while j >= 0 and d[i0] - phase < d[j] <= d[j + 1] and not (held[j] or after[j]):
         j -= 1
@@ -477,16 +524,9 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
         return
     s = smoothstep((d[idx] - (d[i0] - phase)) / phase)[:, None]
     world = (1.0 - s) * _world(place, tips[idx], idx, k) + s * P
+    hole[idx] = P
+    world[:, 2] = np.maximum(world[:, 2], _clearance(place, world, idx, hole[idx]))
     local = _local(place, world, idx, k)
-    local[:, 2] = np.maximum(local[:, 2], 0.0)      # on or above the snow under the foot
-    if place.surface is not None:                   # ... and above the Ground mesh under the tip
-        # by (1 - s) of the free swing's height over the snow under the foot: it comes down
-        # on the snow at its hole, not on a rise on the way there (and slid on to the hole).
-        above = k * np.maximum(tips[idx, 2], 0.0)
-        world = _world(place, local, idx, k)
-        world[:, 2] = np.maximum(world[:, 2], place.surface(world[:, 0], world[:, 1])
-                                 + (1.0 - s[:, 0]) * above)
-        local = _local(place, world, idx, k)
     away = free[idx] - local
     held[idx], tip_at[idx] = True, local
     grip_at[idx] = local + length * away / norm(away, keepdims=True)
@@ -504,11 +544,13 @@ def on_snow(place, p):
 
 @dataclass
 class _Plants:
-    held: np.ndarray      # (n,) bool: the tip is in the snow
+    held: np.ndarray      # (n,) bool: the tip is in the snow (or coming down to its hole)
     after: np.ndarray     # (n,) bool: lifting off after a plant
     u: np.ndarray         # (n,) 0 at lift-off -> 1 when the pole swings free again
     tip_at: np.ndarray    # (n, 3) armature-space hole in the snow while held and lifting off
     grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
+    hole: np.ndarray      # (n, 3) world: the hole coming down, held and lifting off; NaN else
+    planted: np.ndarray   # (n,) bool: the tip in its hole (held, not coming down to it)
 
 
 def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
@@ -516,19 +558,22 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
     """Where each plant goes into the snow and how long it can stay (see arms_and_poles); the
     holes stay put in the world of the figure ``scale`` times the built-in's size.
 
-    ``d`` is the signed phase from the plant, ``tips`` and ``free`` the free swing's tip and grip
-    (armature space), ``shoulder`` the shoulder shifted by the grip's offset from the wrist, so
-    that ``reach[0] <= |grip - shoulder| <= reach[1]`` says the arm holds it."""
+    ``d`` is the signed phase from the plant, ``tips`` and ``free`` the swing forward's tip and
+    the free swing's grip (armature space), ``shoulder`` the shoulder shifted by the grip's
+    offset from the wrist, so that ``reach[0] <= |grip - shoulder| <= reach[1]`` says the arm
+    holds it.  A plant whose hole the arm cannot hold from the touch-down on is not made: the
+    pole swings on above the snow."""
     n = len(d)
     held, after = np.zeros(n, bool), np.zeros(n, bool)
     u = np.ones(n)
     tip_at, grip_at = tips.copy(), free.copy()
+    hole = np.full((n, 3), np.nan)
     # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
     inside = (np.abs(d) <= hold) | ((d < 0) & (d > -hold - swing) & (tips[:, 2] < 1e-3))
     edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
     starts, ends = np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]     # runs [i0, i1)
     if not len(starts):
-        return _Plants(held, after, u, tip_at, grip_at)
+        return _Plants(held, after, u, tip_at, grip_at, hole, held.copy())
     # Every run's frame by frame, all runs at once (the plan below does not change them).
     # The holes: where the swinging tips meet the snow.
     flat = tips[starts].copy()
@@ -544,23 +589,40 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
                               shoulder[idx], *reach)
     grips = local + length * to
     offs = np.concatenate([[0], np.cumsum(ends - starts)])
+    planted = np.zeros(n, bool)
     for P, i0, a, e in zip(holes, starts, offs[:-1], offs[1:]):
-        _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after, tip_at,
-                  grip_at, scale)
-        k = e - a if ok[a:e].all() else max(int(np.argmin(ok[a:e])), 1)
-        idx, grip = np.arange(i0, i0 + k), grips[a:a + k]
-        held[idx], tip_at[idx], grip_at[idx] = True, local[a:a + k], grip
+        # The whole swing forward keeps clear of the snow but over its hole (a rise on the way
+        # would catch the tip), the last part of it comes to rest there; a swing to a plant not
+        # made keeps RISE clear of the snow throughout (an infinitely far hole).
+        aim = P if ok[a] else np.inf
+        j = i0 - 1
+        while j >= 0 and d[i0] - swing - hold < d[j] <= d[j + 1] and not after[j]:
+            j -= 1
+        hole[j + 1:i0] = aim
+        if ok[a]:
+            _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after,
+                      tip_at, grip_at, hole, scale)
+            k = e - a if ok[a:e].all() else int(np.argmin(ok[a:e]))
+            idx, grip = np.arange(i0, i0 + k), grips[a:a + k]
+            held[idx], tip_at[idx], grip_at[idx], hole[idx] = True, local[a:a + k], grip, P
+            planted[idx] = True
+            r = idx[-1]
+        else:
+            # Not made: the swing forward ends where its tip is the frame before the plant
+            # phase (above the snow), and swings back from there as from a hole in the air.
+            r = max(int(np.searchsorted(d[i0:e - a + i0] > 0.0, True)) + i0 - 1, 0)
+            P, grip = _world(place, tips[r:r + 1], np.array([r]), scale)[0], free[r:r + 1]
         # Lift off: from the last held pose to the free swing over `swing` of phase.
-        r = idx[-1]
         dd = d[r + 1:] - d[r]
         stop = np.nonzero(~((dd >= 0.0) & (dd < swing)))[0]
         j = r + 1 + (int(stop[0]) if len(stop) else len(dd))
         u[r + 1:j] = smoothstep(dd[:j - r - 1] / swing)
         after[r + 1:j], grip_at[r + 1:j] = True, grip[-1]
+        hole[i0:j][np.isnan(hole[i0:j, 0])] = aim
         # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
         # rises off the snow along that line) while it swings free.
         tip_at[r + 1:j] = _local(place, P, np.arange(r + 1, j), scale)
-    return _Plants(held, after, u, tip_at, grip_at)
+    return _Plants(held, after, u, tip_at, grip_at, hole, planted)
 
 
 #: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
