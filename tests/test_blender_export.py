@@ -450,26 +450,6 @@ def test_root_motion_on_a_rig_without_a_root_is_refused(scene):
     assert snapshot() == before, diff(before, snapshot())
 
 
-def test_root_motion_on_rigifys_root_control(scene):
-    """Rigify's ``root`` control carries the travel; the deforming bones (the ones a game
-    engine skins with) stay where the object-level bake puts them, as do the equipment."""
-    rig = rigify_rig("Rob")
-    activate(rig)
-    assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
-    deform = [i for i, pb in enumerate(rig.pose.bones) if pb.bone.use_deform]
-    gear = list(rig.turning.rig.equipment.objects)
-    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    want, want_gear = bone_world(rig)[:, deform], world(gear)
-    assert bpy.ops.turning.bake_turns(root_motion=True) == {"FINISHED"}
-    got = bone_world(rig)
-    assert np.ptp(np.array(world([rig]))[:, 0], axis=0).max() == 0.0
-    root = rig.pose.bones.find("root")
-    assert np.linalg.norm(got[-1, root, :3, 3] - got[0, root, :3, 3]) > 5.0
-    # float32 keys through Rigify's IK chains (measured 9.5e-6 m, the equipment 4.8e-6 m)
-    np.testing.assert_allclose(got[:, deform][..., :3, 3], want[..., :3, 3], atol=1e-4)
-    np.testing.assert_allclose(world(gear), want_gear, atol=1e-4)
-
-
 #: Open, shared or not: Blender's FBX exporter writes a strip's take from the strip's first frame
 #: as time 0, so a bake whose strip starts later (a follower waiting at the start: frames 7-30)
 #: comes back 6 frames early (1.8 m off, measured, also baked without Share Motion); glTF and
@@ -578,3 +558,26 @@ def test_a_user_rig_sharing_a_bake_exports_one_animation_with_its_equipment(scen
     reimport(path)
     pos, turn = off_by(world_matrices([bpy.data.objects[n] for n in names]), want)
     assert pos < 1e-5 and turn < 1e-5, (pos, turn)    # float32, as the equipment's test above
+
+# Last in the file: on bpy 4.2 the glTF and FBX exports and imports of the tests run after it in
+# the same process crashed (segfault, abort, a corrupt mesh read) in 9 of 23 full runs of this
+# file, also with the shared-motion export switched off (1 of those 6 runs); with this test last
+# or left out, 0 of 7.  Rigify stays enabled, its generated rig UI registered, after the reset.
+def test_root_motion_on_rigifys_root_control(scene):
+    """Rigify's ``root`` control carries the travel; the deforming bones (the ones a game
+    engine skins with) stay where the object-level bake puts them, as do the equipment."""
+    rig = rigify_rig("Rob")
+    activate(rig)
+    assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
+    deform = [i for i, pb in enumerate(rig.pose.bones) if pb.bone.use_deform]
+    gear = list(rig.turning.rig.equipment.objects)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    want, want_gear = bone_world(rig)[:, deform], world(gear)
+    assert bpy.ops.turning.bake_turns(root_motion=True) == {"FINISHED"}
+    got = bone_world(rig)
+    assert np.ptp(np.array(world([rig]))[:, 0], axis=0).max() == 0.0
+    root = rig.pose.bones.find("root")
+    assert np.linalg.norm(got[-1, root, :3, 3] - got[0, root, :3, 3]) > 5.0
+    # float32 keys through Rigify's IK chains (measured 9.5e-6 m, the equipment 4.8e-6 m)
+    np.testing.assert_allclose(got[:, deform][..., :3, 3], want[..., :3, 3], atol=1e-4)
+    np.testing.assert_allclose(world(gear), want_gear, atol=1e-4)
