@@ -524,6 +524,35 @@ def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, ro
 
 
 
+@pytest.mark.installed
+def test_export_fbx_with_tweaks_plays_a_late_bake_on_its_frames(scene, tmp_path):
+    """A figure whose own bake starts after the scene's first frame (a follower waiting at the
+    start, Share Motion off): Export FBX with Tweaks writes it on its frames (FBX writes a strip's
+    take from time 0; Blender's own FBX export brings it back 6 frames early, above)."""
+    lead = add("CYCLIST")
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
+                                     lateral=1.5, staging="WAIT") == {"FINISHED"}
+    fig = bpy.data.objects["Cyclist 1"]
+    for o in (lead, fig):
+        o.select_set(True)
+    assert bpy.ops.turning.bake_turns(share=False) == {"FINISHED"}
+    assert bake.shared_source(fig)[0] is None and bake.find_bake(fig)[1].frame_start == 7
+    want, bones = bone_world(fig), [pb.name for pb in fig.pose.bones]
+    path = str(tmp_path / "late.fbx")
+    bpy.ops.object.select_all(action="DESELECT")
+    for o in [fig, *fig.children_recursive]:
+        o.select_set(True)
+    from scene_snapshot import diff, snapshot
+    before = snapshot()
+    assert bpy.ops.turning.export_fbx(filepath=path, use_selection=True,
+                                      bake_anim_simplify_factor=0.0) == {"FINISHED"}
+    assert snapshot() == before, diff(before, snapshot())
+    reimport(path)
+    arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+    pos, turn = off_by(bone_world(arm)[:, [arm.pose.bones.find(b) for b in bones]], want)
+    assert pos < 1e-5 and turn < 1e-4, (pos, turn)        # float32 bones, as above
+
+
 def gltf_animations(path) -> list:
     """The names of the animations in a ``.glb`` file (its JSON chunk)."""
     import json

@@ -68,12 +68,6 @@ def _own_copy(fig, undo) -> None:
     strip.action_frame_end = bounds[3] + shift
     strip.frame_start, strip.frame_end = bounds[:2]
     _merge_pieces(fig, shared.name, copy.name, undo)
-    first = bpy.context.scene.frame_start
-    if first < strip.frame_start:
-        # FBX writes a strip's take from its first frame as time 0: the strip plays from the
-        # scene's first frame, holding the copy's first key until the figure's start.
-        strip.action_frame_start -= strip.frame_start - first
-        strip.frame_start_ui = first
     tweaks = bake_layers.tweak_layer(fig)[0]
     if tweaks is not None:          # the figure's frames, which its tweak layer spans: glTF
         #                             samples the tweak layer over the bake only when they match
