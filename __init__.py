@@ -15,7 +15,8 @@ def unregister():
 def __getattr__(name):
     # The glTF exporter looks for this on every enabled add-on's module
     # (blender_turning/blender/anim/export_gltf.py).
-    if name == "glTF2ExportUserExtension":
-        from .blender_turning.blender.anim.export_gltf import glTF2ExportUserExtension
-        return glTF2ExportUserExtension
+    if name in ("glTF2ExportUserExtension", "glTF2_pre_export_callback",
+                "glTF2_post_export_callback"):
+        from .blender_turning.blender.anim import export_gltf
+        return getattr(export_gltf, name)
     raise AttributeError(name)

@@ -17,6 +17,7 @@ from rig_fixtures import activate, mixamo_skeleton, rigify_rig  # noqa: E402
 from test_blender_operators import add  # noqa: E402
 
 from blender_turning.blender import compat  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 FRAMES = (1, 9, 17, 24)
@@ -449,6 +450,148 @@ def test_root_motion_on_a_rig_without_a_root_is_refused(scene):
     assert snapshot() == before, diff(before, snapshot())
 
 
+#: Open, shared or not: Blender's FBX exporter writes a strip's take from the strip's first frame
+#: as time 0, so a bake whose strip starts later (a follower waiting at the start: frames 7-30)
+#: comes back 6 frames early (1.8 m off, measured, also baked without Share Motion); glTF and
+#: Export FBX with Tweaks are right.
+WAITING = "FBX at its defaults: a strip's take starts at time 0"
+TOL = {"glb": (1e-5, 1e-4), "fbx": (5e-3, 1e-2), "tweaks": (1e-5, 1e-4)}
+
+
+# A crowd follower playing the leader's bake (docs/crowds.md, Shared motion), strung out along
+# the track (moved) or waiting at the start (moved and 6 frames later): FBX at its defaults
+# simplifies its curves (the tolerances of the tweaks' test above); glTF and FBX without
+# simplification: float32 bones, 1e-5 m and 1e-4 rad.
+@pytest.mark.installed
+@pytest.mark.parametrize("route, who, staging", [
+    ("glb", 1, "ALONG_TRACK"), ("fbx", 1, "ALONG_TRACK"), ("tweaks", 1, "ALONG_TRACK"),
+    ("glb", 1, "WAIT"),
+    pytest.param("fbx", 1, "WAIT", marks=pytest.mark.xfail(strict=True, reason=WAITING)),
+    ("tweaks", 1, "WAIT"),
+    # 4.2: the follower's empty tweak layer fits the leader (above), a take over frames 7-30
+    ("glb", 0, "WAIT"), pytest.param("fbx", 0, "WAIT", marks=pytest.mark.xfail(
+        not compat.SLOTTED_ACTIONS, strict=True, reason=WAITING))])
+def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, route, who,
+                                                              staging):
+    """A follower that plays the leader's bake (later, moved) exported alone, or the leader
+    alone: the file's every animation plays that figure as Blender shows it (its time shift and
+    its Delta Transform's translation), never the other's motion; the scene is as it was."""
+    from scene_snapshot import diff, snapshot
+    from test_blender_layers import key_head_tweak
+    lead = add("CYCLIST")                  # waiting at the start it shares, 6 frames later
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
+                                     lateral=1.5, staging=staging) == {"FINISHED"}
+    follower = bpy.data.objects["Cyclist 1"]
+    select_all = [lead, follower]
+    for o in select_all:
+        o.select_set(True)
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    shared, strip = bake.shared_source(follower)
+    assert shared == bake.find_bake(lead)[0]                                # it shares,
+    assert strip.frame_start - strip.action_frame_start == (6 if staging == "WAIT" else 0)
+    pos_tol, turn_tol = TOL[route]
+    fig, other = select_all[who], select_all[1 - who]
+    if route != "fbx":                     # FBX's first take is the bake, without tweaks
+        key_head_tweak(fig, frame=9)
+    want, name = bone_world(fig), fig.name
+    bones = [pb.name for pb in fig.pose.bones]
+    assert off_by(bone_world(other), want)[0] > 1.0            # the other's motion is elsewhere
+    path = str(tmp_path / f"shared.{'glb' if route == 'glb' else 'fbx'}")
+    before = snapshot()
+    if route == "tweaks":                  # Export FBX with Tweaks, no curve simplification
+        bpy.ops.object.select_all(action="DESELECT")
+        for o in [fig, *fig.children_recursive]:
+            o.select_set(True)
+        assert bpy.ops.turning.export_fbx(filepath=path, use_selection=True,
+                                          bake_anim_simplify_factor=0.0) == {"FINISHED"}
+    else:
+        export(path, [fig, *fig.children_recursive])
+    assert snapshot() == before, diff(before, snapshot())
+    reimport(path)
+    (arm,) = [o for o in bpy.data.objects if o.type == "ARMATURE"]
+    bone_actions = [a for a in bpy.data.actions
+                    if any(fc.data_path.startswith("pose.bones") for fc in compat.all_fcurves(a))]
+    assert arm.animation_data.action in bone_actions
+    if route == "glb":
+        assert len(bone_actions) == 1, [a.name for a in bpy.data.actions]
+    else:
+        assert arm.animation_data.action.name.startswith(f"{arm.name}|"), name
+    same = [arm.pose.bones.find(b) for b in bones]
+    for action in sorted(bone_actions, key=lambda a: a != arm.animation_data.action):
+        play(arm, action)
+        pos, turn = off_by(bone_world(arm)[:, same], want)
+        assert pos < pos_tol and turn < turn_tol, (action.name, pos, turn)
+
+
+
+@pytest.mark.installed
+def test_export_fbx_with_tweaks_plays_a_late_bake_on_its_frames(scene, tmp_path):
+    """A figure whose own bake starts after the scene's first frame (a follower waiting at the
+    start, Share Motion off): Export FBX with Tweaks writes it on its frames (FBX writes a strip's
+    take from time 0; Blender's own FBX export brings it back 6 frames early, above)."""
+    lead = add("CYCLIST")
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
+                                     lateral=1.5, staging="WAIT") == {"FINISHED"}
+    fig = bpy.data.objects["Cyclist 1"]
+    for o in (lead, fig):
+        o.select_set(True)
+    assert bpy.ops.turning.bake_turns(share=False) == {"FINISHED"}
+    assert bake.shared_source(fig)[0] is None and bake.find_bake(fig)[1].frame_start == 7
+    want, bones = bone_world(fig), [pb.name for pb in fig.pose.bones]
+    path = str(tmp_path / "late.fbx")
+    bpy.ops.object.select_all(action="DESELECT")
+    for o in [fig, *fig.children_recursive]:
+        o.select_set(True)
+    from scene_snapshot import diff, snapshot
+    before = snapshot()
+    assert bpy.ops.turning.export_fbx(filepath=path, use_selection=True,
+                                      bake_anim_simplify_factor=0.0) == {"FINISHED"}
+    assert snapshot() == before, diff(before, snapshot())
+    reimport(path)
+    arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+    pos, turn = off_by(bone_world(arm)[:, [arm.pose.bones.find(b) for b in bones]], want)
+    assert pos < 1e-5 and turn < 1e-4, (pos, turn)        # float32 bones, as above
+
+
+def gltf_animations(path) -> list:
+    """The names of the animations in a ``.glb`` file (its JSON chunk)."""
+    import json
+    import struct
+    with open(path, "rb") as fh:
+        data = fh.read()
+    (length,) = struct.unpack_from("<I", data, 12)
+    return [a.get("name") for a in json.loads(data[20:20 + length]).get("animations", [])]
+
+
+@pytest.mark.installed
+def test_a_user_rig_sharing_a_bake_exports_one_animation_with_its_equipment(scene, tmp_path):
+    """A follower made from the user's rig plays the leader's bake: its glTF holds one animation,
+    the figure with its equipment as its constraints move it, on every frame."""
+    rig = mixamo_skeleton("Ann")
+    activate(rig)
+    assert bpy.ops.turning.make_figure(sport="SKIER") == {"FINISHED"}
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
+                                     lateral=1.5) == {"FINISHED"}
+    bpy.ops.object.select_all(action="SELECT")
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    follower = bpy.data.objects["Ann 1"]
+    assert bake.shared_source(follower)[0] == bake.find_bake(rig)[0]
+    gear = list(follower.turning.rig.equipment.objects)
+    names, want = [o.name for o in gear], world_matrices(gear)
+    from scene_snapshot import diff, snapshot
+    path = str(tmp_path / "ann1.glb")
+    before = snapshot()
+    export(path, [follower, *gear])
+    assert snapshot() == before, diff(before, snapshot())
+    assert gltf_animations(path) == [follower.name]
+    reimport(path)
+    pos, turn = off_by(world_matrices([bpy.data.objects[n] for n in names]), want)
+    assert pos < 1e-5 and turn < 1e-5, (pos, turn)    # float32, as the equipment's test above
+
+# Last in the file: on bpy 4.2 the glTF and FBX exports and imports of the tests run after it in
+# the same process crashed (segfault, abort, a corrupt mesh read) in 9 of 23 full runs of this
+# file, also with the shared-motion export switched off (1 of those 6 runs); with this test last
+# or left out, 0 of 7.  Rigify stays enabled, its generated rig UI registered, after the reset.
 def test_root_motion_on_rigifys_root_control(scene):
     """Rigify's ``root`` control carries the travel; the deforming bones (the ones a game
     engine skins with) stay where the object-level bake puts them, as do the equipment."""

@@ -18,13 +18,31 @@ the armature object the layer keys, as Blender plays them, the bake's strip unde
 The bake's own animation keeps only the channels the tweak layer's leaves out (the armature
 object's travel: :meth:`glTF2ExportUserExtension.pre_gather_animation_hook`), and the two merge
 into the figure's one animation.
+
+A figure that plays another's bake (Shared motion) plays a copy of its own for the length of the
+export (:mod:`.export_shared`; :func:`glTF2_pre_export_callback` and
+:func:`glTF2_post_export_callback`), and exports as a figure with its own bake.
 """
 from __future__ import annotations
 
 from .. import compat
-from . import bake, bake_layers
+from . import bake, bake_layers, export_shared
 
 MERGE_INTO = bake.MERGE_INTO
+#: What :func:`glTF2_post_export_callback` gives back (the undo of the export's own copies).
+_UNDO = []
+
+
+def glTF2_pre_export_callback(export_settings):  # noqa: N802 (the name the exporter looks for)
+    """Before the exporter gathers anything: each figure playing another's bake plays a copy of
+    its own (:mod:`.export_shared`); a failed export's copies are given back first."""
+    import bpy
+    export_shared.restore_all(_UNDO)
+    _UNDO.extend(export_shared.own_copies(list(bpy.context.scene.objects)))
+
+
+def glTF2_post_export_callback(export_settings):  # noqa: N802
+    export_shared.restore_all(_UNDO)
 
 
 def _foreign(action, obj) -> bool:

@@ -7,7 +7,7 @@ import bpy
 from bpy.props import BoolProperty, FloatProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..anim import export_fbx
+from ..anim import export_fbx, export_shared
 
 
 def _fbx_exporter() -> bool:
@@ -42,7 +42,7 @@ class TURNING_OT_export_fbx(bpy.types.Operator, ExportHelper):
     def execute(self, context):
         objs = context.selected_objects if self.use_selection else context.scene.objects
         try:
-            with export_fbx.flattened(list(objs)) as n:
+            with export_shared.unshared(list(objs)), export_fbx.flattened(list(objs)) as n:
                 result = bpy.ops.export_scene.fbx(
                     filepath=self.filepath, use_selection=self.use_selection,
                     bake_anim_simplify_factor=self.bake_anim_simplify_factor)
