@@ -681,14 +681,14 @@ MUTANTS = [
     M("q_near_ignored", "core/planner/problem.py",
       "if st.q_near and st.q_near != st.q and (len(p.obstacles) or p.movers is not None):",
       "if False:", (T + "test_planner_choices_near.py",)),
-    # -- the racer's line (core/planner/race.py) and the leg-force limit ----------------------
-    M("race_bound_interval_ignored", "core/planner/race.py",
+    # -- the racer's line (core/planner/reach.py) and the leg-force limit ----------------------
+    M("race_bound_interval_ignored", "core/planner/reach.py",
       "% (2 * np.pi) - np.pi) - 0.5 * (hi - lo)", "% (2 * np.pi) - np.pi)",
       (T + "test_planner_race.py",)),
-    M("race_cost_half_speed", "core/planner/race.py",
+    M("race_cost_half_speed", "core/planner/reach.py",
       "self.step = problem.speed.max * st.dt", "self.step = 0.5 * problem.speed.max * st.dt",
       (T + "test_planner_race.py",)),
-    M("race_direction_mirrored", "core/planner/race.py",
+    M("race_direction_mirrored", "core/planner/reach.py",
       "self.angle = float(np.arctan2(self.e[1], self.e[0]))",
       "self.angle = float(np.arctan2(-self.e[1], self.e[0]))", (T + "test_planner_race.py",)),
     M("race_search_takes_the_path_bound", "core/planner/search.py",

@@ -52,7 +52,7 @@ def test_follow_writes_track_stats_and_plot(tmp_path, capsys):
 
 
 def test_follow_plans_the_racers_line_when_asked(tmp_path, capsys):
-    """``--line race``: the least time down the road (core/planner/race.py); the road is
+    """``--line race``: the least time down the road (core/planner/reach.py); the road is
     straight and the tree beside it, so the line is straight and costs nothing."""
     stats = tmp_path / "s.json"
     assert main(["follow", str(small_scene(tmp_path)), "--line", "race", "--stats",

@@ -1,4 +1,4 @@
-"""The racer's line as the planner's cost (core/planner/race.py; docs/racing.md, "The racer's
+"""The racer's line as the planner's cost (core/planner/reach.py; docs/racing.md, "The racer's
 line"): each stage's cost is non-negative, the bound never exceeds the cost still to come, the
 branch-and-bound returns the exhaustive search's optimum, and a straight corridor is skied
 straight."""

@@ -7,11 +7,12 @@ action with the NLA off, over the action's own frames: the shared bake, sampled 
 other figure's motion (the strip's time shift lost), and the export hook
 (:mod:`.export_gltf`) drops another figure's bake from a figure's animations, so the follower's
 file would have none (and its keyed equipment, merged into an animation named after the shared
-bake, would be an animation of its own).  With the copy the follower is, to every exporter and to the hook, a
-figure with its own bake on its own strip (its tweak layer above, its ``delta_location`` as it
-is): what Blender shows, and only that figure's.  FBX's *NLA Strips* takes sample every exported
-object with its strips playing (the shift kept); the copy changes nothing there, and Export FBX
-with Tweaks (:mod:`.export_fbx`) flattens a follower's tweaks as any figure's.
+bake, would be an animation of its own).  With the copy the follower is, to every exporter and
+to the hook, a figure with its own bake on its own strip (its tweak layer above, its
+``delta_location`` as it is): what Blender shows, and only that figure's.  FBX's *NLA Strips*
+takes sample every exported object with its strips playing (the shift kept); the copy changes
+nothing there, and Export FBX with Tweaks (:mod:`.export_fbx`) flattens a follower's tweaks as
+any figure's.
 """
 from __future__ import annotations
 

@@ -19,7 +19,7 @@ from .follow_problem import DEFAULT_CLEARANCE, FollowSetup, start_state
 from ..physics.params import PRESETS, Figure, preset
 from .path import HermitePath
 from ..planner import FollowResult, PlannerSettings, Problem, SpeedProfile
-from ..planner.race import LINES
+from ..planner.reach import LINES
 from ..ranges import RANGES
 from ..ground.scene_terrain import read_terrain
 from ..validate import FieldError, Fields, read_json
@@ -234,7 +234,7 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
 
     # Planner settings (Section 6.1).
     pl = top.table("planner", set(_PLANNER) | {"line"})
-    kw = {"line": pl.string("line", "path", choices=LINES)}   # the cost (planner/race.py)
+    kw = {"line": pl.string("line", "path", choices=LINES)}   # the cost (planner/reach.py)
     for key, (field, rng, default) in _PLANNER.items():
         if rng is None:
             kw[field] = pl.boolean(key, default)

@@ -144,14 +144,14 @@ class Problem:
         if settings.leg_force_max and (self.free or not self.speed.is_constant):
             raise ValueError("leg_force_max needs a constant speed held (flat ground): the leg "
                              "force is checked at it")
-        #: The racer's cost (``race.py``) for ``settings.line == "race"``, or ``None``: Section
-        #: 6's distance to the path.
+        #: The racer's cost (:class:`.reach.RaceCost`) for ``settings.line == "race"``, or
+        #: ``None``: Section 6's distance to the path.
         self.race = None
         if settings.line == "race":
             if self.free:
                 raise ValueError("line = 'race' needs the speed held (flat ground, a speed "
                                  "profile): on terrain the speed is a state")
-            from .race import RaceCost
+            from .reach import RaceCost
             self.race = RaceCost(self)
 
     @property
@@ -214,7 +214,7 @@ class Problem:
     def lower_bound(self, d_last, depth, state=None, C_f=None, reach: bool = False):
         """Admissible bound on the cost still to come after nodes at ``depth`` whose last sample
         was ``d_last`` from the path: the sum of :meth:`sample_bounds` (the racer's line: its
-        own, ``race.py``, given the nodes' ``state`` and ``C_f``)."""
+        own, :class:`.reach.RaceCost`, given the nodes' ``state`` and ``C_f``)."""
         d_last = np.asarray(d_last, float)
         if self.race is not None:
             if state is None:
@@ -417,7 +417,7 @@ class Problem:
         if st.leg_force_max:                 # a leg force the legs cannot hold (module docstring)
             fell |= ~(self.leg_force_bw(P, C) <= st.leg_force_max).all(axis=0)
         per = st.steps_per_sample
-        if self.race is not None:         # the racer's cost (race.py): the distance not made good
+        if self.race is not None:         # the racer's cost (RaceCost): the distance not made good
             cost = self.race.stage_cost(P)
             D = np.zeros((1, m))
         else:

@@ -200,7 +200,7 @@ def _bound(problem, r, depth, togo, reach, cols, pairs=None, direct=None):
     st = problem.settings
     if not st.lower_bound:
         return (np.zeros(len(cols)) if togo is None else togo), None
-    if problem.race is not None:      # the racer's line (race.py); its last stage costs >= 0
+    if problem.race is not None:      # the racer's line (reach.RaceCost); its last stage costs >= 0
         h = problem.race.bound(r.state[:, cols], r.C_f[cols], depth[cols])
         return (h if togo is None else np.maximum(h, togo)), None
     depth = depth[cols]

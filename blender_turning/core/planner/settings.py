@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..physics.params import check_range
-from .race import LINES
+from .reach import LINES
 
 __all__ = ["PlannerSettings", "SpeedProfile"]
 
@@ -73,7 +73,8 @@ class PlannerSettings:
     line: str = "path"
     """The cost: ``"path"``, Section 6's ``sum d_i`` (the foot's distance to the drawn path);
     ``"race"``, the racer's line, the least time through the course: the distance not made good
-    along the course's direction, around the obstacles (``race.py``; docs/racing.md)."""
+    along the course's direction, around the obstacles (:class:`.reach.RaceCost`;
+    docs/racing.md)."""
     batch: int = 128
     """Nodes taken from the queue and expanded together as one array operation (1 = the paper's
     one node at a time; a long search grows its batches up to 4 times this, ``search.py``).  Any
