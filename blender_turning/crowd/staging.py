@@ -8,12 +8,21 @@ one of two ways:
 - ``"along_track"`` (the default): every figure moves from the first frame; a turning follower
   due ``dt`` s after the leader instead starts ``dt V_cm`` m behind the leader's start, back
   along the leader's mean direction of travel (its heading, Section 5.2), at the leader's phase,
-  so the line of figures is the leader's track with the gaps in it.  A path follower stays on
-  the crowd's clock (it waits at the start of its path: the planner spaces the figures on the
-  path by time, and a start before the path's would be off it).
+  so the line of figures is the leader's track with the gaps in it.  A path follower likewise
+  starts ``dt V_cm`` m behind the start of its path: its path gets a straight lead-in of that
+  length along the path's start tangent (the leader's track run backwards), and the planner
+  (Section 6) follows it from there, upright as the leader starts, so it reaches the path's
+  start about ``dt`` s after the leader.  Its run is as long as the leader's: it ends that far
+  short of the path's end, as a turning follower ends its gap behind the leader, so the line
+  keeps its gaps to the last frame.
 - ``"wait"``: every follower stands at the leader's start (its lateral offset applied) until its
   time comes, as the core's crowd clock has it (:func:`.runner.run_crowd`).  The shot then needs
-  :func:`shot_length` seconds for the last follower to run as long as the leader.
+  :func:`shot_length` seconds for the last follower to run as long as the leader.  A path
+  follower's run ends ``dt V_cm`` m short of its path's end, as along the track.
+
+A figure that has reached its path's end stands there in the shot; the planner leaves it out
+(:mod:`..core.course.moving`: its lookahead past a follower's own end would meet it), so a
+line's followers end apart: each its gap behind the one before.
 """
 from __future__ import annotations
 
@@ -21,6 +30,8 @@ import math
 from dataclasses import replace
 
 import numpy as np
+
+from .model import FollowPath
 
 __all__ = ["STAGINGS", "stage", "waiting_span", "shot_length"]
 
@@ -35,21 +46,44 @@ def stage(leader, members, heading: float, staging: str = "along_track") -> tupl
         raise ValueError(f"staging = {staging!r} is not one of {', '.join(STAGINGS)}")
     if not math.isfinite(heading):
         raise ValueError(f"heading = {heading!r} is not a finite number (rad)")
-    if staging == "wait":
-        return tuple(members)
     d = np.array([math.cos(heading), math.sin(heading)])
+    along = staging == "along_track"
     out = []
     for m in members:
         late = m.time_offset - leader.time_offset
-        if m.is_path or late <= 0.0:
+        if late <= 0.0 or not (along or m.is_path):
             out.append(m)
             continue
         # The leader covers V_cm late metres in `late` seconds (V_cm is its speed; a follower's
-        # body differences keep it): the follower starts that far back on the leader's line.
-        pos = np.asarray(m.position, float) - late * leader.figure.body.V_cm * d
+        # body differences keep it): the follower is that far back on the leader's line.
+        back = late * leader.figure.body.V_cm
+        if m.is_path:
+            out.append(replace(m, controller=_in_line(m, back, along),
+                               time_offset=leader.time_offset if along else m.time_offset))
+            continue
+        pos = np.asarray(m.position, float) - back * d
         out.append(replace(m, position=(float(pos[0]), float(pos[1])),
                            time_offset=leader.time_offset))
     return tuple(out)
+
+
+def _in_line(m, back: float, lead_in: bool) -> FollowPath:
+    """The path follower ``m``'s scene with its run ending ``back`` m short of its path's end;
+    with ``lead_in``, after a straight lead-in of ``back`` m before its path, started at the
+    lead-in's first point (the start state's lean and lean rate kept)."""
+    sc = m.controller.scene
+    total = sc.path.length()
+    if lead_in:
+        path = sc.path.led_in(back).split(total)[0]
+    elif back < total:
+        path = sc.path.split(total - back)[0]
+    else:
+        raise ValueError(f"{m.name}: {back:.1f} m behind the leader, waiting at the start, it "
+                         f"would end before the start of its {total:.1f} m path: give a "
+                         "smaller gap or fewer followers, or stage them along the track")
+    state0 = np.array(sc.state0, float)
+    state0[:2] = path.knots[0]
+    return FollowPath(replace(sc, path=path, state0=state0))
 
 
 def waiting_span(members) -> float:

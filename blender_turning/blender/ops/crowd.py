@@ -28,9 +28,11 @@ from ..registry_items import formation_items
 STAGING = (
     ("ALONG_TRACK", "Along the Track",
      "Every figure moves from the first frame; a follower due later starts that far behind on "
-     "the leader's line (path followers wait at the start of their path)"),
+     "the leader's line (a path follower on a straight lead-in to its path) and ends as far "
+     "behind the leader's end"),
     ("WAIT", "Wait at the Start",
-     "Each follower stands at the leader's start until its start offset"),
+     "Each follower stands at the leader's start until its start offset (a path follower ends "
+     "its gap behind the leader's end)"),
 )
 GAP_BY = (("TIME", "Time", "Each follower starts Gap seconds after the one before"),
           ("DISTANCE", "Distance", "Each follower starts Gap metres (at the leader's speed) "

@@ -17,10 +17,9 @@ its own); an action of the user's (keyed settings) is shared.
 from __future__ import annotations
 
 import bpy
-import numpy as np
 
 from ...core.course.path import HermitePath
-from ...crowd import CrowdFigure, FollowPath, Turns, point_at_distance
+from ...crowd import CrowdFigure, FollowPath, Turns
 from ..anim import bake
 from . import retarget_adapter
 from ..anim.export_state import CARRIES
@@ -50,30 +49,15 @@ def template_member(context, fig, path: bool) -> CrowdFigure:
 # -- paths ------------------------------------------------------------------------------------
 
 def path_from(path: HermitePath, s_along: float = 0.0) -> HermitePath:
-    """``path`` from ``s_along`` m along it: the segment there split (de Casteljau) so that the
-    rest of the path is unchanged, starting at the point the core's formation starts the figure
-    (:func:`..crowd.formations.point_at_distance`, on 64 chords a segment: off the curve by at
-    most a chord's sagitta, under a millimetre on a road)."""
+    """``path`` from ``s_along`` m along it (:meth:`~..core.course.path.HermitePath.split`),
+    starting at the point the core's formation starts the figure
+    (:func:`..crowd.formations.point_at_distance`, on 64 chords a segment)."""
     if s_along <= 0.0:
         return path
-    per = 64
-    pts = path.sample(per)
-    cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
-    if s_along >= cum[-1]:
-        raise ValueError(f"{s_along:g} m along the path is beyond its length ({cum[-1]:.1f} m)")
-    i = int(np.searchsorted(cum, s_along, side="right")) - 1
-    seg, frac = divmod(i, per)
-    u = (frac + (s_along - cum[i]) / (cum[i + 1] - cum[i])) / per
-    k0, k1 = path.knots[seg], path.knots[seg + 1]
-    p = [k0, k0 + path.t_out[seg] / 3.0, k1 - path.t_in[seg] / 3.0, k1]
-    a = [p[j] + u * (p[j + 1] - p[j]) for j in range(3)]           # de Casteljau at u
-    b = [a[j] + u * (a[j + 1] - a[j]) for j in range(2)]
-    c = b[0] + u * (b[1] - b[0])                                     # on the curve at u
-    start, _ = point_at_distance(path, s_along)
-    knots = np.vstack([start, path.knots[seg + 1:]])
-    t_out = np.vstack([3.0 * (b[1] - c), path.t_out[seg + 1:]])
-    t_in = np.vstack([3.0 * (k1 - a[2]), path.t_in[seg + 1:]])
-    return HermitePath(knots, t_out, t_in)
+    if s_along >= path.length():
+        raise ValueError(f"{s_along:g} m along the path is beyond its length "
+                         f"({path.length():.1f} m)")
+    return path.split(s_along)[1]
 
 
 def curve_object(path: HermitePath, name: str, z: float, collection):

@@ -155,6 +155,43 @@ class HermitePath:
         return HermitePath(np.vstack([self.knots, self.knots[-1] + d]),
                            np.vstack([self.t_out, d]), np.vstack([self.t_in, d]))
 
+    def led_in(self, length: float) -> "HermitePath":
+        """This path with a straight lead-in of ``length`` m before its start, along its start
+        tangent (a follower strung out behind its leader starts there: docs/crowds.md)."""
+        if not length > 0:
+            return self
+        d = self.start_direction() * length
+        return HermitePath(np.vstack([self.knots[0] - d, self.knots]),
+                           np.vstack([d, self.t_out]), np.vstack([d, self.t_in]))
+
+    def split(self, s: float) -> tuple:
+        """``(before, after)``: the path up to and from ``s`` m along it, ``0 < s <`` its
+        length (on 64 chords a segment).  The segment there is split (de Casteljau) so that both
+        parts are the rest of the curve unchanged; they meet at the chords' point at ``s`` (off
+        the curve by at most a chord's sagitta, under a millimetre on a road)."""
+        per = 64
+        pts = self.sample(per)
+        cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+        if not 0.0 < s < cum[-1]:
+            raise ValueError(f"{s:g} m along the path is not inside it (0, {cum[-1]:.1f}) m")
+        i = int(np.searchsorted(cum, s, side="right")) - 1
+        seg, frac = divmod(i, per)
+        w = (s - cum[i]) / (cum[i + 1] - cum[i])
+        u = (frac + w) / per
+        k0, k1 = self.knots[seg], self.knots[seg + 1]
+        p = [k0, k0 + self.t_out[seg] / 3.0, k1 - self.t_in[seg] / 3.0, k1]
+        a = [p[j] + u * (p[j + 1] - p[j]) for j in range(3)]           # de Casteljau at u
+        b = [a[j] + u * (a[j + 1] - a[j]) for j in range(2)]
+        c = b[0] + u * (b[1] - b[0])                                     # on the curve at u
+        at = pts[i] + w * (pts[i + 1] - pts[i])
+        before = HermitePath(np.vstack([self.knots[:seg + 1], at]),
+                             np.vstack([self.t_out[:seg], 3.0 * (a[0] - k0)]),
+                             np.vstack([self.t_in[:seg], 3.0 * (c - b[0])]))
+        after = HermitePath(np.vstack([at, self.knots[seg + 1:]]),
+                            np.vstack([3.0 * (b[1] - c), self.t_out[seg + 1:]]),
+                            np.vstack([3.0 * (k1 - a[2]), self.t_in[seg + 1:]]))
+        return before, after
+
     def length(self, per_segment: int = 64) -> float:
         """Arc length (polyline through ``per_segment`` samples per segment), m."""
         return float(np.sum(np.linalg.norm(np.diff(self.sample(per_segment), axis=0), axis=1)))
