@@ -97,6 +97,10 @@ def test_peloton_rows_are_gap_apart_along_the_road_and_abreast_across_it():
     np.testing.assert_allclose(starts, [[6, -0.5, 0], [6, 0.5, 0], [3, -0.5, 0], [3, 0.5, 0],
                                         [0, 0, 0]], atol=1e-9)
     np.testing.assert_allclose(riders[1].controller.scene.path.knots, [[0, 0.5], [60, 0.5]])
+    # every rider rides 60 m less its row's start: a row ends as far behind the front row
+    ends = [f.controller.scene.path.knots[-1] for f in riders]
+    np.testing.assert_allclose(ends, [[60, -0.5], [60, 0.5], [57, -0.5], [57, 0.5], [54, 0]],
+                               atol=1e-9)
     assert {f.time_offset for f in riders} == {0.0}
     with pytest.raises(ValueError, match="gap = 40 m"):
         peloton(rider, 6, gap=40.0)

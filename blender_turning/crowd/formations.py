@@ -175,7 +175,10 @@ def peloton(template: CrowdFigure, count: int, gap: float, abreast: int = 2,
             name: str | None = None) -> tuple:
     """``count`` riders on the template's path, ``abreast`` to a row ``spacing`` m apart,
     rows ``gap`` m apart along the path; all start at once (the template's time offset), the
-    back row at the path's start, each rider on the path offset by its place in the row.
+    back row at the path's start, each rider on the path offset by its place in the row.  Every
+    rider rides as far: a row ends as far short of the path's end as it starts behind the front
+    row, so the bunch arrives as it rode (a rider at the end stands there, and the planner
+    does not see a figure after its end: docs/crowds.md).
     ``body_jitter`` as in :func:`follow_leader`.  Named ``<name>1 ...`` from the front."""
     if not template.is_path:
         raise ValueError("peloton needs a path template (the riders follow a road)")
@@ -197,9 +200,23 @@ def peloton(template: CrowdFigure, count: int, gap: float, abreast: int = 2,
         row, col = divmod(k, abreast)
         in_row = min(abreast, count - row * abreast)
         fig = _jittered_body(template.figure, rng, body_jitter)
-        out.append(_moved(template, f"{prefix}{k + 1}", fig, (col - 0.5 * (in_row - 1)) * spacing,
-                          s_along=(rows - 1 - row) * gap))
+        rider = _moved(template, f"{prefix}{k + 1}", fig, (col - 0.5 * (in_row - 1)) * spacing,
+                       s_along=(rows - 1 - row) * gap)
+        out.append(cut_short(rider, row * gap))
     return tuple(out)
+
+
+def cut_short(member: CrowdFigure, short: float) -> CrowdFigure:
+    """The path figure ``member`` with its path ending ``short`` m before its end (a
+    ``ValueError`` naming it when its path is not that long)."""
+    if short <= 0.0:
+        return member
+    sc = member.controller.scene
+    total = sc.path.length()
+    if short >= total:
+        raise ValueError(f"{member.name}: its run would end {short:.1f} m short of the end of its "
+                         f"{total:.1f} m path, before its start")
+    return replace(member, controller=FollowPath(replace(sc, path=sc.path.split(total - short)[0])))
 
 
 # -- the built-in formations' records (docs/registry.md) -------------------------------------------

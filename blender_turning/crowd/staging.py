@@ -31,6 +31,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .formations import cut_short
 from .model import FollowPath
 
 __all__ = ["STAGINGS", "stage", "waiting_span", "shot_length"]
@@ -57,9 +58,12 @@ def stage(leader, members, heading: float, staging: str = "along_track") -> tupl
         # The leader covers V_cm late metres in `late` seconds (V_cm is its speed; a follower's
         # body differences keep it): the follower is that far back on the leader's line.
         back = late * leader.figure.body.V_cm
+        if m.is_path and not along:
+            out.append(cut_short(m, back))
+            continue
         if m.is_path:
-            out.append(replace(m, controller=_in_line(m, back, along),
-                               time_offset=leader.time_offset if along else m.time_offset))
+            out.append(replace(m, controller=_led_in(m.controller, back),
+                               time_offset=leader.time_offset))
             continue
         pos = np.asarray(m.position, float) - back * d
         out.append(replace(m, position=(float(pos[0]), float(pos[1])),
@@ -67,20 +71,12 @@ def stage(leader, members, heading: float, staging: str = "along_track") -> tupl
     return tuple(out)
 
 
-def _in_line(m, back: float, lead_in: bool) -> FollowPath:
-    """The path follower ``m``'s scene with its run ending ``back`` m short of its path's end;
-    with ``lead_in``, after a straight lead-in of ``back`` m before its path, started at the
-    lead-in's first point (the start state's lean and lean rate kept)."""
-    sc = m.controller.scene
-    total = sc.path.length()
-    if lead_in:
-        path = sc.path.led_in(back).split(total)[0]
-    elif back < total:
-        path = sc.path.split(total - back)[0]
-    else:
-        raise ValueError(f"{m.name}: {back:.1f} m behind the leader, waiting at the start, it "
-                         f"would end before the start of its {total:.1f} m path: give a "
-                         "smaller gap or fewer followers, or stage them along the track")
+def _led_in(controller: FollowPath, back: float) -> FollowPath:
+    """``controller``'s scene after a straight lead-in of ``back`` m before its path and with
+    as much cut off its end, started at the lead-in's first point (the start state's lean and
+    lean rate kept)."""
+    sc = controller.scene
+    path = sc.path.led_in(back).split(sc.path.length())[0]
     state0 = np.array(sc.state0, float)
     state0[:2] = path.knots[0]
     return FollowPath(replace(sc, path=path, state0=state0))
