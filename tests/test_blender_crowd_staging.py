@@ -12,9 +12,16 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from test_blender_operators import add  # noqa: E402
+from test_blender_crowd_path_formations import bodies  # noqa: E402
+from test_blender_operators import add, make_path  # noqa: E402
 
 from blender_turning.blender.render.config import load_config  # noqa: E402
+from blender_turning.blender.scene import crowd_scene  # noqa: E402
+from blender_turning.blender.scene.scene_adapters import bezier_control_points  # noqa: E402
+from blender_turning.core.course.obstacles import segment_distance  # noqa: E402
+from blender_turning.core.course.path import HermitePath  # noqa: E402
+from blender_turning.crowd import follow_leader, stage  # noqa: E402
+from blender_turning.crowd.model import BODY_CLEARANCE  # noqa: E402
 
 pytestmark = [pytest.mark.blender, pytest.mark.usefixtures("registered")]
 
@@ -106,3 +113,36 @@ def test_waiting_without_fitting_the_range_says_which_follower_starts_too_late(s
     with pytest.raises(RuntimeError, match=r"Start Offset .* = 14\.8 s starts the figure at "
                                            r"frame 357, not before the last frame 241"):
         bpy.ops.turning.bake_turns()
+
+
+def test_path_followers_are_strung_out_along_the_leaders_track_from_frame_1(scene):
+    """The default Follow the Leader of a skier with a path: every follower starts its gap
+    behind on the leader's track (a straight lead-in to its path, the core's rule), moves from
+    frame 1, and no two figures come within the clearance at any frame, standing at their ends
+    too."""
+    lead = add("SKIER")
+    lead.turning.path = make_path([(0, 0), (0, -30), (10, -60), (10, -90)], "Run")
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER") == {"FINISHED"}
+    figs = [lead] + [bpy.data.objects[f"Skier {k}"] for k in range(1, 5)]
+    core = crowd_scene.template_member(bpy.context, lead, path=True)
+    want = stage(core, follow_leader(core, 4, 1.5, "time", 0.0, name="m"),
+                 lead.turning.start_heading)
+    step = 1.5 * lead.turning.speed                         # the gap at the leader's speed
+    for k, (fig, m) in enumerate(zip(figs[1:], want), start=1):
+        # On the leader's line, k gaps up the lead-in behind the path's start (heading -y)
+        np.testing.assert_allclose(m.state0()[:2], [0.0, k * step], atol=1e-4)
+        np.testing.assert_allclose(fig.turning.start[:2], m.state0()[:2], atol=1e-5)
+        assert fig.turning.crowd.time_offset == 0.0
+        drawn = HermitePath.from_bezier(bezier_control_points(fig.turning.path))
+        np.testing.assert_allclose(drawn.knots, m.controller.scene.path.knots, atol=1e-5)
+    assert bpy.ops.turning.follow_path() == {"FINISHED"}
+    frames = np.arange(scene.frame_start, scene.frame_end + 1)
+    foot, cm = bodies(figs, frames)
+    np.testing.assert_allclose(foot[1:, 0], [m.state0()[:2] for m in want], atol=1e-3)
+    assert np.all(np.hypot(*(foot[:, 1] - foot[:, 0]).T) > 0.3)    # ~V / fps = 0.42 m
+    closest = min(float(segment_distance(foot[a], cm[a], foot[b], cm[b]).min())
+                  for a in range(len(figs)) for b in range(a))
+    # the planner's rule in continuous time; 5 mm for this reading of it (24 fps headings,
+    # float32 keys).  Measured 14.9 m: the line keeps its 15 m gaps, to the followers' ends 15 m
+    # apart behind the leader's (waiting, as before, all five stood on the leader's start)
+    assert closest >= BODY_CLEARANCE - 5e-3, closest
