@@ -459,19 +459,28 @@ def path_of(fig):
     return HermitePath.from_bezier(scene_adapters.bezier_control_points(fig.turning.path))
 
 
-def test_followers_on_a_road_follow_the_core_offset_paths(scene):
+@pytest.mark.parametrize("staging", ["ALONG_TRACK", "WAIT"])
+def test_followers_on_a_road_follow_the_core_offset_paths(scene, staging):
+    """Each follower's curve is the road offset sideways, its gap cut off its end, and (along
+    the track) a straight lead-in of its gap before it (docs/layers.md)."""
     from blender_turning.crowd import offset_path
     lead = road_figure()
     road = path_of(lead)
     assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=2, gap_distance=5.0,
-                                     gap_by="DISTANCE", lateral=1.0,
-                                     alternate=True) == {"FINISHED"}
+                                     gap_by="DISTANCE", lateral=1.0, alternate=True,
+                                     staging=staging) == {"FINISHED"}
+    along = staging == "ALONG_TRACK"
     for k, d in ((1, -1.0), (2, 1.0)):
         fig = bpy.data.objects[f"Cyclist {k}"]
-        want, got = offset_path(road, d), path_of(fig)
+        off = offset_path(road, d)
+        want = off.led_in(5.0 * k).split(off.length())[0] if along else \
+            off.split(off.length() - 5.0 * k)[0]
+        got = path_of(fig)
         for a in ("knots", "t_out", "t_in"):   # float32 up to 90 m: ulp 7.6e-6 (measured 5.7e-6)
             np.testing.assert_allclose(getattr(got, a), getattr(want, a), atol=2e-5)
-        assert fig.turning.crowd.time_offset == f32(k * 5.0 / lead.turning.speed)
+        np.testing.assert_allclose(fig.turning.start[:2], got.knots[0], atol=1e-5)
+        assert fig.turning.crowd.time_offset == (0.0 if along else
+                                                 f32(k * 5.0 / lead.turning.speed))
 
 
 def test_a_peloton_starts_where_the_core_places_its_rows(scene):
@@ -489,7 +498,11 @@ def test_a_peloton_starts_where_the_core_places_its_rows(scene):
         np.testing.assert_allclose(start, m.state0()[:2], atol=1e-5)   # float32 (1e-6)
         assert fig.turning.crowd.time_offset == 0.0
         lateral = ((k - 1) % 2 * 0.8 - 0.4) if k < 5 else 0.0   # rows of 2, the last of 1
-        np.testing.assert_allclose(path_of(fig).knots[-1], offset_path(road, lateral).knots[-1],
+        # each row ends as far short of the road's end as it starts behind the front row
+        off = offset_path(road, lateral)
+        end = off.split(off.length() - 4.0 * ((k - 1) // 2))[0] if k > 2 else off
+        np.testing.assert_allclose(path_of(fig).knots[-1], end.knots[-1], atol=1e-5)
+        np.testing.assert_allclose(path_of(fig).knots[-1], m.controller.scene.path.knots[-1],
                                    atol=1e-5)
 
 
