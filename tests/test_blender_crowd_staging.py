@@ -146,3 +146,21 @@ def test_path_followers_are_strung_out_along_the_leaders_track_from_frame_1(scen
     # float32 keys).  Measured 14.9 m: the line keeps its 15 m gaps, to the followers' ends 15 m
     # apart behind the leader's (waiting, as before, all five stood on the leader's start)
     assert closest >= BODY_CLEARANCE - 5e-3, closest
+
+
+def test_waiting_path_followers_longer_than_the_path_are_refused_and_nothing_changes(scene):
+    lead = add("SKIER")
+    lead.turning.path = make_path([(0, 0), (0, -20)], "Short")
+    before = ({o.name: tuple(o.matrix_world.translation) for o in bpy.data.objects},
+              sorted(c.name for c in bpy.data.collections), sorted(c.name for c in bpy.data.curves),
+              scene.frame_end)
+    with pytest.raises(RuntimeError, match=r"Add Crowd: Skier: follower 2, 20\.0 m behind the "
+                                           r"leader and waiting at the start, would end before "
+                                           r"the start of its 20\.0 m path"):
+        bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=3, gap_by="DISTANCE",
+                                  gap_distance=10.0, staging="WAIT")
+    after = ({o.name: tuple(o.matrix_world.translation) for o in bpy.data.objects},
+             sorted(c.name for c in bpy.data.collections), sorted(c.name for c in bpy.data.curves),
+             scene.frame_end)
+    assert after == before
+    assert lead.turning.path.name == "Short" and lead.visible_get()

@@ -92,8 +92,9 @@ def test_path_followers_start_their_gap_behind_on_the_leaders_track_and_end_as_f
         np.testing.assert_array_equal(s.state0(), f.state0())       # at the start, waiting
         assert s.time_offset == f.time_offset
         assert s.controller.scene.path.length() == pytest.approx(total - 10.0 * i, abs=1e-3)
-    with pytest.raises(ValueError, match=r"Lead-3: its run would end 31\.5 m short of the end "
-                                         rf"of its {total:.1f} m path, before its start"):
+    with pytest.raises(ValueError, match=r"follower 3, 31\.5 m behind the leader and waiting "
+                                         rf"at the start, would end before the start of its "
+                                         rf"{total:.1f} m path"):
         stage(lead, follow_leader(lead, 3, 10.5, "distance"), 0.0, "wait")
 
 

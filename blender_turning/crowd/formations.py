@@ -207,16 +207,13 @@ def peloton(template: CrowdFigure, count: int, gap: float, abreast: int = 2,
 
 
 def cut_short(member: CrowdFigure, short: float) -> CrowdFigure:
-    """The path figure ``member`` with its path ending ``short`` m before its end (a
-    ``ValueError`` naming it when its path is not that long)."""
+    """The path figure ``member`` with its path ending ``short`` m (less than its length)
+    before its end."""
     if short <= 0.0:
         return member
     sc = member.controller.scene
-    total = sc.path.length()
-    if short >= total:
-        raise ValueError(f"{member.name}: its run would end {short:.1f} m short of the end of its "
-                         f"{total:.1f} m path, before its start")
-    return replace(member, controller=FollowPath(replace(sc, path=sc.path.split(total - short)[0])))
+    path = sc.path.split(sc.path.length() - short)[0]
+    return replace(member, controller=FollowPath(replace(sc, path=path)))
 
 
 # -- the built-in formations' records (docs/registry.md) -------------------------------------------

@@ -50,7 +50,7 @@ def stage(leader, members, heading: float, staging: str = "along_track") -> tupl
     d = np.array([math.cos(heading), math.sin(heading)])
     along = staging == "along_track"
     out = []
-    for m in members:
+    for i, m in enumerate(members, start=1):
         late = m.time_offset - leader.time_offset
         if late <= 0.0 or not (along or m.is_path):
             out.append(m)
@@ -59,6 +59,12 @@ def stage(leader, members, heading: float, staging: str = "along_track") -> tupl
         # body differences keep it): the follower is that far back on the leader's line.
         back = late * leader.figure.body.V_cm
         if m.is_path and not along:
+            total = m.controller.scene.path.length()
+            if back >= total:
+                raise ValueError(f"follower {i}, {back:.1f} m behind the leader and waiting at "
+                                 f"the start, would end before the start of its {total:.1f} m "
+                                 "path: give a smaller gap or fewer followers, or stage them "
+                                 "along the track")
             out.append(cut_short(m, back))
             continue
         if m.is_path:
