@@ -644,6 +644,8 @@ MUTANTS = [
     M("staging_path_runs_to_the_end", "crowd/staging.py",
       "path = sc.path.led_in(back).split(sc.path.length())[0]", "path = sc.path.led_in(back)",
       STAGING),
+    M("staging_waiting_path_past_its_start", "crowd/staging.py",
+      "            if back >= total:\n", "            if False:\n", STAGING),
     M("staging_waiting_path_runs_to_the_end", "crowd/staging.py",
       "            out.append(cut_short(m, back))", "            out.append(m)", STAGING),
     M("path_lead_in_ahead", "core/course/path.py",
