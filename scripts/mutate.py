@@ -1123,6 +1123,7 @@ MUTANTS += [
 ]
 
 KERNELS = [T + "test_crowd_kernels.py"]
+BATCH_REPORT = KERNELS + [T + "test_lean_report.py"]
 KEYS = [T + "test_mapping_keys.py", T + "test_blender_fewer_keys.py"]
 FEWER_KEYS = [T + "test_blender_fewer_keys.py"]
 # -- the crowd's kernels and Fewer Keys (crowd/kernels.py, mapping/keys.py, blender/anim/fewer_keys.py)
@@ -1131,6 +1132,20 @@ MUTANTS += [
       'return "batch" if count >= BATCH_FROM else "floats"', 'return "floats"', KERNELS),
     M("crowd_batch_falls_after_its_span", "crowd/kernels.py",
       "if at is not None and at <= (n - 1) * dt + 1e-9:", "if at is not None:", KERNELS),
+    M("batch_turns_not_kept", "core/controllers/ellipse.py",
+      "            self._note_batch(t, w, tm, tmf)\n", "            pass\n",
+      BATCH_REPORT),
+    M("batch_worst_turn_the_least_limited", "core/controllers/ellipse.py",
+      "worse = now[3] * rec[\"worst\"][2] < rec[\"worst\"][3] * now[2]",
+      "worse = now[3] * rec[\"worst\"][2] > rec[\"worst\"][3] * now[2]",
+      BATCH_REPORT),
+    M("batch_last_turn_never_changes", "core/controllers/ellipse.py",
+      "rec[\"last\"][:, changed] = now[:, changed]", "pass", BATCH_REPORT),
+    M("batch_report_not_in_the_meta", "crowd/runner.py",
+      "{**meta, **turn_meta(report)}", "meta", KERNELS),
+    M("crowd_cli_lean_report_dropped", "cli/crowd.py",
+      "    if turn is not None:              # the lean reached", "    if False:",
+      [T + "test_crowd.py"]),
     M("keys_no_float32_margin", "mapping/keys.py",
       "    bound = bound - _float32_margin(values)\n", "", KEYS, "mapping"),
     M("keys_extrema_not_kept", "mapping/keys.py",
