@@ -106,7 +106,7 @@ def angles(traj, track, i: int) -> dict:
             "shin": _incl(h(f"shin.{out}") - h(f"foot.{out}")),
             "legs": _incl(mid("thigh") - mid("foot")),
             "trunk": _incl(mid("upper_arm") - mid("thigh")),
-            "counter": math.copysign(math.degrees(math.atan2(line[1], -line[0])), lean)}
+            "counter": math.degrees(math.atan2(line[1], -line[0])) * (1.0 if lean > 0 else -1.0)}
 
 
 def camera(scene):
@@ -202,15 +202,18 @@ def render(args) -> None:
             ax.imshow(plt.imread(str(path)))
             ax.axis("off")
         axes[0, col].set_title(
-            f"{label}: lean {a['lean']:.1f}, skis on edge {a['edge']:.1f} deg\n"
-            f"outside shin {a['shin']:.1f}, legs {a['legs']:.1f}, trunk {a['trunk']:.1f} deg",
-            fontsize=9)
-        gap = abs(traj.y[at[col]] - (1.0 if args.gate % 2 else -1.0))
-        axes[1, col].set_title(f"t = {traj.t[at[col]]:.2f} s, the foot {gap:.2f} m from the "
-                               f"pole; shoulders turned {a['counter']:.1f} deg to the outside",
+            f"{label}: lean {abs(a['lean']):.1f}, skis on edge {abs(a['edge']):.1f} deg\n"
+            f"outside shin {abs(a['shin']):.1f}, legs {abs(a['legs']):.1f}, "
+            f"trunk {abs(a['trunk']):.1f} deg", fontsize=9)
+        tip = 1.0 if args.gate % 2 else -1.0
+        out = (traj.y[at[col]] - tip) * tip         # > 0: round the pole, < 0: through it
+        where = (f"{out:.2f} m outside the pole" if out > 0 else
+                 f"{-out:.2f} m inside the pole's tip")
+        axes[1, col].set_title(f"t = {traj.t[at[col]]:.2f} s: the foot {where}\n"
+                               f"shoulders turned {a['counter']:.1f} deg to the outside",
                                fontsize=9)
-    fig.suptitle(f"Reid's 10 m slalom at 12 m/s, turning pole {args.gate} (a {side} turn): "
-                 "the racer round the poles, the skier's preset on the line without them\n"
+    fig.suptitle(f"Reid's 10 m slalom, 12 m/s, turning pole {args.gate} (a {side} turn)\n"
+                 "racer: round the poles; skier's preset: no plan round them, the line alone\n"
                  "top: from behind (orthographic, 8 deg above the snow)", fontsize=10)
     fig.tight_layout()
     fig.savefig(args.out, dpi=100)
