@@ -1,9 +1,12 @@
-"""docs/racing.png: the skier's preset and the slalom racer at the same phase of the same
-commanded slalom (period 2 s, lean asked 59 deg, 12 m/s), the built-in figures baked in Blender
-and rendered (Workbench) from behind and from the front, side by side, with the angles the
-mapping posed printed under each (measured on the baked pose track).
+"""docs/racing.png: the skier's preset and the slalom racer at the same gate of Reid et al.'s
+10 m slalom course (core/course/reid.py), each at the frame its foot passes that gate: the racer
+follows the course round its poles (the planner as scripts/reid_courses.py runs it, 12 m/s); the
+skier's preset finds no plan round the poles (its skis carve no tighter than 6 m), so it
+follows the course's line without them, its best attempt.  The built-in figures baked in
+Blender from the plans and rendered (Workbench) from behind and from the front, side by side,
+with the gate's poles and the angles the mapping posed printed under each.
 
-    .venv/bin/python scripts/racing_figure.py [--out docs/racing.png] [--frame N]
+    .venv/bin/python scripts/racing_figure.py [--out docs/racing.png] [--gate 3]
 """
 from __future__ import annotations
 
@@ -25,16 +28,31 @@ import numpy as np  # noqa: E402
 
 from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender import compat  # noqa: E402
-from blender_turning.blender.jobs.pipeline import figure_pose_track  # noqa: E402
+from blender_turning.blender.anim import bake  # noqa: E402
+from blender_turning.blender.anim.figure_bake import apply_bake  # noqa: E402
+from blender_turning.blender.jobs.pipeline import map_track  # noqa: E402
+from blender_turning.blender.render.build import make_obstacles  # noqa: E402
 from blender_turning.blender.scene.rig_builder import material  # noqa: E402
 from blender_turning.blender.scene.scene_adapters import FrameRange  # noqa: E402
+from blender_turning.core.course.reid import course, gate_positions  # noqa: E402
+from blender_turning.core.course.scene import scene_from_dict  # noqa: E402
 from blender_turning.mapping.kinematics import Skeleton  # noqa: E402
 from blender_turning.mapping.rig_spec import load_rig  # noqa: E402
-from rig_fixtures import activate  # noqa: E402
 
 FIGURES = (("SKIER", "skier preset"), ("SLALOM_RACER", "slalom racer"))
-SPEED, PERIOD, LEAN = 12.0, 2.0, math.radians(59.0)   # the skier falls past 60
-FRAMES = 96
+GAP, SPEED, GATES, FPS = 10.0, 12.0, 6, 24
+#: The planner as scripts/reid_courses.py runs Reid's courses (docs/racing.md).
+PLANNER = {"stages": 10, "choices": 9, "stage_time": 0.2}
+
+
+def plan(preset: str, poles: bool):
+    """The trajectory of ``preset`` following the course (round its poles, or its line alone)."""
+    doc = course(GAP, SPEED, "skier" if preset == "SKIER" else preset.lower(), gates=GATES,
+                 planner=PLANNER)
+    doc["figure"]["limits"] = {"dC_f_max": 1.0}
+    if not poles:
+        doc["obstacles"] = []
+    return scene_from_dict(doc, f"reid {GAP:g} m").run().trajectory
 
 
 def add(preset: str):
@@ -43,8 +61,29 @@ def add(preset: str):
     obj = bpy.context.view_layer.objects.active
     if preset != "SKIER":
         assert bpy.ops.turning.apply_figure_preset(sport=preset) == {"FINISHED"}
-    obj.turning.speed, obj.turning.period, obj.turning.lean = SPEED, PERIOD, LEAN
     return obj
+
+
+def bake_plan(obj, result):
+    """Key the plan ``result`` (a trajectory on the course's ground plane) on ``obj`` as Follow
+    Path writes one; returns the trajectory at the scene's rate and its pose track."""
+    scene = bpy.context.scene
+    traj = result.resample(FPS, start=0.0)
+    frames = FrameRange(scene.frame_start, scene.frame_start + len(traj) - 1, FPS)
+    scene.frame_end = max(scene.frame_end, frames.end)
+    track = map_track(obj.turning.sport, traj, frames, obj=obj)
+    bake.check_track(obj, track)
+    apply_bake(obj, traj, track)
+    return traj, track
+
+
+def poles(gates: int):
+    """The turning poles' inner tips (Reid's courses: 1.5 m inside the line 2.5 m out), 1.8 m
+    slalom poles, red and blue in turn."""
+    xs = gate_positions(GAP, gates)
+    make_obstacles(bpy, [{"group": "Gates", "kind": "pole", "size": 0.04, "height": 1.8,
+                          "at": (float(x), (1.0 if k % 2 == 0 else -1.0) * 1.0)}
+                         for k, x in enumerate(xs)])
 
 
 def _incl(v):
@@ -52,13 +91,10 @@ def _incl(v):
     return math.degrees(math.atan2(-v[0], v[2]))
 
 
-def angles(obj, frame: int) -> dict:
-    """The mapping's angles at ``frame`` (deg, on the pose track the bake keys): the lean, the
-    left ski's edge, the outside shin's, the leg line's (ankles to hips), the trunk's (hips to
-    shoulders) and the shoulders' turn from the skis seen from above (> 0: to the outside)."""
-    scene = bpy.context.scene
-    traj, track = figure_pose_track(obj, FrameRange.of_scene(scene))
-    i = frame - scene.frame_start
+def angles(traj, track, i: int) -> dict:
+    """The mapping's angles at sample ``i`` (deg, on the pose track the bake keys): the lean,
+    the left ski's edge, the outside shin's, the leg line's (ankles to hips), the trunk's (hips
+    to shoulders) and the shoulders' turn from the skis seen from above (> 0: to the outside)."""
     skel = Skeleton.from_spec(load_rig("skier"))
     P = {b: m[i] for b, m in skel.fk(track.bones, len(track)).items()}
     h = lambda b: P[b][:3, 3]                                        # noqa: E731
@@ -70,7 +106,7 @@ def angles(obj, frame: int) -> dict:
             "shin": _incl(h(f"shin.{out}") - h(f"foot.{out}")),
             "legs": _incl(mid("thigh") - mid("foot")),
             "trunk": _incl(mid("upper_arm") - mid("thigh")),
-            "counter": math.copysign(math.degrees(math.atan2(line[1], -line[0])), lean)}
+            "counter": math.degrees(math.atan2(line[1], -line[0])) * (1.0 if lean > 0 else -1.0)}
 
 
 def camera(scene):
@@ -89,14 +125,14 @@ def shoot(scene, cam, target, obj, lean: float, view: str, path: Path) -> None:
     as they are) or from the front and to the outside of the turn (perspective), aimed 0.6 m up
     the line of the lean ``lean`` (deg) from the foot point."""
     centre = np.array(obj.matrix_world.translation)
-    heading = obj.rotation_euler[2] + math.pi / 2
-    d = np.array([math.cos(heading), math.sin(heading), 0.0])
+    fwd = np.array(obj.matrix_world.col[1][:3])         # the rig's travel, +Y
+    d = np.array([fwd[0], fwd[1], 0.0]) / math.hypot(fwd[0], fwd[1])
     left = np.array([-d[1], d[0], 0.0])
     th = math.radians(lean)
     aim = centre + 0.6 * (math.sin(th) * left + np.array([0.0, 0.0, math.cos(th)]))
     target.location = tuple(aim)
     if view == "behind":        # 8 deg above the horizontal: the snow shows, the angles barely
-        cam.data.type, cam.data.ortho_scale = "ORTHO", 2.4        # change
+        cam.data.type, cam.data.ortho_scale = "ORTHO", 3.2        # change
         cam.location = tuple(aim - 8.0 * d + [0.0, 0.0, 8.0 * math.tan(math.radians(8))])
     else:
         cam.data.type, cam.data.lens = "PERSP", 50
@@ -110,8 +146,8 @@ def main(argv=None) -> int:
     argv = argv[argv.index("--") + 1:] if "--" in argv else argv[1:]
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--out", default=str(ROOT / "docs" / "racing.png"))
-    p.add_argument("--frame", type=int, default=0,
-                   help="frame to show (default: the racer's deepest lean after the first turn)")
+    p.add_argument("--gate", type=int, default=3,
+                   help="the turning pole (1-6) each figure is shown passing")
     args = p.parse_args(argv)
     bpy.ops.wm.read_factory_settings(use_empty=True)
     addon.register()
@@ -127,17 +163,13 @@ def render(args) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     scene = bpy.context.scene
-    scene.frame_start, scene.frame_end, scene.render.fps = 1, FRAMES, 24
+    scene.frame_start, scene.frame_end, scene.render.fps = 1, 2, FPS
+    plans = [plan(preset, preset != "SKIER") for preset, _ in FIGURES]
     figs = [add(preset) for preset, _ in FIGURES]
-    for obj in figs:
-        activate(obj)
-        assert bpy.ops.turning.bake_turns() == {"FINISHED"}
-    frame = args.frame
-    if not frame:       # the racer's deepest lean in the second and third turns (a left one)
-        traj, _ = figure_pose_track(figs[1], FrameRange.of_scene(scene))
-        lo = int(PERIOD * 24)
-        frame = lo + int(np.argmax(traj.theta_v[lo:])) + scene.frame_start
-    scene.frame_set(frame)
+    baked = [bake_plan(obj, tr) for obj, tr in zip(figs, plans)]
+    gate_x = float(gate_positions(GAP, GATES)[args.gate - 1])
+    at = [int(np.argmax(traj.x >= gate_x)) for traj, _ in baked]   # the foot passes the gate
+    poles(GATES)
     mesh = bpy.data.meshes.new("Ground")
     mesh.from_pydata([(-200, -200, 0), (200, -200, 0), (200, 200, 0), (-200, 200, 0)], [],
                      [(0, 1, 2, 3)])
@@ -155,11 +187,14 @@ def render(args) -> None:
     cam, target = camera(scene)
     tmp = Path(tempfile.mkdtemp(prefix="racing-figure-"))
     fig, axes = plt.subplots(2, 2, figsize=(8.0, 9.4))
+    side = "right" if args.gate % 2 else "left"
     for col, (obj, (_, label)) in enumerate(zip(figs, FIGURES)):
         for other in figs:                              # this figure alone in the picture
             for o in [other] + list(other.children_recursive):
                 o.hide_render = other is not obj
-        a = angles(obj, frame)
+        traj, track = baked[col]
+        scene.frame_set(scene.frame_start + at[col])
+        a = angles(traj, track, at[col])
         for row, view in enumerate(("behind", "front")):
             path = tmp / f"{col}{view}.png"
             shoot(scene, cam, target, obj, a['lean'], view, path)
@@ -167,16 +202,23 @@ def render(args) -> None:
             ax.imshow(plt.imread(str(path)))
             ax.axis("off")
         axes[0, col].set_title(
-            f"{label}: lean {a['lean']:.1f}, skis on edge {a['edge']:.1f} deg\n"
-            f"outside shin {a['shin']:.1f}, legs {a['legs']:.1f}, trunk {a['trunk']:.1f} deg",
-            fontsize=9)
-        axes[1, col].set_title(f"from the front: shoulders turned {a['counter']:.1f} deg "
-                               f"to the outside", fontsize=9)
-    fig.suptitle(f"Frame {frame}, the racer's apex of a left turn asked at 59 deg, 2 s, 12 m/s\n"
+            f"{label}: lean {abs(a['lean']):.1f}, skis on edge {abs(a['edge']):.1f} deg\n"
+            f"outside shin {abs(a['shin']):.1f}, legs {abs(a['legs']):.1f}, "
+            f"trunk {abs(a['trunk']):.1f} deg", fontsize=9)
+        tip = 1.0 if args.gate % 2 else -1.0
+        out = (traj.y[at[col]] - tip) * tip         # > 0: round the pole, < 0: through it
+        where = (f"{out:.2f} m outside the pole" if out > 0 else
+                 f"{-out:.2f} m inside the pole's tip")
+        axes[1, col].set_title(f"t = {traj.t[at[col]]:.2f} s: the foot {where}\n"
+                               f"shoulders turned {a['counter']:.1f} deg to the outside",
+                               fontsize=9)
+    fig.suptitle(f"Reid's 10 m slalom, 12 m/s, turning pole {args.gate} (a {side} turn)\n"
+                 "racer: round the poles; skier's preset: no plan round them, the line alone\n"
                  "top: from behind (orthographic, 8 deg above the snow)", fontsize=10)
     fig.tight_layout()
     fig.savefig(args.out, dpi=100)
-    print("racing_figure:", args.out, "frame", frame)
+    print("racing_figure:", args.out, "samples", at, "foot y", [round(float(t.y[i]), 2)
+                                                            for (t, _), i in zip(baked, at)])
 
 
 if __name__ == "__main__":

@@ -87,6 +87,25 @@ def test_a_lean_as_asked_is_not_remarked(scene, capfd, sport):
     assert math.degrees(np.abs(baked).max()) == pytest.approx(23.0, abs=0.02)
 
 
+def test_a_crowds_bake_says_each_members_limited_lean(scene, capfd):
+    """Bake Turns on a crowd (Add Crowd of a telemark whose 23 deg its bounds hold to about
+    19.6 deg) warns for every member with its own lean reached and the bound; none is left
+    out (each member is its own run, its period jittered)."""
+    add("TELEMARK")
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=3, gap_time=1.0,
+                                     period_jitter=0.05, seed=3) == {"FINISHED"}
+    figs = {o.name for o in bpy.context.selected_objects if o.type == "ARMATURE"}
+    assert len(figs) == 4
+    capfd.readouterr()
+    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    said = {m.group(1): m for m in re.finditer(
+        r"Warning: Bake Turns: ([^:]+): lean ([\d.]+) deg at period [\d.]+ s \(asked ([\d.]+) "
+        r"deg; limited by", capfd.readouterr().out)}
+    assert set(said) == figs
+    for m in said.values():
+        assert float(m.group(3)) == pytest.approx(23.0) and 17.0 < float(m.group(2)) < 22.0
+
+
 def test_bake_says_the_tyre_s_grip_held_the_lean(scene, capfd):
     """The cyclist's 50 deg is more than dry asphalt's grip (mu 0.9) holds: Bake Turns says so
     in the command line's words (the core's ``grip_limited``), and the baked lean is the

@@ -119,3 +119,39 @@ def test_a_crowd_job_builds_and_bakes_its_leader_and_followers(tmp_path):
         assert grooves == want[0] and abs(width - want[1]) < 1e-5, (name, grooves, width)
     # One shot per lone figure and one for the crowd (not one per member).
     assert got["cameras"] == ["Camera School", "Camera Snowboarder"]
+
+
+LIMITED = """
+[job]
+seconds = 0.5
+fps = 24
+[[crowds]]
+name = "Steep"
+count = 2
+gap_m = 3.0
+seed = 3
+period_jitter = 0.05
+[crowds.leader]
+sport = "skier"
+name = "Lead"
+start = [0.0, 0.0]
+direction_deg = -90.0
+period = 1.6
+lean_deg = 50.0
+heading_deg = -90.0
+"""
+
+
+def test_a_crowd_job_says_each_members_limited_lean(tmp_path):
+    """Each member of a crowd whose asked 50 deg its bounds hold lower is baked with Bake
+    Turns' warning in the job's output: the lean it reached and the bound, every member."""
+    cfg = tmp_path / "limited.toml"
+    cfg.write_text(LIMITED)
+    r = subprocess.run([sys.executable, str(JOB), "--config", str(cfg), "--no-render",
+                        "--output", str(tmp_path / "out")], capture_output=True, text=True,
+                       timeout=600, cwd=ROOT)
+    assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
+    said = [line for line in (r.stdout + r.stderr).splitlines()
+            if "Bake Turns:" in line and "(asked 50.00 deg; limited by" in line]
+    for name in ("Lead", "Steep 1", "Steep 2"):
+        assert sum(f"Bake Turns: {name}: lean " in line for line in said) == 1, (name, said)

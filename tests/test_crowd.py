@@ -301,3 +301,35 @@ def test_formations_hold_their_arguments_to_the_crowd_files_ranges():
         with pytest.raises(ValueError, match=f"{field} = .* outside the allowed range "
                                              rf"\[?\(?{rng.lo:g}, {rng.hi:g}\]"):
             call(rng.hi * 1.5)
+
+
+def test_crowd_command_reports_each_limited_members_lean(tmp_path, monkeypatch):
+    """A member whose bounds keep its lean below the one asked is named with the lean it
+    reached and the bound (printed and in summary.json's ``lean_report``), on the batch kernel
+    too; a member leaning as asked has no report."""
+    from blender_turning.cli import crowd as cli_crowd
+    from blender_turning.cli import main
+    from blender_turning.crowd import kernels
+    monkeypatch.setattr(kernels, "BATCH_FROM", 2)              # the numpy batch for 3 figures
+    monkeypatch.chdir(tmp_path)
+    scene = tmp_path / "crowd.json"
+    scene.write_text(json.dumps({"duration": 6, "figures": [
+        TURNS, {"name": "b", "preset": "skier", "turns": {"period": 1.6, "lean_deg": 50}},
+        {"name": "c", "preset": "skier", "turns": {"period": 2, "lean_deg": 21}},
+        {"name": "d", "preset": "skier", "turns": {"period": 1.6, "lean_deg": 45}}]}))
+    monkeypatch.setattr(cli_crowd, "LEAN_LINES", 1)
+    import io
+    from contextlib import redirect_stdout
+    out = io.StringIO()
+    with redirect_stdout(out):
+        assert main(["crowd", str(scene), "--out", str(tmp_path / "out")]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    rows = {f["name"]: f for f in summary["figures"]}
+    assert "lean_report" not in rows["a"] and "lean_report" not in rows["c"]
+    assert rows["b"]["lean_report"].startswith("lean ") and "asked 50.00 deg" in \
+        rows["b"]["lean_report"] and "limited by" in rows["b"]["lean_report"]
+    assert "asked 45.00 deg" in rows["d"]["lean_report"]
+    lines = out.getvalue().splitlines()
+    assert f"crowd: b: {rows['b']['lean_report']}" in lines          # the first LEAN_LINES
+    assert not any(line.startswith("crowd: d:") for line in lines)
+    assert any(line.startswith("crowd: 1 more figures lean less than asked") for line in lines)

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
+from blender_turning.core.controllers.feasible import TURN_KEY, TurnsFollowed
 from blender_turning.crowd import Crowd, CrowdFigure, Turns, kernels, run_crowd
 
 SKIER = preset("skier")
@@ -32,13 +33,53 @@ def test_floats_and_the_batch_give_the_same_trajectories():
     figs = _figures()
     floats = kernels.run_turns(0.02, 16.0, figs, "floats")
     batch = kernels.run_turns(0.02, 16.0, figs, "batch")
-    assert [at for _, at in floats] == [at for _, at in batch] == [None] * 8 + [0.2, None]
-    for (a, _), (b, _) in zip(floats, batch):
+    assert [at for _, at, _ in floats] == [at for _, at, _ in batch] == [None] * 8 + [0.2, None]
+    for (a, _, _), (b, _, _) in zip(floats, batch):
         assert a.keys() == b.keys()
         for c in a:
             assert a[c].shape == b[c].shape
             np.testing.assert_allclose(a[c], b[c], rtol=1e-12, atol=1e-12, err_msg=c)
     assert len(floats[-1][0]["t"]) == 6                         # 0.1 s at 0.02 s, no fall
+
+
+def _mixed():
+    """Members asking leans the skier's bounds hold at their period and members asking more,
+    with heading control (a task's figures all hold one or none), and time offsets."""
+    return tuple(CrowdFigure(f"m{k}", SKIER,
+                             Turns(2.0 if k % 2 else 1.6, math.radians(20 if k % 2 else 50),
+                                   math.radians(5 * (k % 3))),
+                             (0.0, 4.0 * k), time_offset=0.5 * (k % 4))
+                 for k in range(8))
+
+
+def test_each_member_of_a_batch_reports_the_lean_it_reached():
+    """A batch keeps each figure's record of the turns it followed: its report is the one the
+    same figure run alone gives (the same turns, bounds and words; the leans over the run to
+    1e-12 rad), and says a member's lean was limited exactly when the floats' report does."""
+    figs = _mixed()
+    floats = kernels.run_turns(0.02, 8.0, figs, "floats")
+    batch = kernels.run_turns(0.02, 8.0, figs, "batch")
+    limited = [r is not None and r.limited for _, _, r in floats]
+    assert limited == [k % 2 == 0 for k in range(8)]
+    for (_, _, a), (_, _, b) in zip(floats, batch):
+        assert b is not None and b.limited == a.limited
+        assert b.describe() == a.describe()
+        assert [t.bound for t in b.turns] == [t.bound for t in a.turns]
+        assert abs(b.lo - a.lo) < 1e-12 and abs(b.hi - a.hi) < 1e-12
+
+
+@pytest.mark.parametrize("kernel", ["floats", "batch"])
+def test_a_crowds_limited_members_carry_their_lean_report(monkeypatch, kernel):
+    """Every member whose lean its bounds limited has the report in its trajectory's meta (what
+    the CLI's summary and output print), and only those."""
+    monkeypatch.setattr(kernels, "kernel_for", lambda n: kernel)
+    res = run_crowd(Crowd("c", _mixed(), duration=8.0))
+    for k, r in enumerate(res.figures):
+        turn = r.trajectory.meta.get(TURN_KEY)
+        assert (turn is not None) == (k % 2 == 0), r.name
+        if turn is not None:
+            report = TurnsFollowed.from_dict(turn)
+            assert report.limited and report.worst.lean < math.radians(50) - 1e-3
 
 
 def test_a_crowd_reports_the_same_falls_on_either_kernel(monkeypatch):

@@ -94,3 +94,34 @@ def test_a_run_that_ends_more_limited_names_its_start_and_its_end():
     assert rep.turns == (a, c) and rep.worst is c and (rep.lo, rep.hi) == (0.8, 1.0)
     assert rep.describe().endswith("limited by C_f_max) from t = 5.00 s on")
     assert TurnsFollowed.from_dict({"turns": [vars(a), vars(c)], "lo": 0.8, "hi": 1.0}) == rep
+
+
+def test_each_figure_of_a_batch_reports_the_turns_it_followed():
+    """A batch run (per-figure ellipses, one numpy state) keeps each figure's record: with the
+    asked leans changing at 3 and 6 s (one figure as asked, then the most limited, then less
+    limited; one limited, then as asked; one limited throughout), each reports its most limited
+    turn, the last and the leans over the run as the same figure run alone does; the batch
+    notes a change at a zero crossing of its lean, within a half-turn of when the figure alone
+    notes it (the test allows 0.8 s)."""
+    from blender_turning.core.controllers.schedule import Schedule
+    from blender_turning.core.physics.simulate import run
+    fig = preset("skier")
+    w = 2 * math.pi / 1.6
+    phases = np.radians([[20.0, 50.0, 50.0], [50.0, 20.0, 50.0], [30.0, 20.0, 50.0]])
+    at = lambda t: phases[min(int(t // 3.0), 2)]                               # noqa: E731
+    lean = lambda k: Schedule(lambda t: float(at(t)[k]))                      # noqa: E731
+    ctl = PhaseEllipse(fig.body, np.full(3, w), Schedule(at), np.full(3, math.radians(5)))
+    s0 = slalom_start(fig.body, w, phases[0][0], math.radians(5))
+    run(fig.body, fig.limits, ctl, np.stack([s0] * 3, axis=1), 9.0)
+    for k in range(3):
+        alone = PhaseEllipse(fig.body, w, lean(k), math.radians(5))
+        run(fig.body, fig.limits, alone, s0, 9.0)
+        a, b = alone.report, ctl.batch_report(k)
+        assert a.limited and b.limited
+        key = lambda r: [(u.lean, u.commanded_lean, u.period, u.bound, u.beta)  # noqa: E731
+                         for u in r.turns]
+        assert key(b) == key(a), (k, b.describe(), a.describe())
+        assert all(abs(u.t - v.t) < 0.8 for u, v in zip(b.turns, a.turns))
+        assert abs(b.lo - a.lo) < 1e-12 and abs(b.hi - a.hi) < 1e-12
+        assert len(a.turns) == (1 if k == 2 else 2)
+    assert ctl.batch_report(0).worst.commanded_lean == pytest.approx(math.radians(50.0))

@@ -17,6 +17,7 @@ import json
 import math
 from pathlib import Path
 
+from ..core.controllers.feasible import TURN_KEY, TurnsFollowed
 from ..core.errors import WorkerLost
 from ..core.files import OutputLock
 from ..core.physics.params import check_range
@@ -131,6 +132,12 @@ def _write(args, crowd, out: Path, outputs: Outputs) -> int:
     n_path = sum(f.is_path for f in crowd.figures)
     print(f"crowd: {crowd.name}, {len(crowd.figures)} figures ({n_path} following paths), "
           f"{result.wall_time:.2f} s -> {out}")
+    limited = [(row["name"], row["lean_report"]) for row in rows if "lean_report" in row]
+    for name, note in limited[:LEAN_LINES]:
+        print(f"crowd: {name}: {note}")
+    if len(limited) > LEAN_LINES:
+        print(f"crowd: {len(limited) - LEAN_LINES} more figures lean less than asked "
+              f"({out / 'summary.json'}, lean_report)")
     lost = [r.name for r in result.figures if r.status == "lost"]
     if lost:
         raise WorkerLost(f"a worker process died while it ran {len(lost)} figure"
@@ -143,6 +150,10 @@ def _write(args, crowd, out: Path, outputs: Outputs) -> int:
         raise ValueError(f"{len(result.failed)} of {len(crowd.figures)} figures failed (see "
                          f"{out / 'summary.json'}); {first.name}: {first.message}")
     return 0
+
+
+#: Figures whose limited lean the command prints (all are in summary.json's ``lean_report``).
+LEAN_LINES = 10
 
 
 def _row(f, r, traj, csv) -> dict:
@@ -160,6 +171,9 @@ def _row(f, r, traj, csv) -> dict:
         row.update(t_start=float(traj.t[0]), t_end=float(traj.t[-1]), samples=len(traj),
                    distance=float(traj.s[-1]),
                    lean_max_deg=math.degrees(float(abs(traj.theta_v).max())))
+    turn = None if r.trajectory is None else r.trajectory.meta.get(TURN_KEY)
+    if turn is not None:              # the lean reached where the bounds kept it below the asked
+        row["lean_report"] = TurnsFollowed.from_dict(turn).describe()
     if r.plan:
         row["plan"] = r.plan
     return row

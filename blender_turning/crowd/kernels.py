@@ -37,9 +37,11 @@ def run_turns(dt: float, duration: float, figures: tuple, kernel: str | None = N
     and limits) each for the crowd's ``duration`` less its time offset, on its own clock.
 
     ``kernel``: ``"floats"``, ``"batch"`` or ``None`` (:func:`kernel_for` the count).  Returns
-    one ``(columns, fell_at)`` per figure: the columns of :func:`~..core.physics.simulate.run`
-    (shape ``(n,)``, up to the figure's span or its fall) and the time of the fall on its own clock
-    (``None``: it did not fall within its span)."""
+    one ``(columns, fell_at, report)`` per figure: the columns of
+    :func:`~..core.physics.simulate.run` (shape ``(n,)``, up to the figure's span or its fall),
+    the time of the fall on its own clock (``None``: it did not fall within its span) and what
+    the controller reports of the turns it followed (:class:`~..core.controllers.feasible.
+    TurnsFollowed`: the lean reached where the bounds kept it below the one asked)."""
     kernel = kernel_for(len(figures)) if kernel is None else kernel
     if kernel not in KERNELS:
         raise ValueError(f"kernel = {kernel!r} is not one of {', '.join(KERNELS)}")
@@ -49,16 +51,16 @@ def run_turns(dt: float, duration: float, figures: tuple, kernel: str | None = N
         out = []
         for f, span in zip(figures, spans):
             c = f.controller
-            r = run(fig.body, fig.limits, PhaseEllipse(fig.body, c.omega0, c.lean,
-                                                       heading=c.heading), f.state0(), span, dt)
-            out.append((r.columns, r.fell_at))
+            ctl = PhaseEllipse(fig.body, c.omega0, c.lean, heading=c.heading)
+            r = run(fig.body, fig.limits, ctl, f.state0(), span, dt)
+            out.append((r.columns, r.fell_at, ctl.report))
         return out
     heading = None if figures[0].controller.heading is None \
         else np.array([f.controller.heading for f in figures])
-    r = run(fig.body, fig.limits,
-            PhaseEllipse(fig.body, np.array([f.controller.omega0 for f in figures]),
-                         np.array([f.controller.lean for f in figures]), heading=heading),
-            np.stack([f.state0() for f in figures], axis=1), max(spans), dt)
+    ctl = PhaseEllipse(fig.body, np.array([f.controller.omega0 for f in figures]),
+                       np.array([f.controller.lean for f in figures]), heading=heading)
+    r = run(fig.body, fig.limits, ctl, np.stack([f.state0() for f in figures], axis=1),
+            max(spans), dt)
     fell = dict(r.falls)
     out = []
     for k, span in enumerate(spans):
@@ -68,5 +70,5 @@ def run_turns(dt: float, duration: float, figures: tuple, kernel: str | None = N
             n = min(n, int(round(at / dt)) + 1)
         else:
             at = None
-        out.append(({c: v[:n, k] for c, v in r.columns.items()}, at))
+        out.append(({c: v[:n, k] for c, v in r.columns.items()}, at, ctl.batch_report(k)))
     return out

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..core import signals
+from ..core.controllers.feasible import turn_meta
 from ..core.errors import PlanInfeasible, TurningError, WorkerLost
 from ..core.physics.trajectory import Trajectory, body_meta
 from . import priority as priority_
@@ -158,11 +159,11 @@ def _batch(dt: float, duration: float, figures: tuple) -> list:
     fig = figures[0].figure
     meta = {"preset": fig.name, "dt": dt, **body_meta(fig.body)}
     out = []
-    for f, (cols, fell_at) in zip(figures, run_turns(dt, duration, figures)):
+    for f, (cols, fell_at, report) in zip(figures, run_turns(dt, duration, figures)):
         status, msg = ("ok", "") if fell_at is None else \
             ("fell", f"fell over at t = {fell_at + f.time_offset:.2f} s")
-        out.append(FigureResult(f.name, _on_crowd_clock(Trajectory.from_columns(cols, meta), f),
-                                status, msg))
+        traj = Trajectory.from_columns(cols, {**meta, **turn_meta(report)})
+        out.append(FigureResult(f.name, _on_crowd_clock(traj, f), status, msg))
     return out
 
 

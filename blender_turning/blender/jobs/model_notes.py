@@ -8,16 +8,10 @@ nothing is recomputed in an operator.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict
-
-from ...core.controllers.feasible import FeasibleTurn, TurnsFollowed
+from ...core.controllers.feasible import TURN_KEY, FeasibleTurn, TurnsFollowed, turn_meta
 from ...core.course.path import path_deviation
 from ..scene.figure_context import BOUND_SETTING
 from ..scene.scene_adapters import FrameRange, controller_from_settings, figure_from_settings
-
-#: The trajectory ``meta`` key of a run's limited turn (``asdict`` of its FeasibleTurn).
-TURN_KEY = "turn_limited"
-
 
 #: Follow Path warns when the foot strays farther than this from the drawn path, m.  The four
 #: shipped sports follow a slalom of 3 m offsets 12 m apart, the crowd tests' path and a bend of
@@ -29,10 +23,8 @@ WARN_DISTANCE = 3.0
 def with_turn(traj, controller):
     """``traj`` with the core's report of the turns a run followed in its meta when one was
     limited (unchanged when each turn was the one asked for, or the controller reports none)."""
-    report = getattr(controller, "report", None)
-    if report is None or not report.limited:
-        return traj
-    return type(traj)(traj.data, {**traj.meta, TURN_KEY: asdict(report)})
+    meta = turn_meta(getattr(controller, "report", None))
+    return type(traj)(traj.data, {**traj.meta, **meta}) if meta else traj
 
 
 def _why(report: TurnsFollowed) -> str:

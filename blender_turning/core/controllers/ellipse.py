@@ -142,6 +142,7 @@ class PhaseEllipse(Controller):
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
         self.followed: list[FeasibleTurn] = []
+        self._batch_turns = None        # a batch's per-figure turns (:meth:`_note_batch`)
         """The turns followed so far, each when it began (:attr:`report`)."""
         self._steer_betas = STEER_BETAS
 
@@ -198,11 +199,27 @@ class PhaseEllipse(Controller):
         self._forget()
         self.achieved = None
         self.followed = []
+        self._batch_turns = None
 
     @property
     def report(self) -> TurnsFollowed | None:
         """What the run's report says of the turns it followed (:class:`.TurnsFollowed`)."""
         return TurnsFollowed.of(self.followed)
+
+    def batch_report(self, k: int) -> TurnsFollowed | None:
+        """:attr:`report` of figure ``k`` of a batch run (per-figure ellipses): from its first
+        turn followed, its most limited and the last it changed to (:meth:`_note_batch`), with
+        the leans it followed over the run."""
+        rec = self._batch_turns
+        if rec is None:
+            return None
+        followed = []
+        for key in ("first", "worst", "last"):
+            turn = self._turn(*(float(v) for v in rec[key][:, k]))
+            if turn not in followed:
+                followed.append(turn)
+        report = TurnsFollowed.of(sorted(followed, key=lambda f: f.t))
+        return replace(report, lo=float(rec["lo"][k]), hi=float(rec["hi"][k]))
 
     def follow_speed(self, V_cm: float) -> BodyParams:
         """Steer at ``V_cm`` (:meth:`.Controller.follow_speed`) and keep the turn feasible at it.
@@ -259,7 +276,8 @@ class PhaseEllipse(Controller):
         return FeasibleTurn(tm, tmf, 2 * math.pi / w, f.bound(w / beta), t, beta)
 
     def _note(self, t, w, tm, tmf):
-        if np.ndim(tmf):           # a batch of per-figure ellipses: no single report
+        if np.ndim(tmf):           # a batch of per-figure ellipses
+            self._note_batch(t, w, tm, tmf)
             return
         turn = self._turn(t, w, tm, tmf)
         a = self.achieved
@@ -268,6 +286,31 @@ class PhaseEllipse(Controller):
         last = self.followed[-1] if self.followed else None
         if last is None or replace(last, t=t) != turn:
             self.followed.append(turn)
+
+    def _note_batch(self, t, w, tm, tmf):
+        """:meth:`_note` for every figure of a batch at once, in arrays (k,): the turn each
+        followed first, its most limited (the least share of the lean asked) and the last it
+        changed to, each ``(t, omega0, theta_max asked, lean followed)``, and the least and
+        largest lean followed; :meth:`batch_report` makes a figure's report of them.  With both
+        schedules constant the arrays are the same objects at every crossing (:meth:`_batch_lean`
+        keeps the leans), and nothing is done: a crowd's batch pays an identity check a step."""
+        rec = self._batch_turns
+        if rec is not None:
+            seen = rec["seen"]
+            if seen[0] is w and seen[1] is tm and seen[2] is tmf:
+                return
+        now = np.stack(np.broadcast_arrays(float(t), w, tm, tmf)).astype(float)
+        if rec is None:
+            self._batch_turns = {"first": now, "worst": now.copy(), "last": now.copy(),
+                                 "lo": now[3].copy(), "hi": now[3].copy(), "seen": (w, tm, tmf)}
+            return
+        rec["seen"] = (w, tm, tmf)
+        worse = now[3] * rec["worst"][2] < rec["worst"][3] * now[2]
+        rec["worst"][:, worse] = now[:, worse]
+        changed = np.any(now[1:] != rec["last"][1:], axis=0)
+        rec["last"][:, changed] = now[:, changed]
+        np.minimum(rec["lo"], now[3], out=rec["lo"])
+        np.maximum(rec["hi"], now[3], out=rec["hi"])
 
     # -- Section 5.2 -------------------------------------------------------------------------
     def half_turn_change(self, theta_max, omega0):

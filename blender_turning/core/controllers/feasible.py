@@ -31,7 +31,7 @@ following half-turns (Eq. 7 measures it again at the next crossing).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from contextlib import contextmanager
 from functools import lru_cache
 
@@ -158,6 +158,16 @@ class TurnsFollowed:
         a, b = self.turns
         return (f"lean {math.degrees(self.lo):.2f}-{math.degrees(self.hi):.2f} deg over the run: "
                 f"{a.brief()} from t = {a.t:.2f} s, {b.brief()} from t = {b.t:.2f} s on")
+
+
+#: The trajectory ``meta`` key of a run's limited turns (``asdict`` of its TurnsFollowed).
+TURN_KEY = "turn_limited"
+
+
+def turn_meta(report: TurnsFollowed | None) -> dict:
+    """``{TURN_KEY: asdict(report)}`` for a trajectory's meta when ``report`` says a turn was
+    limited, else ``{}`` (each turn the one asked for, or no report)."""
+    return {} if report is None or not report.limited else {TURN_KEY: asdict(report)}
 
 
 def fall_cause(limits: Limits, C_f, t, window: float = 1.0) -> str:

@@ -23,15 +23,14 @@ from ...core.sports import Retarget, Sport, register_sport
 from ...core.physics.model import Resistance
 from .. import bones as B
 from ..base import Mapping
-from ..anthropometry import centre_and_roll_inertia
 from .common import (add_local_rotation, carried, height_on_ground, ik_limb, lean, leg_lengths,
                      limb_frames, phase_window, place_on_ground, rot_y, rot_z, smoothstep)
-from ..kinematics import (PoseBuilder, frame_from_yx, norm, on_sphere_within, rigid_inverse,
+from ..kinematics import (frame_from_yx, norm, on_sphere_within, rigid_inverse,
                           stack_dot, two_bone_ik)
 from .skid_pose import SkidPose, equipment_length, knee_direction, ski_front
-from .snow import (SpringLegOptions, bend_waist, carry_vec, hip_drop, knee_flexion,
-                   lean_on_spring_legs, legs_to, level_head, set_pelvis, tilt_gain,
-                   twist_upper_body)
+from .snow import (AngulationOptions, angulation_back, bend_waist, carry_vec, centre_on_lean,
+                   hip_drop, knee_flexion, lean_on_spring_legs, legs_to, level_head, set_pelvis,
+                   tilt_gain, twist_upper_body)
 
 SIDES = (("L", -1.0), ("R", 1.0))
 
@@ -45,14 +44,8 @@ POLE_AIM_PLANT, POLE_AIM_TRAIL = math.radians(15.0), math.radians(150.0)
 #: An arm whose grip offset moved less than this (m) in an aiming pass has settled: another pass
 #: would give the same numbers to rounding, so it leaves the loop.
 SETTLED = 1e-12
-#: Poses tried before the angulated one (SkierMapping.pose): the centre of mass's lean from the
-#: first (the legs on theta_v), then the secant's; the third leaves it within 0.003 deg of
-#: theta_v at every frame of a racer's slalom (measured, tests/test_mapping_racing.py).
-COM_PASSES = 2
-
-
 @dataclass(frozen=True)
-class SkierOptions(SpringLegOptions):
+class SkierOptions(AngulationOptions):
     """Parameters of the skier mapping (SI units, angles in radians)."""
 
     outside_extra: float = 0.15
@@ -85,15 +78,6 @@ class SkierOptions(SpringLegOptions):
     """Amplitude of the upper-body counter-twist (against the turn), rad."""
     twist_phase: float = 0.0
     """Phase offset of the upper-body twist relative to phi, rad."""
-    angulation: float = 1.5
-    """On a preset's carving skis: how much more upright than the lean the pelvis and the upper
-    body stand, per radian of the skis' edge angle over the lean, rad/rad (the hips and knees
-    angulate inside; 0: none).  1.5 puts Reid et al.'s 65 deg of edge on a 55 deg lean at about
-    20 deg between the legs' and the trunk's lines (docs/racing.md)."""
-    angulation_max: float = math.radians(25.0)
-    """The most the upper body stands more upright than the lean, rad: with the legs' line
-    leaning further, the hip joints then take about 30 deg between legs and trunk, the hip's
-    range of adduction (30 deg, AAOS normal ranges)."""
     knee_in_max: float = math.radians(35.0)
     """With angulation: the largest turn of a knee in or out about its hip-to-ankle line, rad
     (within the hip's 45 deg of internal and external rotation, AAOS normal ranges)."""
@@ -112,8 +96,6 @@ class SkierOptions(SpringLegOptions):
         check_range("plant_reach", self.plant_reach, 0.1, 10.0)
         check_range("twist_amp", self.twist_amp, -math.pi / 2, math.pi / 2)
         check_range("twist_phase", self.twist_phase, -2 * math.pi, 2 * math.pi)
-        check_range("angulation", self.angulation, 0.0, 3.0)
-        check_range("angulation_max", self.angulation_max, 0.0, math.radians(45.0))
         check_range("knee_in_max", self.knee_in_max, 0.0, math.pi / 2)
 
 
@@ -177,33 +159,13 @@ class SkierMapping(Mapping):
         it, :func:`shank_twist`), the pelvis and the upper body stand ``angulation`` times the
         edge's excess over the lean more upright than ``theta_v`` (at most ``angulation_max``),
         turned at the hip joints, and the legs lean further by the amount that keeps the centre
-        of mass of the posed figure (Winter's segments, :mod:`.anthropometry`) on ``theta_v``:
-        the centre's lean is close to linear in the legs' (measured), solved by the secant
-        from two trial poses (:data:`COM_PASSES`)."""
+        of mass of the posed figure on ``theta_v`` (:func:`.snow.centre_on_lean`)."""
         carving = carving_of(traj.meta.get("preset"))
         if carving is None or o.angulation == 0.0:
             return self._pose(b, traj, o, spec)
-        th = np.asarray(traj.theta_v, float)
-        edge = carving.edge_angle(traj.C_f)
-        back = np.sign(th) * np.minimum(o.angulation * np.maximum(np.abs(edge) - np.abs(th), 0.0),
-                                        o.angulation_max)
-        extra, last = np.zeros_like(th), None
-        for _ in range(COM_PASSES):
-            trial = PoseBuilder(b.skel, b.n)
-            trial.placement = b.placement
-            self._pose(trial, traj, o, spec, back, extra)
-            P = {name: trial.pose(name) for name in b.skel.names}
-            com, _ = centre_and_roll_inertia(P, b.skel, 1.0)
-            miss = np.arctan2(-com[:, 0], com[:, 2]) - th
-            slope = np.ones_like(th)      # the first step as if the centre leaned with the legs
-            if last is not None:
-                moved = extra - last[0]
-                np.divide(miss - last[1], moved, out=slope, where=moved != 0.0)
-                slope[np.abs(slope) < 1e-3] = 1.0
-            step = -miss / slope
-            last = (extra, miss)
-            extra = extra + step
-        self._pose(b, traj, o, spec, back, extra)
+        back = angulation_back(traj.theta_v, carving.edge_angle(traj.C_f), o)
+        centre_on_lean(b, traj.theta_v,
+                       lambda builder, extra: self._pose(builder, traj, o, spec, back, extra))
 
     def _pose(self, b, traj, o, spec, back=None, extra=0.0):
         """The pose; with angulation (``back`` (n,) rad, not None) the legs lean ``extra`` (n,)
