@@ -145,3 +145,26 @@ def test_the_racer_s_braking_is_not_capped_by_the_drawn_line():
     assert scene.problem().speed_cap.cap(9.81) == 12.0
     path = scene.with_settings(line="path").problem().speed_cap.cap(9.81)
     assert path == pytest.approx(math.sqrt(9.81 / 0.192), rel=0.05)
+
+
+@pytest.mark.parametrize("V,gain,lean", [(0.5, math.cos(SLOPE), 1.0), (0.5, math.cos(SLOPE), -1.0),
+                                         (1.0, 1.0 / math.cos(SLOPE), 1.0),
+                                         (1.0, 1.0 / math.cos(SLOPE), -1.0)])
+def test_the_heading_tables_hold_the_slowest_and_the_fastest_turn(V, gain, lean):
+    """The heading after n steps of the curvature at its fastest rate up (down) from each cell's
+    end, at the slowest speed (the clip's 0.5 m/s) and the plane's least heading gain cos sigma,
+    or at the envelope's top and 1 / cos sigma (a track down the fall line), the lean at its
+    bound either way: within the tables' interval (``V`` 1.0: the envelope's top)."""
+    root = np.array([0.0, 0.0, 0.0, 0.0, 0.0, 12.0])
+    p = at_root(racer(N=3, q=5), root)
+    t = p.race.tables
+    speed = V if V < 1.0 else float(p.race.envelope(p.race.root, 4 * 0.2))
+    lim, l, sl = p.limits, p.body.l, lean * p._sin_lean
+    h, sub = p.settings.dt, 200
+    tau = (np.arange(t.lo.shape[1] * sub) + 0.5) * h / sub            # midpoints, fine steps
+    for cell in range(0, len(t.grid) - 1, 7):
+        for end, sign in ((t.grid[cell], -1.0), (t.grid[cell + 1], 1.0)):
+            C = np.clip(end + sign * lim.dC_f_max * tau, -lim.C_f_max, lim.C_f_max)
+            rate = speed * gain * C / (1.0 - C * l * sl)
+            psi = np.cumsum(rate * h / sub)[sub - 1::sub]                  # each step's end
+            assert np.all(psi >= t.lo[cell] - 1e-9) and np.all(psi <= t.hi[cell] + 1e-9)
