@@ -5,12 +5,12 @@ core/equipment.py), the largest lean and the peak leg force, their mean +- SD ov
 against Reid's (core/course/reid.py), and the whole run's extremes.
 
     python scripts/reid_courses.py [--gates 10 13] [--speed 12] [--stages 10 --choices 9]
-        [--line race] [--leg-force 5] [--rate 2.06]
+        [--line race] [--leg-force 5] [--rate 2.06] [--slope 19 --target-speed 12 [--grip 2]]
 
 The courses (docs/racing.md, "The racer's line"): gates ``gap`` m apart along the fall line
 (+x), the line through them 2.5 m left and right of it, each turning pole a line from 1.5 m
 inside the line to the course's edge (12 m out); flat ground at constant speed (the racers ride
-11-13 m/s on Reid's 19 deg slope)."""
+11-13 m/s on Reid's 19 deg slope), or with ``--slope`` that slope, the speed free."""
 from __future__ import annotations
 
 import argparse
@@ -88,6 +88,9 @@ def main(argv=None) -> int:
     p.add_argument("--target-speed", type=float, default=None, metavar="V",
                    help="with --slope: brake to this speed within the snow's grip "
                         "(docs/skidding.md, the planner brakes)")
+    p.add_argument("--grip", type=float, default=None, metavar="MU",
+                   help="with --target-speed: the snow's largest force ratio (default: hard "
+                        "snow's 1.0)")
     a = p.parse_args(argv)
     if a.angulation is not None:
         record = SPORT_PRESETS[a.preset]
@@ -108,6 +111,8 @@ def main(argv=None) -> int:
             edge_limit=a.edge_limit)
         if a.target_speed is not None:
             grip = SPORTS[sport_of(a.preset)].grip or SNOW["hard"]
+            if a.grip is not None:
+                grip = replace(grip, mu=a.grip, name=f"{a.grip:g}")
             scene = replace(scene, speed_cap=SpeedCap(a.target_speed, grip))
         t0 = time.perf_counter()
         try:
