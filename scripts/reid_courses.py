@@ -5,12 +5,12 @@ core/equipment.py), the largest lean and the peak leg force, their mean +- SD ov
 against Reid's (core/course/reid.py), and the whole run's extremes.
 
     python scripts/reid_courses.py [--gates 10 13] [--speed 12] [--stages 10 --choices 9]
-        [--line race] [--leg-force 5] [--rate 2.06]
+        [--line race] [--leg-force 5] [--rate 2.06] [--slope 19 --target-speed 12 [--grip 2]]
 
 The courses (docs/racing.md, "The racer's line"): gates ``gap`` m apart along the fall line
 (+x), the line through them 2.5 m left and right of it, each turning pole a line from 1.5 m
 inside the line to the course's edge (12 m out); flat ground at constant speed (the racers ride
-11-13 m/s on Reid's 19 deg slope)."""
+11-13 m/s on Reid's 19 deg slope), or with ``--slope`` that slope, the speed free."""
 from __future__ import annotations
 
 import argparse
@@ -25,11 +25,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from blender_turning.core.equipment import (SPORT_PRESETS, carving_of,  # noqa: E402
-                                            register_preset)
+                                            register_preset, sport_of)
 from blender_turning.core.course.reid import (REID, com_radius, course,  # noqa: E402
                                               gate_positions, per_turn, summary)
 from blender_turning.core.course.scene import scene_from_dict  # noqa: E402
 from blender_turning.core.errors import PlanInfeasible  # noqa: E402
+from blender_turning.core.physics.grip import SNOW  # noqa: E402
+from blender_turning.core.planner.speed_cap import SpeedCap  # noqa: E402
+from blender_turning.core.sports import SPORTS  # noqa: E402
 
 
 def extremes(traj, fig, x_lo: float, x_hi: float) -> dict:
@@ -79,6 +82,15 @@ def main(argv=None) -> int:
     p.add_argument("--amplitude", type=float, default=2.5, metavar="M",
                    help="the line through the gates, m left and right of the fall line (the "
                         "turning poles from 1.5 m inside it)")
+    p.add_argument("--slope", type=float, default=0.0, metavar="DEG",
+                   help="the courses on a plane of this slope falling along them, the speed "
+                        "free from --speed on (Reid's: 19); 0: flat, the speed held")
+    p.add_argument("--target-speed", type=float, default=None, metavar="V",
+                   help="with --slope: brake to this speed within the snow's grip "
+                        "(docs/skidding.md, the planner brakes)")
+    p.add_argument("--grip", type=float, default=None, metavar="MU",
+                   help="with --target-speed: the snow's largest force ratio (default: hard "
+                        "snow's 1.0)")
     a = p.parse_args(argv)
     if a.angulation is not None:
         record = SPORT_PRESETS[a.preset]
@@ -89,12 +101,19 @@ def main(argv=None) -> int:
                               "stage_time": a.stage_time, "line": a.line,
                               "leg_force_max_bw": a.leg_force})
         doc["figure"]["limits"] = {"dC_f_max": a.rate}
+        if a.slope:
+            doc["terrain"] = {"type": "plane", "slope_deg": a.slope, "downhill_deg": 0.0}
         if a.edge_max is not None:
             sidecut = carving_of(a.preset).sidecut_radius
             doc["figure"]["limits"]["C_f_max"] = 1.0 / (sidecut * math.cos(math.radians(
                 a.edge_max)))
         scene = scene_from_dict(doc, f"reid {gap:g}").with_settings(
             edge_limit=a.edge_limit)
+        if a.target_speed is not None:
+            grip = SPORTS[sport_of(a.preset)].grip or SNOW["hard"]
+            if a.grip is not None:
+                grip = replace(grip, mu=a.grip, name=f"{a.grip:g}")
+            scene = replace(scene, speed_cap=SpeedCap(a.target_speed, grip))
         t0 = time.perf_counter()
         try:
             result = scene.run()
@@ -105,7 +124,9 @@ def main(argv=None) -> int:
         gate_x = gate_positions(gap, a.count)
         turn = per_turn(traj, scene.figure, gate_x)
         ext = extremes(traj, scene.figure, gate_x[0], gate_x[-1])
-        print(f"gates {gap:g} m at {a.speed:g} m/s ({a.preset}, N = {a.stages}, q = {a.choices}, "
+        print(f"gates {gap:g} m at {a.speed:g} m/s{f' on {a.slope:g} deg' if a.slope else ''}"
+              f"{'' if a.target_speed is None else f', braking to {a.target_speed:g} m/s'} "
+              f"({a.preset}, N = {a.stages}, q = {a.choices}, "
               f"t_stage {a.stage_time:g} s, line {a.line}, leg force <= {a.leg_force:g} BW, "
               f"rate {scene.figure.limits.dC_f_max:.3g}, "
               f"C_f_max {scene.figure.limits.C_f_max:.3g}, "
@@ -114,10 +135,12 @@ def main(argv=None) -> int:
         for i, k in enumerate(turn["gates"]):
             print(f"  gate {int(k) + 1}: COM {turn['R_com'][i]:.2f} m, foot "
                   f"{turn['R_foot'][i]:.2f} m, edge {turn['edge'][i]:.1f} deg, lean "
-                  f"{turn['lean'][i]:.1f} deg, leg force {turn['F_bw'][i]:.2f} BW")
+                  f"{turn['lean'][i]:.1f} deg, leg force {turn['F_bw'][i]:.2f} BW, speed "
+                  f"{turn['V_lo'][i]:.1f}-{turn['V_hi'][i]:.1f} m/s")
         ref = REID.get(gap)
         for name, unit, ref_i in (("R_com", "m", 0), ("R_foot", "m", 0), ("edge", "deg", 2),
-                                  ("lean", "deg", None), ("F_bw", "BW", None)):
+                                  ("lean", "deg", None), ("F_bw", "BW", None),
+                                  ("V_lo", "m/s", None), ("V_hi", "m/s", None)):
             mean, sd = summary(turn)[name]
             verdict = ""
             if ref and ref_i is not None:

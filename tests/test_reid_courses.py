@@ -30,7 +30,8 @@ def slalom_track(gap=10.0, gates=6, amplitude=2.5, n=4001):
     C = ddy / (1 + dy ** 2) ** 1.5
     force = 1.0 + np.abs(C)          # body weights with m g = 800 N below
     return SimpleNamespace(t=x / 10.0, x=x, y=y, theta_dir=np.arctan(dy), C_f=C,
-                           theta_v=0.5 * np.sign(C) * np.abs(C) ** 0.5, F_leg=800.0 * force)
+                           theta_v=0.5 * np.sign(C) * np.abs(C) ** 0.5, F_leg=800.0 * force,
+                           V_cm=10.0 + 0.01 * x)
 
 
 def test_each_inner_gate_is_one_turn_with_its_apex_radius():
@@ -46,6 +47,11 @@ def test_each_inner_gate_is_one_turn_with_its_apex_radius():
     edge = math.degrees(math.acos(1.0 / (carving_of("slalom_racer").sidecut_radius / apex)))
     np.testing.assert_allclose(got["edge"], edge, rtol=1e-5)
     np.testing.assert_allclose(got["F_bw"], 1.0 + 1.0 / apex, rtol=1e-5)
+    # The speed over each turn: a turn runs from one crossover (half-way between gates) to the
+    # next, and the speed grows with x here.
+    x = gate_positions(gap, 6)[1:5]
+    np.testing.assert_allclose(got["V_lo"], 10.0 + 0.01 * (x - gap / 2), atol=2e-3)
+    np.testing.assert_allclose(got["V_hi"], 10.0 + 0.01 * (x + gap / 2), atol=2e-3)
     mean, sd = summary(got)["R_foot"]
     assert mean == pytest.approx(apex, rel=1e-5) and sd == pytest.approx(0.0, abs=1e-5)
 

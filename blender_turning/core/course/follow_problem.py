@@ -84,7 +84,10 @@ class FollowSetup:
         run_out = self.run_out
         cap = self.speed_cap
         if cap is not None:
-            cap = replace(cap, curvature=path_curvature_max(self.path),
+            # The racer's line is not held to the drawn path, so its bends set no cap: the
+            # gates are the constraints (docs/racing.md, "The least-time line").
+            race = self.settings.line == "race"
+            cap = replace(cap, curvature=0.0 if race else path_curvature_max(self.path),
                           lean_bound=self.settings.theta_bound)
         if self.ground is not None or cap is not None:
             def make(dist, obstacles):

@@ -98,8 +98,9 @@ def per_turn(traj, figure, gate_x, skip: int = 1) -> dict:
     centre of mass's tightest radius (m); ``R_foot``, the foot's, ``1 / max |C_f|`` (the skis'
     arc, m); ``edge``, the skis' largest edge angle (the sidecut relation for ``C_f``,
     :meth:`..equipment.Carving.edge_angle`, deg); ``lean``, the largest ``|theta_v|`` (deg);
-    ``F_bw``, the peak leg force (Appendix A, body weights).  Arrays with one entry a turn;
-    ``gates``: the turns' gate indices."""
+    ``F_bw``, the peak leg force (Appendix A, body weights); ``V_lo``, ``V_hi``: the centre of
+    mass's slowest and fastest speed (m/s).  Arrays with one entry a turn; ``gates``: the turns'
+    gate indices."""
     carving = carving_of(figure.name)
     if carving is None:
         raise ValueError(f"figure = {figure.name!r} has no carving equipment: the edge angle is "
@@ -108,10 +109,11 @@ def per_turn(traj, figure, gate_x, skip: int = 1) -> dict:
     weight = figure.body.m * figure.body.g
     rows = [(k, R[sl].min(), 1.0 / np.abs(traj.C_f[sl]).max(),
              math.degrees(np.abs(carving.edge_angle(traj.C_f[sl])).max()),
-             math.degrees(np.abs(traj.theta_v[sl]).max()), traj.F_leg[sl].max() / weight)
+             math.degrees(np.abs(traj.theta_v[sl]).max()), traj.F_leg[sl].max() / weight,
+             traj.V_cm[sl].min(), traj.V_cm[sl].max())
             for k, sl in turns(traj, gate_x) if skip <= k < len(gate_x) - skip]
-    cols = np.array(rows, float).reshape(-1, 6).T
-    return dict(zip(("gates", "R_com", "R_foot", "edge", "lean", "F_bw"), cols))
+    cols = np.array(rows, float).reshape(-1, 8).T
+    return dict(zip(("gates", "R_com", "R_foot", "edge", "lean", "F_bw", "V_lo", "V_hi"), cols))
 
 
 def summary(turn: dict) -> dict:

@@ -141,16 +141,13 @@ class Problem:
         self._fused = not self.free and flat_stage.applies(self)
         if self.free:
             free_speed.setup(self, lean)
-        if settings.leg_force_max and (self.free or not self.speed.is_constant):
-            raise ValueError("leg_force_max needs a constant speed held (flat ground): the leg "
-                             "force is checked at it")
+        if settings.leg_force_max and not (self.free or self.speed.is_constant):
+            raise ValueError("leg_force_max needs a constant speed held or a free one (terrain): "
+                             "the leg force is checked at the state's speed")
         #: The racer's cost (:class:`.reach.RaceCost`) for ``settings.line == "race"``, or
         #: ``None``: Section 6's distance to the path.
         self.race = None
         if settings.line == "race":
-            if self.free:
-                raise ValueError("line = 'race' needs the speed held (flat ground, a speed "
-                                 "profile): on terrain the speed is a state")
             from .reach import RaceCost
             self.race = RaceCost(self)
 
@@ -189,6 +186,8 @@ class Problem:
                 p.v_max = free_speed.speed_limit(self, float(state[V_CM]))
             p._runaways = np.zeros(1, np.int64)
             r = p.reach()
+            if p.race is not None and state is not None:    # the speed's envelope (RaceCost)
+                p.race = p.race.at_root(p, 0.0 if t is None else t, state)
         p.distance = self.distance.near(center, r)
         # One stage more for the dead-end test (search.py), and the body's ground point.
         far = r + p.v_max * self.settings.t_stage * 1.001 + self.body.l
@@ -351,6 +350,8 @@ class Problem:
         n, rows, m = P.shape
         S = P.transpose(1, 0, 2).reshape(rows, n * m)
         c = np.asarray(C, float).reshape(n * m)
+        if self.free:                     # on the ground, at the state's speed (model.leg_force)
+            return free_speed.leg_force_bw(self, S, c).reshape(n, m)
         V = float(self.speed.V[0])
         _, cf, alpha, _ = steer(self.body, self.limits, c, S, None, 0.0, V)
         F = leg_force(self.body, S[THETA_V], S[OMEGA_V], alpha, cf, V)[0]
@@ -418,7 +419,11 @@ class Problem:
             fell |= ~(self.leg_force_bw(P, C) <= st.leg_force_max).all(axis=0)
         per = st.steps_per_sample
         if self.race is not None:         # the racer's cost (RaceCost): the distance not made good
-            cost = self.race.stage_cost(P)
+            cost = self.race.stage_cost(P, t0)
+            if self.free:                 # past the speed's envelope: a run-away (RaceCost)
+                runaway = self.race.runaway(P, t0) & ~fell
+                self._runaways[0] += int(np.count_nonzero(runaway))
+                fell |= runaway
             D = np.zeros((1, m))
         else:
             D = self.distance(P[per::per, :2].transpose(0, 2, 1))      # (samples, m)

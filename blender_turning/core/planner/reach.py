@@ -32,9 +32,14 @@ Not used with the exact (spline) path distance, which can be below the nearest-s
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from ..physics.dynamics import THETA_DIR, X, Y
+from ..ground.terrain import Plane
+from ..physics.dynamics import OMEGA_V, THETA_DIR, THETA_V, X, Y
+from ..physics.model import V_CM
+from ..physics.terrain_sim import MIN_SPEED
 
 __all__ = ["ReachBound", "LINES", "RaceCost"]
 
@@ -46,17 +51,22 @@ class ReachBound:
     ``phi[j]`` relative to the node's heading, for ``C0`` in grid cell ``cell``; ``L[k]``: the
     farthest the foot can be then; ``samples``: how many samples the bound is used for."""
 
-    def __init__(self, problem, directions=16, cells=64):
+    def __init__(self, problem, directions=16, cells=64, speeds=None, gains=(1.0, 1.0)):
         st, lim, b = problem.settings, problem.limits, problem.body
         V = float(problem.speed.V[0])
+        # The speed's and the heading gain's ranges (held speed, flat: one value each; a
+        # varying speed: RaceCost.at_root): the rate V_cm gain C_f / (1 - C_f l sin theta_v)
+        # is largest at the fast end for C_f > 0 and at the slow end for C_f < 0.
+        v_lo, v_hi = (V, V) if speeds is None else speeds
+        k_lo, k_hi = v_lo * gains[0], v_hi * gains[1]
         h, sl = st.dt, problem._sin_lean
         n = np.arange(st.n_stages * st.steps_per_stage)
         self.grid = np.linspace(-lim.C_f_max, lim.C_f_max, cells + 1)
         c0 = self.grid[:, None]
         c_hi = np.minimum(lim.C_f_max, c0 + lim.dC_f_max * (n + 1) * h)
         c_lo = np.maximum(-lim.C_f_max, c0 - lim.dC_f_max * (n + 1) * h)
-        r_hi = V * c_hi / (1.0 - c_hi * b.l * sl)
-        r_lo = V * c_lo / (1.0 + c_lo * b.l * sl)
+        r_hi = np.where(c_hi > 0.0, k_hi, k_lo) * c_hi / (1.0 - c_hi * b.l * sl)
+        r_lo = np.where(c_lo > 0.0, k_lo, k_hi) * c_lo / (1.0 + c_lo * b.l * sl)
         hi = np.cumsum(h * r_hi, axis=1) - h * r_hi + h * np.maximum(r_hi, 0.0)
         lo = np.cumsum(h * r_lo, axis=1) - h * r_lo + h * np.minimum(r_lo, 0.0)
         lo, hi = lo[:-1], hi[1:]                       # a cell's hull: its lower and upper end
@@ -71,7 +81,7 @@ class ReachBound:
         mid, half = 0.5 * (lo + hi), 0.5 * (hi - lo)
         gap = np.abs((self.phi - mid[..., None] + np.pi) % (2 * np.pi) - np.pi) - half[..., None]
         c = np.where(gap <= 0.0, 1.0, np.cos(np.minimum(gap, np.pi)))
-        v_min = V / (1.0 + lim.C_f_max * b.l * sl)
+        v_min = v_lo / (1.0 + lim.C_f_max * b.l * sl)
         sup = h * np.where(c >= 0.0, problem.v_max * c, v_min * c)
         H = np.cumsum(sup, axis=1)[:, per - 1::per]
         self.H = H * (1 + 1e-9) + 1e-9                 # rounding of the sums
@@ -174,6 +184,34 @@ class RaceCost:
 
     The proof reuse of ``proof.py`` stays valid: a stage's cost depends on the node and its choice
     only (``e`` and ``V_cm`` are fixed for the problem), as ``sum d_i`` does.
+
+    **A free speed** (terrain, resistance, braking: ``Problem.free``).  The plans still all last
+    ``N t_stage``, so the least time is still the plan whose centre of mass makes good the most
+    along ``e``, now at its own speed: ``V_cm(t) cos(psi - phi_e)``.  For a non-negative stage
+    cost the distance not made good is counted against an envelope of the speed,
+
+        E(t)^2 = (V_r + a (t - t_r))^2 + 2 (g l (cos theta_r - cos theta_bound)
+                                            + (l^2 + I_v / m) omega_r^2 / 2)
+
+    ``V_r``, ``theta_r``, ``omega_r`` the search's root's speed, lean and lean rate at ``t_r``:
+    ``a = g sin sigma_max`` is the most gravity adds along the track (friction, drag and braking
+    only slow: docs/TERRAIN.md Section 4), and the lean trades its energy with the speed (on flat
+    ground without resistance the model keeps ``V^2 / 2 + g l cos theta_v + (l^2 + I_v / m)
+    omega_v^2 / 2``, to 1e-10 of it over 3 s of RK4 at 1 ms), so the speed gains at most the
+    lean's energy above its least, the lean at its bound and still::
+
+        cost = h sum_j ((E_j - V_j cos(psi_j - phi_e)) + (E_j+1 - V_j+1 cos(psi_j+1 - phi_e))) / 2
+
+    ``sum E`` is the same for every plan of a search, so the least cost is the furthest plan.  The
+    envelope rests on that balance, which a slope's lean dynamics only approach; as the run-away
+    foot speed (:mod:`.terrain_problem`), it is made a rule of the problem: a branch whose
+    ``V_cm`` passes ``E`` at a step's end is clipped and counted as a run-away
+    (:meth:`runaway`).  The bound: step
+    ``k`` makes good at most ``E_k max(c_k, 0)`` (``c_k`` over the heading interval of the tables
+    built with the speed in ``[MIN_SPEED, E]`` and, on a plane of slope ``sigma``, the heading
+    gain ``dpsi/dt / (V_f C_f)`` of :func:`..terrain.surface_frame`, ``cos sigma (1 + p^2)`` with
+    the slope along the track ``|p| <= tan sigma``, in ``[cos sigma, 1 / cos sigma]``).  The costs
+    refer to the search's root, so a search hands no proof on (``receding.py``).
     """
 
     def __init__(self, problem):
@@ -188,35 +226,88 @@ class RaceCost:
         self.e = e / np.hypot(*e)
         self.angle = float(np.arctan2(self.e[1], self.e[0]))
         st = problem.settings
-        self.n_stages, self.steps = st.n_stages, st.steps_per_stage
+        self.n_stages, self.steps, self.h, self.t_stage = (st.n_stages, st.steps_per_stage,
+                                                           st.dt, st.t_stage)
         #: ``V_cm h``, m: what one integration step makes good at most (the speed held; with a
         #: speed profile, its largest).
         self.step = problem.speed.max * st.dt
-        self.tables = ReachBound.for_problem(problem, headings_only=True)
+        #: A free speed: the envelope's slope ``a`` (m/s^2) and its root ``(t_r, V_r)``.
+        self.free = problem.free
+        self.accel = problem.body.g * problem._sin_max if self.free else 0.0
+        self.root = (0.0, float(problem.speed.V[0]), 0.0)
+        self._lean = (problem.body.g * problem.body.l, math.cos(st.theta_bound),
+                      0.5 * (problem.body.l ** 2 + problem.body.I_v / problem.body.m))
+        self.tables = (None if self.free else
+                       ReachBound.for_problem(problem, headings_only=True))
 
-    def stage_cost(self, P) -> np.ndarray:
+    def at_root(self, problem, t: float, state) -> "RaceCost":
+        """This cost for a search from a root ``state`` at time ``t`` (a free speed: the
+        envelope and the tables over its speed range; class docstring)."""
+        out = RaceCost.__new__(RaceCost)
+        out.__dict__.update(self.__dict__)
+        gl, cos_bound, j = self._lean
+        lean = gl * (math.cos(float(state[THETA_V])) - cos_bound) + j * float(state[OMEGA_V]) ** 2
+        out.root = (float(t), float(state[V_CM]), 2.0 * max(lean, 0.0))
+        out.tables = None
+        if isinstance(problem.ground, Plane):     # a height field: no tables, the bound 0
+            cos = math.cos(problem.ground.slope)
+            top = self.envelope(out.root, t + (self.n_stages + 1) * self.t_stage)
+            out.tables = ReachBound(problem, max(problem.settings.reach_directions, 1),
+                                    speeds=(MIN_SPEED, top), gains=(cos, 1.0 / cos))
+        return out
+
+    def envelope(self, root, t):
+        """``E(t)``, m/s (class docstring)."""
+        return np.sqrt((root[1] + self.accel * (np.asarray(t, float) - root[0])) ** 2 + root[2])
+
+    def runaway(self, P, t0) -> np.ndarray:
+        """Columns of ``P`` (shape ``(steps + 1, rows, m)``, from times ``t0``) whose speed
+        passes the envelope at a step's end (a free speed only)."""
+        if not self.free:
+            return np.zeros(P.shape[2], bool)
+        t = np.asarray(t0, float)[None, :] + self.h * np.arange(1, len(P))[:, None]
+        return ~(P[1:, V_CM] <= self.envelope(self.root, t) * (1 + 1e-9) + 1e-9).all(axis=0)
+
+    def stage_cost(self, P, t0=None) -> np.ndarray:
         """The cost of stages whose states at the integration steps' ends are ``P`` (shape
-        ``(steps + 1, rows, m)``, the stage's start first)."""
+        ``(steps + 1, rows, m)``, the stage's start first), from times ``t0`` (a free speed)."""
         c = np.cos(P[:, THETA_DIR] - self.angle)                   # (steps + 1, m)
-        return self.step * (len(c) - 1 - 0.5 * (c[:-1] + c[1:]).sum(axis=0))
+        if not self.free:
+            return self.step * (len(c) - 1 - 0.5 * (c[:-1] + c[1:]).sum(axis=0))
+        t = np.asarray(t0, float)[None, :] + self.h * np.arange(len(P))[:, None]
+        short = np.maximum(self.envelope(self.root, t) - P[:, V_CM] * c, 0.0)
+        return self.h * 0.5 * (short[:-1] + short[1:]).sum(axis=0)
 
     def bound(self, state, C0, depth) -> np.ndarray:
         """Admissible lower bound on the cost still to come after nodes at ``depth`` (the class
         docstring)."""
         C0 = np.atleast_1d(np.asarray(C0, float))
-        K = np.broadcast_to(self.n_stages - np.asarray(depth), C0.shape)
+        depth = np.broadcast_to(np.asarray(depth), C0.shape)
+        K = self.n_stages - depth
         t = self.tables
         top = int(np.max(K, initial=0)) * self.steps
-        if t is None or not top:
+        if not top or (t is None and not self.free):
             return np.zeros(C0.shape)
-        cells = len(t.grid) - 1
-        cell = np.clip(np.searchsorted(t.grid, C0, side="right") - 1, 0, cells - 1)
-        lo, hi = t.lo[cell, :top], t.hi[cell, :top]                  # (m, top)
         phi = (self.angle - np.asarray(state[THETA_DIR]))[:, None]
-        gap = np.abs((phi - 0.5 * (lo + hi) + np.pi) % (2 * np.pi) - np.pi) - 0.5 * (hi - lo)
-        c = np.where(gap <= 0.0, 1.0, np.cos(np.minimum(gap, np.pi)))
+        if t is None:
+            c = np.ones((len(C0), top))
+        else:
+            cells = len(t.grid) - 1
+            cell = np.clip(np.searchsorted(t.grid, C0, side="right") - 1, 0, cells - 1)
+            lo, hi = t.lo[cell, :top], t.hi[cell, :top]                  # (m, top)
+            gap = np.abs((phi - 0.5 * (lo + hi) + np.pi) % (2 * np.pi) - np.pi) - 0.5 * (hi - lo)
+            c = np.where(gap <= 0.0, 1.0, np.cos(np.minimum(gap, np.pi)))
+        mask = np.arange(top)[None, :] < (K * self.steps)[:, None]
+        if self.free:            # the envelope E at the steps' ends; step k makes good <= E c+
+            tj = (self.root[0] + depth * self.t_stage)[:, None] + self.h * np.arange(top + 1)
+            E = self.envelope(self.root, tj)
+            made = np.concatenate([np.asarray(state[V_CM])[:, None] * np.cos(phi),
+                                   E[:, 1:] * np.maximum(c, 0.0)], axis=1)
+            short = E - made
+            term = np.where(mask, 0.5 * (short[:, :-1] + short[:, 1:]), 0.0)
+            return np.maximum(self.h * term.sum(axis=1) * (1 - 1e-9) - 1e-12, 0.0)
         c = np.concatenate([np.cos(phi), c], axis=1)                 # c_-1, c_0, ...
         term = 1.0 - 0.5 * (c[:, :-1] + c[:, 1:])
-        term = np.where(np.arange(top)[None, :] < (K * self.steps)[:, None], term, 0.0)
+        term = np.where(mask, term, 0.0)
         # The sums' rounding (about 1e-15 m a term) stays inside the search's 1e-9 tolerance.
         return np.maximum(self.step * term.sum(axis=1) * (1 - 1e-9) - 1e-12, 0.0)

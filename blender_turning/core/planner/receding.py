@@ -113,6 +113,8 @@ def follow(problem: Problem, state0, C_f0: float = 0.0, duration: float | None =
         proof = plan.proof.after(plan.choices[0])
         if getattr(local, "runaways", 0):     # terrain: the next search's rules may be looser
             proof = None
+        if local.race is not None and local.free:   # its costs refer to the root (RaceCost)
+            proof = None
         if progress is not None:
             steps = [xs[:2, 0] for xs in r.record["state"]] + [x[:2, 0]]
             for a, b in zip(steps[:-1], steps[1:]):

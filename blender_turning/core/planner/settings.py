@@ -66,7 +66,7 @@ class PlannerSettings:
     docs/racing.md): Section 3's curvature bounds alone."""
     leg_force_max: float = 0.0
     """The largest leg force a branch may need, in body weights (Appendix A's ``F_leg`` over
-    ``m g`` at every integration step's end; at a constant speed held); a branch that needs more
+    ``m g`` at every integration step's end, at the state's speed); a branch that needs more
     is clipped as one the figure cannot ski, as a fall is (exact: clipping only removes
     branches).  0: no limit, the paper's problem.  A racer's legs hold about 5 (Supej &
     Holmberg 2019's peaks; docs/racing.md, "The least-time line")."""

@@ -136,6 +136,16 @@ def end_rates(p, x, cf):
     return a, v
 
 
+def leg_force_bw(p, S, C) -> np.ndarray:
+    """Appendix A's leg force on the ground (:func:`..model.leg_force`) in body weights at states
+    ``S`` (shape ``(6, m)``) with curvatures ``C`` already within their bounds."""
+    state = tuple(S[k] for k in range(6))
+    _, cf, alpha, V_f, _, fr = model.rhs(p.body, Limits(), p.ground, C, state,
+                                         resistance=p.resistance)
+    F = model.leg_force(p.body, S[THETA_V], S[4], alpha, cf, S[V_CM], V_f, fr)[0]
+    return F / (p.body.m * p.body.g)
+
+
 def columns(p, S, A, C, V) -> dict:
     """``z`` (the ground under the foot), ``V_cm`` (the state) and ``F_leg`` on the ground;
     with a speed cap the braking force and the skid angle it makes (docs/skidding.md)."""
