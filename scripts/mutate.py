@@ -1145,7 +1145,7 @@ MUTANTS += [
       "return cls(lambda tt: float(v[max(np.searchsorted(t, tt, side='right') - 1, 0)]))",
       TERMS + [T + "test_speed_schedule.py"]),
     M("follow_cap_without_path_curvature", "core/course/follow_problem.py",
-      "cap = replace(cap, curvature=path_curvature_max(self.path),", "cap = replace(cap,",
+      "curvature=0.0 if race else path_curvature_max(self.path),", "",
       [T + "test_follow_problem.py", T + "test_planner_speed_cap.py"]),
     M("follow_start_heading_reversed", "core/course/follow_problem.py",
       "heading = math.atan2(d[1], d[0])", "heading = math.atan2(-d[1], -d[0])",
