@@ -62,8 +62,9 @@ def pytest_pyfunc_call(pyfuncitem):
     import subprocess
     root = pyfuncitem.config.rootpath
     run = subprocess.run(
-        [sys.executable, "-m", "pytest", "-p", "no:cacheprovider", "-q", "-rA",
-         pyfuncitem.nodeid], cwd=root, env={**os.environ, OWN_PROCESS: "1"},
+        [sys.executable, *(["-P"] if sys.flags.safe_path else []), "-m", "pytest", "-p",
+         "no:cacheprovider", "-q", "-rA", pyfuncitem.nodeid], cwd=root,
+        env={**os.environ, OWN_PROCESS: "1"},
         capture_output=True, text=True)
     out = run.stdout + run.stderr
     if run.returncode == 0 and "1 passed" in out:
@@ -71,6 +72,16 @@ def pytest_pyfunc_call(pyfuncitem):
     if run.returncode == 0 and "1 skipped" in out:
         pytest.skip(f"in its own process: {out.strip().splitlines()[-1]}")
     pytest.fail(f"in its own process (exit status {run.returncode}):\n{out}", pytrace=False)
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_setup(item):
+    """Against the installed extension the checkout stays off ``sys.path`` (pytest's setup of the
+    first test puts it there: :func:`installed_addon.hide_checkout`)."""
+    result = yield
+    if installed_addon.ACTIVE:
+        installed_addon.hide_checkout()
+    return result
 
 
 def pytest_collection_modifyitems(config, items):
