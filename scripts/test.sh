@@ -4,8 +4,8 @@
 # Extra args go to pytest (the first run; the 4.2 run takes them when they name blender tests).
 # Without args each Blender version also runs the tests marked `installed` against the extension
 # built with the README's command and installed into a temporary user configuration
-# (tests/installed_addon.py), in a venv that cannot import the checkout.  TURNING_SKIP_BPY42=1
-# skips the 4.2 runs.
+# (scripts/installed.sh: in a venv that cannot import the checkout).  TURNING_SKIP_BPY42=1 skips
+# the 4.2 runs.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 bash "$root/scripts/env.sh"
@@ -15,18 +15,7 @@ status=0
 installed() {            # $1: the venv's python, $2 its bpy: the marked tests, installed extension
   [ "$nargs" -eq 0 ] || return 0
   echo "test.sh: the built and installed extension on $2" >&2
-  # In a venv that sees the packages of $1's venv and not the checkout: its .pth names that
-  # site-packages, whose own .pth files (the checkout's editable install) Python then never
-  # reads; -P keeps the working directory (the checkout) off sys.path.  Worker processes start
-  # with the same interpreter.
-  local view site
-  view="$(mktemp -d "${TMPDIR:-/tmp}/turning-installed-venv.XXXXXX")"
-  "$1" -m venv --without-pip "$view"
-  site="$("$view/bin/python" -c 'import sysconfig; print(sysconfig.get_path("purelib"))')"
-  "$1" -c 'import sysconfig; print(sysconfig.get_path("purelib"))' > "$site/venv.pth"
-  TURNING_INSTALLED=1 "$view/bin/python" -P -m pytest -p no:cacheprovider -q -m installed \
-    "$root"/tests/test_blender_*.py || status=$?
-  rm -rf "$view"
+  bash "$root/scripts/installed.sh" "$1" || status=$?
 }
 nargs=$#
 installed "$root/.venv/bin/python" "bpy 5.0"
