@@ -79,6 +79,14 @@ def install() -> None:
     _record_operator_calls(bpy)
 
 
+def hide_checkout() -> None:
+    """Take the checkout's root off ``sys.path``: pytest puts it there when it imports the root's
+    ``__init__.py`` (the extension's entry point, a package to pytest) while it sets up the first
+    test, and from there ``import blender_turning`` would find the checkout (in the tests and in
+    every worker process they start, which gets this ``sys.path``)."""
+    sys.path[:] = [p for p in sys.path if Path(p or os.curdir).resolve() != ROOT]
+
+
 #: ``turning.*`` operators the installed add-on registered, and those the tests called.
 REGISTERED: set = set()
 CALLED: set = set()
@@ -131,3 +139,15 @@ def _keep_enabled(*_args):
 
 def _raise(exc):
     raise exc
+
+
+def checkout_import() -> tuple:
+    """Run in a worker process: the modules named ``blender_turning...`` it has loaded (a task
+    that reached the checkout's), then what ``import blender_turning`` gives there (the
+    exception's name, or the file it imported)."""
+    loaded = sorted(m for m in sys.modules if m.split(".")[0] == "blender_turning")
+    try:
+        import blender_turning
+    except ModuleNotFoundError as exc:
+        return loaded, type(exc).__name__
+    return loaded, blender_turning.__file__

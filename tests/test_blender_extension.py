@@ -113,3 +113,36 @@ def test_the_installed_run_runs_the_installed_copy():
     assert blender_turning is sys.modules[installed_addon.INNER]
     assert workers.PACKAGE == installed_addon.INNER
     assert Path(os.environ["BLENDER_USER_RESOURCES"]) in here.parents
+
+
+@pytest.mark.installed
+def test_the_installed_run_cannot_import_the_checkout():
+    """Against the installed extension (scripts/test.sh) nothing but the installed copy is
+    ``blender_turning``: without the tests' alias ``import blender_turning`` fails, in the tests'
+    process and in a Follow Path worker after it planned a figure (the add-on's pool, its task),
+    so code that reached for the checkout would fail there as it does for a user."""
+    import installed_addon
+    if not installed_addon.ACTIVE:
+        pytest.skip("the checkout is the add-on here (TURNING_INSTALLED=1 runs it installed)")
+    from blender_turning import core
+    from blender_turning.blender.jobs import workers
+    from blender_turning.crowd import Crowd, CrowdFigure, Turns, runner
+    alias = [f for f in sys.meta_path if isinstance(f, installed_addon._InstalledAlias)]
+    saved = sys.modules.pop("blender_turning")
+    sys.meta_path[:] = [f for f in sys.meta_path if f not in alias]
+    try:
+        with pytest.raises(ModuleNotFoundError):
+            import blender_turning  # noqa: F401
+    finally:
+        sys.meta_path[:0] = alias
+        sys.modules["blender_turning"] = saved
+    task = runner.crowd_tasks(Crowd("c", [CrowdFigure("a", core.preset("skier"),
+                                                      Turns(2.0, 0.4))], 3.0))[0]
+    pool = workers.worker_pool(1)                    # one process: the task's, then the probe's
+    try:
+        with workers._plain_main():
+            assert pool.submit(runner.run_task, task).result(timeout=120)
+            loaded, got = pool.submit(installed_addon.checkout_import).result(timeout=120)
+    finally:
+        pool.shutdown()
+    assert (loaded, got) == ([], "ModuleNotFoundError")

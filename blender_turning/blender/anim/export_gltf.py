@@ -21,28 +21,43 @@ into the figure's one animation.
 
 A figure that plays another's bake (Shared motion) plays a copy of its own for the length of the
 export (:mod:`.export_shared`; :func:`glTF2_pre_export_callback` and
-:func:`glTF2_post_export_callback`), and exports as a figure with its own bake.
+:func:`glTF2_post_export_callback`, and after a failed export the timer and handler there), and
+exports as a figure with its own bake.
 """
 from __future__ import annotations
+
+import bpy
 
 from .. import compat
 from . import bake, bake_layers, export_shared
 
 MERGE_INTO = bake.MERGE_INTO
-#: What :func:`glTF2_post_export_callback` gives back (the undo of the export's own copies).
-_UNDO = []
 
 
 def glTF2_pre_export_callback(export_settings):  # noqa: N802 (the name the exporter looks for)
     """Before the exporter gathers anything: each figure playing another's bake plays a copy of
-    its own (:mod:`.export_shared`); a failed export's copies are given back first."""
-    import bpy
-    export_shared.restore_all(_UNDO)
-    _UNDO.extend(export_shared.own_copies(list(bpy.context.scene.objects)))
+    its own (:mod:`.export_shared`).  The exporter skips :func:`glTF2_post_export_callback` when
+    the export fails: then the timer gives the scene back as soon as the failed export returns
+    (in Blender's window), and a save (:func:`restore_before_save`) or the next export before
+    it, should it come first."""
+    export_shared.own_copies(list(bpy.context.scene.objects))
+    if not bpy.app.timers.is_registered(restore_after_export):
+        bpy.app.timers.register(restore_after_export, first_interval=0.0)
 
 
 def glTF2_post_export_callback(export_settings):  # noqa: N802
-    export_shared.restore_all(_UNDO)
+    export_shared.restore_copies()
+
+
+def restore_after_export():
+    """The timer of :func:`glTF2_pre_export_callback` (returns ``None``: runs once)."""
+    export_shared.restore_copies()
+
+
+@bpy.app.handlers.persistent
+def restore_before_save(*_args):
+    """A ``save_pre`` handler: no file is saved with an export's copies."""
+    export_shared.restore_copies()
 
 
 def _foreign(action, obj) -> bool:

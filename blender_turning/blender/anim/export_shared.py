@@ -40,23 +40,23 @@ def _shift_keys(action, shift: float) -> None:
         action.frame_start += shift
 
 
-def _own_copy(fig, undo) -> None:
+#: On an export's copy: the shared bake it stands in for (``of``), the strip's frames before the
+#: copy (``strip``: start, end, action start, action end) and its slot's identifier (``slot``).
+#: :func:`restore_copies` finds the copies by it in the file, so no list of them can outlive the
+#: data it names (a file loaded after a failed export frees them).
+COPY = "turn_export_copy"
+
+
+def _own_copy(fig) -> None:
     """Let ``fig``'s strip play a copy of the shared bake keyed on the scene frames it plays it
-    on; append to ``undo`` the function that gives the shared bake back (before any change)."""
+    on, marked with what gives the shared bake back (:data:`COPY`)."""
     shared, strip = bake.shared_source(fig)
     slot = compat.strip_slot(strip)
     bounds = strip.frame_start, strip.frame_end, strip.action_frame_start, strip.action_frame_end
     shift = strip.frame_start - strip.action_frame_start        # a shared strip's scale is 1
     copy = shared.copy()
-
-    def restore():
-        strip.action = shared
-        if slot is not None:
-            strip.action_slot = slot
-        strip.action_frame_start, strip.action_frame_end = bounds[2:]
-        strip.frame_start, strip.frame_end = bounds[:2]
-        bpy.data.actions.remove(copy)
-    undo.append(restore)
+    copy[COPY] = {"of": shared, "strip": list(bounds),
+                  "slot": slot.identifier if slot is not None else ""}
     copy.name = fig.name
     copy[bake.OWNER] = fig
     copy.pop(bake.SHARED, None)
@@ -68,7 +68,7 @@ def _own_copy(fig, undo) -> None:
     strip.action_frame_start = bounds[2] + shift
     strip.action_frame_end = bounds[3] + shift
     strip.frame_start, strip.frame_end = bounds[:2]
-    _merge_pieces(fig, shared.name, copy.name, undo)
+    _merge_pieces(fig, shared.name, copy.name)
     tweaks = bake_layers.tweak_layer(fig)[0]
     if tweaks is not None:          # the figure's frames, which its tweak layer spans: glTF
         #                             samples the tweak layer over the bake only when they match
@@ -77,37 +77,57 @@ def _own_copy(fig, undo) -> None:
         copy.frame_start, copy.frame_end = tweaks.frame_range
 
 
-def _merge_pieces(fig, shared: str, own: str, undo) -> None:
-    """The keyed equipment and state Empties of ``fig`` merge into its glTF animation, named
-    after the bake it plays (:func:`.export_ready.key_in_place`): the copy's name for the
-    export."""
+def _give_back(fig, strip, copy) -> None:
+    """``fig``'s ``strip`` plays the shared bake ``copy`` stands in for, on its frames."""
+    mark = copy[COPY]
+    shared, bounds = mark["of"], list(mark["strip"])
+    strip.action = shared
+    slot = compat.slot_named(shared, mark["slot"])
+    if slot is not None:
+        strip.action_slot = slot
+    strip.action_frame_start, strip.action_frame_end = bounds[2:]
+    strip.frame_start, strip.frame_end = bounds[:2]
+    _merge_pieces(fig, copy.name, shared.name)
+
+
+def _merge_pieces(fig, merged: str, into: str) -> None:
+    """The keyed equipment and state Empties of ``fig`` that merge into its glTF animation named
+    ``merged`` (:func:`.export_ready.key_in_place`) merge into ``into``'s: the copy's for the
+    export, the shared bake's again after it."""
     from .export_ready import equipment
     from .export_state import carriers
     for obj in equipment(fig) + carriers(fig):
         action = obj.animation_data.action if obj.animation_data else None
-        if action is not None and action.get(bake.MERGE_INTO) == shared:
-            action[bake.MERGE_INTO] = own
-            undo.append(lambda action=action: action.__setitem__(bake.MERGE_INTO, shared))
+        if action is not None and action.get(bake.MERGE_INTO) == merged:
+            action[bake.MERGE_INTO] = into
 
 
-def own_copies(figures) -> list:
+def own_copies(figures) -> None:
     """Give each of ``figures`` that plays another's bake a copy of its own (see the module
-    doc); returns the functions that undo it, to call in reverse order."""
-    undo = []
+    doc), after giving back any copies an export left (:func:`restore_copies`)."""
+    restore_copies()
     try:
         for fig in figures:
             if fig.type == "ARMATURE" and bake.shared_source(fig)[0] is not None:
-                _own_copy(fig, undo)
+                _own_copy(fig)
     except Exception:
-        restore_all(undo)
+        restore_copies()
         raise
-    return undo
 
 
-def restore_all(undo) -> None:
-    for restore in reversed(undo):
-        restore()
-    undo.clear()
+def restore_copies() -> None:
+    """Every figure playing an export's copy plays the shared bake again, on the frames it
+    played it on, and the copies are gone: the scene as it was before the export."""
+    copies = [a for a in bpy.data.actions if COPY in a]
+    if not copies:
+        return
+    for fig in bpy.data.objects:
+        adt = fig.animation_data
+        for strip in (s for t in (adt.nla_tracks if adt else ()) for s in t.strips):
+            if strip.action in copies:
+                _give_back(fig, strip, strip.action)
+    for copy in copies:
+        bpy.data.actions.remove(copy)
 
 
 @contextmanager
@@ -117,9 +137,9 @@ def unshared(figures):
     again with the shared bake."""
     scene = bpy.context.scene
     frame = scene.frame_current, scene.frame_subframe
-    undo = own_copies(figures)
+    own_copies(figures)
     try:
         yield
     finally:
-        restore_all(undo)
+        restore_copies()
         scene.frame_set(frame[0], subframe=frame[1])

@@ -7,7 +7,7 @@ import bpy
 from bpy.props import BoolProperty, FloatProperty, StringProperty
 from bpy_extras.io_utils import ExportHelper
 
-from ..anim import export_fbx, export_shared
+from ..anim import export_fbx, export_gltf, export_shared
 
 
 def _fbx_exporter() -> bool:
@@ -69,8 +69,13 @@ _register, _unregister = bpy.utils.register_classes_factory(classes)
 def register():
     _register()
     bpy.types.TOPBAR_MT_file_export.append(menu_entry)
+    bpy.app.handlers.save_pre.append(export_gltf.restore_before_save)
 
 
 def unregister():
+    while export_gltf.restore_before_save in bpy.app.handlers.save_pre:
+        bpy.app.handlers.save_pre.remove(export_gltf.restore_before_save)
+    if bpy.app.timers.is_registered(export_gltf.restore_after_export):
+        bpy.app.timers.unregister(export_gltf.restore_after_export)
     bpy.types.TOPBAR_MT_file_export.remove(menu_entry)
     _unregister()
