@@ -922,7 +922,7 @@ MUTANTS = [
     M("export_copy_keeps_its_frame_range", "blender/anim/export_shared.py",
       "    copy.use_frame_range = True", "    pass", EXPORT, "bake"),
     M("export_pieces_merge_into_the_shared_bake", "blender/anim/export_shared.py",
-      "            action[bake.MERGE_INTO] = own", "            pass", EXPORT, "bake"),
+      "            action[bake.MERGE_INTO] = into", "            pass", EXPORT, "bake"),
     M("fbx_late_strip_from_its_own_start", "blender/anim/export_fbx.py",
       "            _from_first_frame(fig, scene, undo)", "            pass", EXPORT, "bake"),
     M("export_copy_left_behind", "blender/anim/export_shared.py",
