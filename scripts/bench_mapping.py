@@ -6,6 +6,7 @@ For each built-in sport (skier, snowboarder, telemark, cyclist): a 60 s run on t
 controller (its preset, a 2 s turn, 20 deg lean) resampled at 24 fps (1,441 frames), mapped
 whole (``map_trajectory``) and as Live Preview's drag step maps it: a window of 73 frames in
 the middle of the run (the run's edge-tilt fit passed in, as ``blender/jobs/live.py`` does).
+The carver's and the slalom racer's 20 s slaloms (``PRESETS``), mapped whole.
 Times are the least over the calls of one process, wall and CPU (the process's CPU: OpenBLAS
 threads woken by LAPACK calls show as CPU above wall).  And the crowd's mapping
 (``scripts/bench_crowd.py``'s 100 skiers, a leader and followers 0.1 s apart, 60 s): the first
@@ -34,6 +35,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 SPORTS = ("skier", "snowboarder", "telemark", "cyclist")
+#: Presets whose mapping keeps the centre of mass on the lean (docs/racing.md): a 20 s slalom
+#: from ``slalom_start``, (turn period s, lean asked deg), 481 frames at 24 fps.
+PRESETS = {"carver": (2.5, 70.0), "slalom_racer": (2.0, 60.0)}
 WINDOW = 73                 # Live Preview's drag step: 12 frames either side + 24 of context
 CALLS = {"window": 40, "run": 5}
 CROWD = "crowd: resample at 24 fps + map {} skiers"
@@ -58,6 +62,15 @@ def make_runs(path: Path, crowd: int) -> None:
                                           heading=0.0), duration=60.0).resample(24)
         runs[sport] = {"meta": traj.meta, "data": {c: v.tolist() for c, v in
                                                    traj.columns().items()}}
+    from blender_turning.core import slalom_start
+    for name, (period, lean) in PRESETS.items():
+        fig = preset(name)
+        ctl = PhaseEllipse(fig.body, 2 * math.pi / period, math.radians(lean), 0.0,
+                           limits=fig.limits)
+        w, tm = ctl.target(0.0)
+        traj = simulate(fig, ctl, 20.0, state0=slalom_start(fig.body, w, tm)).resample(24)
+        runs[name] = {"meta": traj.meta, "data": {c: v.tolist() for c, v in
+                                                  traj.columns().items()}}
     path.write_text(json.dumps(runs))
 
 
@@ -101,8 +114,16 @@ def one_tree(runs_path: str, poses_path: str) -> None:
     runs = json.loads(Path(runs_path).read_text())
     crowd = [Trajectory.from_columns({c: doc["data"][c] for c in COLUMNS}, doc["meta"])
              for doc in runs.pop("crowd")]
-    for sport, doc in runs.items():
+    for name, doc in runs.items():
         traj = Trajectory.from_columns({c: doc["data"][c] for c in COLUMNS}, doc["meta"])
+        if name in PRESETS:                     # the whole slalom only
+            from blender_turning.core.equipment import sport_of
+            sport = sport_of(name)
+            case = f"{name} slalom, {PRESETS[name][1]:.0f} deg ({len(traj)} frames)"
+            keep(case, map_trajectory(sport, traj))
+            out[case] = timed(lambda: map_trajectory(sport, traj), CALLS["run"])
+            continue
+        sport = name
         n = len(traj)
         lo = n // 2 - WINDOW // 2
         part = Trajectory(traj.data[:, lo:lo + WINDOW], {**traj.meta, "s_start": float(traj.s[0])})

@@ -78,6 +78,7 @@ STAGING = [T + "test_crowd_staging.py", T + "test_render_job_crowd.py"]
 POLES = [T + "test_blender_poles.py"]
 SKIER_MAPPING = [T + "test_mapping_skier.py"]
 RACING = [T + "test_racing_presets.py", T + "test_mapping_racing.py"]
+SNOW_COM = RACING + [T + "test_mapping_snowboarder.py"]
 LEAN_ROOM = [T + "test_racing_lean.py", T + "test_feasible_turns.py"]
 LEAN_RANGE = [T + "test_lean_range.py", T + "test_cli_robust.py"]
 LEAN_REPORT = [T + "test_lean_report.py", T + "test_feasible_turns.py"]
@@ -766,9 +767,16 @@ MUTANTS = [
       "        edge = carving.edge_angle(traj.C_f)\n        return {s: edge for s, _ in SIDES}\n",
       "        pass\n", RACING, "mapping"),
     M("angulation_com_uncorrected", "mapping/sports/snow.py",
-      "        extra = extra - miss / slope\n", "        pass\n", RACING, "mapping"),
+      "        extra = extra + step\n", "        pass\n", SNOW_COM, "mapping"),
     M("angulation_com_no_secant", "mapping/sports/snow.py",
-      "        if last is not None:\n", "        if False:\n", RACING, "mapping"),
+      "        if last is not None:\n", "        if False:\n", SNOW_COM, "mapping"),
+    M("com_model_no_slide", "mapping/sports/snow.py",
+      "out = ankle_z * (1.0 / np.cos(legs_lean + d) - secant)", "out = 0.0 * ankle_z", SNOW_COM,
+      "mapping"),
+    M("com_model_legs_unturned", "mapping/sports/snow.py",
+      'LEG_SEGMENTS = ("thigh", "leg", "foot")', "LEG_SEGMENTS = ()", SNOW_COM, "mapping"),
+    M("com_one_trial_pose", "mapping/sports/snow.py",
+      "COM_PASSES = 2\n", "COM_PASSES = 1\n", SNOW_COM, "mapping"),
     M("angulation_back_unsigned", "mapping/sports/snow.py",
       "return np.sign(th) * np.minimum(", "return np.abs(th) * 0.0 + np.minimum(", RACING,
       "mapping"),
@@ -785,10 +793,13 @@ MUTANTS = [
     M("carver_board_linear_tilt", "mapping/sports/snowboarder.py",
       'carving = carving_of(traj.meta.get("preset"))', "carving = None", RACING, "mapping"),
     M("carver_com_uncorrected", "mapping/sports/snowboarder.py",
-      "builder, traj, o, spec, tilt, back, extra), COM_PASSES)",
-      "builder, traj, o, spec, tilt, back, 0.0 * extra), COM_PASSES)", RACING, "mapping"),
+      "builder, traj, o, spec, tilt, back, extra), passes)",
+      "builder, traj, o, spec, tilt, back, 0.0 * extra), passes)", RACING, "mapping"),
     M("carver_com_two_passes", "mapping/sports/snowboarder.py",
-      "COM_PASSES = 3", "COM_PASSES = 2", RACING, "mapping"),
+      "CARVER_PASSES = 3", "CARVER_PASSES = 2", RACING, "mapping"),
+    M("snowboarder_com_uncorrected", "mapping/sports/snowboarder.py",
+      "back, passes = np.zeros(len(traj)), COM_PASSES", "back, passes = np.zeros(len(traj)), 0",
+      MAPPING, "mapping"),
     M("carver_upper_body_leans", "mapping/sports/snowboarder.py",
       "add_local_rotation(b, B.HIPS, (0.0, 1.0, 0.0), back + extra)",
       "add_local_rotation(b, B.HIPS, (0.0, 1.0, 0.0), extra)", RACING, "mapping"),

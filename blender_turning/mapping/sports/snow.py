@@ -23,7 +23,7 @@ import numpy as np
 
 from ...core.physics.params import check_range
 from .. import bones as B
-from ..anthropometry import centre_and_roll_inertia
+from ..anthropometry import SEGMENTS, segment_ends
 from ..kinematics import PoseBuilder, dot, norm
 from .common import (add_local_rotation, body_axes, carried, ik_limb, lean, leg_lengths,
                      static_force)
@@ -31,7 +31,7 @@ from .common import (add_local_rotation, body_axes, carried, ik_limb, lean, leg_
 __all__ = ["SpringLegOptions", "AngulationOptions", "angulation_back", "centre_on_lean",
            "lean_on_spring_legs", "spring_length", "bridged_force",
            "tilt_gain", "set_pelvis", "hip_drop", "knee_flexion",
-           "carry_vec", "bend_waist", "twist_upper_body", "level_head"]
+           "carry_vec", "bend_waist", "twist_upper_body", "level_head", "legs_step"]
 
 
 @dataclass(frozen=True)
@@ -96,35 +96,83 @@ def angulation_back(theta_v, edge, o) -> np.ndarray:
                                     o.angulation_max)
 
 
-#: Poses tried before the angulated one (:func:`centre_on_lean`): the centre of mass's lean from
-#: the first (the legs on theta_v), then the secant's; the third leaves it within 0.003 deg of
-#: theta_v at every frame of a racer's slalom (measured, tests/test_mapping_racing.py).
+#: Poses tried before the final one (:func:`centre_on_lean`): the first's step from the model of
+#: :func:`legs_step`, then the secant's; after two the centre of mass leans theta_v within
+#: 0.002 deg at every frame of a snowboarder's slalom, 0.001 deg of a racer's (measured,
+#: tests/test_mapping_snowboarder.py, tests/test_mapping_racing.py).
 COM_PASSES = 2
+#: Winter's segments that lean with the legs (:func:`legs_step`) and the bones whose poses give
+#: every segment's ends (:func:`..anthropometry.segment_ends`).
+LEG_SEGMENTS = ("thigh", "leg", "foot")
+SEGMENT_BONES = tuple(f"{bone}.{s}" for bone in ("thigh", "shin", "foot", "toe", "upper_arm",
+                                                   "forearm", "hand") for s in "LR")
+#: Newton steps on :func:`legs_step`'s model: the fourth and a sixth give the same pose to
+#: 1e-14 deg of the centre's lean (measured on the carver).
+MODEL_STEPS = 4
 
 
 def centre_on_lean(b, theta_v, pose, passes: int = COM_PASSES) -> None:
     """Pose ``b`` by ``pose(builder, extra)``, the legs leaning ``extra`` (n,) rad beyond
     ``theta_v``, with the ``extra`` that puts the posed figure's centre of mass (Winter's
-    segments, :mod:`..anthropometry`) on ``theta_v`` from the foot point: the centre's lean is
-    close to linear in the legs' (measured), solved by the secant from ``passes`` trial poses
-    (:data:`COM_PASSES`)."""
+    segments, :mod:`..anthropometry`) on ``theta_v`` from the foot point.  From ``passes``
+    trial poses (:data:`COM_PASSES`): the first step is the root of :func:`legs_step`'s model,
+    the next ones the secant's through the last two trials' misses (the pose is not linear in
+    ``extra``: the hips drop where a leg cannot reach, the waist bends with the knees)."""
     th = np.asarray(theta_v, float)
     extra, last = np.zeros_like(th), None
     for _ in range(passes):
         trial = PoseBuilder(b.skel, b.n)
         trial.placement = b.placement
         pose(trial, extra)
-        P = {name: trial.pose(name) for name in b.skel.names}
-        com, _ = centre_and_roll_inertia(P, b.skel, 1.0)
-        miss = np.arctan2(-com[:, 0], com[:, 2]) - th
-        slope = np.ones_like(th)      # the first step as if the centre leaned with the legs
+        miss, step = legs_step({name: trial.pose(name) for name in SEGMENT_BONES}, b.skel, th,
+                               th + extra)
         if last is not None:
-            moved = extra - last[0]
+            moved, slope = extra - last[0], np.zeros_like(th)
             np.divide(miss - last[1], moved, out=slope, where=moved != 0.0)
-            slope[np.abs(slope) < 1e-3] = 1.0
+            step = np.where(np.abs(slope) > 1e-3, -miss / np.where(slope == 0.0, 1.0, slope),
+                            step)
         last = (extra, miss)
-        extra = extra - miss / slope
+        extra = extra + step
     pose(b, extra)
+
+
+def legs_step(P, skel, theta_v, legs_lean):
+    """``(miss, step)`` (n,) rad of the pose ``P`` whose legs lean ``legs_lean`` (n,) rad: how
+    far its centre of mass leans beyond ``theta_v`` from the foot point, and the legs' further
+    lean ``d`` that puts it on ``theta_v`` in a model of how the pose moves.  Leaning the legs
+    by ``d`` further turns them and the hip joints by ``d`` about the foot's line and carries
+    the rest of the body (pelvis, trunk, arms: turned back about the hips) with the hip joints;
+    and :func:`set_pelvis` keeps the ankles at their height ``a`` above the ground, so the whole
+    figure slides out along the legs' line by ``a (1 / cos(legs_lean + d) - 1 / cos legs_lean)``.
+    The centre's moment is then ``R(d) A + C + slide``: ``A`` the legs' moment plus the rest's
+    mass at the hip joints, ``C`` the rest's moment about them; ``d`` is its root in
+    :data:`MODEL_STEPS` Newton steps."""
+    legs, rest, m_rest = 0.0, 0.0, 0.0
+    for name, a, e in segment_ends(P, skel):
+        frac, at, _ = SEGMENTS[name]
+        if name in LEG_SEGMENTS:
+            legs = legs + frac * (a + at * (e - a))
+        else:
+            rest, m_rest = rest + frac * (a + at * (e - a)), m_rest + frac
+    com = (legs + rest)[:, ::2] * (-1.0, 1.0)
+    hips = 0.5 * (P["thigh.L"][:, :3, 3] + P["thigh.R"][:, :3, 3])
+    ankle_z = 0.5 * (P["foot.L"][:, 2, 3] + P["foot.R"][:, 2, 3])
+    A = (legs + m_rest * hips)[:, ::2] * (-1.0, 1.0)     # (x, z) with x to the left
+    C = (rest - m_rest * hips)[:, ::2] * (-1.0, 1.0)
+    secant = 1.0 / np.cos(legs_lean)
+
+    def miss(d):
+        c, s = np.cos(d), np.sin(d)
+        out = ankle_z * (1.0 / np.cos(legs_lean + d) - secant)
+        x = c * A[:, 0] + s * A[:, 1] + C[:, 0] + out * np.sin(legs_lean + d)
+        z = -s * A[:, 0] + c * A[:, 1] + C[:, 1] + out * np.cos(legs_lean + d)
+        return np.arctan2(x, z) - theta_v
+
+    d = np.zeros_like(theta_v)
+    for _ in range(MODEL_STEPS):
+        m = miss(d)
+        d = d - m / ((miss(d + 1e-6) - m) / 1e-6)
+    return np.arctan2(com[:, 0], com[:, 1]) - theta_v, d
 
 
 def spring_length(traj, k_s: float, static: float, lo: float, hi: float,

@@ -9,7 +9,8 @@ its edge on the ground; the boots are glued to it, so the ankles take up the dif
 the board's tilt and the body's lean ``theta_v``.  On a preset's carving board (the carver) the
 board stands on the edge angle that carves C_f by the sidecut relation, the rider angulates
 where that edge exceeds the lean (hips and knees inside the turn, the upper body more upright)
-and the centre of mass of the posed figure leans ``theta_v`` (docs/racing.md).
+(docs/racing.md).  On either board the legs lean so that the centre of mass of the posed figure
+leans ``theta_v`` (the side-on rider's waist bend is across the travel).
 """
 from __future__ import annotations
 
@@ -27,16 +28,16 @@ from .. import bones as B
 from ..base import Mapping
 from .common import add_local_rotation, carried, lean, place_on_ground, rot_y, rot_z
 from .skid_pose import SkidPose, equipment_length, knee_direction
-from .snow import (AngulationOptions, angulation_back, bend_waist, carry_vec, centre_on_lean,
-                   hip_drop, knee_flexion, lean_on_spring_legs, legs_to, level_head, set_pelvis,
-                   tilt_gain, twist_upper_body)
+from .snow import (COM_PASSES, AngulationOptions, angulation_back, bend_waist, carry_vec,
+                   centre_on_lean, hip_drop, knee_flexion, lean_on_spring_legs, legs_to,
+                   level_head, set_pelvis, tilt_gain, twist_upper_body)
 
 SIDES = ("L", "R")
-#: Trial poses of the carver's centre of mass (:func:`.snow.centre_on_lean`): a side-on rider's
-#: centre moves less linearly with the legs' lean than a skier's (the waist bends across the
-#: travel); two leave it 0.05-0.12 deg off theta_v, three within 0.0012 deg (measured,
-#: tests/test_mapping_racing.py).
-COM_PASSES = 3
+#: Trial poses of the carver's centre of mass (:func:`.snow.centre_on_lean`): on edge past the
+#: lean the side-on rider's centre moves less linearly with the legs' lean than a skier's (the
+#: hips drop to reach the board, the waist bends across the travel); two leave it up to 0.031
+#: deg off theta_v, three within 0.0001 deg (measured, tests/test_mapping_racing.py).
+CARVER_PASSES = 3
 
 
 @dataclass(frozen=True)
@@ -78,32 +79,32 @@ class SnowboarderMapping(Mapping):
         angle that carves C_f by the sidecut relation; where it stands further on edge than the
         body leans, the pelvis and the upper body stand ``angulation`` times the excess more
         upright than ``theta_v`` (at most ``angulation_max``), turned at the hip joints about
-        the travel; the legs lean by the amount that keeps the centre of mass of the posed
-        figure on ``theta_v`` (:func:`.snow.centre_on_lean`; the rider's forward bend at the
-        waist is across the travel and moves it too)."""
+        the travel.  On either board the legs lean by the amount that keeps the centre of mass
+        of the posed figure on ``theta_v`` (:func:`.snow.centre_on_lean`: the rider's forward
+        bend at the waist is across the travel and moves it, 8.4 deg at a carver's apex)."""
         carving = carving_of(traj.meta.get("preset"))    # a preset's board: the sidecut relation
         if carving is None:
             tilt = np.clip(tilt_gain(traj, o.tilt_gain) * traj.C_f, -o.tilt_max, o.tilt_max)
-            return self._pose(b, traj, o, spec, tilt)
-        tilt = carving.edge_angle(traj.C_f)
-        back = angulation_back(traj.theta_v, tilt, o)
+            back, passes = np.zeros(len(traj)), COM_PASSES
+        else:
+            tilt = carving.edge_angle(traj.C_f)
+            back, passes = angulation_back(traj.theta_v, tilt, o), CARVER_PASSES
         centre_on_lean(b, traj.theta_v, lambda builder, extra: self._pose(
-            builder, traj, o, spec, tilt, back, extra), COM_PASSES)
+            builder, traj, o, spec, tilt, back, extra), passes)
 
-    def _pose(self, b, traj, o, spec, tilt, back=None, extra=0.0):
-        """The pose with the board on ``tilt`` (n,) rad; with angulation (``back`` (n,) rad, not
-        None) the legs lean ``extra`` (n,) rad beyond ``theta_v``, the pelvis and the upper
-        body ``back + extra`` rad back toward upright about the hip joints."""
+    def _pose(self, b, traj, o, spec, tilt, back, extra):
+        """The pose with the board on ``tilt`` (n,) rad, the legs leaning ``extra`` (n,) rad
+        beyond ``theta_v``, the pelvis and the upper body ``back + extra`` rad back toward
+        upright about the hip joints (``back``: the angulation, zero on the sport's own
+        board)."""
         skel = b.skel
         th, (right, fwd, up), full, length = lean_on_spring_legs(b, traj, o, equipment_length(spec))
         skid = SkidPose(traj)       # the board across the travel (docs/skidding.md Section 8)
         skid.lean_back(b)
         skid.turn_hips(b, up)
-        angulated = back is not None
-        if angulated:
-            lean(b, extra)
-            th = th + extra
-            add_local_rotation(b, B.HIPS, (0.0, 1.0, 0.0), back + extra)  # at the hip joints
+        lean(b, extra)
+        th = th + extra
+        add_local_rotation(b, B.HIPS, (0.0, 1.0, 0.0), back + extra)  # at the hip joints
         ankle_rest = {s: skel.rest_of(B.side("foot", s))[:3, 3] for s in SIDES}
         anchor = 0.5 * (ankle_rest["L"] + ankle_rest["R"])
         R = rot_y(-skid.tilt(tilt)) @ skel.rest_of(B.BOARD)[:3, :3]
@@ -131,7 +132,7 @@ class SnowboarderMapping(Mapping):
         twist = np.clip(o.twist_gain * traj.C_f, -o.twist_max, o.twist_max)
         twist_upper_body(b, up, twist)
         skid.counter_rotate(b, up)
-        level_head(b, th - (back + extra if angulated else 0.0), o.head_level)  # its own lean
+        level_head(b, th - (back + extra), o.head_level)  # its own lean
         # Arms out to the sides, swinging ahead of the twist: the twist arm_lead seconds later.
         ahead = np.clip(o.twist_gain * np.interp(traj.t + o.arm_lead, traj.t, traj.C_f),
                         -o.twist_max, o.twist_max)
