@@ -1057,6 +1057,13 @@ MUTANTS += [
     M("preview_tables_fine_without_a_new_lean", "core/controllers/ellipse.py",
       "        return (min(tm, top(feasible_turns(",
       "        return True or (min(tm, top(feasible_turns(", PREVIEW),
+    M("preview_midpoint_slopes_held", "core/physics/terrain_sim.py",
+      "dv = (hx + hxx * ex + hxy * ey, hy + hxy * ex + hyy * ey, hxx, hxy, hyy)",
+      "dv = (hx, hy, hxx, hxy, hyy)", PREVIEW),
+    M("preview_midpoints_read_twice", "core/physics/terrain_sim.py",
+      "        if dv is not None:\n            hx, hy, hxx, hxy, hyy = dv",
+      "        if dv is not None:\n            dv = derivatives(qx, qy)\n        if False:\n"
+      "            hx, hy, hxx, hxy, hyy = dv", PREVIEW),
     M("preview_rows_at_fine_steps", "core/physics/terrain_sim.py",
       "row = stride == 1 or i % stride == 0", "row = True", PREVIEW),
     M("resample_window_from_the_next_sample", "core/physics/trajectory.py",
