@@ -193,9 +193,9 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     the coming half-turn at the step before one (Section 5.2,
     :meth:`.PhaseEllipse.begin_step`: a crossing within the step, ``theta_v + omega_v dt``
     across zero) and the law switches to its ellipse there (a jump in ``alpha_v`` inside a
-    step), and so does a controller taking new feasible turns at a speed it passes where they
-    change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same grid,
-    those steps are the ``stride = 1`` run's.  A coarse step is tried where the lean's rate carries it
+    step), and so does a controller taking new feasible turns at a speed it passes where
+    they change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same
+    grid, those steps are the ``stride = 1`` run's.  A coarse step is tried where the lean's rate carries it
     across zero within no fewer than :data:`REACH` coarse steps and it moves at most
     :data:`SPAN` cells of a height field, and kept only if the controller does not change over
     it and it ends on the same side with no crossing within ``stride dt`` ahead (where
