@@ -195,13 +195,13 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     across zero) and the law switches to its ellipse there (a jump in ``alpha_v`` inside a
     step), and so does a controller taking new feasible turns at a speed it passes where
     they change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same
-    grid, those steps are the ``stride = 1`` run's.  A coarse step is tried where the lean's rate carries it
-    across zero within no fewer than :data:`REACH` coarse steps and it moves at most
-    :data:`SPAN` cells of a height field, and kept only if the controller does not change over
-    it and it ends on the same side with no crossing within ``stride dt`` ahead (where
-    ``begin_step``, seeing the long step behind it, would plan).
-    A step's first stage bounds the rate of ``C_f`` relative to the last step's, ``last`` s
-    before (Section 3).  The fall and a stop are checked at the rows."""
+    grid, those steps are the ``stride = 1`` run's.  A coarse step is tried where the lean's
+    rate carries it across zero within no fewer than :data:`REACH` coarse steps and it moves
+    at most :data:`SPAN` cells of a height field, and kept only if the controller does not
+    change over it and it ends on the same side with no crossing within ``stride dt`` ahead
+    (where ``begin_step``, seeing the long step behind it, would plan).  A step's first stage
+    bounds the rate of ``C_f`` relative to the last step's, ``last`` s before (Section 3).  The
+    fall and a stop are checked at the rows."""
     controller.begin_run(limits)
     foot = rhs.foot
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
