@@ -6,8 +6,10 @@
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py --parts    # where a drag step goes
 
 Each case is one figure with Live Preview on, the current frame in the middle of the range
-(a drag step re-bakes the frames around it first); a drag step sets its slider (``turning.lean``, or
-for the Body cases ``turning.mass``) a little further and re-bakes.  Timed, median of ``--steps``
+(``--frame end``: the last frame, the dearest: a drag step simulates from the first frame to
+just past the frames around the current one, which it re-bakes first); a drag step sets its
+slider (``turning.lean``, or for the Body cases ``turning.mass``) a little further and
+re-bakes.  Timed, median of ``--steps``
 steps (in ms), the three ways interleaved step by step (the machine is shared):
 
 - ``bake op``: today's figure, ``bpy.ops.turning.bake_turns()`` after the set (curves made anew,
@@ -84,13 +86,19 @@ def build():
     return figs
 
 
+#: Where the current frame stands (``--frame``): a drag step simulates from the first frame to
+#: just past it, so the last frame is the dearest.
+AT = {"middle": 0.5, "end": 1.0}
+_at = ["middle"]
+
+
 def case_setup(name, figs):
     """``(figure, setting, values)`` of a case, the scene's range set."""
     parts = name.split("-")
     seconds = int(parts[-1])
     scene = bpy.context.scene
     scene.frame_end = 1 + 24 * seconds
-    scene.frame_set(1 + 12 * seconds)            # the current frame in the middle of the range
+    scene.frame_set(1 + round(AT[_at[0]] * 24 * seconds))   # the current frame (--frame)
     if parts[0] == "body":
         fig = figs["skier" if parts[1] == "skier" else "cyclist-ground"]
         return fig, "mass", [75.0 + 0.25 * k for k in range(400)]
@@ -198,9 +206,12 @@ def main(argv=None):
     ap.add_argument("--only", nargs="*", choices=CASES, default=None)
     ap.add_argument("--ways", nargs="*", choices=WAYS, default=WAYS)
     ap.add_argument("--profile", choices=CASES, help="cProfile 20 drag steps of one case")
+    ap.add_argument("--frame", choices=tuple(AT), default="middle",
+                    help="the current frame: the middle of the range or its last frame")
     ap.add_argument("--parts", action="store_true",
                     help="CPU ms of each drag step's simulation, mapping and keys")
     args = ap.parse_args(argv)
+    _at[0] = args.frame
     bpy.ops.wm.read_factory_settings(use_empty=True)
     addon.register()
     try:
@@ -218,6 +229,7 @@ def main(argv=None):
                 prof.runcall(live.schedule)
             pstats.Stats(prof).sort_stats("cumulative").print_stats(30)
             return
+        print(f"current frame: {args.frame} of the range")
         print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load average "
               f"{' '.join(f'{v:.2f}' for v in os.getloadavg())}, Python "
               f"{platform.python_version()}, bpy {bpy.app.version_string}")

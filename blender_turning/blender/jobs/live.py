@@ -76,10 +76,11 @@ WINDOW, MARGIN = 2, 12
 PREVIEW_STEPS = 50
 #: A drag step on a Ground mesh (no Target Speed, no skidding) steps PREVIEW_STRIDE DEFAULT_DT
 #: at a time where nothing discrete happens, and DEFAULT_DT on the bake's own grid about the
-#: lean's zero crossings and a new feasibility table, and where a coarse step would cross more
-#: than 1.25 cells of the height field (:func:`...core.physics.terrain_sim.simulate_free`'s
-#: ``stride``): the benchmark's cyclist within 5 cm of the release over 30 s, about 40 % of its
-#: work (docs/live-preview.md).  The release integrates with DEFAULT_DT.
+#: lean's zero crossings and a new feasibility table that changes the turn's lean, and where a
+#: coarse step would cross more than 1.25 cells of the height field
+#: (:func:`...core.physics.terrain_sim.simulate_free`'s ``stride``): the benchmark's cyclist
+#: within 8 cm of the release over 30 s, a third of its ground reads (docs/live-preview.md).
+#: The release integrates with DEFAULT_DT.
 PREVIEW_STRIDE = 3
 #: A drag step's controller may take the feasible turns of a body within this (relative) of the
 #: figure's (:func:`..core.controllers.feasible.nearby_tables`); the release bakes its own.

@@ -237,8 +237,22 @@ class PhaseEllipse(Controller):
         return body
 
     def changes_between(self, V_a: float, V_b: float) -> bool:
-        """The feasibility table changes between the two speeds (:meth:`follow_speed`)."""
-        return self._limits is not None and _table_speed(V_a) != _table_speed(V_b)
+        """The feasibility table changes between the two speeds (:meth:`follow_speed`) and with
+        it the ellipse the law follows.  Between the lean's zero crossings the table acts only
+        through :meth:`feasible_lean` (the betas are planned at the crossings): with both
+        schedules constant, two tables that leave the commanded turn the same lean change
+        nothing the law does (the commanded lean below both tables' bounds, the usual case)."""
+        if self._limits is None:
+            return False
+        a, b = _table_speed(V_a), _table_speed(V_b)
+        if a == b:
+            return False
+        w, tm = self._omega0.constant_value, self._theta_max.constant_value
+        if type(w) is not float or type(tm) is not float:
+            return True
+        body, limits, top = self.nominal_body, self._limits, self._top
+        return (min(tm, top(feasible_turns(body.at_speed(a), limits), w)) !=
+                min(tm, top(feasible_turns(body.at_speed(b), limits), w)))
 
     # -- the feasible ellipse -------------------------------------------------------------------
     def feasible_lean(self, omega0: float, theta_max: float) -> float:
@@ -253,9 +267,12 @@ class PhaseEllipse(Controller):
             top = (self._feasible.max_leans(omega0) if self.heading is None else
                    self._feasible.steerable_leans(omega0, self.steer_betas))
             return np.minimum(theta_max, top)
-        top = (self._feasible.max_lean(omega0) if self.heading is None else
-               self._feasible.steerable_lean(omega0, self.steer_betas))
-        return min(theta_max, top)
+        return min(theta_max, self._top(self._feasible, omega0))
+
+    def _top(self, table, omega0: float) -> float:
+        """The largest lean ``table`` lets the law follow at ``omega0`` (one figure)."""
+        return (table.max_lean(omega0) if self.heading is None else
+                table.steerable_lean(omega0, self.steer_betas))
 
     def commanded_turn(self, t: float = 0.0) -> FeasibleTurn:
         """The turn followed for the ellipse commanded at ``t`` (one figure), before any run:

@@ -374,8 +374,12 @@ def feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
         return table
     rel = _NEARBY[0]
     if rel is not None:
+        # The speed first (the tables of a run lie 0.5 m/s apart): a body whose speed alone is
+        # further than rel is not near; the others by every field.
+        V = body.V_cm
         near = [(_body_distance(b, body), i, table)
-                for i, ((b, lim), table) in enumerate(_TABLES.items()) if lim == limits]
+                for i, ((b, lim), table) in enumerate(_TABLES.items())
+                if abs(b.V_cm - V) / V <= rel and lim == limits]
         near = [n for n in near if n[0] <= rel]
         if near:
             return min(near, key=lambda n: (n[0], -n[1]))[2]    # the nearest, then the newest

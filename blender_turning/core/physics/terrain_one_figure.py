@@ -87,7 +87,7 @@ class TerrainStage:
         cmax, rate = limits.C_f_max, limits.dC_f_max
         rated = rate != math.inf
         sin, cos, sqrt, atan = math.sin, math.cos, math.sqrt, math.atan
-        inf, copysign = math.inf, math.copysign
+        inf, copysign, margin = math.inf, math.copysign, PHYSICAL_MARGIN
         derivatives, law = self.derivatives, self.controller.lean_law
         # The equilibrium lean: along the course (0), the plumb lean (1).
         kind = 0 if self._heading is not None else 1
@@ -149,8 +149,14 @@ class TerrainStage:
                 cf = k / den if den > 0.0 else copysign(inf, k)
             # Section 3: |C_f| <= C_f_max, the physical branch on the side of the lean, the rate.
             ls = l * sn
-            lo = -cmax if ls >= 0.0 else max(-cmax, PHYSICAL_MARGIN / ls)
-            hi = cmax if ls <= 0.0 else min(cmax, PHYSICAL_MARGIN / ls)
+            if ls > 0.0:                              # max, min of floats without the calls
+                lo, hi = -cmax, margin / ls
+                hi = hi if hi < cmax else cmax
+            elif ls < 0.0:
+                lo, hi = margin / ls, cmax
+                lo = lo if lo > -cmax else -cmax
+            else:
+                lo, hi = -cmax, cmax
             cf = lo if cf < lo else hi if cf > hi else cf
             if rated and anchor is not None:
                 step = rate * tau
