@@ -338,8 +338,8 @@ MUTANTS = [
       '_BODY_FIELDS = ("m", "l", "I_v", "V_cm", "g")', '_BODY_FIELDS = ("m", "l", "I_v", "V_cm")',
       HEADING),
     M("feasible_nearby_key_without_limits", "core/controllers/feasible.py",
-      "enumerate(_TABLES.items()) if lim == limits]",
-      "enumerate(_TABLES.items())]", HEADING),
+      "if abs(b.V_cm - V) / V <= rel and lim == limits]",
+      "if abs(b.V_cm - V) / V <= rel]", HEADING),
     M("feasible_nearby_takes_newest", "core/controllers/feasible.py",
       "min(near, key=lambda n: (n[0], -n[1]))", "max(near, key=lambda n: n[1])", HEADING),
     # -- receding-horizon following (core/planner/receding.py, Section 6.1) -------------------
