@@ -121,17 +121,26 @@ def test_the_leg_force_limit_clips_what_the_trajectory_would_show_past_it():
     same states (to rounding), and the search with the clip stays exact."""
     p = racer(N=3, q=5, leg_force_max=4.0)
     state, C0 = random_nodes(p, 60, 5)
-    u = np.random.default_rng(6).choice(p.u_values, 60)
-    r = p.simulate_stage(state, C0, u, np.zeros(60), np.zeros(60), record=True)
+    assert_leg_force_clipped(p, racer(N=3, q=5), state, C0, 4.0)
+
+
+def assert_leg_force_clipped(p, free, state, C0, limit):
+    """One stage from random nodes with the problem ``p`` (its ``leg_force_max`` = ``limit``):
+    the leg force it checks is the trajectory's ``F_leg`` at the same states (to rounding), some
+    branches and not all pass ``limit``, and ``p`` fells exactly the branches the problem without
+    the limit (``free``) fells and those."""
+    u = np.random.default_rng(6).choice(p.u_values, len(C0))
+    zeros = np.zeros(len(C0))
+    r = p.simulate_stage(state, C0, u, zeros, zeros, record=True)
     S, C = np.stack(r.record["state"]), np.stack(r.record["C_f"])
     F = p.columns(S.transpose(1, 0, 2), np.stack(r.record["alpha_v"]), C,
                   np.stack(r.record["V_f"]))["F_leg"] / (p.body.m * p.body.g)
     both = p.leg_force_bw(np.concatenate([S, r.state[None]]), np.concatenate([C, r.C_f[None]]))
     np.testing.assert_allclose(both[:-1], F, rtol=1e-12, atol=1e-12)
-    over = (both > 4.0).any(axis=0)
+    over = (both > limit).any(axis=0)
     assert over.any() and not over.all()
-    free = racer(N=3, q=5).simulate_stage(state, C0, u, np.zeros(60), np.zeros(60))
-    np.testing.assert_array_equal(r.fell, free.fell | over)
+    plain = free.simulate_stage(state, C0, u, zeros, zeros)
+    np.testing.assert_array_equal(r.fell, plain.fell | over)
     # Exact: the search returns the exhaustive optimum around a pole within 2 body weights (at
     # the preset's own rate, 2.06 1/(m s)), which is not the optimum without the limit.
     poles = Obstacles(segments=[((8.0, 0.6), (8.0, -12.0))], clearance=0.3)

@@ -120,20 +120,11 @@ def test_the_search_returns_the_exhaustive_optimum_around_a_pole(N, q):
 
 
 def test_the_leg_force_is_checked_on_the_ground_at_the_state_s_speed():
-    p = at_root(racer(N=3, q=5, leg_force_max=3.0), np.array([0, 0, 0, 0, 0, 12.0]))
+    from test_planner_race import assert_leg_force_clipped
+    root = np.array([0, 0, 0, 0, 0, 12.0])
     state, C0 = random_nodes(60, 5)
-    u = np.random.default_rng(6).choice(p.u_values, 60)
-    r = p.simulate_stage(state, C0, u, np.zeros(60), np.zeros(60), record=True)
-    S, C = np.stack(r.record["state"]), np.stack(r.record["C_f"])
-    F = p.columns(S.transpose(1, 0, 2), np.stack(r.record["alpha_v"]), C,
-                  np.stack(r.record["V_f"]))["F_leg"] / (p.body.m * p.body.g)
-    both = p.leg_force_bw(np.concatenate([S, r.state[None]]), np.concatenate([C, r.C_f[None]]))
-    np.testing.assert_allclose(both[:-1], F, rtol=1e-12, atol=1e-12)
-    over = (both > 3.0).any(axis=0)
-    assert over.any() and not over.all()
-    free = at_root(racer(N=3, q=5), np.array([0, 0, 0, 0, 0, 12.0]))
-    plain = free.simulate_stage(state, C0, u, np.zeros(60), np.zeros(60))
-    np.testing.assert_array_equal(r.fell, plain.fell | over)
+    assert_leg_force_clipped(at_root(racer(N=3, q=5, leg_force_max=3.0), root),
+                             at_root(racer(N=3, q=5), root), state, C0, 3.0)
 
 
 def test_the_racer_s_braking_is_not_capped_by_the_drawn_line():
