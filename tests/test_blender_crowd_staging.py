@@ -115,6 +115,7 @@ def test_waiting_without_fitting_the_range_says_which_follower_starts_too_late(s
         bpy.ops.turning.bake_turns()
 
 
+@pytest.mark.installed
 def test_path_followers_are_strung_out_along_the_leaders_track_from_frame_1(scene):
     """The default Follow the Leader of a skier with a path: every follower starts its gap
     behind on the leader's track (a straight lead-in to its path, the core's rule), moves from

@@ -560,6 +560,7 @@ def failing_gltf_export(monkeypatch):
     monkeypatch.setattr(module, "__export", fail)
 
 
+@pytest.mark.installed
 @pytest.mark.parametrize("then", ["timer", "save", "export", "load"])
 def test_a_failed_gltf_export_gives_the_follower_its_shared_bake_back(scene, tmp_path,
                                                                       monkeypatch, then):
