@@ -142,8 +142,8 @@ class PhaseEllipse(Controller):
         self.achieved: FeasibleTurn | None = None
         """The most limited turn followed so far (the first one if none was limited)."""
         self.followed: list[FeasibleTurn] = []
-        self._batch_turns = None        # a batch's per-figure turns (:meth:`_note_batch`)
         """The turns followed so far, each when it began (:attr:`report`)."""
+        self._batch_turns = None        # a batch's per-figure turns (:meth:`_note_batch`)
         self._steer_betas = STEER_BETAS
 
     @property
