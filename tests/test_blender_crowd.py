@@ -256,11 +256,12 @@ def test_a_users_rig_is_a_template(scene):
     for key, (frames, values) in late.items():      # measured 5e-17
         if key[0].startswith("pose.bones"):
             np.testing.assert_allclose(values, lead[key][1][:n], atol=1e-12, err_msg=str(key))
-    # so, sharing, it plays the leader's bake from frame 25, moved 2 m
+    # so, sharing, it plays the leader's bake from frame 25, moved 2 m (its strip from the
+    # scene's first frame, holding the first pose: bake.held_from)
     assert bpy.ops.turning.bake_turns() == {"FINISHED"}
     action, strip = bake.shared_source(followers[0])
     assert action == bake.find_bake(rig)[0]
-    assert (strip.frame_start, strip.action_frame_start, strip.frame_end) == (25, 1,
+    assert (strip.frame_start, strip.action_frame_start, strip.frame_end) == (1, -23,
                                                                             scene.frame_end)
     np.testing.assert_allclose(followers[0].delta_location[:2], 2.0 * left, atol=5e-6)
     # Remove Figure on it: its rig back as it was, the other follower still plays the bake

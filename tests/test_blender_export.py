@@ -473,27 +473,22 @@ def test_root_motion_on_a_rig_without_a_root_is_refused(scene):
     assert snapshot() == before, diff(before, snapshot())
 
 
-#: Open, shared or not: Blender's FBX exporter writes a strip's take from the strip's first frame
-#: as time 0, so a bake whose strip starts later (a follower waiting at the start: frames 7-30)
-#: comes back 6 frames early (1.8 m off, measured, also baked without Share Motion); glTF and
-#: Export FBX with Tweaks are right.
-WAITING = "FBX at its defaults: a strip's take starts at time 0"
 TOL = {"glb": (1e-5, 1e-4), "fbx": (5e-3, 1e-2), "tweaks": (1e-5, 1e-4)}
 
 
 # A crowd follower playing the leader's bake (docs/crowds.md, Shared motion), strung out along
-# the track (moved) or waiting at the start (moved and 6 frames later): FBX at its defaults
-# simplifies its curves (the tolerances of the tweaks' test above); glTF and FBX without
-# simplification: float32 bones, 1e-5 m and 1e-4 rad.
+# the track (moved) or waiting at the start (moved and 6 frames later), or baked on its own
+# (OWN_WAIT: waiting, Share Motion off): FBX at its defaults simplifies its curves (the tolerances
+# of the tweaks' test above); glTF and FBX without simplification: float32 bones, 1e-5 m and
+# 1e-4 rad.  FBX writes each strip and each action as a take from its first frame as time 0, so
+# a waiting figure's bake holds its first pose from the scene's first frame (``bake.held_from``;
+# before, its take came back 6 frames early, 1.8 m off).
 @pytest.mark.installed
 @pytest.mark.parametrize("route, who, staging", [
     ("glb", 1, "ALONG_TRACK"), ("fbx", 1, "ALONG_TRACK"), ("tweaks", 1, "ALONG_TRACK"),
-    ("glb", 1, "WAIT"),
-    pytest.param("fbx", 1, "WAIT", marks=pytest.mark.xfail(strict=True, reason=WAITING)),
-    ("tweaks", 1, "WAIT"),
-    # 4.2: the follower's empty tweak layer fits the leader (above), a take over frames 7-30
-    ("glb", 0, "WAIT"), pytest.param("fbx", 0, "WAIT", marks=pytest.mark.xfail(
-        not compat.SLOTTED_ACTIONS, strict=True, reason=WAITING))])
+    ("glb", 1, "WAIT"), ("fbx", 1, "WAIT"), ("tweaks", 1, "WAIT"),
+    ("glb", 0, "WAIT"), ("fbx", 0, "WAIT"), ("fbx", 1, "OWN_WAIT"), ("glb", 1, "OWN_WAIT"),
+    ("tweaks", 1, "OWN_WAIT")])
 def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, route, who,
                                                               staging):
     """A follower that plays the leader's bake (later, moved) exported alone, or the leader
@@ -502,16 +497,23 @@ def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, ro
     from scene_snapshot import diff, snapshot
     from test_blender_layers import key_head_tweak
     lead = add("CYCLIST")                  # waiting at the start it shares, 6 frames later
+    own = staging == "OWN_WAIT"
     assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
-                                     lateral=1.5, staging=staging) == {"FINISHED"}
+                                     lateral=1.5, staging="WAIT" if own else staging) == {"FINISHED"}
     follower = bpy.data.objects["Cyclist 1"]
     select_all = [lead, follower]
     for o in select_all:
         o.select_set(True)
-    assert bpy.ops.turning.bake_turns() == {"FINISHED"}
+    assert bpy.ops.turning.bake_turns(share=not own) == {"FINISHED"}
     shared, strip = bake.shared_source(follower)
-    assert shared == bake.find_bake(lead)[0]                                # it shares,
-    assert strip.frame_start - strip.action_frame_start == (6 if staging == "WAIT" else 0)
+    if own:
+        action, strip = bake.find_bake(follower)
+        assert shared is None and action != bake.find_bake(lead)[0]
+        assert strip.frame_start == 1 and min(fc.range()[0] for fc in compat.all_fcurves(
+            action) if fc.data_path.startswith("pose.bones")) == 7         # held from frame 1
+    else:
+        assert shared == bake.find_bake(lead)[0]                            # it shares,
+        assert strip.frame_start - strip.action_frame_start == (6 if staging == "WAIT" else 0)
     pos_tol, turn_tol = TOL[route]
     fig, other = select_all[who], select_all[1 - who]
     if route != "fbx":                     # FBX's first take is the bake, without tweaks
@@ -604,35 +606,6 @@ def test_a_failed_gltf_export_gives_the_follower_its_shared_bake_back(scene, tmp
         export(path, [follower, *follower.children_recursive])
         assert gltf_animations(path) == [name]
     assert snapshot() == before, diff(before, snapshot())
-
-
-@pytest.mark.installed
-def test_export_fbx_with_tweaks_plays_a_late_bake_on_its_frames(scene, tmp_path):
-    """A figure whose own bake starts after the scene's first frame (a follower waiting at the
-    start, Share Motion off): Export FBX with Tweaks writes it on its frames (FBX writes a strip's
-    take from time 0; Blender's own FBX export brings it back 6 frames early, above)."""
-    lead = add("CYCLIST")
-    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
-                                     lateral=1.5, staging="WAIT") == {"FINISHED"}
-    fig = bpy.data.objects["Cyclist 1"]
-    for o in (lead, fig):
-        o.select_set(True)
-    assert bpy.ops.turning.bake_turns(share=False) == {"FINISHED"}
-    assert bake.shared_source(fig)[0] is None and bake.find_bake(fig)[1].frame_start == 7
-    want, bones = bone_world(fig), [pb.name for pb in fig.pose.bones]
-    path = str(tmp_path / "late.fbx")
-    bpy.ops.object.select_all(action="DESELECT")
-    for o in [fig, *fig.children_recursive]:
-        o.select_set(True)
-    from scene_snapshot import diff, snapshot
-    before = snapshot()
-    assert bpy.ops.turning.export_fbx(filepath=path, use_selection=True,
-                                      bake_anim_simplify_factor=0.0) == {"FINISHED"}
-    assert snapshot() == before, diff(before, snapshot())
-    reimport(path)
-    arm = next(o for o in bpy.data.objects if o.type == "ARMATURE")
-    pos, turn = off_by(bone_world(arm)[:, [arm.pose.bones.find(b) for b in bones]], want)
-    assert pos < 1e-5 and turn < 1e-4, (pos, turn)        # float32 bones, as above
 
 
 def gltf_animations(path) -> list:

@@ -309,6 +309,12 @@ def bake_pose_track(obj, track: PoseTrack) -> BakeResult:
     action[BAKED_PATHS] = "\n".join(sorted({c[0] for c in chans}))
     count = write_channels(bag, chans, np.asarray(track.frames, float))
     bake_layers.fingerprint(action, bag)
+    first, last = float(track.frames[0]), float(track.frames[-1])
+    since = held_from(obj, first)
+    action.use_frame_range = since < first     # held from the scene's first frame
+    if since < first:
+        action.frame_end = last
+        action.frame_start = since
     if strip is not None:
         _fit_strip(strip, action)
     else:
@@ -374,6 +380,18 @@ def _kept_keys(action, todo, total: int, frames):
     return keys, kept[2], points
 
 
+def held_from(obj, first: float) -> float:
+    """The frame a figure's bake starts on: the scene's first frame when the figure's motion
+    starts later (a follower waiting at the start), its first pose held until then (the bake
+    action's manual frame range, a shared bake's strip from before the action's first key).
+    Blender's FBX exporter at its defaults writes each NLA strip and each action (*All
+    Actions*) as a take from its first frame as time 0: a bake starting at the figure's first
+    frame would come back that many frames early."""
+    scenes = obj.users_scene
+    start = (scenes[0] if scenes else bpy.context.scene).frame_start
+    return float(min(first, start))
+
+
 def can_share(obj) -> bool:
     """May ``obj`` play another figure's bake, or be played by others (:func:`share_bake`)?
     Not with a ``delta_location`` of the user's (sharing sets it), nor with a bake of the kind
@@ -411,19 +429,20 @@ def share_bake(obj, source, track: PoseTrack, shift: int, translation) -> BakeRe
     obj.rotation_mode = "XYZ"
     _make_props(obj, track)
     first, last = float(track.frames[0]), float(track.frames[-1])
+    since = held_from(obj, first)
     nla = adt.nla_tracks.new()
     nla.name = bake_layers.BAKE_TRACK
-    played = nla.strips.new(action.name, int(first), action)
+    played = nla.strips.new(action.name, int(since), action)
     if compat.SLOTTED_ACTIONS:
         played.action_slot = source_strip.action_slot
     played.action_frame_end = last - shift       # the strip ends on the figure's last frame
-    played.action_frame_start = first - shift
+    played.action_frame_start = since - shift    # (before the action's first key: held)
     action[SHARED] = True
     obj.delta_location = translation
     obj[SHARE_OFFSET] = list(translation)
     bake_layers.start_tweaks(obj)
     bake_layers.take_parameters(obj, params)
-    bake_layers.span_tweaks(obj, (first, last))
+    bake_layers.span_tweaks(obj, (since, last))
     return BakeResult(action, 0, len(track))
 
 

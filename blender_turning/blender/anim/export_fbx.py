@@ -16,9 +16,6 @@ it, so :func:`flattened` does it for one export (Export FBX with Tweaks, docs/ex
   flattened strip, and another figure's (the same bones) would play that figure's tweaks on this
   one;
 
-- a figure's bake strip that starts after the scene's first frame plays from the scene's first
-  frame (:func:`_from_first_frame`: FBX writes a strip's take from its first frame as time 0);
-
 and on leaving (also after an error) the strip plays the bake again, the tweak layer is the
 active action again, the tweak layers lose that curve, the flattened action is deleted and the
 scene is on its frame again.
@@ -53,8 +50,6 @@ def flattened(figures):
     frame = scene.frame_current, scene.frame_subframe
     undo = []
     try:
-        for fig in figures:
-            _from_first_frame(fig, scene, undo)
         figs = [f for f in figures if tweaked(f)]
         for fig in figs:
             _flatten(fig, scene, undo)
@@ -66,25 +61,6 @@ def flattened(figures):
         for restore in reversed(undo):
             restore()
         scene.frame_set(frame[0], subframe=frame[1])
-
-
-def _from_first_frame(fig, scene, undo) -> None:
-    """FBX writes a strip's take from the strip's first frame as time 0: the bake strip of a
-    figure that starts after the scene's first frame (a follower waiting at the start), holding
-    its first frame before it (``HOLD``), plays from the scene's first frame for the export,
-    holding the bake's first key until the figure's start, as Blender shows it."""
-    strip = bake.find_bake(fig)[1] if fig.type == "ARMATURE" else None
-    first = scene.frame_start
-    if strip is None or strip.frame_start <= first or strip.extrapolation != "HOLD":
-        return
-    bounds = strip.frame_start, strip.frame_end, strip.action_frame_start, strip.action_frame_end
-
-    def restore():
-        strip.action_frame_start, strip.action_frame_end = bounds[2:]
-        strip.frame_start, strip.frame_end = bounds[:2]
-    undo.append(restore)
-    strip.action_frame_start -= (strip.frame_start - first) / strip.scale
-    strip.frame_start_ui = first
 
 
 def _curves(action, slot) -> list:
