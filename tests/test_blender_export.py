@@ -498,8 +498,8 @@ def test_a_figure_sharing_a_bake_exports_its_own_motion_only(scene, tmp_path, ro
     from test_blender_layers import key_head_tweak
     lead = add("CYCLIST")                  # waiting at the start it shares, 6 frames later
     own = staging == "OWN_WAIT"
-    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25,
-                                     lateral=1.5, staging="WAIT" if own else staging) == {"FINISHED"}
+    assert bpy.ops.turning.add_crowd(formation="FOLLOW_LEADER", count=1, gap_time=0.25, lateral=1.5,
+                                     staging="WAIT" if own else staging) == {"FINISHED"}
     follower = bpy.data.objects["Cyclist 1"]
     select_all = [lead, follower]
     for o in select_all:
