@@ -1,6 +1,7 @@
 """Reid et al. 2020's slalom courses through ``follow`` (core/course/reid.py; docs/racing.md,
-"The racer's line"): the per-turn measures on tracks whose radii are known, and the slalom
-racer's line on a section of the 10 m course against Reid's turn radii and edge angles."""
+"The racer's line"): the per-turn measures on tracks whose radii are known, Reid's measure
+(the skis' radius), and the slalom racer's lines on both courses against Reid's turn radii and
+edge angles."""
 import math
 from types import SimpleNamespace
 
