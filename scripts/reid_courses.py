@@ -1,8 +1,9 @@
 """Reid et al. 2020's slalom courses (Front. Sports Act. Living 2:25) as scene files, followed
 by the path planner (Section 6) with a racer preset; prints each turn's tightest radius of the
 skis (the foot's) and of the centre of mass, the skis' largest edge angle (the sidecut relation,
-core/equipment.py), the largest lean and the peak leg force, their mean +- SD over the turns
-against Reid's (core/course/reid.py), and the whole run's extremes.
+core/equipment.py), the largest lean and the peak leg force, their mean +- SD over the turns,
+the skis' radius and edge against Reid's (their measures: core/course/reid.py, against_reid),
+and the whole run's extremes.
 
     python scripts/reid_courses.py [--gates 10 13] [--speed 12] [--stages 10 --choices 9]
         [--line race] [--leg-force 5] [--rate 2.06] [--slope 19 --target-speed 12 [--grip 2]]
@@ -26,8 +27,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from blender_turning.core.equipment import (SPORT_PRESETS, carving_of,  # noqa: E402
                                             register_preset, sport_of)
-from blender_turning.core.course.reid import (REID, com_radius, course,  # noqa: E402
-                                              gate_positions, per_turn, summary)
+from blender_turning.core.course.reid import (REID, against_reid, com_radius,  # noqa: E402
+                                              course, gate_positions, per_turn, summary)
 from blender_turning.core.course.scene import scene_from_dict  # noqa: E402
 from blender_turning.core.errors import PlanInfeasible  # noqa: E402
 from blender_turning.core.physics.grip import SNOW  # noqa: E402
@@ -45,11 +46,6 @@ def extremes(traj, fig, x_lo: float, x_hi: float) -> dict:
             "R_foot": 1.0 / float(np.abs(traj.C_f[m]).max()),
             "edge": math.degrees(float(edge.max())), "F_bw": float(bw.max()),
             "F_mean_bw": float(bw.mean())}
-
-
-def within(value: float, ref: float, tol: float = 0.1) -> bool:
-    """Is ``value`` within ``tol`` (relative) of Reid's mean ``ref``?"""
-    return abs(value - ref) <= tol * ref
 
 
 def main(argv=None) -> int:
@@ -138,14 +134,17 @@ def main(argv=None) -> int:
                   f"{turn['lean'][i]:.1f} deg, leg force {turn['F_bw'][i]:.2f} BW, speed "
                   f"{turn['V_lo'][i]:.1f}-{turn['V_hi'][i]:.1f} m/s")
         ref = REID.get(gap)
-        for name, unit, ref_i in (("R_com", "m", 0), ("R_foot", "m", 0), ("edge", "deg", 2),
-                                  ("lean", "deg", None), ("F_bw", "BW", None),
-                                  ("V_lo", "m/s", None), ("V_hi", "m/s", None)):
+        verdicts = against_reid(turn, gap) if ref else {}
+        for name, unit, ref_i, measure in (
+                ("R_com", "m", None, None), ("R_foot", "m", 0, "radius"),
+                ("edge", "deg", 2, "edge"), ("lean", "deg", None, None),
+                ("F_bw", "BW", None, None), ("V_lo", "m/s", None, None),
+                ("V_hi", "m/s", None, None)):
             mean, sd = summary(turn)[name]
             verdict = ""
-            if ref and ref_i is not None:
+            if measure in verdicts:
                 verdict = (f"  Reid {ref[ref_i]:g} +- {ref[ref_i + 1]:g}: "
-                           f"{'within' if within(mean, ref[ref_i]) else 'NOT within'} 10 %")
+                           f"{'within' if verdicts[measure][2] else 'NOT within'} 10 %")
             print(f"  per turn ({len(turn['gates'])} turns) {name}: {mean:.2f} +- {sd:.2f} "
                   f"{unit}{verdict}")
         print(f"  whole run's extremes: COM {ext['R_com']:.2f} m, foot {ext['R_foot']:.2f} m, "

@@ -6,13 +6,16 @@ Sports Act. Living 2:25 (2020), abstract: on a 19 deg slope with gates 10 m and 
 skis' edge angles reached maximum values of 65.7 +- 1.7 and 71.0 +- 1.9 deg and the turn radii
 minimum values of 3.96 +- 0.23 and 4.94 +- 0.59 m, "in good agreement with theoretical
 predictions by Howe (2001) of turn radius based on edging angle": radii of the measured ski
-trajectories, each a turn's minimum (and each edge a turn's maximum), given as mean +- SD.
+trajectories ("how measured ski trajectories compare to predictions based on theoretical models
+of ski-snow interaction mechanics"), each a turn's minimum (and each edge a turn's maximum),
+given as mean +- SD.  Howe's prediction, ``R = R_sc cos(edge)``, is the ski's own arc.
 
 So a run is measured turn by turn (:func:`per_turn`): each turn's tightest radius and largest
 edge angle, then their mean and SD (:func:`summary`), leaving out the turns into and out of the
 course.  Both radii are measured: the skis' (the foot's, ``1 / max |C_f|``; Section 3's ``C_f`` is
 the curvature of the foot's path), which is what Reid et al. measured, and the centre of mass's
-(the curvature of its track).
+(the curvature of its track), which they did not; :func:`against_reid` sets a run's turns
+against Reid's means on the skis' radius and edge.
 """
 from __future__ import annotations
 
@@ -21,8 +24,10 @@ import math
 import numpy as np
 
 from ..equipment import carving_of
+from ..validate import check_range
 
-__all__ = ["REID", "course", "gate_positions", "com_radius", "turns", "per_turn", "summary"]
+__all__ = ["REID", "course", "gate_positions", "com_radius", "turns", "per_turn", "summary",
+           "against_reid"]
 
 #: Reid et al. 2020 by gate spacing (m): minimum turn radius mean, SD (m); maximum edge angle
 #: mean, SD (deg).
@@ -120,3 +125,21 @@ def summary(turn: dict) -> dict:
     """Mean and sample SD of each column of :func:`per_turn`: ``{name: (mean, sd)}``."""
     return {k: (float(v.mean()), float(v.std(ddof=1)) if len(v) > 1 else 0.0)
             for k, v in turn.items() if k != "gates"}
+
+
+def against_reid(turn: dict, gap: float, tol: float = 0.1) -> dict:
+    """A run's turns (:func:`per_turn`) against Reid's means for the course of gates ``gap`` m
+    apart: ``{"radius": (mean, Reid's, within), "edge": (...)}``, each mean over the turns and
+    within when at most ``tol`` (relative) from Reid's.  The radius is the skis' (``R_foot``):
+    Reid et al. measured the skis' trajectories, and the centre of mass's track (``R_com``) is
+    wider or tighter than the skis' as the lean swings over them (docs/racing.md)."""
+    if gap not in REID:
+        raise ValueError(f"gap = {gap!r} m: Reid et al. measured the courses of gates "
+                         f"{sorted(REID)} m apart")
+    check_range("tol", tol, 0.0, 1.0)
+    R, _, edge, _ = REID[gap]
+    out = {}
+    for name, key, ref in (("radius", "R_foot", R), ("edge", "edge", edge)):
+        mean = float(np.mean(turn[key]))
+        out[name] = (mean, ref, abs(mean - ref) <= tol * ref)
+    return out
