@@ -63,6 +63,11 @@ class SkierOptions(AngulationOptions):
     and stays in its hole (world space) within this of it, for as long as the arm can follow."""
     pole_swing: float = math.radians(70.0)
     """Phase over which the pole swings between planted and trailing, rad."""
+    pole_swing_time: float = 0.6
+    """Shortest time the pole takes to swing forward from trailing to a plant, s: at a quick
+    rhythm the swing starts earlier in phase than ``pole_swing`` (after the last plant's
+    lift-out), and a plant with less time than this since that lift-out is not made (the pole
+    stays trailing).  It bounds how fast the free pole turns about its grip."""
     pole_lift: float = 0.35
     """Height of the pole tip when trailing, m."""
     plant_scale: float = 1.0
@@ -91,6 +96,7 @@ class SkierOptions(AngulationOptions):
         check_range("pole_plant_R", self.pole_plant_R, 0.0, 2 * math.pi)
         check_range("pole_hold", self.pole_hold, 0.0, math.pi / 2)
         check_range("pole_swing", self.pole_swing, 0.0, math.pi, lo_open=True)
+        check_range("pole_swing_time", self.pole_swing_time, 0.0, 5.0)
         check_range("pole_lift", self.pole_lift, 0.0, 1.0)
         check_range("plant_scale", self.plant_scale, 0.1, 10.0)
         check_range("plant_reach", self.plant_reach, 0.1, 10.0)
@@ -272,20 +278,32 @@ class SkierMapping(Mapping):
             length = skel.length(pole)
             arm = _Arm(b, B.side("upper_arm", s), B.side("forearm", s), elbow_dir, pole)
 
-            # The free pole swings forward (and down) for the plant only: after the plant it
-            # trails, as a pole dragged out of its hole does, until the swing to the next one.
-            w_aim = np.where(d > 0.0, 0.0, w)
-            swing = (w_aim, sx, length, o.pole_lift, right, fwd, up)
-
             # Free swing first; its grip sits `offset` from the wrist the IK aims.
             grip, wrist = arm.reach(hand)
             offset = grip - wrist
             free = hand + offset
-            # The holes and touch-downs from the swing forward to the plant (a frame past the
-            # plant phase at a quick rhythm has the free pole trailing already).
-            plan = _plan_plants(place, d, o.pole_hold, o.pole_swing,
-                                grip + length * _free_axis(grip, w, *swing[1:]), free,
-                                shoulder + offset, length, reach, o.plant_scale)
+            free_axis = (sx, length, o.pole_lift, right, fwd, up)
+
+            def planned(fw):
+                """The plants of the swings ``fw``: the holes and touch-downs from the swing
+                forward (a frame past the plant phase at a quick rhythm has the free pole
+                trailing already)."""
+                w_tip = np.where(fw.past, w, fw.w_aim)
+                return _plan_plants(place, d, o.pole_hold, fw,
+                                    grip + length * _free_axis(grip, w_tip, *free_axis), free,
+                                    shoulder + offset, length, reach, o.plant_scale)
+
+            # The free pole swings forward (and down) for the plant only, over at least
+            # pole_swing_time: after the plant it trails, as a pole dragged out of its hole
+            # does, until the swing to the next plant made.  It does not swing to a plant the
+            # arm cannot hold (the next one has the time).
+            fw = _swing_forward(traj.t, d, o.pole_hold, o.pole_swing, o.pole_swing_time)
+            plan = planned(fw)
+            if plan.missed.any():
+                fw = _swing_forward(traj.t, d, o.pole_hold, o.pole_swing, o.pole_swing_time,
+                                    plan.missed)
+                plan = planned(fw)
+            swing = (fw.w_aim,) + free_axis
             sides.append((arm, plan, free, offset, length, swing, elbow_dir, pole))
         # Both arms aim in one loop (each frame and side is solved on its own).
         aimed = _aim(*zip(*(side[:5] for side in sides)))
@@ -311,10 +329,11 @@ class SkierMapping(Mapping):
 def _free_axis(grip, w_aim, sx, length, lift, right, fwd, up):
     """The free pole's direction (n, 3) from its grip: trailing at ``POLE_AIM_TRAIL`` from ahead,
     swinging to ``POLE_AIM_PLANT`` by ``w_aim`` (n,), its tip ``lift`` (m) up when trailing
-    (``sx`` the side's sign, ``length`` the pole's)."""
+    (``sx`` the side's sign, ``length`` the pole's), coming down late in the swing (as
+    ``1 - w_aim**2``: a swing forward of ``pole_swing_time`` starts low no earlier)."""
     beta = POLE_AIM_TRAIL + w_aim * (POLE_AIM_PLANT - POLE_AIM_TRAIL)
     horiz = (sx * np.sin(beta))[:, None] * right + np.cos(beta)[:, None] * fwd
-    dz = lift * (1.0 - w_aim) - grip[:, 2]
+    dz = lift * (1.0 - w_aim * w_aim) - grip[:, 2]
     rho = np.sqrt(np.maximum(length * length - dz * dz, 0.0))
     return (rho[:, None] * horiz + dz[:, None] * up) / length
 
@@ -472,19 +491,19 @@ def _out_of_snow(place, grip, axis, length, k, hole, frames):
     return np.einsum("nji,nj->ni", place.R[idx], a)
 
 
-def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, grip_at, hole,
+def _approach(place, t, span, tips, free, P, i0, length, held, after, tip_at, grip_at, hole,
               k=1.0) -> None:
-    """The frames before the plant at ``i0`` within ``phase`` of it: the tip goes from the free
-    swing's to the hole ``P`` (world) along a smoothstep, so that it arrives at rest, and comes
-    down onto the hole (:func:`_clearance`); the grip is the pole's length from it towards the
-    free swing's grip.  Frames of an earlier plant stay."""
+    """The frames before the plant at ``i0`` within ``span`` (s) of it: the tip goes from the
+    free swing's to the hole ``P`` (world) along a smoothstep in time, so that it arrives at
+    rest, and comes down onto the hole (:func:`_clearance`); the grip is the pole's length from
+    it towards the free swing's grip.  Frames of an earlier plant stay."""
     j = i0 - 1
-    while j >= 0 and d[i0] - phase < d[j] <= d[j + 1] and not (held[j] or after[j]):
+    while j >= 0 and t[i0] - span < t[j] and not (held[j] or after[j]):
         j -= 1
     idx = np.arange(j + 1, i0)
     if not len(idx):
         return
-    s = smoothstep((d[idx] - (d[i0] - phase)) / phase)[:, None]
+    s = smoothstep((t[idx] - (t[i0] - span)) / span)[:, None]
     world = (1.0 - s) * _world(place, tips[idx], idx, k) + s * P
     hole[idx] = P
     world[:, 2] = np.maximum(world[:, 2], _clearance(place, world, idx, hole[idx]))
@@ -492,6 +511,49 @@ def _approach(place, d, phase, tips, free, P, i0, length, held, after, tip_at, g
     away = free[idx] - local
     held[idx], tip_at[idx] = True, local
     grip_at[idx] = local + length * away / norm(away, keepdims=True)
+
+
+@dataclass
+class _Swings:
+    w_aim: np.ndarray     # (n,) the free pole's aim: 0 trailing -> 1 at the plant
+    made: np.ndarray      # (n,) bool: from the swing forward to a plant made to its lift-out
+    past: np.ndarray      # (n,) bool: of those, past the plant phase
+    span: np.ndarray      # (n,) s: the swing's last ``swing`` of phase (or all of it, if less)
+    lift: np.ndarray      # (n,) s: the lift-out's duration, over a plant's frames
+    t: np.ndarray         # (n,) s: the frames' times
+
+
+def _swing_forward(t, d, hold, swing, least, skip=None) -> _Swings:
+    """The swings forward to the plants and the lift-outs after them (``d`` (n,) the signed
+    phase from the plant, rad, at times ``t`` (n,) s).  A swing forward takes ``swing`` of phase
+    but at least ``least`` seconds, from trailing (``w_aim`` 0) to the plant's window (``hold``
+    of the plant phase, 1) along a smoothstep in time; a lift-out ``swing`` of phase but at
+    least ``least / 3``.  So the free pole turns no faster than the swing's angle times 1.5 /
+    ``least`` whatever the rhythm.  A swing starts no earlier than the last plant's lift-out
+    ends; a plant with less than ``least`` from there, or with a frame in ``skip`` (n,) bool,
+    is not made and the pole stays trailing through it (a quick rhythm plants less often)."""
+    n = len(d)
+    w_aim, made, past = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool)
+    span, lift = np.zeros(n), np.zeros(n)
+    rate = np.maximum(np.abs(np.gradient(np.unwrap(d), t)) if n > 1 else 0.0, 1e-9)
+    win = np.abs(d) <= hold
+    edges = np.diff(np.concatenate([[False], win, [False]]).astype(np.int8))
+    free_at = -np.inf                  # when the last plant made has lifted out
+    for a, e in zip(np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]):
+        if t[a] - free_at < least or (skip is not None and skip[a:e].any()):
+            continue
+        start = max(t[a] - max(swing / rate[a], least), free_at)
+        before = (t > start) & (np.arange(n) < a)
+        w_aim[before] = smoothstep((t[before] - start) / (t[a] - start))
+        w_aim[a:e] = np.where(d[a:e] <= 0.0, 1.0, 0.0)
+        span[before] = span[a] = min(t[a] - start, swing / rate[a])
+        # The lift-out ends by its duration after the window's last frame.
+        free_at = t[e - 1] + max(swing / rate[a], least / 3.0)
+        stop = int(np.searchsorted(t, free_at))
+        made[before] = made[a:stop] = True
+        past[a:stop] = d[a:stop] > 0.0
+        lift[before] = lift[a:stop] = free_at - t[e - 1]
+    return _Swings(w_aim, made, past, span, lift, t)
 
 
 def on_snow(place, p):
@@ -513,29 +575,31 @@ class _Plants:
     grip_at: np.ndarray   # (n, 3) armature-space grip while held (and at lift-off after)
     hole: np.ndarray      # (n, 3) world: the hole coming down, held and lifting off; NaN else
     planted: np.ndarray   # (n,) bool: the tip in its hole (held, not coming down to it)
+    missed: np.ndarray    # (n,) bool: the touch-downs of plants the arm could not hold
 
 
-def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
+def _plan_plants(place, d, hold, fw, tips, free, shoulder, length, reach,
                  scale: float = 1.0) -> _Plants:
     """Where each plant goes into the snow and how long it can stay (see arms_and_poles); the
     holes stay put in the world of the figure ``scale`` times the built-in's size.
 
-    ``d`` is the signed phase from the plant, ``tips`` and ``free`` the swing forward's tip and
+    ``d`` is the signed phase from the plant, ``fw`` the swings forward to the plants made
+    (:func:`_swing_forward`), ``tips`` and ``free`` the swing forward's tip and
     the free swing's grip (armature space), ``shoulder`` the shoulder shifted by the grip's
     offset from the wrist, so that ``reach[0] <= |grip - shoulder| <= reach[1]`` says the arm
     holds it.  A plant whose hole the arm cannot hold from the touch-down on is not made: the
-    pole swings on above the snow."""
+    pole swings on above the snow (``missed``, for a plan without that swing)."""
     n = len(d)
     held, after = np.zeros(n, bool), np.zeros(n, bool)
     u = np.ones(n)
     tip_at, grip_at = tips.copy(), free.copy()
     hole = np.full((n, 3), np.nan)
     # In the snow within `hold` of the plant, and from the moment the swinging tip touches it.
-    inside = (np.abs(d) <= hold) | ((d < 0) & (d > -hold - swing) & (tips[:, 2] < 1e-3))
+    inside = fw.made & ((np.abs(d) <= hold) | ((d < 0) & (tips[:, 2] < 1e-3)))
     edges = np.diff(np.concatenate([[False], inside, [False]]).astype(np.int8))
     starts, ends = np.nonzero(edges > 0)[0], np.nonzero(edges < 0)[0]     # runs [i0, i1)
     if not len(starts):
-        return _Plants(held, after, u, tip_at, grip_at, hole, held.copy())
+        return _Plants(held, after, u, tip_at, grip_at, hole, held.copy(), held.copy())
     # Every run's frame by frame, all runs at once (the plan below does not change them).
     # The holes: where the swinging tips meet the snow.
     flat = tips[starts].copy()
@@ -551,19 +615,19 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
                               shoulder[idx], *reach)
     grips = local + length * to
     offs = np.concatenate([[0], np.cumsum(ends - starts)])
-    planted = np.zeros(n, bool)
+    planted, missed = np.zeros(n, bool), np.zeros(n, bool)
     for P, i0, a, e in zip(holes, starts, offs[:-1], offs[1:]):
         # The whole swing forward keeps clear of the snow but over its hole (a rise on the way
         # would catch the tip), the last part of it comes to rest there; a swing to a plant not
         # made keeps RISE clear of the snow throughout (an infinitely far hole).
         aim = P if ok[a] else np.inf
         j = i0 - 1
-        while j >= 0 and d[i0] - swing - hold < d[j] <= d[j + 1] and not after[j]:
+        while j >= 0 and fw.made[j] and d[j] < 0.0 and not after[j]:
             j -= 1
         hole[j + 1:i0] = aim
         if ok[a]:
-            _approach(place, d, swing * APPROACH, tips, free, P, i0, length, held, after,
-                      tip_at, grip_at, hole, scale)
+            _approach(place, fw.t, fw.span[i0] * APPROACH, tips, free, P, i0, length, held,
+                      after, tip_at, grip_at, hole, scale)
             k = e - a if ok[a:e].all() else int(np.argmin(ok[a:e]))
             idx, grip = np.arange(i0, i0 + k), grips[a:a + k]
             held[idx], tip_at[idx], grip_at[idx], hole[idx] = True, local[a:a + k], grip, P
@@ -573,18 +637,18 @@ def _plan_plants(place, d, hold, swing, tips, free, shoulder, length, reach,
             # Not made: the swing forward ends where its tip is the frame before the plant
             # phase (above the snow), and swings back from there as from a hole in the air.
             r = max(int(np.searchsorted(d[i0:e - a + i0] > 0.0, True)) + i0 - 1, 0)
+            missed[i0:i0 + e - a] = True
             P, grip = _world(place, tips[r:r + 1], np.array([r]), scale)[0], free[r:r + 1]
-        # Lift off: from the last held pose to the free swing over `swing` of phase.
-        dd = d[r + 1:] - d[r]
-        stop = np.nonzero(~((dd >= 0.0) & (dd < swing)))[0]
-        j = r + 1 + (int(stop[0]) if len(stop) else len(dd))
-        u[r + 1:j] = smoothstep(dd[:j - r - 1] / swing)
+        # Lift off: from the last held pose to the free swing (:func:`_swing_forward`).
+        dd = fw.t[r + 1:] - fw.t[r]
+        j = r + 1 + int(np.searchsorted(dd, fw.lift[r]))
+        u[r + 1:j] = smoothstep(dd[:j - r - 1] / fw.lift[r])
         after[r + 1:j], grip_at[r + 1:j] = True, grip[-1]
         hole[i0:j][np.isnan(hole[i0:j, 0])] = aim
         # The pole still aims at the hole it leaves (the figure moves away from it, so the tip
         # rises off the snow along that line) while it swings free.
         tip_at[r + 1:j] = _local(place, P, np.arange(r + 1, j), scale)
-    return _Plants(held, after, u, tip_at, grip_at, hole, planted)
+    return _Plants(held, after, u, tip_at, grip_at, hole, planted, missed)
 
 
 #: The sport's record (docs/registry.md): its preset, resistance, rig, mapping and labels.
