@@ -10,8 +10,8 @@ from blender_turning.mapping import bones as B
 from blender_turning.mapping.sports.common import mesh_points
 from blender_turning.mapping.kinematics import Skeleton
 from blender_turning.mapping.rig_spec import load_rig
-from blender_turning.mapping.sports.skier import (POLE_AIM_PLANT, POLE_AIM_TRAIL,
-                                                  SkierOptions)
+from blender_turning.mapping.sports.skier import SkierOptions
+from pole_swing import swing_bound
 
 
 def run(sport, seconds=10.0, theta_max=23.0, period=2.0):
@@ -287,17 +287,6 @@ def _plants(tip, grip, ground):
     excess = max((step_tip[b - 1:b + 12] - step_grip[b - 1:b + 12]).max()
                  for a, b in runs if b < len(tip))
     return travel, under, excess, (step_tip - step_grip).max(), runs
-
-
-def swing_bound(o, length, fps=24):
-    """The most a free pole's tip may move a frame more than its grip (m): the pole's own turn
-    about the grip.  A swing forward (skier.py ``_swing_forward``) turns the pole's bearing
-    from trailing to planted, ``POLE_AIM_TRAIL - POLE_AIM_PLANT``, on a circle of at most its
-    ``length`` and lowers the tip ``pole_lift`` (as ``1 - w**2``: at most twice that per unit
-    of ``w``), ``w`` a smoothstep over at least ``pole_swing_time`` (at most 1.5 / T a second);
-    the lift-out is quicker (a third of that time) but moves the tip back, with the figure."""
-    turn = POLE_AIM_TRAIL - POLE_AIM_PLANT
-    return 1.5 / (o.pole_swing_time * fps) * (length * turn + 2.0 * o.pole_lift)
 
 
 @pytest.mark.parametrize("sport", ["skier", "telemark"])
