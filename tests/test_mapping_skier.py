@@ -333,3 +333,27 @@ def test_plants_at_a_quick_rhythm_stay_put_and_lift_out_smoothly(sport, period, 
         assert under > -1e-3, (s, under)
         bound = swing_bound(SkierOptions(), sk.length(f"pole.{s}"))
         assert excess < bound and anywhere < bound, (s, excess, anywhere, bound)
+
+
+@pytest.mark.parametrize("sport", ["skier", "telemark"])
+@pytest.mark.parametrize("period, slow", [(1.0, 0.35), (2.0, 0.35), (1.0, 0.45)])
+def test_a_plant_at_a_slowing_phase_comes_down_no_faster_than_the_swing(sport, period, slow):
+    """A phase that slows into each plant and hurries between them (as a Ground mesh's slopes
+    give: its rate 1 - 2 ``slow`` times the mean at the plants, 1 + 2 ``slow`` between): the
+    swing forward still takes ``pole_swing_time``, and the tip comes to rest in its hole over
+    the last half of the swing but at most 0.3 s of it.  Coming to rest from the free swing's
+    landing point, the tip first speeds up (two thirds more than the free swing at the
+    smoothstep's steepest); over the 70 deg of a slow phase (7-15 frames) that spent the swing's
+    fast middle on it and moved the tip 35.6-41.0 cm a frame more than the hand, above the
+    swing's bound (35.5 cm); measured now 25.4-29.8 cm."""
+    traj = run(sport, period=period, theta_max=12.0)
+    cols = traj.columns()
+    cols["phi"] = cols["phi"] - slow * np.sin(2.0 * (cols["phi"] - math.radians(30.0)))
+    traj = type(traj).from_columns(cols, traj.meta)
+    track, spec, sk, P = posed(sport, traj)
+    for s in ("L", "R"):
+        tip = world_points(track, sk.carry(P, f"pole.{s}", spec.bone(f"pole.{s}").tail))
+        grip = world_points(track, P[f"pole.{s}"][:, :3, 3])
+        travel, under, _, anywhere, runs = _plants(tip, grip, lambda x, y: 0.0 * np.asarray(x))
+        assert len(runs) >= 0.4 * traj.t[-1] / period and travel < 0.03 and under > -1e-3
+        assert anywhere < swing_bound(SkierOptions(), sk.length(f"pole.{s}")), (s, anywhere)

@@ -546,7 +546,7 @@ def _swing_forward(t, d, hold, swing, least, skip=None) -> _Swings:
         before = (t > start) & (np.arange(n) < a)
         w_aim[before] = smoothstep((t[before] - start) / (t[a] - start))
         w_aim[a:e] = np.where(d[a:e] <= 0.0, 1.0, 0.0)
-        span[before] = span[a] = min(t[a] - start, swing / rate[a])
+        span[before] = span[a] = min(t[a] - start, swing / rate[a], least / 2.0)
         # The lift-out ends by its duration after the window's last frame.
         free_at = t[e - 1] + max(swing / rate[a], least / 3.0)
         stop = int(np.searchsorted(t, free_at))
