@@ -607,6 +607,8 @@ MUTANTS = [
       "start = max(t[a] - swing / rate[a], free_at)", SKIER_MAPPING, "mapping"),
     M("pole_swing_cut_short_by_the_next_plant", "mapping/sports/skier.py",
       "if t[a] - free_at < least or (skip", "if (skip", SKIER_MAPPING, "mapping"),
+    M("pole_comes_to_rest_over_a_slow_phase", "mapping/sports/skier.py",
+      "swing / rate[a], least / 2.0)", "swing / rate[a])", SKIER_MAPPING, "mapping"),
     M("pole_swings_to_a_plant_it_misses", "mapping/sports/skier.py",
       "            if plan.missed.any():", "            if False:", SKIER_MAPPING, "mapping"),
     M("pole_free_tip_left_under_the_snow", "mapping/sports/skier.py",

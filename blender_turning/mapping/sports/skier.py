@@ -428,8 +428,11 @@ class _Arm:
                 head + self.fore[idx] * r_low[:, :, 1])
 
 
-#: The last part of the swing to a plant, as a fraction of ``pole_swing``: the tip comes to rest
-#: in its hole over it (world space), instead of landing at the figure's speed and sliding.
+#: The last part of the swing to a plant, as a fraction of its duration (``_Swings.span``): the
+#: tip comes to rest in its hole over it (world space), instead of landing at the figure's speed
+#: and sliding.  Coming to rest where the free swing would land, it first speeds up (by up to two
+#: thirds of the free tip's speed, at the smoothstep's steepest), so the span is short: at most
+#: ``pole_swing`` of phase and half of ``pole_swing_time``, past the swing's fast middle.
 APPROACH = 0.5
 #: A tip coming down to its hole or lifting out of it is at least ``STEEP`` times its horizontal
 #: distance from the hole above the snow, up to ``RISE`` (m) (1: within 45 deg of straight down
@@ -518,7 +521,7 @@ class _Swings:
     w_aim: np.ndarray     # (n,) the free pole's aim: 0 trailing -> 1 at the plant
     made: np.ndarray      # (n,) bool: from the swing forward to a plant made to its lift-out
     past: np.ndarray      # (n,) bool: of those, past the plant phase
-    span: np.ndarray      # (n,) s: the swing's last ``swing`` of phase (or all of it, if less)
+    span: np.ndarray      # (n,) s: the swing's, at most ``swing`` of phase and least / 2
     lift: np.ndarray      # (n,) s: the lift-out's duration, over a plant's frames
     t: np.ndarray         # (n,) s: the frames' times
 
@@ -529,7 +532,8 @@ def _swing_forward(t, d, hold, swing, least, skip=None) -> _Swings:
     but at least ``least`` seconds, from trailing (``w_aim`` 0) to the plant's window (``hold``
     of the plant phase, 1) along a smoothstep in time; a lift-out ``swing`` of phase but at
     least ``least / 3``.  So the free pole turns no faster than the swing's angle times 1.5 /
-    ``least`` whatever the rhythm.  A swing starts no earlier than the last plant's lift-out
+    ``least`` whatever the rhythm (``span``: the part the tip comes down to its hole over,
+    :data:`APPROACH`).  A swing starts no earlier than the last plant's lift-out
     ends; a plant with less than ``least`` from there, or with a frame in ``skip`` (n,) bool,
     is not made and the pole stays trailing through it (a quick rhythm plants less often)."""
     n = len(d)
