@@ -79,7 +79,7 @@ def test_arms_aimed_together_as_each_alone():
              arms[1].root + rng.uniform(-1.5, 1.5, (n, 3))]
     offsets = [grip - wrist, np.subtract(*arms[1].reach(frees[1]))]
     no = np.zeros(n, bool)
-    plans = [_Plants(no, no, np.ones(n), f.copy(), f.copy(), np.full((n, 3), np.nan), no)
+    plans = [_Plants(no, no, np.ones(n), f.copy(), f.copy(), np.full((n, 3), np.nan), no, no)
              for f in frees]
     together = _aim(arms, plans, frees, offsets, (1.2, 1.2))
     for k in range(2):
