@@ -26,7 +26,6 @@ def posed():
 def lowest_above_ski(spec, P, s):
     """Per frame, the lowest corner of the boot's shell (heel to ball) and of its toe above the
     ski's top, m."""
-    sk = Skeleton.from_spec(spec)
     ski = P[f"ski.{s}"]
     top = max(c[2] for c in mesh_points(spec, f"ski.{s}") if abs(c[2]) < 0.025)     # 0.02
     out = []
