@@ -440,6 +440,10 @@ APPROACH = 0.5
 #: not skimming the snow at the figure's speed (a quick rhythm gives the swing in and the
 #: lift-off 1-3 frames).
 STEEP, RISE = 1.0, 0.10
+#: The points along a free pole, as fractions of its length from the grip, kept on or above the
+#: snow besides its tip (:func:`_out_of_snow`): every 10 cm of the built-in's 1.15 m pole, so a
+#: crest narrower than that is all that could still reach between two of them.
+POLE_POINTS = tuple(np.arange(1, 11) / 11.0)
 
 
 def _world(place, p, idx, k):
@@ -478,20 +482,34 @@ def _out_of_snow(place, grip, axis, length, k, hole, frames):
     about the grip wherever the tip would be lower than :func:`_clearance` (``hole`` (m, 3)
     world, NaN rows: none) allows: the
     tip keeps its bearing from the grip and rises on the sphere of the pole's length (a fixed
-    point of a few passes; a grip too low for any turn to clear it points the pole up)."""
+    point of a few passes; a grip too low for any turn to clear it points the pole up).  The
+    points :data:`POLE_POINTS` along it stay on or above the snow too: the pole turns up until
+    the steepest of them clears it (a crest between the grip and the tip)."""
     idx = np.arange(len(place.origin))[frames]
     g = _world(place, grip, idx, k)
     a = np.einsum("nij,nj->ni", place.R[idx], axis)
     L = k * length
+    rows = np.arange(len(idx))          # the poles still turning up (the others stay as they are)
     for _ in range(4):
-        need = _clearance(place, g + L * a, idx, hole)
-        low = g[:, 2] + L * a[:, 2] < need - 1e-9
+        gr, ar, ir = g[rows], a[rows], idx[rows]
+        need = _clearance(place, gr + L * ar, ir, hole[rows])
+        tip = (need - gr[:, 2]) / L
+        inner = np.max([(_ground(place, gr + f * L * ar, ir) - gr[:, 2]) / (f * L)
+                        for f in POLE_POINTS], axis=0)
+        low = (gr[:, 2] + L * ar[:, 2] < need - 1e-9) | (ar[:, 2] < inner - 1e-9)
         if not low.any():
             break
-        z = np.clip((need[low] - g[low, 2]) / L, -1.0, 1.0)
-        flat = a[low, :2] / np.maximum(np.hypot(a[low, 0], a[low, 1]), 1e-12)[:, None]
-        a[low] = np.column_stack([flat * np.sqrt(1.0 - z * z)[:, None], z])
+        rows, z = rows[low], np.clip(np.maximum(tip, inner)[low], -1.0, 1.0)
+        flat = a[rows, :2] / np.maximum(np.hypot(a[rows, 0], a[rows, 1]), 1e-12)[:, None]
+        a[rows] = np.column_stack([flat * np.sqrt(1.0 - z * z)[:, None], z])
     return np.einsum("nji,nj->ni", place.R[idx], a)
+
+
+def _clear_of_snow(place, grip, tip, idx):
+    """Whether the poles from ``grip`` to ``tip`` (m, 3) world of frames ``idx`` keep the points
+    :data:`POLE_POINTS` along them on or above the snow (within 1 mm: a hole is on it)."""
+    return np.min([(p := grip + f * (tip - grip))[:, 2] - _ground(place, p, idx)
+                   for f in POLE_POINTS], axis=0) > -1e-3
 
 
 def _approach(place, t, span, tips, free, P, i0, length, held, after, tip_at, grip_at, hole,
@@ -616,8 +634,10 @@ def _plan_plants(place, d, hold, fw, tips, free, shoulder, length, reach,
     # changes, the tip stays put); the plant ends where no point of it is in reach.
     away = free[idx] - local
     to, ok = on_sphere_within(local, length, away / norm(away, keepdims=True),
-                              shoulder[idx], *reach)
+                              shoulder[idx], *reach)   # and its line out of the snow:
     grips = local + length * to
+    ok &= _clear_of_snow(place, _world(place, grips, idx, scale),
+                         np.repeat(holes, ends - starts, axis=0), idx)
     offs = np.concatenate([[0], np.cumsum(ends - starts)])
     planted, missed = np.zeros(n, bool), np.zeros(n, bool)
     for P, i0, a, e in zip(holes, starts, offs[:-1], offs[1:]):
