@@ -218,12 +218,14 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
 
     def advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf):
         """RK4's stages 2-4 and the step, and the ground at the step's end (``None``: to be
-        read there).  A coarse step reads the ground once for both midpoint stages: stage 3's foot lies ``h (k2 - k1)`` from stage 2's (about a millimetre at 3 m/s),
-        and takes stage 2's slopes carried there to first order by its curvatures, and its
-        curvatures (``tests/test_terrain_preview.py``'s cyclist: within 0.01 mm of the run
-        reading the ground there over 30 s; 4-5 mm with the slopes held, not carried); the
-        step's end, a few millimetres from stage 4's foot, takes stage 4's ground carried the
-        same way (the next step's first stage, and the lean there)."""
+        read there).  A coarse step reads the ground once for both midpoint stages: stage 3's
+        foot lies ``h (k2 - k1)`` from stage 2's (about a millimetre at 3 m/s), and takes stage
+        2's slopes carried there to first order by its curvatures, and its curvatures
+        (``tests/test_terrain_preview.py``'s cyclist: within 0.01 mm of the run reading the
+        ground there over 30 s; 4-5 mm with the slopes held, not carried); the step's end, a
+        few millimetres from stage 4's foot, takes stage 4's ground carried the same way (the
+        next step's first stage and the lean the controller sees there: within the midpoints'
+        bounds of the ground's)."""
         px, py = x0 + h * a0, x1 + h * a1
         dv = None if step == dt else derivatives(px, py)
         b0, b1, b2, b3, b4, b5, _, _, _ = stage(
