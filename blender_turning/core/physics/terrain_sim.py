@@ -194,14 +194,17 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     :meth:`.PhaseEllipse.begin_step`: a crossing within the step, ``theta_v + omega_v dt``
     across zero) and the law switches to its ellipse there (a jump in ``alpha_v`` inside a
     step), and so does a controller taking new feasible turns at a speed it passes where
-    they change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same
-    grid, those steps are the ``stride = 1`` run's.  A coarse step is tried where the lean's
-    rate carries it across zero within no fewer than :data:`REACH` coarse steps and it moves
-    at most :data:`SPAN` cells of a height field, and kept only if the controller does not
-    change over it and it ends on the same side with no crossing within ``stride dt`` ahead
-    (where ``begin_step``, seeing the long step behind it, would plan).  A step's first stage
-    bounds the rate of ``C_f`` relative to the last step's, ``last`` s before (Section 3).  The
-    fall and a stop are checked at the rows."""
+    they change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the
+    same grid, those steps take the ``stride = 1`` run's instants.  A coarse step is tried where
+    the lean's rate carries it across zero within no fewer than :data:`REACH` coarse steps and
+    it moves at most :data:`SPAN` cells of a height field, and kept only if the controller does
+    not change over it and it ends on the same side with no crossing within ``stride dt`` ahead
+    (where ``begin_step``, seeing the long step behind it, would plan).  Where a coarse step may
+    be taken (slow enough for :data:`SPAN`), a step of either length reads the ground three
+    times, not four (:func:`advance`: the midpoints share a read, the end is carried from stage
+    4); faster, the preview's steps are the ``stride = 1`` run's, bit for bit.  A step's first
+    stage bounds the rate of ``C_f`` relative to the last step's, ``last`` s before (Section 3).
+    The fall and a stop are checked at the rows."""
     controller.begin_run(limits)
     foot = rhs.foot
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
@@ -216,7 +219,8 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     x_lo, x_hi, y_lo, y_hi = getattr(ground, "extent", (-math.inf, math.inf, -math.inf,
                                                         math.inf))
 
-    def advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf):
+    def advance(t, step, h, w6, shared, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5,
+                cf):
         """RK4's stages 2-4 and the step, and the ground at the step's end (``None``: to be
         read there).  A coarse step reads the ground once for both midpoint stages: stage 3's
         foot lies ``h (k2 - k1)`` from stage 2's (about a millimetre at 3 m/s), and takes stage
@@ -227,7 +231,7 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         next step's first stage and the lean the controller sees there: within the midpoints'
         bounds of the ground's)."""
         px, py = x0 + h * a0, x1 + h * a1
-        dv = None if step == dt else derivatives(px, py)
+        dv = derivatives(px, py) if shared else None
         b0, b1, b2, b3, b4, b5, _, _, _ = stage(
             t + h, px, py, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5, cf, h, dv)
         qx, qy = x0 + h * b0, x1 + h * b1
@@ -282,11 +286,11 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,
                                                        dv)
         (step, h, w6), k, y = fine, 1, None
-        if stride > 1 and row and i + stride < n and x5 <= fastest and \
-                rel * (rel + x4 * reach) > 0.0:
+        slow = stride > 1 and x5 <= fastest         # the preview's reads shared (advance)
+        if slow and row and i + stride < n and rel * (rel + x4 * reach) > 0.0:
             try:
-                y, dv_y = advance(t, *coarse, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5,
-                                  cf)
+                y, dv_y = advance(t, *coarse, True, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4,
+                                  a5, cf)
                 if changes(max(x5, MIN_SPEED), max(y[5], MIN_SPEED)):
                     raise _Fine
                 if dv_y is None:
@@ -312,8 +316,8 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         near = None
         if y is None:
             try:
-                y, near = advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4,
-                                  a5, cf)
+                y, near = advance(t, step, h, w6, slow, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3,
+                                  a4, a5, cf)
             except OffTerrain:
                 return rows, "left"
         x0, x1, x2, x3, x4, x5 = y
