@@ -1153,6 +1153,8 @@ MUTANTS += [
       "            dv = _carried(dv, y[0] - sx, y[1] - sy)", "            dv = None", PREVIEW),
     M("preview_step_end_slopes_held", "core/physics/terrain_sim.py",
       "            dv = _carried(dv, y[0] - sx, y[1] - sy)", "            dv = dv", PREVIEW),
+    M("bake_shares_the_previews_reads", "core/physics/terrain_sim.py",
+      "slow = stride > 1 and x5 <= fastest", "slow = x5 <= fastest", PREVIEW),
     M("preview_fine_steps_read_four_times", "core/physics/terrain_sim.py",
       "y, near = advance(t, step, h, w6, slow,", "y, near = advance(t, step, h, w6, False,",
       PREVIEW),

@@ -125,6 +125,31 @@ def test_a_coarse_steps_third_stage_carries_the_seconds_ground(monkeypatch):
     assert off[:, :2].max() < 1e-6 and off[:, 2:].max() < 2e-4
 
 
+def test_the_bake_reads_the_ground_at_every_stage(monkeypatch):
+    """The bake (``stride = 1``, the release of a drag) shares no read: every stage given the
+    ground is given the ground's own numbers at its foot, bit for bit, so the release is the
+    run the bake always made (``tests/test_terrain_fast.py`` holds that run to the array
+    loop); a preview that carries them (the coarse steps' midpoints and ends) is checked above.
+    """
+    from blender_turning.core.physics import terrain_one_figure
+    given, init = [], terrain_one_figure.TerrainStage.__init__
+
+    def recording(self, *a, **k):
+        init(self, *a, **k)
+        stage = self.stage
+
+        def read(t, x, y, d, th, om, V, anchor, tau, dv=None):
+            if dv is not None:
+                given.append((x, y, dv))
+            return stage(t, x, y, d, th, om, V, anchor, tau, dv)
+        self.stage = read
+
+    monkeypatch.setattr(terrain_one_figure.TerrainStage, "__init__", recording)
+    _run(duration=10.0)
+    assert len(given) == 501                         # each step's first stage, read there
+    assert all(tuple(dv) == ROLLS.slopes_one(x, y) for x, y, dv in given)
+
+
 def test_a_step_bounds_the_rate_of_c_f_over_the_time_since_the_last():
     """Section 3's bound on the rate of ``C_f`` (0.3 1/(m s) here: it holds ``C_f`` over the
     first half second and at times after) relative to the last step's first stage: a coarse
