@@ -125,6 +125,20 @@ def test_a_coarse_steps_third_stage_carries_the_seconds_ground(monkeypatch):
     assert off[:, :2].max() < 1e-6 and off[:, 2:].max() < 2e-4
 
 
+def test_a_run_finds_each_speeds_table_once(monkeypatch):
+    """On terrain the speed crosses the feasibility tables' grid lines back and forth, and a
+    preview's coarse steps ask at each one whether the table changes the law
+    (:meth:`.PhaseEllipse.changes_between`): a run looks each table up once (13 look-ups for
+    the 6 speeds this run passes, the table and its lean at the period; 52 when it looked
+    them up at every crossing), and finds the tables at the bake's steps (above)."""
+    looked = []
+    find = ellipse.feasible_turns
+    monkeypatch.setattr(ellipse, "feasible_turns", lambda b, lim: looked.append(b) or find(b, lim))
+    preview = _run(stride=3)
+    speeds = set(np.floor(preview.V_cm / ellipse.SPEED_GRID) * ellipse.SPEED_GRID)
+    assert len(speeds) == 6 and len(looked) <= 2 * len(speeds) + 1
+
+
 def test_the_bake_reads_the_ground_at_every_stage(monkeypatch):
     """The bake (``stride = 1``, the release of a drag) shares no read: every stage given the
     ground is given the ground's own numbers at its foot, bit for bit, so the release is the
