@@ -37,6 +37,27 @@ def _off(a, b):
             math.degrees(np.abs(a.theta_dir - heading).max()))
 
 
+def _given_ground(monkeypatch, **run):
+    """``[(x, y, the ground given)]`` of every stage of ``_run(**run)`` given the ground
+    (the others read it themselves at their foot)."""
+    from blender_turning.core.physics import terrain_one_figure
+    given, init = [], terrain_one_figure.TerrainStage.__init__
+
+    def recording(self, *a, **k):
+        init(self, *a, **k)
+        stage = self.stage
+
+        def read(t, x, y, d, th, om, V, anchor, tau, dv=None):
+            if dv is not None:
+                given.append((x, y, dv))
+            return stage(t, x, y, d, th, om, V, anchor, tau, dv)
+        self.stage = read
+
+    monkeypatch.setattr(terrain_one_figure.TerrainStage, "__init__", recording)
+    _run(**run)
+    return given
+
+
 def _with_events(monkeypatch, stride):
     """The run, and where its controller planned a half-turn (Section 5.2) and took a new
     feasibility table: ``[(t, "plan")]``, ``[(t, the table's speed, the lean it lets the turn
@@ -104,21 +125,7 @@ def test_a_coarse_steps_third_stage_carries_the_seconds_ground(monkeypatch):
     curvatures the second's, within 2e-4 1/m of the ground's (9.6e-5, of up to 0.023); and the
     step's end takes the fourth stage's ground carried the same way (a few millimetres), within
     the same bounds (the next step's first stage, and the lean the controller sees there)."""
-    from blender_turning.core.physics import terrain_one_figure
-    given, init = [], terrain_one_figure.TerrainStage.__init__
-
-    def recording(self, *a, **k):
-        init(self, *a, **k)
-        stage = self.stage
-
-        def read(t, x, y, d, th, om, V, anchor, tau, dv=None):
-            if dv is not None:
-                given.append((x, y, dv))
-            return stage(t, x, y, d, th, om, V, anchor, tau, dv)
-        self.stage = read
-
-    monkeypatch.setattr(terrain_one_figure.TerrainStage, "__init__", recording)
-    _run(stride=3)
+    given = _given_ground(monkeypatch, stride=3)
     exact = np.array([ROLLS.slopes_one(x, y) for x, y, _ in given])
     off = np.abs(np.array([dv for _, _, dv in given]) - exact)
     assert len(given) > 1900           # the first stages, the coarse steps' 2-4
@@ -145,21 +152,7 @@ def test_the_bake_reads_the_ground_at_every_stage(monkeypatch):
     run the bake always made (``tests/test_terrain_fast.py`` holds that run to the array
     loop); a preview that carries them (the coarse steps' midpoints and ends) is checked above.
     """
-    from blender_turning.core.physics import terrain_one_figure
-    given, init = [], terrain_one_figure.TerrainStage.__init__
-
-    def recording(self, *a, **k):
-        init(self, *a, **k)
-        stage = self.stage
-
-        def read(t, x, y, d, th, om, V, anchor, tau, dv=None):
-            if dv is not None:
-                given.append((x, y, dv))
-            return stage(t, x, y, d, th, om, V, anchor, tau, dv)
-        self.stage = read
-
-    monkeypatch.setattr(terrain_one_figure.TerrainStage, "__init__", recording)
-    _run(duration=10.0)
+    given = _given_ground(monkeypatch, duration=10.0)
     assert len(given) == 501                         # each step's first stage, read there
     assert all(tuple(dv) == ROLLS.slopes_one(x, y) for x, y, dv in given)
 
