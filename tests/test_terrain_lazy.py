@@ -103,3 +103,32 @@ def test_bad_samples_and_grids_are_refused():
     eager, lazy, _ = _pair()
     with pytest.raises(ValueError, match="off the terrain"):
         lazy.slopes_one(X0 - 0.01, 10.0)
+
+
+def _one_cell(field, i, j):
+    """Cell ``(i, j)``'s coefficients made alone: ``M^T P M`` of its own 4 x 4 stencil about its
+    corner (``HeightField._cell``'s formula, one matrix at a time)."""
+    from blender_turning.core.ground.terrain import _HERMITE_POWERS as M, _POW
+    P = field._h[j + 1:j + 5, i + 1:i + 5]
+    A = M.T @ (P - P[1, 1]) @ M
+    A[0, 0] += P[1, 1]
+    Au = A[:, 1:] * _POW[1:]
+    Auu = Au[:, 1:] * _POW[1:-1]
+    return tuple(np.concatenate([A.ravel(), Au.ravel(), Auu.ravel()]).tolist())
+
+
+def test_cells_made_with_their_block_are_made_alone_bit_for_bit():
+    """A cell's polynomial is made with the cells of its 4 x 4 block (``BLOCK``) in one numpy
+    pass (a drag's next run finds its neighbours made): each is the cell's own, bit for bit,
+    on both fields, at the grid's last cells (a partial block) too."""
+    eager, lazy, _ = _pair()
+    rng = np.random.default_rng(5)
+    cells = [(int(i), int(j)) for i, j in zip(rng.integers(0, NX - 1, 60),
+                                              rng.integers(0, NY - 1, 60))]
+    cells += [(0, 0), (NX - 2, NY - 2), (NX - 2, 0), (0, NY - 2)]
+    for field in (lazy, eager):
+        for i, j in cells:
+            assert field._cell(i, j) == _one_cell(eager, i, j)
+        assert len(field._coef) > 10 * len(cells)          # 4 x 4 cells a block
+        for key, coef in field._coef.items():
+            assert coef == _one_cell(eager, key % NX, key // NX)

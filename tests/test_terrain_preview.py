@@ -37,6 +37,27 @@ def _off(a, b):
             math.degrees(np.abs(a.theta_dir - heading).max()))
 
 
+def _given_ground(monkeypatch, **run):
+    """``[(x, y, the ground given)]`` of every stage of ``_run(**run)`` given the ground
+    (the others read it themselves at their foot)."""
+    from blender_turning.core.physics import terrain_one_figure
+    given, init = [], terrain_one_figure.TerrainStage.__init__
+
+    def recording(self, *a, **k):
+        init(self, *a, **k)
+        stage = self.stage
+
+        def read(t, x, y, d, th, om, V, anchor, tau, dv=None):
+            if dv is not None:
+                given.append((x, y, dv))
+            return stage(t, x, y, d, th, om, V, anchor, tau, dv)
+        self.stage = read
+
+    monkeypatch.setattr(terrain_one_figure.TerrainStage, "__init__", recording)
+    _run(**run)
+    return given
+
+
 def _with_events(monkeypatch, stride):
     """The run, and where its controller planned a half-turn (Section 5.2) and took a new
     feasibility table: ``[(t, "plan")]``, ``[(t, the table's speed, the lean it lets the turn
@@ -66,10 +87,11 @@ def test_a_preview_plans_and_switches_tables_at_the_bakes_steps(monkeypatch):
     exact, bake_events = _with_events(monkeypatch, 1)
     n_exact = len(calls)
     preview, events = _with_events(monkeypatch, 3)
-    # The work: the ground read 1,935 times for the bake's 6,001 (2,393 reading it at both
-    # midpoints of a coarse step, 2,525 when every new table was also stepped finely; 2,690
-    # trying coarse steps up to the crossings).
-    assert len(calls) - n_exact < 0.33 * n_exact
+    # The work: the ground read 1,199 times for the bake's 6,001 (1,481 reading it at each
+    # stage of the fine steps, 1,935 reading it again at a coarse step's end, 2,393 also at
+    # both midpoints, 2,525 when every new table was also stepped finely; 2,690 trying coarse
+    # steps up to the crossings).
+    assert len(calls) - n_exact < 0.22 * n_exact
     assert np.allclose(np.diff(preview.t), 0.06) and preview.t[-1] == pytest.approx(30.0)
     assert preview.meta["dt"] == pytest.approx(0.06) and preview.meta["fine_dt"] == 0.02
     assert sum(len(e) == 2 for e in bake_events) == 22               # each half-turn
@@ -100,26 +122,39 @@ def test_a_coarse_steps_third_stage_carries_the_seconds_ground(monkeypatch):
     """A coarse step reads the ground once for RK4's two midpoint stages: the third stage's
     slopes are the second's carried to its foot (about a millimetre away) by the curvatures,
     within 1e-6 of the ground's there (measured 1.1e-7; 2.4e-5 held, not carried), and its
-    curvatures the second's, within 2e-4 1/m of the ground's (9.6e-5, of up to 0.023)."""
-    from blender_turning.core.physics import terrain_one_figure
-    given, init = [], terrain_one_figure.TerrainStage.__init__
-
-    def recording(self, *a, **k):
-        init(self, *a, **k)
-        stage = self.stage
-
-        def read(t, x, y, d, th, om, V, anchor, tau, dv=None):
-            if dv is not None:
-                given.append((x, y, dv))
-            return stage(t, x, y, d, th, om, V, anchor, tau, dv)
-        self.stage = read
-
-    monkeypatch.setattr(terrain_one_figure.TerrainStage, "__init__", recording)
-    _run(stride=3)
+    curvatures the second's, within 2e-4 1/m of the ground's (9.6e-5, of up to 0.023); and the
+    step's end takes the fourth stage's ground carried the same way (a few millimetres), within
+    the same bounds (the next step's first stage, and the lean the controller sees there)."""
+    given = _given_ground(monkeypatch, stride=3)
     exact = np.array([ROLLS.slopes_one(x, y) for x, y, _ in given])
     off = np.abs(np.array([dv for _, _, dv in given]) - exact)
-    assert len(given) > 1400                         # the steps' first stages, 2 and 3 coarse
+    assert len(given) > 1900           # the first stages, the coarse steps' 2-4
     assert off[:, :2].max() < 1e-6 and off[:, 2:].max() < 2e-4
+
+
+def test_a_run_finds_each_speeds_table_once(monkeypatch):
+    """On terrain the speed crosses the feasibility tables' grid lines back and forth, and a
+    preview's coarse steps ask at each one whether the table changes the law
+    (:meth:`.PhaseEllipse.changes_between`): a run looks each table up once (13 look-ups for
+    the 6 speeds this run passes, the table and its lean at the period; 52 when it looked
+    them up at every crossing), and finds the tables at the bake's steps (above)."""
+    looked = []
+    find = ellipse.feasible_turns
+    monkeypatch.setattr(ellipse, "feasible_turns", lambda b, lim: looked.append(b) or find(b, lim))
+    preview = _run(stride=3)
+    speeds = set(np.floor(preview.V_cm / ellipse.SPEED_GRID) * ellipse.SPEED_GRID)
+    assert len(speeds) == 6 and len(looked) <= 2 * len(speeds) + 1
+
+
+def test_the_bake_reads_the_ground_at_every_stage(monkeypatch):
+    """The bake (``stride = 1``, the release of a drag) shares no read: every stage given the
+    ground is given the ground's own numbers at its foot, bit for bit, so the release is the
+    run the bake always made (``tests/test_terrain_fast.py`` holds that run to the array
+    loop); a preview that carries them (the coarse steps' midpoints and ends) is checked above.
+    """
+    given = _given_ground(monkeypatch, duration=10.0)
+    assert len(given) == 501                         # each step's first stage, read there
+    assert all(tuple(dv) == ROLLS.slopes_one(x, y) for x, y, dv in given)
 
 
 def test_a_step_bounds_the_rate_of_c_f_over_the_time_since_the_last():

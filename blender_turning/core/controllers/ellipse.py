@@ -133,6 +133,7 @@ class PhaseEllipse(Controller):
         self._limits = limits
         self._feasible = None if limits is None else feasible_turns(body, limits)
         self._table_speed = None    # the speed follow_speed took _feasible at (None: not yet)
+        self._tables = {}           # a run's tables by speed, and their leans (_table_at)
         self._bp = self._bn = None  # beta of the left (theta_v >= 0) and right half-turns
         self._side = None           # +1 during a left half-turn, -1 right, per figure
         self._planned = False       # the coming half-turn's beta was set in this step
@@ -187,6 +188,7 @@ class PhaseEllipse(Controller):
         self._steer_betas = tuple(betas)
         self._forget()
         self._rates = {}
+        self._tables = {}
 
     def begin_run(self, limits: Limits) -> None:
         """A new run: forget the last run's half-turns; take the figure's limits unless given."""
@@ -197,6 +199,7 @@ class PhaseEllipse(Controller):
         self._bp = self._bn = self._side = self._t_prev = None
         self._planned = False
         self._forget()
+        self._tables = {}
         self.achieved = None
         self.followed = []
         self._batch_turns = None
@@ -231,7 +234,7 @@ class PhaseEllipse(Controller):
         if self._limits is not None:
             grid = _table_speed(V_cm)
             if grid != self._table_speed:       # on terrain the speed changes every step
-                self._feasible = feasible_turns(self.nominal_body.at_speed(grid), self._limits)
+                self._feasible = self._table_at(grid)[0]
                 self._table_speed = grid
                 self._forget()                  # the ellipses made feasible by the old table
         return body
@@ -250,9 +253,20 @@ class PhaseEllipse(Controller):
         w, tm = self._omega0.constant_value, self._theta_max.constant_value
         if type(w) is not float or type(tm) is not float:
             return True
-        body, limits, top = self.nominal_body, self._limits, self._top
-        return (min(tm, top(feasible_turns(body.at_speed(a), limits), w)) !=
-                min(tm, top(feasible_turns(body.at_speed(b), limits), w)))
+        return min(tm, self._table_at(a, w)[1]) != min(tm, self._table_at(b, w)[1])
+
+    def _table_at(self, speed: float, omega0: float | None = None):
+        """``(table, the largest lean it lets the law follow at omega0)`` of the body at the
+        grid speed ``speed`` (:func:`.feasible.feasible_turns`, :meth:`_top`; the lean ``None``
+        without ``omega0``), kept for the run: on terrain the speed crosses a grid line back
+        and forth (a preview's coarse steps ask at every one, :meth:`changes_between`), and a
+        table found again is the one found first (the same numbers)."""
+        kept = self._tables.get((speed, omega0))
+        if kept is None:
+            table = feasible_turns(self.nominal_body.at_speed(speed), self._limits)
+            kept = (table, None if omega0 is None else self._top(table, omega0))
+            self._tables[(speed, omega0)] = kept
+        return kept
 
     # -- the feasible ellipse -------------------------------------------------------------------
     def feasible_lean(self, omega0: float, theta_max: float) -> float:

@@ -194,14 +194,17 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     :meth:`.PhaseEllipse.begin_step`: a crossing within the step, ``theta_v + omega_v dt``
     across zero) and the law switches to its ellipse there (a jump in ``alpha_v`` inside a
     step), and so does a controller taking new feasible turns at a speed it passes where
-    they change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same
-    grid, those steps are the ``stride = 1`` run's.  A coarse step is tried where the lean's
-    rate carries it across zero within no fewer than :data:`REACH` coarse steps and it moves
-    at most :data:`SPAN` cells of a height field, and kept only if the controller does not
-    change over it and it ends on the same side with no crossing within ``stride dt`` ahead
-    (where ``begin_step``, seeing the long step behind it, would plan).  A step's first stage
-    bounds the rate of ``C_f`` relative to the last step's, ``last`` s before (Section 3).  The
-    fall and a stop are checked at the rows."""
+    they change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the
+    same grid, those steps take the ``stride = 1`` run's instants.  A coarse step is tried where
+    the lean's rate carries it across zero within no fewer than :data:`REACH` coarse steps and
+    it moves at most :data:`SPAN` cells of a height field, and kept only if the controller does
+    not change over it and it ends on the same side with no crossing within ``stride dt`` ahead
+    (where ``begin_step``, seeing the long step behind it, would plan).  Where a coarse step may
+    be taken (slow enough for :data:`SPAN`), a step of either length reads the ground three
+    times, not four (:func:`advance`: the midpoints share a read, the end is carried from stage
+    4); faster, the preview's steps are the ``stride = 1`` run's, bit for bit.  A step's first
+    stage bounds the rate of ``C_f`` relative to the last step's, ``last`` s before (Section 3).
+    The fall and a stop are checked at the rows."""
     controller.begin_run(limits)
     foot = rhs.foot
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
@@ -213,35 +216,48 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     reach = REACH * stride * dt
     fastest = SPAN * getattr(ground, "cell", math.inf) / (stride * dt)   # m/s, coarse steps
     changes = controller.changes_between
+    x_lo, x_hi, y_lo, y_hi = getattr(ground, "extent", (-math.inf, math.inf, -math.inf,
+                                                        math.inf))
 
-    def advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf):
-        """RK4's stages 2-4 and the step.  A coarse step reads the ground once for both
-        midpoint stages: stage 3's foot lies ``h (k2 - k1)`` from stage 2's (about a millimetre
-        at 3 m/s), and takes stage 2's slopes carried there to first order by its curvatures,
-        and its curvatures (``tests/test_terrain_preview.py``'s cyclist: within 0.01 mm of the
-        run reading the ground there over 30 s; 4-5 mm with the slopes held, not carried)."""
+    def advance(t, step, h, w6, shared, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5,
+                cf):
+        """RK4's stages 2-4 and the step, and the ground at the step's end (``None``: to be
+        read there).  A coarse step reads the ground once for both midpoint stages: stage 3's
+        foot lies ``h (k2 - k1)`` from stage 2's (about a millimetre at 3 m/s), and takes stage
+        2's slopes carried there to first order by its curvatures, and its curvatures
+        (``tests/test_terrain_preview.py``'s cyclist: within 0.01 mm of the run reading the
+        ground there over 30 s; 4-5 mm with the slopes held, not carried); the step's end, a
+        few millimetres from stage 4's foot, takes stage 4's ground carried the same way (the
+        next step's first stage and the lean the controller sees there: within the midpoints'
+        bounds of the ground's)."""
         px, py = x0 + h * a0, x1 + h * a1
-        dv = None if step == dt else derivatives(px, py)
+        dv = derivatives(px, py) if shared else None
         b0, b1, b2, b3, b4, b5, _, _, _ = stage(
             t + h, px, py, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5, cf, h, dv)
         qx, qy = x0 + h * b0, x1 + h * b1
         if dv is not None:
-            hx, hy, hxx, hxy, hyy = dv
-            ex, ey = qx - px, qy - py
-            dv = (hx + hxx * ex + hxy * ey, hy + hxy * ex + hyy * ey, hxx, hxy, hyy)
+            dv = _carried(dv, qx - px, qy - py)
         c0, c1, c2, c3, c4, c5, _, _, _ = stage(
             t + h, qx, qy, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5, cf, h, dv)
+        sx, sy = x0 + step * c0, x1 + step * c1
+        if dv is not None:
+            dv = derivatives(sx, sy)
         d0, d1, d2, d3, d4, d5, _, _, _ = stage(
-            t + step, x0 + step * c0, x1 + step * c1, x2 + step * c2, x3 + step * c3,
-            x4 + step * c4, x5 + step * c5, cf, step)
-        return (x0 + w6 * (a0 + 2.0 * (b0 + c0) + d0), x1 + w6 * (a1 + 2.0 * (b1 + c1) + d1),
-                x2 + w6 * (a2 + 2.0 * (b2 + c2) + d2), x3 + w6 * (a3 + 2.0 * (b3 + c3) + d3),
-                x4 + w6 * (a4 + 2.0 * (b4 + c4) + d4), x5 + w6 * (a5 + 2.0 * (b5 + c5) + d5))
+            t + step, sx, sy, x2 + step * c2, x3 + step * c3, x4 + step * c4, x5 + step * c5,
+            cf, step, dv)
+        y = (x0 + w6 * (a0 + 2.0 * (b0 + c0) + d0), x1 + w6 * (a1 + 2.0 * (b1 + c1) + d1),
+             x2 + w6 * (a2 + 2.0 * (b2 + c2) + d2), x3 + w6 * (a3 + 2.0 * (b3 + c3) + d3),
+             x4 + w6 * (a4 + 2.0 * (b4 + c4) + d4), x5 + w6 * (a5 + 2.0 * (b5 + c5) + d5))
+        if dv is not None and x_lo <= y[0] <= x_hi and y_lo <= y[1] <= y_hi:
+            dv = _carried(dv, y[0] - sx, y[1] - sy)
+        else:
+            dv = None
+        return y, dv
 
     rows = []
     append = rows.append
     V_now = body.V_cm
-    i, ahead, last = 0, None, dt
+    i, ahead, last, near = 0, None, dt, None
     while True:
         t = i * dt
         if x5 != V_now:
@@ -254,10 +270,13 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         if skid is not None:
             skid.update(t, (x0, x1, x2, x3, x4, x5), foot)
         if ahead is None:
-            try:
-                dv = derivatives(x0, x1)
-            except OffTerrain:                  # the step ended past the edge
-                return rows, "left"
+            if near is not None:                # carried from the last step's stage 4
+                dv = near
+            else:
+                try:
+                    dv = derivatives(x0, x1)
+                except OffTerrain:              # the step ended past the edge
+                    return rows, "left"
             rel = lean(t, x0, x1, x2, x3, dv)
         else:                                   # found by the coarse step that led here
             dv, rel = ahead
@@ -267,13 +286,15 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,
                                                        dv)
         (step, h, w6), k, y = fine, 1, None
-        if stride > 1 and row and i + stride < n and x5 <= fastest and \
-                rel * (rel + x4 * reach) > 0.0:
+        slow = stride > 1 and x5 <= fastest         # the preview's reads shared (advance)
+        if slow and row and i + stride < n and rel * (rel + x4 * reach) > 0.0:
             try:
-                y = advance(t, *coarse, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf)
+                y, dv_y = advance(t, *coarse, True, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4,
+                                  a5, cf)
                 if changes(max(x5, MIN_SPEED), max(y[5], MIN_SPEED)):
                     raise _Fine
-                dv_y = derivatives(y[0], y[1])
+                if dv_y is None:
+                    dv_y = derivatives(y[0], y[1])
                 rel_y = lean(t + coarse[0], *y[:4], dv_y)
                 if rel * rel_y <= 0.0 or rel_y * (rel_y + y[4] * coarse[0]) <= 0.0:
                     raise _Fine
@@ -292,15 +313,24 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
                 return rows, "halted" if skid is not None and skid.stopping else "stopped"
         if i + 1 >= n:
             break
+        near = None
         if y is None:
             try:
-                y = advance(t, step, h, w6, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5, cf)
+                y, near = advance(t, step, h, w6, slow, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3,
+                                  a4, a5, cf)
             except OffTerrain:
                 return rows, "left"
         x0, x1, x2, x3, x4, x5 = y
         anchor, last = cf, step
         i += k
     return rows, None
+
+
+def _carried(dv, ex, ey):
+    """The ground's slopes ``dv`` (:attr:`.terrain_one_figure.TerrainStage.derivatives`) carried
+    ``(ex, ey)`` by its curvatures (to first order), the curvatures held."""
+    hx, hy, hxx, hxy, hyy = dv
+    return (hx + hxx * ex + hxy * ey, hy + hxy * ex + hyy * ey, hxx, hxy, hyy)
 
 
 class _Fine(Exception):
