@@ -126,6 +126,16 @@ def test_pole_tips_touch_the_ground_at_the_plant_phases(sport):
         assert np.all(side * tip[near, 0] > 0)
 
 
+def mapped_poles(sport, traj, surface):
+    """``{side: (tip, grip)}``, world (n, 3), of ``traj`` mapped on ``surface``."""
+    track = map_trajectory(sport, traj, surface=surface)
+    spec = load_rig(sport)
+    sk = Skeleton.from_spec(spec)
+    P = sk.fk(track.bones, len(track))
+    return {s: (world_points(track, sk.carry(P, f"pole.{s}", spec.bone(f"pole.{s}").tail)),
+                world_points(track, P[f"pole.{s}"][:, :3, 3])) for s in "LR"}
+
+
 def world_points(track, local):
     """Armature-space points (n, 3) to world, with the object's location and heading."""
     a = track.rotation[:, 2]
@@ -214,12 +224,7 @@ def test_pole_tips_stay_on_or_above_a_bumpy_surface(sport):
     def bumps(x, y):
         return 0.15 * np.sin(np.asarray(x) / 2.0) * np.cos(np.asarray(y) / 1.5)
 
-    track = map_trajectory(sport, traj, surface=bumps)
-    spec = load_rig(sport)
-    sk = Skeleton.from_spec(spec)
-    P = sk.fk(track.bones, len(track))
-    for s in ("L", "R"):
-        tip = world_points(track, sk.carry(P, f"pole.{s}", spec.bone(f"pole.{s}").tail))
+    for s, (tip, _) in mapped_poles(sport, traj, bumps).items():
         above = tip[:, 2] - bumps(tip[:, 0], tip[:, 1])
         assert above.min() > -1e-3, (s, above.min())
         assert (above < 1e-3).sum() > 10                      # it does plant
@@ -245,14 +250,8 @@ def test_no_part_of_a_pole_goes_into_steep_bumps(sport, period):
     def crate(x, y):
         return 0.3 * np.sin(np.asarray(x) / 0.16) * np.cos(np.asarray(y) / 0.16)
 
-    track = map_trajectory(sport, traj, surface=crate)
-    spec = load_rig(sport)
-    sk = Skeleton.from_spec(spec)
-    P = sk.fk(track.bones, len(track))
     plants = 0
-    for s in ("L", "R"):
-        tip = world_points(track, sk.carry(P, f"pole.{s}", spec.bone(f"pole.{s}").tail))
-        grip = world_points(track, P[f"pole.{s}"][:, :3, 3])
+    for s, (tip, grip) in mapped_poles(sport, traj, crate).items():
         pts = grip[:, None] + np.linspace(0.0, 1.0, 12)[None, :, None] * (tip - grip)[:, None]
         under = (pts[..., 2] - crate(pts[..., 0], pts[..., 1])).min()
         assert under > -1e-3, (s, under)      # measured -0.9 mm at worst (the hole's 1 mm)
