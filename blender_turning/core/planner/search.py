@@ -178,7 +178,8 @@ def _expand(problem: Problem, nodes: _Nodes, ids):
     par = np.repeat(ids, q)
     ch = np.tile(np.arange(q), len(ids))
     t0 = nodes.cols["t"][par]
-    args = (nodes.state[:, par], nodes.cols["cf"][par], problem.u_values[ch], t0,
+    cf = nodes.cols["cf"][par]
+    args = (nodes.state[:, par], cf, problem.rates(cf, ch), t0,
             nodes.cols["s"][par])
     if problem.settings.vectorize_children:
         r = problem.simulate_stage(*args)
@@ -235,14 +236,15 @@ def _follow_choices(problem, state, C_f, t0, s0, choices):
     x, cf, t, s = np.asarray(state, float).reshape(-1, 1), np.array([C_f]), t0, np.array([s0])
     f = np.zeros(1)
     for k, c in enumerate(choices):
-        r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
+        r = problem.simulate_stage(x, cf, problem.rates(cf, [c]), np.array([t]), s)
         if r.collided[0] or r.fell[0] or doomed_nodes(problem, r.state, r.C_f, k + 1)[0]:
             return np.inf, None, k + 1, None
         x, cf, s, f, t = r.state, r.C_f, r.s, f + r.cost, t + st.t_stage
     if len(choices) < st.n_stages:
         q = st.q
-        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
-                                   np.full(q, t), np.repeat(s, q))
+        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q),
+                                   problem.rates(cf, np.arange(q)), np.full(q, t),
+                                   np.repeat(s, q))
         bad = r.collided | r.fell | doomed_nodes(problem, r.state, r.C_f, st.n_stages)
         bad[~bad] = dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
                                  r.s[~bad])
@@ -269,8 +271,9 @@ def _greedy_dive(problem, state, C_f, t0, s0):
     f = 0.0
     choices = []
     for depth in range(1, st.n_stages + 1):
-        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
-                                   np.full(q, t), np.repeat(s, q))
+        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q),
+                                   problem.rates(cf, np.arange(q)), np.full(q, t),
+                                   np.repeat(s, q))
         key = f + r.cost + problem.lower_bound(r.d_last, depth, r.state, r.C_f)
         bad = r.collided | r.fell | doomed_nodes(problem, r.state, r.C_f, depth)
         if depth == st.n_stages:
@@ -424,8 +427,24 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                 "wall_time": time.perf_counter() - clock})
             return replace(plan, stats=stats, viable=False)
         return Plan((), (), math.inf, stats)
-    return Plan(tuple(best), tuple(float(problem.u_values[c]) for c in best), float(ub), stats,
+    return Plan(tuple(best), _rates_of(problem, state, C_f, t0, s0, best), float(ub), stats,
                 nodes.proof(), best_leaf)
+
+
+def _rates_of(problem, state, C_f, t0, s0, choices) -> tuple:
+    """The plan's ``dC_f/dt`` per stage (:meth:`.Problem.rates`: with ``spread = "range"`` each
+    stage's from the curvature the plan reaches, simulated)."""
+    if problem.settings.spread == "rate":
+        return tuple(float(problem.u_values[c]) for c in choices)
+    x, cf, s = np.asarray(state, float).reshape(-1, 1), np.array([C_f], float), np.array([s0])
+    out = []
+    for k, c in enumerate(choices):
+        u = problem.rates(cf, [c])
+        out.append(float(u[0]))
+        if k + 1 < len(choices):
+            r = problem.simulate_stage(x, cf, u, np.array([t0 + k * problem.settings.t_stage]), s)
+            x, cf, s = r.state, r.C_f, r.s
+    return tuple(out)
 
 
 _COUNTS = ("expanded", "generated", "clipped_collision", "clipped_fall", "clipped_bound",
@@ -448,7 +467,8 @@ def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float =
         m = x.shape[1]
         par = np.repeat(np.arange(m), q)
         ch = np.tile(np.arange(q), m)
-        r = problem.simulate_stage(x[:, par], cf[par], problem.u_values[ch], t[par], s[par])
+        r = problem.simulate_stage(x[:, par], cf[par], problem.rates(cf[par], ch), t[par],
+                                   s[par])
         alive = ~(r.collided | r.fell)
         if not alive.any():
             return np.inf, None
