@@ -45,12 +45,18 @@ def test_the_search_returns_the_exhaustive_optimum_round_a_pole(leg):
     poles = Obstacles(segments=[((8.0, 0.6), (8.0, -12.0))], clearance=0.3)
     p = racer(N=3, q=5, obstacles=poles, rate=2.06, spread="range", leg_force_max=leg)
     start = np.array([0.0, 0.0, 0.3, 0.1, 0.0])
-    for C0 in (0.0, 0.15):
+    for C0, heading, lean in ((0.0, 0.3, 0.1), (0.15, 0.3, 0.1), (0.24, 0.5, 0.6),
+                              (-0.2, -0.2, -0.5), (0.259, 0.6, 0.8)):
+        start = np.array([0.0, 0.0, heading, lean, 0.0])
         f, choices = exhaustive(p, start, C0)
         plan = branch_and_bound(p, start, C0)
+        if choices is None:               # every branch needs more than 3 BW or falls: none
+            assert not plan.feasible and leg
+            continue
         assert plan.choices == choices
         assert plan.f_opt == pytest.approx(f, rel=1e-9)
         assert plan.u[0] == p.rates(np.array([C0]), [choices[0]])[0]
+    start = np.array([0.0, 0.0, 0.3, 0.1, 0.0])
     # Not the even spread's optimum: the choices are other rates.
     assert exhaustive(racer(N=3, q=5, obstacles=poles, rate=2.06, leg_force_max=leg), start,
                       0.15)[0] != pytest.approx(f, rel=1e-6)
@@ -68,3 +74,13 @@ def test_the_receding_horizon_plans_the_same_line_with_and_without_its_speed_ups
     np.testing.assert_allclose([r.f_opt for r in a.replans], [r.f_opt for r in b.replans],
                                rtol=1e-9)
     assert math.isfinite(a.replans[-1].f_opt)
+
+
+def test_a_child_with_a_siblings_rate_is_simulated_once():
+    """On the bound the curvature left is 0: the rates towards it are all 0, the same branch as
+    holding it, and only that one is simulated; off it every child is.  The tree's counts: the
+    root's children (N = 1, no warm start)."""
+    p = racer(N=1, q=5, rate=2.06, spread="range", warm_start=False)
+    start = np.zeros(5)
+    for C0, children in ((p.limits.C_f_max, 3), (-p.limits.C_f_max, 3), (0.2, 5), (0.0, 5)):
+        assert branch_and_bound(p, start, C0).stats.generated == children

@@ -172,14 +172,22 @@ class _Nodes:
 
 
 def _expand(problem: Problem, nodes: _Nodes, ids):
-    """Simulate all q children of nodes ``ids``; returns the stage result and parent/choice."""
+    """Simulate the q children of nodes ``ids``; returns the stage result, parent/choice and the
+    ``(parents, choices)`` left out: a child whose ``dC_f/dt`` equals an earlier sibling's
+    (``spread = "range"`` on the bound, where the curvature left is 0) is the same branch, and
+    of tied plans the search returns the one with the smaller choices anyway."""
     q = problem.settings.q
     ids = np.asarray(ids)
     par = np.repeat(ids, q)
     ch = np.tile(np.arange(q), len(ids))
-    t0 = nodes.cols["t"][par]
-    cf = nodes.cols["cf"][par]
-    args = (nodes.state[:, par], cf, problem.rates(cf, ch), t0,
+    u = problem.rates(nodes.cols["cf"][par], ch).reshape(len(ids), q)
+    same = np.zeros(u.shape, bool)
+    for j in range(1, q):
+        same[:, j] = (u[:, :j] == u[:, j:j + 1]).any(axis=1)
+    same = same.reshape(-1)
+    dropped = (par[same], ch[same])
+    par, ch, u = par[~same], ch[~same], u.reshape(-1)[~same]
+    args = (nodes.state[:, par], nodes.cols["cf"][par], u, nodes.cols["t"][par],
             nodes.cols["s"][par])
     if problem.settings.vectorize_children:
         r = problem.simulate_stage(*args)
@@ -188,7 +196,7 @@ def _expand(problem: Problem, nodes: _Nodes, ids):
                  for j in range(len(par))]
         r = type(parts[0])(*(np.concatenate([getattr(p, f) for p in parts], axis=-1)
                              for f in ("state", "C_f", "s", "cost", "d_last", "collided", "fell")))
-    return r, par, ch
+    return r, par, ch, dropped
 
 
 def _bound(problem, r, depth, togo, reach, cols, pairs=None, direct=None):
@@ -349,7 +357,8 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
             break
         expanded += len(ids)
         nodes.expanded[ids] = True
-        r, par, ch = _expand(problem, nodes, ids)
+        r, par, ch, dropped = _expand(problem, nodes, ids)
+        nodes.child_total[dropped], nodes.child_f[dropped] = np.inf, 0.0   # a sibling's (proof.py)
         generated += len(par)
         depth = nodes.depth[par] + 1
         f = nodes.cols["f"][par] + r.cost
