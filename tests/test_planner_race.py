@@ -156,13 +156,16 @@ def assert_leg_force_clipped(p, free, state, C0, limit):
         Problem(p.figure, p.distance, poles, p.settings, varying)
 
 
-def test_the_receding_horizon_plans_the_same_line_with_and_without_its_speed_ups():
+@pytest.mark.parametrize("kw", [{}, {"rate": 2.06, "spread": "range"}])
+def test_the_receding_horizon_plans_the_same_line_with_and_without_its_speed_ups(kw):
     """Past a turning pole, the receding horizon for 1.8 s: the warm start, the reused proof and
-    the bound (each exact for the racer's cost) leave every plan as the plain search's."""
+    the bound (each exact for the racer's cost) leave every plan as the plain search's; also
+    with the choices spread over the curvature left (``PlannerSettings.spread``), where a child
+    with a sibling's rate is left out (and proved so, ``proof.py``)."""
     from blender_turning.core.planner import follow
     poles = Obstacles(segments=[((18.0, 0.6), (18.0, -12.0)), ((28.0, -0.6), (28.0, 12.0))],
                       clearance=0.3)
-    fast = racer(N=6, q=5, obstacles=poles)
+    fast = racer(N=6, q=5, obstacles=poles, **kw)
     plain = Problem(fast.figure, fast.distance, poles, replace(
         fast.settings, warm_start=False, reuse_proof=False, lower_bound=False))
     a, b = (follow(p, np.zeros(5), 0.0, 1.8) for p in (fast, plain))

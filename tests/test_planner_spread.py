@@ -1,15 +1,14 @@
 """The planner's choices spread over the curvature left (``PlannerSettings.spread = "range"``;
 docs/racing.md, "The planner's curvature lattice"): each choice stays within Section 6.1's
 bounds, the largest brings ``C_f`` exactly to its bound, the search stays exact (the exhaustive
-optimum around a pole, the receding horizon's plans with and without its speed-ups)."""
-import math
-from dataclasses import replace
+optimum around a pole; the receding horizon's plans with and without its speed-ups are in
+tests/test_planner_race.py)."""
 
 import numpy as np
 import pytest
 
 from blender_turning.core.course.obstacles import Obstacles
-from blender_turning.core.planner import PlannerSettings, branch_and_bound, exhaustive, follow
+from blender_turning.core.planner import PlannerSettings, branch_and_bound, exhaustive
 
 from test_planner_race import racer
 
@@ -60,20 +59,6 @@ def test_the_search_returns_the_exhaustive_optimum_round_a_pole(leg):
     # Not the even spread's optimum: the choices are other rates.
     assert exhaustive(racer(N=3, q=5, obstacles=poles, rate=2.06, leg_force_max=leg), start,
                       0.15)[0] != pytest.approx(f, rel=1e-6)
-
-
-def test_the_receding_horizon_plans_the_same_line_with_and_without_its_speed_ups():
-    poles = Obstacles(segments=[((18.0, 0.6), (18.0, -12.0)), ((28.0, -0.6), (28.0, 12.0))],
-                      clearance=0.3)
-    fast = racer(N=6, q=5, obstacles=poles, rate=2.06, spread="range")
-    from blender_turning.core.planner import Problem
-    plain = Problem(fast.figure, fast.distance, poles, replace(
-        fast.settings, warm_start=False, reuse_proof=False, lower_bound=False))
-    a, b = (follow(p, np.zeros(5), 0.0, 1.8) for p in (fast, plain))
-    assert [r.u for r in a.replans] == [r.u for r in b.replans]
-    np.testing.assert_allclose([r.f_opt for r in a.replans], [r.f_opt for r in b.replans],
-                               rtol=1e-9)
-    assert math.isfinite(a.replans[-1].f_opt)
 
 
 def test_a_child_with_a_siblings_rate_is_simulated_once():
