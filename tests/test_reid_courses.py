@@ -160,3 +160,28 @@ def test_the_racers_line_on_reids_courses_turns_like_reids_racers(gap, speed):
     assert verdict["radius"][2], verdict
     assert verdict["edge"][2], verdict
     assert got["F_bw"].max() <= 5.0
+
+
+@pytest.mark.slow
+def test_at_13_m_s_the_racer_holds_the_10_m_course_within_5_body_weights():
+    """The 10 m course at 13 m/s (Reid's fastest): the least-time line carves every turn at the
+    skis' 72 deg and peaks at 5.55-5.89 BW without a limit.  With the leg-force limit
+    (``planner.leg_force_max_bw = 5``, a line needing more is clipped), a 2.8 s horizon (N = 14)
+    and the choices spread over the curvature left, the turns stay within 10 % of Reid's on
+    average.  Measured: 4.19 +- 0.29 m, 70.4 deg, 4.89 BW at most.  With the even spread there
+    is no plan at t = 1.6 s (every branch hits a pole or needs more than 5 BW), as with N = 10
+    or 12 and the range spread (t = 5.6 and 5.2 s; BENCHMARKS.md, "Racing and carving")."""
+    sidecut = carving_of("slalom_racer").sidecut_radius
+    scene = scene_from_dict({**course(10.0, 13.0, gates=8, planner={
+        "stages": 14, "choices": 9, "stage_time": 0.2, "line": "race", "spread": "range",
+        "leg_force_max_bw": 5.0}),
+        "figure": {"preset": "slalom_racer", "body": {"V_cm": 13.0},
+                   "limits": {"dC_f_max": 2.06,
+                              "C_f_max": 1.0 / (sidecut * math.cos(math.radians(72.0)))}}},
+        "reid 10")
+    got = per_turn(scene.run().trajectory, scene.figure, gate_positions(10.0, 8))
+    assert got["gates"].tolist() == [1, 2, 3, 4, 5, 6]
+    verdict = against_reid(got, 10.0)
+    assert verdict["radius"][2], verdict
+    assert verdict["edge"][2], verdict
+    assert got["F_bw"].max() <= 5.0
