@@ -421,7 +421,7 @@ MUTANTS = [
       "room = lim.C_f_max - np.asarray(C_f, float)", [T + "test_planner_spread.py"]),
     M("spread_scene_key_ignored", "core/course/scene.py",
       '"spread": pl.string("spread", "rate", choices=SPREADS)}', "}",
-      [T + "test_planner_spread.py"]),
+      [T + "test_planner_race.py"]),
     M("spread_drops_unlike_siblings", "core/planner/search.py",
       "same[:, j] = (u[:, :j] == u[:, j:j + 1]).any(axis=1)",
       "same[:, j] = np.isclose(u[:, :j], u[:, j:j + 1], atol=0.3).any(axis=1)",

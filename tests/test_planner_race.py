@@ -113,6 +113,13 @@ def test_the_paper_cost_is_the_default_and_other_lines_are_refused():
         scene_from_dict(doc, "s.json")
     doc["planner"]["line"] = "race"
     assert scene_from_dict(doc, "s.json").settings.line == "race"
+    # The choices' spread (PlannerSettings.spread, tests/test_planner_spread.py) the same way.
+    assert PlannerSettings().spread == "rate"
+    doc["planner"]["spread"] = "wide"
+    with pytest.raises(FieldError, match="planner.spread = 'wide' is not one of rate, range"):
+        scene_from_dict(doc, "s.json")
+    doc["planner"]["spread"] = "range"
+    assert scene_from_dict(doc, "s.json").settings.spread == "range"
 
 
 def test_the_leg_force_limit_clips_what_the_trajectory_would_show_past_it():

@@ -70,14 +70,3 @@ def test_a_child_with_a_siblings_rate_is_simulated_once():
     for C0, children in ((p.limits.C_f_max, 3), (-p.limits.C_f_max, 3), (0.2, 5), (0.0, 5)):
         assert branch_and_bound(p, start, C0).stats.generated == children
 
-
-def test_a_scene_sets_the_spread_and_other_spreads_are_refused():
-    from blender_turning.core.course.scene import scene_from_dict
-    from blender_turning.core.validate import FieldError
-    assert PlannerSettings().spread == "rate"
-    doc = {"figure": {"preset": "slalom_racer"}, "path": {"polyline": [[0, 0], [40, 0]]},
-           "planner": {"spread": "wide"}}
-    with pytest.raises(FieldError, match="planner.spread = 'wide' is not one of rate, range"):
-        scene_from_dict(doc, "s.json")
-    doc["planner"]["spread"] = "range"
-    assert scene_from_dict(doc, "s.json").settings.spread == "range"
