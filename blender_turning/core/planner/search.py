@@ -182,7 +182,7 @@ def _expand(problem: Problem, nodes: _Nodes, ids):
     ch = np.tile(np.arange(q), len(ids))
     u = problem.rates(nodes.cols["cf"][par], ch).reshape(len(ids), q)
     same = np.zeros(u.shape, bool)
-    for j in range(1, q):
+    for j in range(1, q if problem.settings.spread == "range" else 0):   # "rate": all distinct
         same[:, j] = (u[:, :j] == u[:, j:j + 1]).any(axis=1)
     same = same.reshape(-1)
     dropped = (par[same], ch[same])
