@@ -69,6 +69,8 @@ def main(argv=None) -> int:
     p.add_argument("--line", choices=("path", "race"), default="path",
                    help="the planner's cost: the distance to the drawn line (Section 6) or the "
                         "racer's least time through the gates (PlannerSettings.line)")
+    p.add_argument("--spread", choices=("rate", "range"), default="range",
+                   help="the planner's choices of dC_f/dt (PlannerSettings.spread)")
     p.add_argument("--leg-force", type=float, default=0.0, metavar="BW",
                    help="clip lines whose leg force passes this many body weights "
                         "(PlannerSettings.leg_force_max; 0: no limit)")
@@ -94,7 +96,7 @@ def main(argv=None) -> int:
     for gap in a.gates:
         doc = course(gap, a.speed, a.preset, gates=a.count, amplitude=a.amplitude,
                      planner={"stages": a.stages, "choices": a.choices,
-                              "stage_time": a.stage_time, "line": a.line,
+                              "stage_time": a.stage_time, "line": a.line, "spread": a.spread,
                               "leg_force_max_bw": a.leg_force})
         doc["figure"]["limits"] = {"dC_f_max": a.rate}
         if a.slope:
@@ -123,7 +125,8 @@ def main(argv=None) -> int:
         print(f"gates {gap:g} m at {a.speed:g} m/s{f' on {a.slope:g} deg' if a.slope else ''}"
               f"{'' if a.target_speed is None else f', braking to {a.target_speed:g} m/s'} "
               f"({a.preset}, N = {a.stages}, q = {a.choices}, "
-              f"t_stage {a.stage_time:g} s, line {a.line}, leg force <= {a.leg_force:g} BW, "
+              f"t_stage {a.stage_time:g} s, line {a.line}, spread {a.spread}, "
+              f"leg force <= {a.leg_force:g} BW, "
               f"rate {scene.figure.limits.dC_f_max:.3g}, "
               f"C_f_max {scene.figure.limits.C_f_max:.3g}, "
               f"edge limit {'on' if a.edge_limit else 'off'}, "

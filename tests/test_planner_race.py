@@ -113,6 +113,13 @@ def test_the_paper_cost_is_the_default_and_other_lines_are_refused():
         scene_from_dict(doc, "s.json")
     doc["planner"]["line"] = "race"
     assert scene_from_dict(doc, "s.json").settings.line == "race"
+    # The choices' spread (PlannerSettings.spread, tests/test_planner_spread.py) the same way.
+    assert PlannerSettings().spread == "rate"
+    doc["planner"]["spread"] = "wide"
+    with pytest.raises(FieldError, match="planner.spread = 'wide' is not one of rate, range"):
+        scene_from_dict(doc, "s.json")
+    doc["planner"]["spread"] = "range"
+    assert scene_from_dict(doc, "s.json").settings.spread == "range"
 
 
 def test_the_leg_force_limit_clips_what_the_trajectory_would_show_past_it():
@@ -156,13 +163,16 @@ def assert_leg_force_clipped(p, free, state, C0, limit):
         Problem(p.figure, p.distance, poles, p.settings, varying)
 
 
-def test_the_receding_horizon_plans_the_same_line_with_and_without_its_speed_ups():
+@pytest.mark.parametrize("kw", [{}, {"rate": 2.06, "spread": "range"}])
+def test_the_receding_horizon_plans_the_same_line_with_and_without_its_speed_ups(kw):
     """Past a turning pole, the receding horizon for 1.8 s: the warm start, the reused proof and
-    the bound (each exact for the racer's cost) leave every plan as the plain search's."""
+    the bound (each exact for the racer's cost) leave every plan as the plain search's; also
+    with the choices spread over the curvature left (``PlannerSettings.spread``), where a child
+    with a sibling's rate is left out (and proved so, ``proof.py``)."""
     from blender_turning.core.planner import follow
     poles = Obstacles(segments=[((18.0, 0.6), (18.0, -12.0)), ((28.0, -0.6), (28.0, 12.0))],
                       clearance=0.3)
-    fast = racer(N=6, q=5, obstacles=poles)
+    fast = racer(N=6, q=5, obstacles=poles, **kw)
     plain = Problem(fast.figure, fast.distance, poles, replace(
         fast.settings, warm_start=False, reuse_proof=False, lower_bound=False))
     a, b = (follow(p, np.zeros(5), 0.0, 1.8) for p in (fast, plain))

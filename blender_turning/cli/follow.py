@@ -42,6 +42,10 @@ def register(sub):
                    help="the planner's cost: path, the distance to the drawn path (Section 6); "
                         "race, the least time down the course around the obstacles (scene "
                         "default; docs/racing.md)")
+    p.add_argument("--spread", choices=("rate", "range"),
+                   help="how the choices of dC_f/dt spread: rate, evenly over the largest rate "
+                        "(Section 6.1); range, over the rate that brings C_f to its bound by "
+                        "the stage's end (scene default; docs/racing.md)")
     p.add_argument("--target-speed", type=float, metavar="V",
                    help="m/s: brake at the foot, within the grip, to hold at most this speed "
                         "(and what the grip allows on the path's tightest bend; "
@@ -69,6 +73,8 @@ def run(args) -> int:
         changes["t_stage"] = check("--stage-time", args.stage_time, "t_stage")
     if args.line is not None:
         changes["line"] = args.line
+    if args.spread is not None:
+        changes["spread"] = args.spread
     scene = load_scene(args.scene)
     if args.grip is not None and args.target_speed is None:
         raise ValueError("--grip needs --target-speed (the grip bounds the braking)")
@@ -144,7 +150,7 @@ def _settings(st) -> dict:
             "theta_bound": st.theta_bound, "sample_dt": st.sample_dt, "dt": st.dt,
             "warm_start": st.warm_start, "lower_bound": st.lower_bound,
             "lookahead": st.lookahead, "fall_table": st.fall_table, "batch": st.batch,
-            "line": st.line, "leg_force_max": st.leg_force_max}
+            "line": st.line, "spread": st.spread, "leg_force_max": st.leg_force_max}
 
 
 def _plot(outputs, scene, traj, failed_at=None):

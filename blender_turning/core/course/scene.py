@@ -20,6 +20,7 @@ from ..physics.params import PRESETS, Figure, preset
 from .path import HermitePath
 from ..planner import FollowResult, PlannerSettings, Problem, SpeedProfile
 from ..planner.reach import LINES
+from ..planner.settings import SPREADS
 from ..ranges import RANGES
 from ..ground.scene_terrain import read_terrain
 from ..validate import FieldError, Fields, read_json
@@ -233,8 +234,9 @@ def scene_from_dict(doc, source: str = "scene") -> Scene:
         speed = SpeedProfile.constant(fig.body.V_cm)
 
     # Planner settings (Section 6.1).
-    pl = top.table("planner", set(_PLANNER) | {"line"})
-    kw = {"line": pl.string("line", "path", choices=LINES)}   # the cost (planner/reach.py)
+    pl = top.table("planner", set(_PLANNER) | {"line", "spread"})
+    kw = {"line": pl.string("line", "path", choices=LINES),    # the cost (planner/reach.py)
+          "spread": pl.string("spread", "rate", choices=SPREADS)}    # PlannerSettings.spread
     for key, (field, rng, default) in _PLANNER.items():
         if rng is None:
             kw[field] = pl.boolean(key, default)

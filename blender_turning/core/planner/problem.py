@@ -112,7 +112,8 @@ class Problem:
         self.speed = speed or SpeedProfile.constant(self.body.V_cm)
         #: The edge a lean can hold (:class:`..equipment.EdgeLimit`), or ``None``.
         self.edge_limit = edge_limit_of(figure.name) if settings.edge_limit else None
-        #: The q values of dC_f/dt, spread evenly within their bound (Section 6.1).
+        #: The q values of dC_f/dt, spread evenly within their bound (Section 6.1); with
+        #: ``spread = "range"`` each node's own are :meth:`rates`.
         self.u_values = self.limits.dC_f_max * np.linspace(-1.0, 1.0, settings.q)
         # Largest foot speed on any branch that is not clipped (Eq. 21 at the largest |C_f| and
         # lean), for the admissible lower bound.
@@ -203,6 +204,19 @@ class Problem:
             p.settings = replace(st, q=st.q_near)
             p.u_values = self.limits.dC_f_max * np.linspace(-1.0, 1.0, st.q_near)
         return p
+
+    def rates(self, C_f, ch) -> np.ndarray:
+        """``dC_f/dt`` of choices ``ch`` (indices, broadcast with ``C_f``) at stage-start
+        curvatures ``C_f`` (``PlannerSettings.spread``): ``u_values[ch]``, or with ``"range"``
+        the fraction ``linspace(-1, 1, q)[ch]`` of ``min(dC_f_max, (C_f_max -+ C_f) /
+        t_stage)``, the rate that brings ``C_f`` to its bound on that side by the stage's end
+        (never above ``dC_f_max``, never past the bound: Section 6.1's limits)."""
+        frac = self.u_values[ch] / self.limits.dC_f_max
+        if self.settings.spread == "rate":
+            return self.u_values[ch]
+        lim = self.limits
+        room = lim.C_f_max - np.copysign(1.0, frac) * np.asarray(C_f, float)
+        return frac * np.clip(room / self.settings.t_stage, 0.0, lim.dC_f_max)
 
     @property
     def runaways(self) -> int:

@@ -172,13 +172,22 @@ class _Nodes:
 
 
 def _expand(problem: Problem, nodes: _Nodes, ids):
-    """Simulate all q children of nodes ``ids``; returns the stage result and parent/choice."""
+    """Simulate the q children of nodes ``ids``; returns the stage result, parent/choice and the
+    ``(parents, choices)`` left out: a child whose ``dC_f/dt`` equals an earlier sibling's
+    (``spread = "range"`` on the bound, where the curvature left is 0) is the same branch, and
+    of tied plans the search returns the one with the smaller choices anyway."""
     q = problem.settings.q
     ids = np.asarray(ids)
     par = np.repeat(ids, q)
     ch = np.tile(np.arange(q), len(ids))
-    t0 = nodes.cols["t"][par]
-    args = (nodes.state[:, par], nodes.cols["cf"][par], problem.u_values[ch], t0,
+    u = problem.rates(nodes.cols["cf"][par], ch).reshape(len(ids), q)
+    same = np.zeros(u.shape, bool)
+    for j in range(1, q if problem.settings.spread == "range" else 0):   # "rate": all distinct
+        same[:, j] = (u[:, :j] == u[:, j:j + 1]).any(axis=1)
+    same = same.reshape(-1)
+    dropped = (par[same], ch[same])
+    par, ch, u = par[~same], ch[~same], u.reshape(-1)[~same]
+    args = (nodes.state[:, par], nodes.cols["cf"][par], u, nodes.cols["t"][par],
             nodes.cols["s"][par])
     if problem.settings.vectorize_children:
         r = problem.simulate_stage(*args)
@@ -187,7 +196,7 @@ def _expand(problem: Problem, nodes: _Nodes, ids):
                  for j in range(len(par))]
         r = type(parts[0])(*(np.concatenate([getattr(p, f) for p in parts], axis=-1)
                              for f in ("state", "C_f", "s", "cost", "d_last", "collided", "fell")))
-    return r, par, ch
+    return r, par, ch, dropped
 
 
 def _bound(problem, r, depth, togo, reach, cols, pairs=None, direct=None):
@@ -235,14 +244,15 @@ def _follow_choices(problem, state, C_f, t0, s0, choices):
     x, cf, t, s = np.asarray(state, float).reshape(-1, 1), np.array([C_f]), t0, np.array([s0])
     f = np.zeros(1)
     for k, c in enumerate(choices):
-        r = problem.simulate_stage(x, cf, problem.u_values[[c]], np.array([t]), s)
+        r = problem.simulate_stage(x, cf, problem.rates(cf, [c]), np.array([t]), s)
         if r.collided[0] or r.fell[0] or doomed_nodes(problem, r.state, r.C_f, k + 1)[0]:
             return np.inf, None, k + 1, None
         x, cf, s, f, t = r.state, r.C_f, r.s, f + r.cost, t + st.t_stage
     if len(choices) < st.n_stages:
         q = st.q
-        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
-                                   np.full(q, t), np.repeat(s, q))
+        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q),
+                                   problem.rates(cf, np.arange(q)), np.full(q, t),
+                                   np.repeat(s, q))
         bad = r.collided | r.fell | doomed_nodes(problem, r.state, r.C_f, st.n_stages)
         bad[~bad] = dead_leaves(problem, r.state[:, ~bad], r.C_f[~bad], t + st.t_stage,
                                  r.s[~bad])
@@ -269,8 +279,9 @@ def _greedy_dive(problem, state, C_f, t0, s0):
     f = 0.0
     choices = []
     for depth in range(1, st.n_stages + 1):
-        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q), problem.u_values,
-                                   np.full(q, t), np.repeat(s, q))
+        r = problem.simulate_stage(np.repeat(x, q, 1), np.repeat(cf, q),
+                                   problem.rates(cf, np.arange(q)), np.full(q, t),
+                                   np.repeat(s, q))
         key = f + r.cost + problem.lower_bound(r.d_last, depth, r.state, r.C_f)
         bad = r.collided | r.fell | doomed_nodes(problem, r.state, r.C_f, depth)
         if depth == st.n_stages:
@@ -346,7 +357,8 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
             break
         expanded += len(ids)
         nodes.expanded[ids] = True
-        r, par, ch = _expand(problem, nodes, ids)
+        r, par, ch, dropped = _expand(problem, nodes, ids)
+        nodes.child_total[dropped], nodes.child_f[dropped] = np.inf, 0.0   # a sibling's (proof.py)
         generated += len(par)
         depth = nodes.depth[par] + 1
         f = nodes.cols["f"][par] + r.cost
@@ -424,8 +436,24 @@ def branch_and_bound(problem: Problem, state, C_f: float, t0: float = 0.0, s0: f
                 "wall_time": time.perf_counter() - clock})
             return replace(plan, stats=stats, viable=False)
         return Plan((), (), math.inf, stats)
-    return Plan(tuple(best), tuple(float(problem.u_values[c]) for c in best), float(ub), stats,
+    return Plan(tuple(best), _rates_of(problem, state, C_f, t0, s0, best), float(ub), stats,
                 nodes.proof(), best_leaf)
+
+
+def _rates_of(problem, state, C_f, t0, s0, choices) -> tuple:
+    """The plan's ``dC_f/dt`` per stage (:meth:`.Problem.rates`: with ``spread = "range"`` each
+    stage's from the curvature the plan reaches, simulated)."""
+    if problem.settings.spread == "rate":
+        return tuple(float(problem.u_values[c]) for c in choices)
+    x, cf, s = np.asarray(state, float).reshape(-1, 1), np.array([C_f], float), np.array([s0])
+    out = []
+    for k, c in enumerate(choices):
+        u = problem.rates(cf, [c])
+        out.append(float(u[0]))
+        if k + 1 < len(choices):
+            r = problem.simulate_stage(x, cf, u, np.array([t0 + k * problem.settings.t_stage]), s)
+            x, cf, s = r.state, r.C_f, r.s
+    return tuple(out)
 
 
 _COUNTS = ("expanded", "generated", "clipped_collision", "clipped_fall", "clipped_bound",
@@ -448,7 +476,8 @@ def exhaustive(problem: Problem, state, C_f: float, t0: float = 0.0, s0: float =
         m = x.shape[1]
         par = np.repeat(np.arange(m), q)
         ch = np.tile(np.arange(q), m)
-        r = problem.simulate_stage(x[:, par], cf[par], problem.u_values[ch], t[par], s[par])
+        r = problem.simulate_stage(x[:, par], cf[par], problem.rates(cf[par], ch), t[par],
+                                   s[par])
         alive = ~(r.collided | r.fell)
         if not alive.any():
             return np.inf, None

@@ -10,7 +10,10 @@ import numpy as np
 from ..physics.params import check_range
 from .reach import LINES
 
-__all__ = ["PlannerSettings", "SpeedProfile"]
+__all__ = ["PlannerSettings", "SpeedProfile", "SPREADS"]
+
+#: How the choices of dC_f/dt spread (``PlannerSettings.spread``).
+SPREADS = ("rate", "range")
 
 
 @dataclass(frozen=True)
@@ -23,6 +26,15 @@ class PlannerSettings:
     """N, the number of stages planned ahead (the horizon is N t_stage)."""
     q: int = 5
     """Number of dC_f/dt values tried per stage, spread evenly over [-dC_f_max, dC_f_max]."""
+    spread: str = "rate"
+    """How the ``q`` values of dC_f/dt spread: ``"rate"``, evenly over ``[-dC_f_max, dC_f_max]``
+    (Section 6.1); ``"range"``, the same fractions ``linspace(-1, 1, q)`` of the rate each side
+    can use this stage, ``min(dC_f_max, (C_f_max -+ C_f) / t_stage)``: the largest brings
+    ``C_f`` exactly to its bound at the stage's end, 0 still holds it, and the others split the
+    curvature left into equal steps, so near the bound the curvatures between the paper's
+    lattice points are reachable (docs/racing.md, "The planner's curvature lattice").  Either
+    keeps every choice within Section 6.1's bounds, which the lower bounds and the fall table
+    assume (exact)."""
     q_near: int = 0
     """Number of dC_f/dt values tried per stage by a search with an obstacle or another figure
     within the horizon's reach (``Problem.local``), evenly spread as ``q``'s; 0: ``q``.  With
@@ -86,6 +98,8 @@ class PlannerSettings:
     proven optimal and says so in its statistics."""
 
     def __post_init__(self):
+        if self.spread not in SPREADS:
+            raise ValueError(f"spread = {self.spread!r} is not one of {', '.join(SPREADS)}")
         if self.line not in LINES:
             raise ValueError(f"line = {self.line!r} is not one of {', '.join(LINES)}")
         check_range("t_stage", self.t_stage, 0.0, 60.0, lo_open=True)

@@ -44,7 +44,8 @@ def no_way_on(problem: Problem, state, C_f, t, s) -> np.ndarray:
     t = np.broadcast_to(np.asarray(t, float), C_f.shape)
     s = np.broadcast_to(np.asarray(s, float), C_f.shape)
     r = problem.simulate_stage(np.repeat(state, q, 1), np.repeat(C_f, q),
-                               np.tile(problem.u_values, m), np.repeat(t, q), np.repeat(s, q))
+                               problem.rates(np.repeat(C_f, q), np.tile(np.arange(q), m)),
+                               np.repeat(t, q), np.repeat(s, q))
     return (r.collided | r.fell).reshape(m, q).all(axis=1)
 
 
