@@ -55,10 +55,11 @@ def test_the_search_returns_the_exhaustive_optimum_round_a_pole(leg):
         assert plan.choices == choices
         assert plan.f_opt == pytest.approx(f, rel=1e-9)
         assert plan.u[0] == p.rates(np.array([C0]), [choices[0]])[0]
+    # Not the even spread's optimum from the same state: the choices are other rates (measured
+    # 0.304 against 0.345 without the leg-force limit, 0.309 against 0.387 with it).
     start = np.array([0.0, 0.0, 0.3, 0.1, 0.0])
-    # Not the even spread's optimum: the choices are other rates.
-    assert exhaustive(racer(N=3, q=5, obstacles=poles, rate=2.06, leg_force_max=leg), start,
-                      0.15)[0] != pytest.approx(f, rel=1e-6)
+    even = racer(N=3, q=5, obstacles=poles, rate=2.06, leg_force_max=leg)
+    assert exhaustive(even, start, 0.15)[0] > exhaustive(p, start, 0.15)[0] * (1 + 1e-6)
 
 
 def test_a_child_with_a_siblings_rate_is_simulated_once():

@@ -211,10 +211,10 @@ class Problem:
         the fraction ``linspace(-1, 1, q)[ch]`` of ``min(dC_f_max, (C_f_max -+ C_f) /
         t_stage)``, the rate that brings ``C_f`` to its bound on that side by the stage's end
         (never above ``dC_f_max``, never past the bound: Section 6.1's limits)."""
-        frac = self.u_values[ch] / self.limits.dC_f_max
         if self.settings.spread == "rate":
             return self.u_values[ch]
         lim = self.limits
+        frac = self.u_values[ch] / lim.dC_f_max
         room = lim.C_f_max - np.copysign(1.0, frac) * np.asarray(C_f, float)
         return frac * np.clip(room / self.settings.t_stage, 0.0, lim.dC_f_max)
 
