@@ -401,7 +401,8 @@ MUTANTS = [
     M("lazy_extension_flipped", "core/ground/terrain.py",
       "k = np.where(idx < 0, -idx,", "k = np.where(idx < 0, idx,", TERRAIN),
     M("lazy_stencil_one_tile_row", "core/ground/terrain.py",
-      "a0, a1, b0, b1 = r0 // T, (r0 + 3) // T,", "a0, a1, b0, b1 = r0 // T, r0 // T,", TERRAIN),
+      "a0, a1, b0, b1 = r0 // T * W, (r0 + 3) // T * W,",
+      "a0, a1, b0, b1 = r0 // T * W, r0 // T * W,", TERRAIN),
     # -- planner (Section 6) -------------------------------------------------------------------
     M("v_max_without_eq21", "core/planner/problem.py",
       "self.v_max = self.speed.max / (1.0 - slip)", "self.v_max = self.speed.max", PLANNER),

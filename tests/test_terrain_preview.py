@@ -87,11 +87,11 @@ def test_a_preview_plans_and_switches_tables_at_the_bakes_steps(monkeypatch):
     exact, bake_events = _with_events(monkeypatch, 1)
     n_exact = len(calls)
     preview, events = _with_events(monkeypatch, 3)
-    # The work: the ground read 1,199 times for the bake's 6,001 (1,481 reading it at each
-    # stage of the fine steps, 1,935 reading it again at a coarse step's end, 2,393 also at
-    # both midpoints, 2,525 when every new table was also stepped finely; 2,690 trying coarse
-    # steps up to the crossings).
-    assert len(calls) - n_exact < 0.22 * n_exact
+    # The work (a count, the same on every run): the ground read 1,199 times for the bake's
+    # 6,001 (1,283 trying coarse steps up to the crossings; 1,481 reading it at each stage of
+    # the fine steps, 1,935 reading it again at a coarse step's end, 2,393 also at both
+    # midpoints, 2,525 when every new table was also stepped finely).
+    assert len(calls) - n_exact < 0.205 * n_exact
     assert np.allclose(np.diff(preview.t), 0.06) and preview.t[-1] == pytest.approx(30.0)
     assert preview.meta["dt"] == pytest.approx(0.06) and preview.meta["fine_dt"] == 0.02
     assert sum(len(e) == 2 for e in bake_events) == 22               # each half-turn

@@ -323,21 +323,14 @@ class LazyHeightField(HeightField):
 
     def _store(self, r0, c0):
         T, done = self.TILE, self._done
-        if type(r0) is int:                                 # one stencil (derivatives_one)
-            a0, a1, b0, b1 = r0 // T, (r0 + 3) // T, c0 // T, (c0 + 3) // T
-            if done[a0, b0] and done[a1, b1] and done[a0, b1] and done[a1, b0]:
-                return self._data
-            tiles = {(a, b) for a in (a0, a1) for b in (b0, b1)}
-        else:
-            r0, c0 = np.ravel(r0), np.ravel(c0)
-            W = done.shape[1]
-            a0, a1, b0, b1 = r0 // T * W, (r0 + 3) // T * W, c0 // T, (c0 + 3) // T
-            k = np.unique(np.concatenate([a0 + b0, a0 + b1, a1 + b0, a1 + b1]))
-            k = k[~done.ravel()[k]]
-            if not len(k):
-                return self._data
-            tiles = zip(*np.divmod(k, W))
-        for a, b in tiles:
+        r0, c0 = np.ravel(r0), np.ravel(c0)
+        W = done.shape[1]
+        a0, a1, b0, b1 = r0 // T * W, (r0 + 3) // T * W, c0 // T, (c0 + 3) // T
+        k = np.unique(np.concatenate([a0 + b0, a0 + b1, a1 + b0, a1 + b1]))
+        k = k[~done.ravel()[k]]
+        if not len(k):
+            return self._data
+        for a, b in zip(*np.divmod(k, W)):
             if not done[a, b]:
                 self._fill(a * T, min((a + 1) * T, self.ny + 4),
                            b * T, min((b + 1) * T, self.nx + 4))
