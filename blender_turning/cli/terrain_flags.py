@@ -31,10 +31,10 @@ from ..core.ground.terrain import Plane
 from ..core.physics.model import RESISTANCE, Resistance
 from ..core.validate import FieldError, Fields, check, read_json
 
-# flag -> (Resistance field, allowed range)
 SNOW_HELP = ("hard|soft|race: the snow's grip (default hard; race: a race piste, "
              "docs/skidding.md)")
 
+# flag -> (Resistance field, allowed range)
 RESISTANCE_FLAGS = {"friction": ("mu", 0.0, 1.0), "drag_area": ("CdA", 0.0, 10.0),
                     "air_density": ("rho", 0.0, 2.0)}
 
