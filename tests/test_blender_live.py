@@ -309,7 +309,9 @@ def test_a_body_slider_step_takes_a_nearby_body_s_feasible_turns(scene):
     fig = live_figure()
     scene.frame_set(100)
     built = feasible._feasible_turns.cache_info().misses
-    fig.turning.mass = 75.5                       # 0.7 % more: within NEARBY_BODY (2 %)
+    # 16 % more mass, far beyond NEARBY_BODY (2 %) itself, moves what a table reads of the
+    # body, J = (I_v + l^2 m) / (m l), by 1.9 %: within it, at its edge.
+    fig.turning.mass = 87.0
     live.schedule()                               # the drag step
     assert feasible._feasible_turns.cache_info().misses == built
     step = baked(fig)
@@ -319,10 +321,13 @@ def test_a_body_slider_step_takes_a_nearby_body_s_feasible_turns(scene):
     full = baked(fig)
     assert_same(full, fresh_bake(fig))
     w = slice(2 * (100 - live.WINDOW - 1), 2 * (100 + live.WINDOW))
-    # The lean the window shows is the exact one's to 0.05 deg: the commanded 23 deg is well
-    # inside both bodies' feasible turns (0.0 deg measured).
+    # What the window shows is the exact one's to the bound docs/live-preview.md states (0.2 deg
+    # of lean, 4 cm of the foot): the commanded 23 deg is inside both bodies' feasible turns,
+    # but heading control's room to flatten a half-turn is the nearby body's (measured here
+    # 0.114 deg, 3.06 cm; at a mass within 2 % of the table's, 76.5 kg, 0.015 deg, 0.45 cm).
     key = ('["turn_lean"]', 0)
-    assert np.abs(step[key][w][1::2] - full[key][w][1::2]).max() < math.radians(0.05)
+    assert np.abs(step[key][w][1::2] - full[key][w][1::2]).max() < math.radians(0.12)
+    assert np.abs(step["location", 0][w][1::2] - full["location", 0][w][1::2]).max() < 0.032
 
 
 def ground_figure():
