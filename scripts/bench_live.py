@@ -10,7 +10,9 @@ Each case is one figure with Live Preview on, the current frame in the middle of
 just past the frames around the current one, which it re-bakes first); a drag step sets its
 slider (``turning.lean``, or for the Body cases ``turning.mass``) a little further and
 re-bakes.  Timed, median of ``--steps``
-steps (in ms), the three ways interleaved step by step (the machine is shared):
+steps (in ms) and the largest (a step that builds feasibility tables stands out), the three
+ways interleaved step by step (the machine is shared), and the feasibility tables built over
+the steps (a deterministic count):
 
 - ``bake op``: today's figure, ``bpy.ops.turning.bake_turns()`` after the set (curves made anew,
   the foot track, an undo step);
@@ -132,15 +134,18 @@ def run_case(name, figs, steps, ways=WAYS):
                                 ("drag step", live.schedule)) if k.split()[0] in ways}
     times = {k: [] for k in ways}
     cpu = {k: [] for k in ways}
+    built = dict.fromkeys(ways, 0)
     k, failed = 0, []
     for _ in range(steps):
         for way, fn in ways.items():
             k += 1
             setattr(fig.turning, setting, values[k])
+            n = tables_built()
             t, c = time.perf_counter(), time.process_time()
             fn()
             times[way].append(time.perf_counter() - t)
             cpu[way].append(time.process_time() - c)
+            built[way] += tables_built() - n
             if fig.name in live.FAILURES:
                 failed.append(live.FAILURES[fig.name].message)
     if failed:                             # a step that fails re-bakes nothing: not a measure
@@ -151,7 +156,15 @@ def run_case(name, figs, steps, ways=WAYS):
     setattr(fig.turning, setting, values[0])
     fig.turning.live = False
     return ({way: 1000 * statistics.median(v) for way, v in times.items()},
-            {way: 1000 * statistics.median(v) for way, v in cpu.items()})
+            {way: 1000 * statistics.median(v) for way, v in cpu.items()},
+            {way: 1000 * max(v) for way, v in times.items()},
+            {way: 1000 * max(v) for way, v in cpu.items()}, built)
+
+
+def tables_built() -> int:
+    """Feasibility tables built so far (:func:`...core.controllers.feasible.feasible_turns`)."""
+    from blender_turning.core.controllers import feasible
+    return feasible._feasible_turns.cache_info().misses
 
 
 def run_parts(name, figs, steps):
@@ -241,12 +254,15 @@ def main(argv=None):
                 print(f"{name:20s} " + " ".join(f"{k} {v:6.1f}" for k, v in parts.items()),
                       flush=True)
             return
-        print(f"median ms per drag step of {args.steps} (24 fps; goal <= 40 ms): wall (CPU)")
+        print(f"ms per drag step of {args.steps} (24 fps; goal <= 40 ms), median and largest: "
+              "wall (CPU); the feasibility tables built over the steps")
         heads = {"bake": "bake op", "refresh": "refresh op", "drag": "drag step"}
-        print(f"{'case':20s} " + " ".join(f"{heads[w]:>15s}" for w in WAYS if w in args.ways))
+        print(f"{'case':20s} " + " ".join(f"{heads[w] + ' median':>15s} {'max':>15s} tables"
+                                          for w in WAYS if w in args.ways))
         for name in args.only or CASES:
-            wall, cpu = run_case(name, figs, args.steps, args.ways)
-            print(f"{name:20s} " + " ".join(f"{wall[w]:7.1f} ({cpu[w]:5.1f})" for w in wall),
+            wall, cpu, top, top_cpu, built = run_case(name, figs, args.steps, args.ways)
+            print(f"{name:20s} " + " ".join(f"{wall[w]:7.1f} ({cpu[w]:5.1f}) {top[w]:7.1f} "
+                                            f"({top_cpu[w]:5.1f}) {built[w]:6d}" for w in wall),
                   flush=True)
         print(f"load average after: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     finally:
