@@ -184,6 +184,7 @@ def test_nearby_tables_answer_with_a_close_body_s_table_only_inside_the_block(mo
     from blender_turning.core.controllers import feasible
     from blender_turning.core.controllers.feasible import feasible_turns, nearby_tables
     monkeypatch.setattr(feasible, "_TABLES", {})
+    monkeypatch.setattr(feasible, "_PREVIEWS", {})
     fig = preset("skier")
     base = feasible_turns(fig.body, fig.limits)
     close, far = rep(fig.body, m=fig.body.m * 1.01), rep(fig.body, l=fig.body.l * 1.05)
@@ -206,12 +207,62 @@ def test_nearby_tables_take_the_nearest_body_whatever_was_built_last(monkeypatch
     from blender_turning.core.controllers import feasible
     from blender_turning.core.controllers.feasible import feasible_turns, nearby_tables
     monkeypatch.setattr(feasible, "_TABLES", {})
+    monkeypatch.setattr(feasible, "_PREVIEWS", {})
     fig = preset("skier")
     near = feasible_turns(rep(fig.body, m=fig.body.m * 1.005), fig.limits)
     later = feasible_turns(rep(fig.body, l=fig.body.l * 0.985), fig.limits)      # built last
     with nearby_tables(0.02):
         assert feasible_turns(fig.body, fig.limits) is near
         assert feasible_turns(rep(fig.body, l=fig.body.l * 0.99), fig.limits) is later
+
+
+@pytest.mark.parametrize("name", ["skier", "cyclist", "carver"])
+def test_a_preview_table_is_the_whole_table_where_it_is_asked(name):
+    """A drag step's own table (:class:`PreviewTurns`) answers every question as the whole
+    table does, bit for bit (its frequencies solved apart from the others), after solving only
+    those about the first one asked: at a constant period, the turn, the half-turns directional
+    control sharpens and flattens and the beta range it bisects lie within 74 of the 256."""
+    from blender_turning.core.controllers.feasible import FeasibleTurns, PreviewTurns
+    p = preset(name)
+    rng = np.random.default_rng(3)
+    for V in (1.0, 3.0, 10.0):
+        body = p.body.at_speed(V)
+        full = FeasibleTurns(body, p.limits)
+        for period in (1.0, 3.0):
+            part, w = PreviewTurns(body, p.limits), TWO_PI / period
+            assert part.steerable_lean(w) == full.steerable_lean(w)
+            assert part.max_lean(w) == full.max_lean(w) and part.bound(w) == full.bound(w)
+            for lean in (0.05, 0.3, 0.6):
+                assert part.beta_range(lean, w) == full.beta_range(lean, w)
+            assert sum(part._solved) <= 74
+        ws = np.exp(rng.uniform(-7.0, 5.5, 300))       # the grid and past both of its ends
+        assert np.array_equal(part.max_leans(ws), full.max_leans(ws))
+        assert [part.bound(v) for v in ws] == [full.bound(v) for v in ws]
+        np.testing.assert_array_equal(part._lean, full._lean)
+
+
+def test_a_drag_step_without_a_near_table_makes_its_own_that_no_bake_takes(monkeypatch):
+    """Inside ``nearby_tables`` a body with no table within reach gets a preview table of its
+    own (:class:`PreviewTurns`, kept for the next steps, no whole table built); outside, the
+    same body gets its whole table, built then: the release never bakes with a preview's."""
+    from blender_turning.core.controllers import feasible
+    from blender_turning.core.controllers.feasible import (FeasibleTurns, PreviewTurns,
+                                                           nearby_tables)
+    monkeypatch.setattr(feasible, "_TABLES", {})
+    monkeypatch.setattr(feasible, "_PREVIEWS", {})
+    fig = preset("cyclist")
+    base = feasible_turns(fig.body, fig.limits)
+    taller = replace(fig.body, l=fig.body.l * 1.05)
+    built = feasible._feasible_turns.cache_info().misses
+    with nearby_tables(0.02):
+        part = feasible_turns(taller, fig.limits)
+        assert type(part) is PreviewTurns and part.body == taller
+        assert feasible_turns(replace(taller, l=taller.l * 1.01), fig.limits) is part
+        assert feasible_turns(fig.body, fig.limits) is base
+    assert feasible._feasible_turns.cache_info().misses == built
+    own = feasible_turns(taller, fig.limits)
+    assert type(own) is FeasibleTurns and own.body == taller
+    assert feasible_turns(replace(taller, l=taller.l * 1.01), fig.limits) is not part
 
 
 def _bisected_leans(table, omega0):
@@ -260,6 +311,7 @@ def test_a_table_is_shared_only_by_the_same_body_and_limits(monkeypatch, nearby)
     from blender_turning.core.controllers.feasible import nearby_tables
     from blender_turning.core.physics.params import BodyParams, Limits
     monkeypatch.setattr(feasible, "_TABLES", {})
+    monkeypatch.setattr(feasible, "_PREVIEWS", {})
     fig = preset("skier")
     with nearby_tables(0.02) if nearby else nullcontext():
         base = feasible_turns(fig.body, fig.limits)
@@ -291,6 +343,7 @@ def test_nearby_tables_measure_nearness_on_what_a_table_reads(monkeypatch):
     from blender_turning.core.controllers import feasible
     from blender_turning.core.controllers.feasible import nearby_tables
     monkeypatch.setattr(feasible, "_TABLES", {})
+    monkeypatch.setattr(feasible, "_PREVIEWS", {})
     fig = preset("cyclist")
     body = fig.body.at_speed(3.0)
     base = feasible_turns(body, fig.limits)
@@ -316,6 +369,7 @@ def test_a_nearby_table_s_leans_are_within_the_stated_bound(monkeypatch, name):
     from blender_turning.core.controllers import feasible
     from blender_turning.core.controllers.feasible import FeasibleTurns, nearby_tables
     monkeypatch.setattr(feasible, "_TABLES", {})
+    monkeypatch.setattr(feasible, "_PREVIEWS", {})
     p = preset(name)
     for V in (1.0, 3.0, 8.0, 20.0):
         body = p.body.at_speed(V)
