@@ -23,7 +23,7 @@ the steps (a deterministic count):
 Cases: the built-in skier, a Rigify rig as a skier, a cyclist on a 200 m x 200 m Ground mesh
 (1 m grid, the rolls of ``ski_slope`` without its slope), each over 10 s and 60 s at 24 fps, and
 a Body slider (mass) on the built-in skier (10 s) and on the cyclist on the Ground mesh (10 s and
-60 s).
+60 s), and the COM Height on the latter (60 s).
 """
 from __future__ import annotations
 
@@ -49,7 +49,8 @@ from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender.jobs import live  # noqa: E402
 
 CASES = ("skier-10", "skier-60", "rigify-10", "rigify-60", "cyclist-ground-10",
-         "cyclist-ground-60", "body-skier-10", "body-ground-10", "body-ground-60")
+         "cyclist-ground-60", "body-skier-10", "body-ground-10", "body-ground-60",
+         "height-ground-60")
 
 
 def select(fig):
@@ -104,6 +105,8 @@ def case_setup(name, figs):
     if parts[0] == "body":
         fig = figs["skier" if parts[1] == "skier" else "cyclist-ground"]
         return fig, "mass", [75.0 + 0.25 * k for k in range(400)]
+    if parts[0] == "height":                   # 0.5 % a step: past 2 % every fourth or fifth
+        return figs["cyclist-ground"], "com_height", [1.0 + 0.005 * k for k in range(400)]
     fig = figs["-".join(parts[:-1])]
     base = math.degrees(fig.turning.lean)
     # The cyclist on the Ground mesh's rolls falls at some leans a little above 4 deg: dragged
@@ -134,7 +137,7 @@ def run_case(name, figs, steps, ways=WAYS):
                                 ("drag step", live.schedule)) if k.split()[0] in ways}
     times = {k: [] for k in ways}
     cpu = {k: [] for k in ways}
-    built = dict.fromkeys(ways, 0)
+    built = dict.fromkeys(ways, 0j)
     k, failed = 0, []
     for _ in range(steps):
         for way, fn in ways.items():
@@ -161,10 +164,13 @@ def run_case(name, figs, steps, ways=WAYS):
             {way: 1000 * max(v) for way, v in cpu.items()}, built)
 
 
-def tables_built() -> int:
-    """Feasibility tables built so far (:func:`...core.controllers.feasible.feasible_turns`)."""
+def tables_built():
+    """Feasibility tables built so far (:func:`...core.controllers.feasible.feasible_turns`):
+    whole ones and a drag step's own (``PreviewTurns``, solved where asked), as a complex
+    number to be summed (real: whole, imaginary: preview)."""
     from blender_turning.core.controllers import feasible
-    return feasible._feasible_turns.cache_info().misses
+    return complex(feasible._feasible_turns.cache_info().misses,
+                   len(getattr(feasible, "_PREVIEWS", ())))
 
 
 def run_parts(name, figs, steps):
@@ -255,15 +261,15 @@ def main(argv=None):
                       flush=True)
             return
         print(f"ms per drag step of {args.steps} (24 fps; goal <= 40 ms), median and largest: "
-              "wall (CPU); the feasibility tables built over the steps")
+              "wall (CPU); the feasibility tables built over the steps: whole + preview")
         heads = {"bake": "bake op", "refresh": "refresh op", "drag": "drag step"}
         print(f"{'case':20s} " + " ".join(f"{heads[w] + ' median':>15s} {'max':>15s} tables"
                                           for w in WAYS if w in args.ways))
         for name in args.only or CASES:
             wall, cpu, top, top_cpu, built = run_case(name, figs, args.steps, args.ways)
-            print(f"{name:20s} " + " ".join(f"{wall[w]:7.1f} ({cpu[w]:5.1f}) {top[w]:7.1f} "
-                                            f"({top_cpu[w]:5.1f}) {built[w]:6d}" for w in wall),
-                  flush=True)
+            print(f"{name:20s} " + " ".join(
+                f"{wall[w]:7.1f} ({cpu[w]:5.1f}) {top[w]:7.1f} ({top_cpu[w]:5.1f}) "
+                f"{built[w].real:3.0f}+{built[w].imag:.0f}" for w in wall), flush=True)
         print(f"load average after: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     finally:
         addon.unregister()

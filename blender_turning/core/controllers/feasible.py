@@ -473,15 +473,16 @@ def nearby_tables(rel: float):
     inertia act on the turns through it alone), speed and gravity are each within ``rel``
     (relative) of the one asked for, with the same limits, when there is one (the nearest
     such body): a Body slider's drag step in Live Preview then costs no new table (a run
-    passes through several, ~7 ms each).  When there is none, the body's own, solved only about
-    the frequencies the run asks for (:class:`PreviewTurns`: its leans and bounds those of the
-    whole table, at about a third of its cost), kept for the next steps.  The mass moves ``J`` by a fraction of its own move
+    passes through several, ~7 ms each).  The mass moves ``J`` by a fraction of its own move
     (``I_v / (m l J)`` of it: 0.15 for the cyclist, 0.14 for the skier), so a mass slider
-    stays near a table about 7 times as long as it would on the mass itself.  The turns it
-    allows are those of that nearby body: with ``l`` and ``J`` within 2 % its leans are the
-    body's own to 2.03 % (0.91 deg), with the speed within 2 % to 4.4 % (2.05 deg) (measured
-    over six presets' tables at 1, 3, 8 and 20 m/s, leans above 1 deg,
-    tests/test_feasible_turns.py); the bake when the drag ends builds the body's own."""
+    stays near a table about 7 times as long as it would on the mass itself.  When there is
+    none, the body's own, solved only about the frequencies the run asks for
+    (:class:`PreviewTurns`: its leans and bounds those of the whole table, at about a third of
+    its cost), kept for the next steps.  The turns a nearby table allows are those of its body:
+    with ``l`` and ``J`` within 2 % its leans are the body's own to 2.03 % (0.91 deg), with the
+    speed within 2 % to 4.4 % (2.05 deg) (measured over six presets' tables at 1, 3, 8 and
+    20 m/s, leans above 1 deg, tests/test_feasible_turns.py); the bake when the drag ends builds
+    the body's whole table."""
     old, _NEARBY[0] = _NEARBY[0], float(rel)
     try:
         yield
