@@ -365,8 +365,8 @@ class PreviewTurns(FeasibleTurns):
     and flatten) and heading control's beta range bisects between ``omega0 / BETA_MAX`` and
     ``omega0 / BETA_MIN``: the first frequency asked about solves the grid from ``AROUND[0]``
     nodes below it to ``AROUND[1]`` above (``log 3`` and ``log 5`` over the grid's step, with a
-    margin), about a quarter of it, in one :meth:`_solve` (3 ms against 10 ms for the whole,
-    measured on the cyclist).  :meth:`_solve` treats every frequency alone, so each lean and
+    margin), 74 of its 256 frequencies, in one :meth:`_solve` (4.4 ms against 7.9 ms for the
+    whole, the cyclist at 1.5-4.5 m/s with 3 s turns).  :meth:`_solve` treats every frequency alone, so each lean and
     bound is bit for bit the full table's (tests/test_feasible_turns.py)."""
 
     AROUND = (30, 42)
@@ -477,7 +477,7 @@ def nearby_tables(rel: float):
     (``I_v / (m l J)`` of it: 0.15 for the cyclist, 0.14 for the skier), so a mass slider
     stays near a table about 7 times as long as it would on the mass itself.  When there is
     none, the body's own, solved only about the frequencies the run asks for
-    (:class:`PreviewTurns`: its leans and bounds those of the whole table, at about a third of
+    (:class:`PreviewTurns`: its leans and bounds those of the whole table, at about half of
     its cost), kept for the next steps.  The turns a nearby table allows are those of its body:
     with ``l`` and ``J`` within 2 % its leans are the body's own to 2.03 % (0.91 deg), with the
     speed within 2 % to 4.4 % (2.05 deg) (measured over six presets' tables at 1, 3, 8 and
