@@ -366,8 +366,9 @@ class PreviewTurns(FeasibleTurns):
     ``omega0 / BETA_MIN``: the first frequency asked about solves the grid from ``AROUND[0]``
     nodes below it to ``AROUND[1]`` above (``log 3`` and ``log 5`` over the grid's step, with a
     margin), 74 of its 256 frequencies, in one :meth:`_solve` (4.4 ms against 7.9 ms for the
-    whole, the cyclist at 1.5-4.5 m/s with 3 s turns).  :meth:`_solve` treats every frequency alone, so each lean and
-    bound is bit for bit the full table's (tests/test_feasible_turns.py)."""
+    whole, the cyclist at 1.5-4.5 m/s with 3 s turns).  :meth:`_solve` treats every frequency
+    alone, so each lean and bound is bit for bit the full table's
+    (tests/test_feasible_turns.py)."""
 
     AROUND = (30, 42)
 
