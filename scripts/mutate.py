@@ -350,7 +350,8 @@ MUTANTS = [
       "own = _keep(_PREVIEWS, (body, limits), PreviewTurns(body, limits))",
       "own = _keep(_TABLES, (body, limits), PreviewTurns(body, limits))", HEADING),
     M("feasible_drag_step_records_nothing", "core/controllers/feasible.py",
-      "table._asked = set()                      # a drag step's", "table._asked = None  #", HEADING),
+      "table._asked = set()                      # a drag step's", "table._asked = None  #",
+      HEADING),
     M("feasible_found_beta_range_unrecorded", "core/controllers/feasible.py",
       "            if self._asked is not None:             # what it asked when it was found\n"
       "                self._asked.update(nodes)\n", "", HEADING),

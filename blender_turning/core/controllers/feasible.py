@@ -398,11 +398,13 @@ class PreviewTurns(FeasibleTurns):
     Where: a drag step's run asks the same few grid intervals as the step before it (the turn
     at a constant period, the half-turns directional control sharpens and flattens, the points
     of heading control's beta range, which bisects between ``omega0 / BETA_MAX`` and
-    ``omega0 / BETA_MIN``): 3-15 a table on the cyclist.  :func:`preview_tables` solves those a
-    nearby body's tables recorded (``_asked``; no margin: one more node each way solved 70 %
-    more and missed as often), for every speed at once.  An interval asked outside them solves the grid from ``AROUND[0]``
-    nodes below it to ``AROUND[1]`` above (``log 3`` and ``log 5`` over the grid's step, with
-    a margin: the whole beta range, 74 of the 256 frequencies) in one :meth:`_solve`."""
+    ``omega0 / BETA_MIN``): 3-15 a table on the cyclist.  :func:`preview_tables` solves those
+    a nearby body's tables recorded (``_asked``; no margin: one more node each way solved 70 %
+    more and missed as often), for every speed at once (the cyclist's 7: 110 frequencies,
+    5-8 ms, against 7 x 74 in 20-45 ms).  An interval asked outside them (``misses``) solves
+    the grid from ``AROUND[0]`` nodes below it to ``AROUND[1]`` above (``log 3`` and ``log 5``
+    over the grid's step, with a margin: the whole beta range, 74 of the 256 frequencies) in
+    one :meth:`_solve`."""
 
     AROUND = (30, 42)
 
