@@ -433,6 +433,49 @@ def test_a_drag_step_s_previews_are_solved_at_once_where_the_last_step_asked(mon
     assert len(feasible._PREVIEWS) == 5
 
 
+def test_each_speed_s_previews_are_planned_by_the_nearest_body_asked_there(monkeypatch):
+    """The speeds a drag step's previews are solved at come from every recorded body within
+    ``PLAN_REACH``, each planned by the nearest one's table at that speed: a Mass drag whose run
+    reached a new speed (4.5 m/s, its own preview) a step before the others left 2 % plans
+    those from the bake's tables (one solve, no interval asked outside); a body further than
+    ``PLAN_REACH`` from every recorded one plans nothing (its own preview only)."""
+    from blender_turning.core.controllers import feasible
+    from blender_turning.core.controllers.feasible import (FeasibleTurns, PreviewTurns,
+                                                           nearby_tables)
+    monkeypatch.setattr(feasible, "_TABLES", {})
+    monkeypatch.setattr(feasible, "_PREVIEWS", {})
+    fig = preset("cyclist")
+    speeds, w = (1.5, 2.0, 2.5, 3.0), TWO_PI / 2.0
+    for V in speeds:                              # the bake's, then taken by a drag step
+        feasible_turns(fig.body.at_speed(V), fig.limits)
+    with nearby_tables(0.02):
+        for V in speeds:
+            _ask(feasible_turns(fig.body.at_speed(V), fig.limits), w)
+    first = _with_J(fig.body, fig.body.J * 1.015)
+    with nearby_tables(0.02):                     # the step that reached 4.5 m/s
+        new = feasible_turns(first.at_speed(4.5), fig.limits)
+        assert type(new) is PreviewTurns and not any(new._solved)   # none asked there
+        _ask(new, w)
+    solves = []
+    real = FeasibleTurns._solve
+    monkeypatch.setattr(FeasibleTurns, "_solve",
+                        lambda self, omega0, of=None: solves.append(omega0.size) or
+                        real(self, omega0, of))
+    later = _with_J(fig.body, fig.body.J * 1.03)
+    with nearby_tables(0.02):
+        for V in speeds:
+            part = feasible_turns(later.at_speed(V), fig.limits)
+            assert type(part) is PreviewTurns and part.body == later.at_speed(V)
+            _ask(part, w)
+            assert part.misses == 0
+        assert feasible_turns(later.at_speed(4.5), fig.limits) is new
+    assert len(solves) == 1 and len(feasible._PREVIEWS) == 1 + 4
+    far = replace(fig.body, l=fig.body.l * (1 + 1.5 * feasible.PLAN_REACH))
+    with nearby_tables(0.02):
+        alone = feasible_turns(far.at_speed(3.0), fig.limits)
+        assert not any(alone._solved) and len(feasible._PREVIEWS) == 1 + 4 + 1
+
+
 @pytest.mark.parametrize("name", ["skier", "cyclist", "carver"])
 def test_previews_solved_together_are_each_body_s_whole_table(name):
     """Tables of several bodies (speeds, COM heights, inertia) solved in one ``_solve``

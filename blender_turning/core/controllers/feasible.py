@@ -399,8 +399,8 @@ class PreviewTurns(FeasibleTurns):
     at a constant period, the half-turns directional control sharpens and flattens, the points
     of heading control's beta range, which bisects between ``omega0 / BETA_MAX`` and
     ``omega0 / BETA_MIN``): 3-15 a table on the cyclist.  :func:`preview_tables` solves those
-    a nearby body's tables recorded (``_asked``; no margin: one more node each way solved 70 %
-    more and missed as often), for every speed at once (the cyclist's 7: 110 frequencies,
+    the nearest body's table at each speed recorded (``_asked``, :func:`_previews`; no margin:
+    one more node each way solved 70 % more and missed as often), for every speed at once (the cyclist's 7: 110 frequencies,
     5-8 ms, against 7 x 74 in 20-45 ms).  An interval asked outside them (``misses``) solves
     the grid from ``AROUND[0]`` nodes below it to ``AROUND[1]`` above (``log 3`` and ``log 5``
     over the grid's step, with a margin: the whole beta range, 74 of the 256 frequencies) in
@@ -517,23 +517,20 @@ def _nearest(body: BodyParams, limits: Limits, rel: float) -> FeasibleTurns | No
 
 
 def _previews(body: BodyParams, limits: Limits, rel: float) -> PreviewTurns:
-    """``body``'s own :class:`PreviewTurns`, kept; with it those of ``body`` at each speed of
-    the recorded tables (``_asked``) of the body nearest it in ``l``, ``J`` and gravity (the
-    newest of equals), a run's speeds, that have no table within ``rel``: all solved at once
-    about the grid intervals those tables were asked (:func:`preview_tables`)."""
+    """``body``'s own :class:`PreviewTurns`, kept; with it those of ``body`` at each speed a
+    recorded table (``_asked``) of a body within ``PLAN_REACH`` of it in ``l``, ``J`` and
+    gravity was asked at (a run's speeds) that have no table within ``rel``: all solved at
+    once about the grid intervals the nearest such body's table at that speed (the newest of
+    equals) was asked (:func:`preview_tables`)."""
     own = _keep(_PREVIEWS, (body, limits), PreviewTurns(body, limits))
-    told = [(_body_distance(b, body, ("l", "J", "g")), i, b)
-            for i, ((b, lim), t) in enumerate([*_TABLES.items(), *_PREVIEWS.items()])
-            if lim == limits and t._asked]
-    if not told:
-        return own
-    src = min(told, key=lambda n: (n[0], -n[1]))[2].at_speed(1.0)
-    asked: dict = {}                  # speed: the intervals asked there (whole and preview)
-    for (b, lim), t in [*_TABLES.items(), *_PREVIEWS.items()]:
-        if lim == limits and t._asked and b.at_speed(1.0) == src:
-            asked.setdefault(b.V_cm, set()).update(t._asked)
+    nearest: dict = {}                  # speed: (distance, -order, the intervals asked)
+    for i, ((b, lim), t) in enumerate([*_TABLES.items(), *_PREVIEWS.items()]):
+        if lim == limits and t._asked:
+            d = _body_distance(b, body, ("l", "J", "g"))
+            if d <= PLAN_REACH and (d, -i) < nearest.get(b.V_cm, (math.inf,))[:2]:
+                nearest[b.V_cm] = (d, -i, t._asked)
     plans = []
-    for V, where in asked.items():
+    for V, (_, _, where) in nearest.items():
         other = body.at_speed(V)
         if other == body:
             plans.append((own, where))
@@ -541,6 +538,12 @@ def _previews(body: BodyParams, limits: Limits, rel: float) -> PreviewTurns:
             plans.append((_keep(_PREVIEWS, (other, limits), PreviewTurns(other, limits)), where))
     preview_tables(plans)
     return own
+
+
+#: How far (relative, in ``l``, ``J`` and gravity) a body's recorded tables plan another's
+#: preview tables (:func:`_previews`): a drag's earlier steps (a step past 2 % from the body
+#: before, several such steps back), not another figure's body.
+PLAN_REACH = 0.1
 
 
 def _keep(tables: dict, key, table):
