@@ -401,10 +401,10 @@ class PreviewTurns(FeasibleTurns):
     ``omega0 / BETA_MIN``): 3-15 a table on the cyclist.  :func:`preview_tables` solves those
     the nearest body's table at each speed recorded (``_asked``, :func:`_previews`; no margin:
     one more node each way solved 70 % more and missed as often), for every speed at once
-    (the cyclist's 7: 110 frequencies, 5-8 ms, against 7 x 74 in 20-45 ms).  An interval asked outside them (``misses``) solves
-    the grid from ``AROUND[0]`` nodes below it to ``AROUND[1]`` above (``log 3`` and ``log 5``
-    over the grid's step, with a margin: the whole beta range, 74 of the 256 frequencies) in
-    one :meth:`_solve`."""
+    (the cyclist's 7: 110 frequencies, 5-8 ms, against 7 x 74 in 20-45 ms).  An interval
+    asked outside them (``misses``) solves the grid from ``AROUND[0]`` nodes below it to
+    ``AROUND[1]`` above (``log 3`` and ``log 5`` over the grid's step, with a margin: the
+    whole beta range, 74 of the 256 frequencies) in one :meth:`_solve`."""
 
     AROUND = (30, 42)
 
