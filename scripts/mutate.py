@@ -350,8 +350,10 @@ MUTANTS = [
       "own = _keep(_PREVIEWS, (body, limits), PreviewTurns(body, limits))",
       "own = _keep(_TABLES, (body, limits), PreviewTurns(body, limits))", HEADING),
     M("feasible_drag_step_records_nothing", "core/controllers/feasible.py",
-      "table._asked = set()                      # a drag step's", "table._asked = None  #",
-      HEADING),
+      "table._asked, table._step = set(), _NEARBY[1]", "table._step = _NEARBY[1]", HEADING),
+    M("feasible_drag_step_records_on_old_asks", "core/controllers/feasible.py",
+      "table._asked, table._step = set(), _NEARBY[1]",
+      "table._asked, table._step = table._asked or set(), _NEARBY[1]", HEADING),
     M("feasible_found_beta_range_unrecorded", "core/controllers/feasible.py",
       "            if self._asked is not None:             # what it asked when it was found\n"
       "                self._asked.update(nodes)\n", "", HEADING),

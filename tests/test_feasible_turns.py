@@ -476,6 +476,37 @@ def test_each_speed_s_previews_are_planned_by_the_nearest_body_asked_there(monke
         assert not any(alone._solved) and len(feasible._PREVIEWS) == 1 + 4 + 1
 
 
+def test_a_table_records_what_the_last_drag_step_that_took_it_asked(monkeypatch):
+    """A table's record (where the next body's preview tables are solved) is what the last
+    drag step that took it asked: a step at 2 s turns, then one at 4 s, leaves 4 s turns'
+    intervals only (a drag of the Turn Period must not pile every period's up, that the next
+    Body slider's step would then solve at every speed); the questions asked outside a drag
+    step (a bake) are not recorded."""
+    from blender_turning.core.controllers import feasible
+    from blender_turning.core.controllers.feasible import nearby_tables
+    monkeypatch.setattr(feasible, "_TABLES", {})
+    monkeypatch.setattr(feasible, "_PREVIEWS", {})
+    fig = preset("cyclist")
+    body = fig.body.at_speed(3.0)
+    table = feasible_turns(body, fig.limits)
+    _ask(table, TWO_PI / 1.0)                             # the bake: nothing recorded
+    with nearby_tables(0.02):
+        assert feasible_turns(body, fig.limits) is table
+        _ask(table, TWO_PI / 2.0)
+    two = set(table._asked)
+    with nearby_tables(0.02):
+        feasible_turns(body, fig.limits)
+        _ask(table, TWO_PI / 4.0)
+        feasible_turns(body, fig.limits)                  # the same step again: kept
+    four = set(table._asked)
+    with nearby_tables(0.02):
+        feasible_turns(body, fig.limits)
+        _ask(table, TWO_PI / 4.0)
+    assert table._asked == four and two and four and not two <= four
+    node = [int((math.log(TWO_PI / T) - table._lw0) / table._dlw) for T in (4.0, 2.0)]
+    assert node[0] in four and node[1] in two and node[1] not in four
+
+
 @pytest.mark.parametrize("name", ["skier", "cyclist", "carver"])
 def test_previews_solved_together_are_each_body_s_whole_table(name):
     """Tables of several bodies (speeds, COM heights, inertia) solved in one ``_solve``

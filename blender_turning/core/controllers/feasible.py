@@ -215,10 +215,12 @@ def _needs(of, theta_max, omega0):
 class FeasibleTurns:
     """``max_lean(omega0)`` and the feasible range of beta for one body and its limits."""
 
-    #: The grid intervals a drag step asked about (a set, from the first drag step that takes
-    #: the table, :func:`nearby_tables`; ``None``: not recorded): where the next body's
-    #: :class:`PreviewTurns` at this speed are solved.
-    _asked = None
+    #: The grid intervals the last drag step that took the table asked about (a set, from the
+    #: first drag step that takes it, :func:`nearby_tables`; ``None``: not recorded): where the
+    #: next body's :class:`PreviewTurns` at this speed are solved.  ``_step``: that drag step
+    #: (the count of ``nearby_tables`` blocks): a later one records afresh, so the intervals
+    #: of earlier settings (another Turn Period) do not pile up.
+    _asked, _step = None, 0
 
     def __init__(self, body: BodyParams, limits: Limits):
         self.body, self.limits = body, limits
@@ -411,7 +413,7 @@ class PreviewTurns(FeasibleTurns):
 
     def _tabulate(self):
         self._solved = [False] * _N_OMEGA
-        self._asked = set()
+        self._asked, self._step = set(), _NEARBY[1]
         self.misses = 0         # the solves of intervals not planned (AROUND)
         return np.zeros(_N_OMEGA), np.zeros(_N_OMEGA, np.intp)
 
@@ -481,8 +483,9 @@ def _feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
     return FeasibleTurns(body, limits)
 
 
-#: ``[relative tolerance or None]``: see :func:`nearby_tables`.
-_NEARBY = [None]
+#: ``[relative tolerance or None, the nearby_tables blocks entered]``: see
+#: :func:`nearby_tables`.
+_NEARBY = [None, 0]
 #: What a table reads of its body (:func:`ellipse_needs`): the mass and the roll inertia only
 #: through ``J = (I_v + l^2 m) / (m l)``, so nearness is measured on these.
 _BODY_FIELDS = ("l", "J", "V_cm", "g")
@@ -499,8 +502,8 @@ def feasible_turns(body: BodyParams, limits: Limits) -> FeasibleTurns:
         table = _nearest(body, limits, rel) or _previews(body, limits, rel)
     if table is None:
         return _keep(_TABLES, (body, limits), _feasible_turns(body, limits))
-    if rel is not None and table._asked is None:
-        table._asked = set()                      # a drag step's: what it asks, recorded
+    if rel is not None and table._step != _NEARBY[1]:
+        table._asked, table._step = set(), _NEARBY[1]     # this drag step's asks, recorded
     return table
 
 
@@ -587,6 +590,7 @@ def nearby_tables(rel: float):
     20 m/s, leans above 1 deg, tests/test_feasible_turns.py); the bake when the drag ends builds
     the body's whole table."""
     old, _NEARBY[0] = _NEARBY[0], float(rel)
+    _NEARBY[1] += 1
     try:
         yield
     finally:
