@@ -138,17 +138,19 @@ def run_case(name, figs, steps, ways=WAYS):
     times = {k: [] for k in ways}
     cpu = {k: [] for k in ways}
     built = dict.fromkeys(ways, 0j)
+    nodes = dict.fromkeys(ways, 0)
     k, failed = 0, []
     for _ in range(steps):
         for way, fn in ways.items():
             k += 1
             setattr(fig.turning, setting, values[k])
-            n = tables_built()
+            n, m = tables_built(), preview_nodes()
             t, c = time.perf_counter(), time.process_time()
             fn()
             times[way].append(time.perf_counter() - t)
             cpu[way].append(time.process_time() - c)
             built[way] += tables_built() - n
+            nodes[way] += preview_nodes() - m
             if fig.name in live.FAILURES:
                 failed.append(live.FAILURES[fig.name].message)
     if failed:                             # a step that fails re-bakes nothing: not a measure
@@ -161,7 +163,7 @@ def run_case(name, figs, steps, ways=WAYS):
     return ({way: 1000 * statistics.median(v) for way, v in times.items()},
             {way: 1000 * statistics.median(v) for way, v in cpu.items()},
             {way: 1000 * max(v) for way, v in times.items()},
-            {way: 1000 * max(v) for way, v in cpu.items()}, built)
+            {way: 1000 * max(v) for way, v in cpu.items()}, built, nodes)
 
 
 def tables_built():
@@ -171,6 +173,12 @@ def tables_built():
     from blender_turning.core.controllers import feasible
     return complex(feasible._feasible_turns.cache_info().misses,
                    len(getattr(feasible, "_PREVIEWS", ())))
+
+
+def preview_nodes():
+    """The frequencies the drag steps' own tables solved so far (of 256 a table)."""
+    from blender_turning.core.controllers import feasible
+    return sum(sum(t._solved) for t in getattr(feasible, "_PREVIEWS", {}).values())
 
 
 def run_parts(name, figs, steps):
@@ -261,15 +269,17 @@ def main(argv=None):
                       flush=True)
             return
         print(f"ms per drag step of {args.steps} (24 fps; goal <= 40 ms), median and largest: "
-              "wall (CPU); the feasibility tables built over the steps: whole + preview")
+              "wall (CPU); the feasibility tables built over the steps: whole + preview "
+              "(the previews' frequencies solved)")
         heads = {"bake": "bake op", "refresh": "refresh op", "drag": "drag step"}
         print(f"{'case':20s} " + " ".join(f"{heads[w] + ' median':>15s} {'max':>15s} tables"
                                           for w in WAYS if w in args.ways))
         for name in args.only or CASES:
-            wall, cpu, top, top_cpu, built = run_case(name, figs, args.steps, args.ways)
+            wall, cpu, top, top_cpu, built, nodes = run_case(name, figs, args.steps, args.ways)
             print(f"{name:20s} " + " ".join(
                 f"{wall[w]:7.1f} ({cpu[w]:5.1f}) {top[w]:7.1f} ({top_cpu[w]:5.1f}) "
-                f"{built[w].real:3.0f}+{built[w].imag:.0f}" for w in wall), flush=True)
+                f"{built[w].real:3.0f}+{built[w].imag:.0f} ({nodes[w]})" for w in wall),
+                flush=True)
         print(f"load average after: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     finally:
         addon.unregister()
