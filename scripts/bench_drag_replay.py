@@ -2,7 +2,7 @@
 
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py --capture calls.pkl --frame end
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_drag_replay.py calls.pkl count      # stages
-    PYTHONPATH=$PWD .venv/bin/python scripts/bench_drag_replay.py calls.pkl callgrind  # instructions
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_drag_replay.py calls.pkl callgrind
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_drag_replay.py calls.pkl time
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_drag_replay.py calls.pkl hash > now.txt
 
@@ -22,8 +22,8 @@ made):
 - ``hash``: a digest of every column of every row of each call's preview (its ``stride``) and
   release (``stride = 1``) run, and of runs on the test suite's grounds (``CASES``: the rolls,
   a mogul slope with and without a course, a plane, a 12 deg slope, flat ground with friction,
-  a straight run, a target speed with skidding), each at both strides where a preview may run: two trees whose
-  digests agree step bit for bit alike.
+  a straight run, a target speed with skidding), each at both strides where a preview may
+  run: two trees whose digests agree step bit for bit alike.
 """
 from __future__ import annotations
 
