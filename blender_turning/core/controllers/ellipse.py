@@ -86,18 +86,40 @@ def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=
 
 def ellipse_alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius=0.05):
     """:func:`ellipse_alpha` on Python floats (one figure is stepped ~12,000 times a minute)."""
+    return ellipse_law_one(theta_max, omega0, alpha_max, origin_radius)(th, om)
+
+
+def ellipse_law_one(theta_max, omega0, alpha_max, origin_radius=0.05):
+    """:func:`ellipse_alpha_one` of one ellipse: ``(th, om) -> alpha_v``, its products of the
+    ellipse's constants (``-omega0^2``, ``omega0 theta_max``, ``K omega0^2 theta_max``) made
+    once, the same floats (:meth:`PhaseEllipse.lean_law` keeps one per half-turn)."""
     w2 = omega0 * omega0
-    x = om / (omega0 * theta_max)
-    y = th / theta_max
-    r = math.sqrt(x * x + y * y)
-    a = -w2 * th + GAIN * w2 * theta_max * (1.0 - r) * x / (r if r > 1.0 else 1.0)
-    if r < origin_radius:
-        f = 1.0 - r / origin_radius
-        a += 0.5 * alpha_max * f * f
-    return -alpha_max if a < -alpha_max else (alpha_max if a > alpha_max else a)
+    neg_w2, wt, gain = -w2, omega0 * theta_max, GAIN * w2 * theta_max
+    lo, half, sqrt = -alpha_max, 0.5 * alpha_max, math.sqrt
+
+    def alpha(th, om):
+        x = om / wt
+        y = th / theta_max
+        r = sqrt(x * x + y * y)
+        a = neg_w2 * th + gain * (1.0 - r) * x / (r if r > 1.0 else 1.0)
+        if r < origin_radius:
+            f = 1.0 - r / origin_radius
+            a += half * f * f
+        return lo if a < lo else (alpha_max if a > alpha_max else a)
+    return alpha
+
+
+def _law_of(alpha_one):
+    """``alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius)`` as a factory of one
+    ellipse's law (:func:`ellipse_law_one`'s signature)."""
+    def law_one(theta_max, omega0, alpha_max, origin_radius=0.05):
+        return lambda th, om: alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius)
+    return law_one
 
 
 LAWS = {"smooth": (ellipse_alpha, ellipse_alpha_one), "paper": (paper_alpha, paper_alpha_one)}
+#: Each law of one ellipse on floats, as :func:`ellipse_law_one` makes it.
+LAWS_ONE = {"smooth": ellipse_law_one, "paper": _law_of(paper_alpha_one)}
 
 
 class PhaseEllipse(Controller):
@@ -129,6 +151,7 @@ class PhaseEllipse(Controller):
         self.directional = directional
         self.law = law
         self._alpha, self._alpha_one = LAWS[law]
+        self._law_one = LAWS_ONE[law]
         self._limits_given = limits is not None
         self._limits = limits
         self._feasible = None if limits is None else feasible_turns(body, limits)
@@ -552,36 +575,37 @@ class PhaseEllipse(Controller):
         return np.where(theta_v >= 0, self._bp, self._bn)
 
     def _half_turn(self, t, b):
-        """:meth:`_ellipse` of the schedules at ``t`` for beta ``b``, kept per beta while both
-        schedules are constant (``_fixed``, :meth:`_forget`)."""
+        """:meth:`_ellipse` of the schedules at ``t`` for beta ``b``, kept per beta with its law
+        on floats (:meth:`lean_law`) while both schedules are constant (``_fixed``,
+        :meth:`_forget`)."""
         e = self._ellipse(self._omega0(t), self._theta_max(t), b)
         fixed = self._fixed
         if fixed is not None and type(b) is float:
             if len(fixed) > 16:
                 fixed.clear()
-            fixed[b] = e
+            fixed[b] = (e, self._law_one(*e, self.origin_radius))
         return e
 
     def target(self, t):
         side = self._side
         b = 1.0 if side is None else self._b(side)
         fixed = self._fixed
-        e = fixed.get(b) if fixed is not None and type(b) is float else None
-        if e is None:
-            e = self._half_turn(t, b)
+        kept = fixed.get(b) if fixed is not None and type(b) is float else None
+        e = self._half_turn(t, b) if kept is None else kept[0]
         return e[1], e[0]
 
     def lean_law(self, t, theta_v, omega_v):
         """The law of the module docstring about the half-turn's ellipse (:meth:`_ellipse`; beta
-        by the side of the lean, :meth:`_b`); one figure on floats (:func:`ellipse_alpha_one`
-        or the paper's)."""
+        by the side of the lean, :meth:`_b`); one figure on floats (:func:`ellipse_law_one`
+        or the paper's, kept per half-turn)."""
         if type(theta_v) is float:
             bp = self._bp
             b = 1.0 if bp is None else bp if theta_v >= 0.0 else self._bn
             fixed = self._fixed
-            e = fixed.get(b) if fixed is not None and type(b) is float else None
-            if e is None:
-                e = self._half_turn(t, b)
+            kept = fixed.get(b) if fixed is not None and type(b) is float else None
+            if kept is not None:
+                return kept[1](theta_v, omega_v)
+            e = self._half_turn(t, b)
             return self._alpha_one(theta_v, omega_v, e[0], e[1], e[2], self.origin_radius)
         tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t), self._b(theta_v))
         return self._alpha(theta_v, omega_v, tm, w, amax, self.origin_radius)
