@@ -12,7 +12,8 @@ The simulation steps a controller (:func:`..physics.simulate.simulate`): once be
 step it is given the figure's limits (:meth:`~Controller.begin_run`), once per accepted step it
 is told the time and the state with the lean from the equilibrium lean
 (:meth:`~Controller.begin_step`, where it may update its memory), and at each of the step's
-integrator stages its lean law is asked (pure: no memory change).  States have shape ``(5, n)``
+integrator stages its lean law is asked (pure: no memory change; one figure on floats asks the
+law :meth:`~Controller.step_law` gives for the step).  States have shape ``(5, n)``
 or ``(5,)``; the law gets floats for one figure and arrays for a batch.
 """
 from __future__ import annotations
@@ -64,6 +65,13 @@ class Controller:
         ``theta_v`` (rad, from the equilibrium lean) and its rate ``omega_v`` (rad/s): floats
         for one figure, arrays for a batch."""
         raise NotImplementedError
+
+    def step_law(self, t: float):
+        """The lean law the integrator stages of the step begun at ``t`` ask, after
+        :meth:`begin_step` (one figure on floats): :meth:`lean_law` itself here; a controller
+        whose law stays the same over a step may return a faster function of ``(t, theta_v,
+        omega_v)`` with the same values."""
+        return self.lean_law
 
     def target(self, t: float):
         """``(omega0, theta_max)`` of the ellipse the motion is following now (for the phase)."""

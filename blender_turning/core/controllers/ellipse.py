@@ -86,18 +86,23 @@ def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=
 
 def ellipse_alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius=0.05):
     """:func:`ellipse_alpha` on Python floats (one figure is stepped ~12,000 times a minute)."""
-    return ellipse_law_one(theta_max, omega0, alpha_max, origin_radius)(th, om)
+    e = (theta_max, omega0, alpha_max)
+    return ellipse_law_one(e, e, origin_radius)(0.0, th, om)
 
 
-def ellipse_law_one(theta_max, omega0, alpha_max, origin_radius=0.05):
-    """:func:`ellipse_alpha_one` of one ellipse: ``(th, om) -> alpha_v``, its products of the
-    ellipse's constants (``-omega0^2``, ``omega0 theta_max``, ``K omega0^2 theta_max``) made
-    once, the same floats (:meth:`PhaseEllipse.lean_law` keeps one per half-turn)."""
-    w2 = omega0 * omega0
-    neg_w2, wt, gain = -w2, omega0 * theta_max, GAIN * w2 * theta_max
-    lo, half, sqrt = -alpha_max, 0.5 * alpha_max, math.sqrt
+def ellipse_law_one(pos, neg, origin_radius=0.05):
+    """:func:`ellipse_alpha_one` of a turn's two half-turns: ``(t, th, om) -> alpha_v`` about
+    the ellipse ``pos = (theta_max, omega0, alpha_max)`` where ``th >= 0`` and ``neg`` where
+    not (:meth:`PhaseEllipse.step_law`), each ellipse's products (``omega0 theta_max``,
+    ``-omega0^2``, ``K omega0^2 theta_max``) made once: the same floats."""
+    def made(theta_max, omega0, alpha_max):
+        w2 = omega0 * omega0
+        return (theta_max, omega0 * theta_max, -w2, GAIN * w2 * theta_max, -alpha_max,
+                alpha_max, 0.5 * alpha_max)
+    P, N, sqrt = made(*pos), made(*neg), math.sqrt
 
-    def alpha(th, om):
+    def alpha(t, th, om):
+        theta_max, wt, neg_w2, gain, lo, hi, half = P if th >= 0.0 else N
         x = om / wt
         y = th / theta_max
         r = sqrt(x * x + y * y)
@@ -105,20 +110,22 @@ def ellipse_law_one(theta_max, omega0, alpha_max, origin_radius=0.05):
         if r < origin_radius:
             f = 1.0 - r / origin_radius
             a += half * f * f
-        return lo if a < lo else (alpha_max if a > alpha_max else a)
+        return lo if a < lo else (hi if a > hi else a)
     return alpha
 
 
 def _law_of(alpha_one):
-    """``alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius)`` as a factory of one
-    ellipse's law (:func:`ellipse_law_one`'s signature)."""
-    def law_one(theta_max, omega0, alpha_max, origin_radius=0.05):
-        return lambda th, om: alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius)
+    """``alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius)`` as a law of two
+    half-turns (:func:`ellipse_law_one`'s signature)."""
+    def law_one(pos, neg, origin_radius=0.05):
+        def alpha(t, th, om):
+            return alpha_one(th, om, *(pos if th >= 0.0 else neg), origin_radius)
+        return alpha
     return law_one
 
 
 LAWS = {"smooth": (ellipse_alpha, ellipse_alpha_one), "paper": (paper_alpha, paper_alpha_one)}
-#: Each law of one ellipse on floats, as :func:`ellipse_law_one` makes it.
+#: Each law of a turn's two half-turns on floats, as :func:`ellipse_law_one` makes it.
 LAWS_ONE = {"smooth": ellipse_law_one, "paper": _law_of(paper_alpha_one)}
 
 
@@ -198,6 +205,7 @@ class PhaseEllipse(Controller):
         const = (self._omega0.constant_value, self._theta_max.constant_value)
         self._fixed = {} if all(type(v) is float for v in const) else None
         self._batch = None          # a batch's per-figure ellipses (:meth:`_batch_lean`)
+        self._step = None           # the law of the betas and the table now (step_law)
 
     @property
     def steer_betas(self) -> tuple:
@@ -219,7 +227,7 @@ class PhaseEllipse(Controller):
             self._limits = limits
             self._feasible = feasible_turns(self.body, limits)
             self._table_speed = None
-        self._bp = self._bn = self._side = self._t_prev = None
+        self._bp = self._bn = self._side = self._t_prev = self._step = None
         self._planned = False
         self._forget()
         self._tables = {}
@@ -270,6 +278,8 @@ class PhaseEllipse(Controller):
         nothing the law does (the commanded lean below both tables' bounds, the usual case)."""
         if self._limits is None:
             return False
+        if math.floor(V_a / SPEED_GRID) == math.floor(V_b / SPEED_GRID):
+            return False                        # one cell of the grid: one table
         a, b = _table_speed(V_a), _table_speed(V_b)
         if a == b:
             return False
@@ -424,6 +434,7 @@ class PhaseEllipse(Controller):
             soon = (th + om * dt) * side < 0.0           # a crossing within this step
             if first:
                 self._bp = self._bn = 1.0
+                self._step = None
                 self._side = -side if abs(th) < 0.05 * self.theta_max(t) else side
             elif side == self._side and not soon:        # most steps of one figure
                 self._planned = False
@@ -488,6 +499,7 @@ class PhaseEllipse(Controller):
                 self._bp = beta
             else:
                 self._bn = beta
+            self._step = None
             return
         goal = self.heading(t)                                    # per-figure headings too
         beta = self._modifier(np.asarray(theta_dir)[idx], side[idx], t, tmf, w, change, lo, hi,
@@ -583,7 +595,7 @@ class PhaseEllipse(Controller):
         if fixed is not None and type(b) is float:
             if len(fixed) > 16:
                 fixed.clear()
-            fixed[b] = (e, self._law_one(*e, self.origin_radius))
+            fixed[b] = (e, self._law_one(e, e, self.origin_radius))
         return e
 
     def target(self, t):
@@ -604,11 +616,36 @@ class PhaseEllipse(Controller):
             fixed = self._fixed
             kept = fixed.get(b) if fixed is not None and type(b) is float else None
             if kept is not None:
-                return kept[1](theta_v, omega_v)
+                return kept[1](t, theta_v, omega_v)
             e = self._half_turn(t, b)
             return self._alpha_one(theta_v, omega_v, e[0], e[1], e[2], self.origin_radius)
         tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t), self._b(theta_v))
         return self._alpha(theta_v, omega_v, tm, w, amax, self.origin_radius)
+
+    def step_law(self, t):
+        """:meth:`lean_law` on floats over the step begun at ``t``: while both schedules are
+        constant, one law of the two half-turns' ellipses (:func:`ellipse_law_one`), without
+        the look-ups of :meth:`lean_law` at every stage; kept until a beta or the table changes
+        (``_step``: :meth:`_forget`, :meth:`begin_run`, :meth:`begin_step`, :meth:`_plan`)."""
+        law = self._step
+        if law is None:
+            fixed, bp, bn = self._fixed, self._bp, self._bn
+            if bp is None:
+                bp = bn = 1.0
+            if fixed is None or type(bp) is not float or type(bn) is not float:
+                return self.lean_law
+            law = self._step = self._law_one(self._fixed_turn(t, bp)[0],
+                                             self._fixed_turn(t, bn)[0], self.origin_radius)
+        return law
+
+    def _fixed_turn(self, t, b):
+        """``(ellipse, law)`` of the half-turn of beta ``b`` (a float) while both schedules are
+        constant (``_fixed``, :meth:`_half_turn`)."""
+        kept = self._fixed.get(b)
+        if kept is None:
+            self._half_turn(t, b)
+            kept = self._fixed[b]
+        return kept
 
 register_controller(ControllerType(
     name="ellipse", label="Phase Ellipse",

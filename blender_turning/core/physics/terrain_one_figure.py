@@ -70,7 +70,7 @@ class TerrainStage:
         """The last braked stage's ``(F_brake / m, F_lat / m, N / m, hold)``, m/s^2
         (:mod:`.grip`): ``hold`` the braking force over the mass that would hold the speed
         (the speed's rate without the brake over the foot's speed ratio)."""
-        self.stage, self.lean = self._build(body, limits, resistance)
+        self.stage, self.lean, self.use_law = self._build(body, limits, resistance)
 
     def _along(self, t):
         """``(cos H, sin H)`` of the course at ``t``."""
@@ -194,4 +194,9 @@ class TerrainStage:
                 dV -= b * ratio
             return (u * c, u * s, turn, om, alpha, dV, alpha, V_f, cf)
 
-        return stage, lean
+        def use_law(step_law):
+            """The law the coming stages ask (:meth:`.Controller.step_law` of the step)."""
+            nonlocal law
+            law = step_law
+
+        return stage, lean, use_law

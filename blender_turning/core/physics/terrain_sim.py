@@ -16,6 +16,7 @@ across the hill (docs/TERRAIN.md Section 6).
 from __future__ import annotations
 
 import math
+from itertools import chain
 
 import numpy as np
 
@@ -158,7 +159,9 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
             skid.restore()
     if stop == "halted":
         rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None
-    traj = _trajectory(body, ground, np.array(rows, float), stride * dt, info)
+    # The rows' floats into one array (np.array of a list of tuples: twice the time).
+    rec = np.fromiter(chain.from_iterable(rows), float, len(rows) * len(rows[0]))
+    traj = _trajectory(body, ground, rec.reshape(len(rows), -1), stride * dt, info)
     if stop == "fell":
         raise FellOver(float(traj.t[-1]), float(rows[-1][11]), traj,
                        fall_cause(limits, traj.C_f, traj.t))
@@ -210,6 +213,7 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
     begin, target, fall = controller.begin_step, controller.target, limits.theta_fall
     follow, changes = controller.follow_speed, controller.changes_between
+    step_law, use_law = controller.step_law, rhs.use_law
     anchor = None if anchor is None else float(anchor)
     x0, x1, x2, x3, x4, x5 = (float(v) for v in st)
     step_f, h_f, w6_f = dt, 0.5 * dt, dt / 6.0
@@ -262,7 +266,7 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     append = rows.append
     V_now = body.V_cm
     V_law = low if low > V_now else V_now
-    i, ahead, last, near = 0, None, dt, None
+    i, ahead, last, near, law_now = 0, None, dt, None, None
     while True:
         t = i * dt
         if x5 != V_now:
@@ -288,6 +292,10 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
             dv, rel = ahead
             ahead = None
         begin(t, (x0, x1, x2, rel, x4))
+        law = step_law(t)
+        if law is not law_now:
+            use_law(law)
+            law_now = law
         row = stride == 1 or i % stride == 0
         a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,
                                                        dv)
