@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..physics.params import BodyParams
+from ..physics.params import BodyParams, reached_speed
 
 
 class Controller:
@@ -30,21 +30,27 @@ class Controller:
     (``C_f = 0``) and the lean does what gravity makes it do."""
 
     def __init__(self, body: BodyParams):
-        self.body = body
-        """The body the controller steers (Eq. 1 is solved with it); :attr:`body` carries the
-        current speed."""
+        self._body, self._speed = body, None      # the body, and a speed followed since
         self.nominal_body = body
         """The body the controller was made for."""
 
-    def follow_speed(self, V_cm: float) -> BodyParams:
-        """Steer at the forward speed ``V_cm`` from now on (a speed that varies over time);
-        returns the body at that speed.
+    @property
+    def body(self) -> BodyParams:
+        """The body the controller steers (Eq. 1 is solved with it), at the current speed
+        (:meth:`follow_speed`)."""
+        if self._speed is not None:
+            self._body, self._speed = self.nominal_body.at_speed(self._speed), None
+        return self._body
+
+    def follow_speed(self, V_cm: float) -> None:
+        """Steer at the forward speed ``V_cm`` from now on (a speed that varies over time):
+        :attr:`body` is the body at that speed (made when next asked: on terrain the speed
+        changes every step, and few steps ask).
 
         Eq. (1) is solved with the current ``V_cm``; the paper keeps ``V_cm`` constant in
         Sections 3-5, and lets it vary along the path in Section 6 (the planner's speed
         profile)."""
-        self.body = self.nominal_body.at_speed(float(V_cm))
-        return self.body
+        self._speed = reached_speed(V_cm)
 
     def changes_between(self, V_a: float, V_b: float) -> bool:
         """Does following the speed from ``V_a`` to ``V_b`` change the controller at a speed

@@ -163,6 +163,7 @@ class PhaseEllipse(Controller):
         self._limits = limits
         self._feasible = None if limits is None else feasible_turns(body, limits)
         self._table_speed = None    # the speed follow_speed took _feasible at (None: not yet)
+        self._cell = None           # and the cell of the grid it followed last (its floor)
         self._tables = {}           # a run's tables by speed, and their leans (_table_at)
         self._bp = self._bn = None  # beta of the left (theta_v >= 0) and right half-turns
         self._side = None           # +1 during a left half-turn, -1 right, per figure
@@ -198,12 +199,19 @@ class PhaseEllipse(Controller):
         self._forget()
 
     def _forget(self) -> None:
-        """Forget the ellipses made feasible (:meth:`_ellipse`): the table, the room or a
-        schedule changed.  With both schedules constant (and floats) the ellipse depends on
+        """Forget the ellipses made feasible (:meth:`_ellipse`) with every table: the room or a
+        schedule changed."""
+        self._by_table = {}         # (_memo, _fixed) of a table not followed now, by its speed
+        self._ellipses(None)
+
+    def _ellipses(self, kept) -> None:
+        """Take the ellipses ``kept`` (``(_memo, _fixed)`` made with the table followed now),
+        or none (``None``).  With both schedules constant (and floats) the ellipse depends on
         beta alone and :meth:`lean_law` keeps it per beta (``_fixed``)."""
-        self._memo = {}
-        const = (self._omega0.constant_value, self._theta_max.constant_value)
-        self._fixed = {} if all(type(v) is float for v in const) else None
+        if kept is None:
+            const = (self._omega0.constant_value, self._theta_max.constant_value)
+            kept = {}, {} if all(type(v) is float for v in const) else None
+        self._memo, self._fixed = kept
         self._batch = None          # a batch's per-figure ellipses (:meth:`_batch_lean`)
         self._step = None           # the law of the betas and the table now (step_law)
 
@@ -226,7 +234,7 @@ class PhaseEllipse(Controller):
         if not self._limits_given:
             self._limits = limits
             self._feasible = feasible_turns(self.body, limits)
-            self._table_speed = None
+            self._table_speed = self._cell = None
         self._bp = self._bn = self._side = self._t_prev = self._step = None
         self._planned = False
         self._forget()
@@ -255,20 +263,29 @@ class PhaseEllipse(Controller):
         report = TurnsFollowed.of(sorted(followed, key=lambda f: f.t))
         return replace(report, lo=float(rec["lo"][k]), hi=float(rec["hi"][k]))
 
-    def follow_speed(self, V_cm: float) -> BodyParams:
+    def follow_speed(self, V_cm: float) -> None:
         """Steer at ``V_cm`` (:meth:`.Controller.follow_speed`) and keep the turn feasible at it.
 
         What is feasible depends on the speed (a slower figure needs more ``C_f`` for the same
         lean), so the table follows it, taken at the speed rounded *down* to ``SPEED_GRID``
         (never promising more than the current speed allows; a few tables, not one a step)."""
-        body = super().follow_speed(V_cm)
-        if self._limits is not None:
+        super().follow_speed(V_cm)
+        cell = math.floor(V_cm / SPEED_GRID)    # on terrain the speed changes every step
+        if self._limits is not None and cell != self._cell:
+            self._cell = cell
             grid = _table_speed(V_cm)
-            if grid != self._table_speed:       # on terrain the speed changes every step
-                self._feasible = self._table_at(grid)[0]
-                self._table_speed = grid
-                self._forget()                  # the ellipses made feasible by the old table
-        return body
+            if grid != self._table_speed:
+                self._take_table(grid)
+
+    def _take_table(self, grid: float) -> None:
+        """Follow the feasibility table of the grid speed ``grid`` (:meth:`_table_at`) with the
+        ellipses made feasible with it before in the run: on terrain the speed crosses a grid
+        line back and forth, and each ellipse made anew asks the table again."""
+        kept = self._by_table
+        kept[self._table_speed] = (self._memo, self._fixed)
+        self._feasible = self._table_at(grid)[0]
+        self._table_speed = grid
+        self._ellipses(kept.get(grid))          # not those made feasible by the old table
 
     def changes_between(self, V_a: float, V_b: float) -> bool:
         """The feasibility table changes between the two speeds (:meth:`follow_speed`) and with
