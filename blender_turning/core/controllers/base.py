@@ -18,6 +18,8 @@ or ``(5,)``; the law gets floats for one figure and arrays for a batch.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ..physics.params import BodyParams, reached_speed
@@ -50,7 +52,8 @@ class Controller:
         Eq. (1) is solved with the current ``V_cm``; the paper keeps ``V_cm`` constant in
         Sections 3-5, and lets it vary along the path in Section 6 (the planner's speed
         profile)."""
-        self._speed = reached_speed(V_cm)
+        # (the check's call only for a speed that fails it)
+        self._speed = float(V_cm) if 0.0 < V_cm < math.inf else reached_speed(V_cm)
 
     def changes_between(self, V_a: float, V_b: float) -> bool:
         """Does following the speed from ``V_a`` to ``V_b`` change the controller at a speed

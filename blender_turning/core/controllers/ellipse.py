@@ -616,8 +616,11 @@ class PhaseEllipse(Controller):
         return e
 
     def target(self, t):
-        side = self._side
-        b = 1.0 if side is None else self._b(side)
+        side, bp = self._side, self._bp
+        if type(side) is float:                 # one figure: :meth:`_b` without the call
+            b = 1.0 if bp is None else bp if side >= 0.0 else self._bn
+        else:
+            b = 1.0 if side is None else self._b(side)
         fixed = self._fixed
         kept = fixed.get(b) if fixed is not None and type(b) is float else None
         e = self._half_turn(t, b) if kept is None else kept[0]
