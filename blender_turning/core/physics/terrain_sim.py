@@ -242,8 +242,10 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         b0, b1, b2, b3, b4, b5, _, _, _ = stage(
             t_h, px, py, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5, cf, h, dv)
         qx, qy = x0 + h * b0, x1 + h * b1
-        if dv is not None:
-            dv = _carried(dv, qx - px, qy - py)
+        if dv is not None:          # stage 2's slopes carried by its curvatures (first order)
+            hx, hy, hxx, hxy, hyy = dv
+            mx, my = qx - px, qy - py
+            dv = (hx + hxx * mx + hxy * my, hy + hxy * mx + hyy * my, hxx, hxy, hyy)
         c0, c1, c2, c3, c4, c5, _, _, _ = stage(
             t_h, qx, qy, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5, cf, h, dv)
         sx, sy = x0 + step * c0, x1 + step * c1
@@ -255,7 +257,9 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         y0 = x0 + w6 * (a0 + 2.0 * (b0 + c0) + d0)
         y1 = x1 + w6 * (a1 + 2.0 * (b1 + c1) + d1)
         if dv is not None and x_lo <= y0 <= x_hi and y_lo <= y1 <= y_hi:
-            dv = _carried(dv, y0 - sx, y1 - sy)
+            hx, hy, hxx, hxy, hyy = dv            # stage 4's, carried the same way
+            ex, ey = y0 - sx, y1 - sy
+            dv = (hx + hxx * ex + hxy * ey, hy + hxy * ex + hyy * ey, hxx, hxy, hyy)
         else:
             dv = None
         return (y0, y1, x2 + w6 * (a2 + 2.0 * (b2 + c2) + d2),
@@ -342,13 +346,6 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
         anchor, last = cf, step
         i += k
     return rows, None
-
-
-def _carried(dv, ex, ey):
-    """The ground's slopes ``dv`` (:attr:`.terrain_one_figure.TerrainStage.derivatives`) carried
-    ``(ex, ey)`` by its curvatures (to first order), the curvatures held."""
-    hx, hy, hxx, hxy, hyy = dv
-    return (hx + hxx * ex + hxy * ey, hy + hxy * ex + hyy * ey, hxx, hxy, hyy)
 
 
 class _Fine(Exception):
