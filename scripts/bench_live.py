@@ -12,7 +12,9 @@ Each case is one figure with Live Preview on, the current frame in the middle of
 just past the frames around the current one, which it re-bakes first); a drag step sets its
 slider (``turning.lean``, or for the Body cases ``turning.mass``) a little further and
 re-bakes.  Timed, median of ``--steps``
-steps (in ms), the three ways interleaved step by step (the machine is shared):
+steps (in ms) and the largest (a step that builds feasibility tables stands out), the three
+ways interleaved step by step (the machine is shared), and the feasibility tables built over
+the steps (a deterministic count):
 
 - ``bake op``: today's figure, ``bpy.ops.turning.bake_turns()`` after the set (curves made anew,
   the foot track, an undo step);
@@ -23,7 +25,7 @@ steps (in ms), the three ways interleaved step by step (the machine is shared):
 Cases: the built-in skier, a Rigify rig as a skier, a cyclist on a 200 m x 200 m Ground mesh
 (1 m grid, the rolls of ``ski_slope`` without its slope), each over 10 s and 60 s at 24 fps, and
 a Body slider (mass) on the built-in skier (10 s) and on the cyclist on the Ground mesh (10 s and
-60 s).
+60 s), and the COM Height on the latter (60 s).
 """
 from __future__ import annotations
 
@@ -49,7 +51,8 @@ from blender_turning import blender as addon  # noqa: E402
 from blender_turning.blender.jobs import live  # noqa: E402
 
 CASES = ("skier-10", "skier-60", "rigify-10", "rigify-60", "cyclist-ground-10",
-         "cyclist-ground-60", "body-skier-10", "body-ground-10", "body-ground-60")
+         "cyclist-ground-60", "body-skier-10", "body-ground-10", "body-ground-60",
+         "height-ground-60")
 
 
 def select(fig):
@@ -104,6 +107,8 @@ def case_setup(name, figs):
     if parts[0] == "body":
         fig = figs["skier" if parts[1] == "skier" else "cyclist-ground"]
         return fig, "mass", [75.0 + 0.25 * k for k in range(400)]
+    if parts[0] == "height":                   # 0.5 % a step: past 2 % every fourth or fifth
+        return figs["cyclist-ground"], "com_height", [1.0 + 0.005 * k for k in range(400)]
     fig = figs["-".join(parts[:-1])]
     base = math.degrees(fig.turning.lean)
     # The cyclist on the Ground mesh's rolls falls at some leans a little above 4 deg: dragged
@@ -134,15 +139,20 @@ def run_case(name, figs, steps, ways=WAYS):
                                 ("drag step", live.schedule)) if k.split()[0] in ways}
     times = {k: [] for k in ways}
     cpu = {k: [] for k in ways}
+    built = dict.fromkeys(ways, 0j)
+    nodes = dict.fromkeys(ways, 0)
     k, failed = 0, []
     for _ in range(steps):
         for way, fn in ways.items():
             k += 1
             setattr(fig.turning, setting, values[k])
+            n, m = tables_built(), preview_nodes()
             t, c = time.perf_counter(), time.process_time()
             fn()
             times[way].append(time.perf_counter() - t)
             cpu[way].append(time.process_time() - c)
+            built[way] += tables_built() - n
+            nodes[way] += preview_nodes() - m
             if fig.name in live.FAILURES:
                 failed.append(live.FAILURES[fig.name].message)
     if failed:                             # a step that fails re-bakes nothing: not a measure
@@ -153,7 +163,24 @@ def run_case(name, figs, steps, ways=WAYS):
     setattr(fig.turning, setting, values[0])
     fig.turning.live = False
     return ({way: 1000 * statistics.median(v) for way, v in times.items()},
-            {way: 1000 * statistics.median(v) for way, v in cpu.items()})
+            {way: 1000 * statistics.median(v) for way, v in cpu.items()},
+            {way: 1000 * max(v) for way, v in times.items()},
+            {way: 1000 * max(v) for way, v in cpu.items()}, built, nodes)
+
+
+def tables_built():
+    """Feasibility tables built so far (:func:`...core.controllers.feasible.feasible_turns`):
+    whole ones and a drag step's own (``PreviewTurns``, solved where asked), as a complex
+    number to be summed (real: whole, imaginary: preview)."""
+    from blender_turning.core.controllers import feasible
+    return complex(feasible._feasible_turns.cache_info().misses,
+                   len(getattr(feasible, "_PREVIEWS", ())))
+
+
+def preview_nodes():
+    """The frequencies the drag steps' own tables solved so far (of 256 a table)."""
+    from blender_turning.core.controllers import feasible
+    return sum(sum(t._solved) for t in getattr(feasible, "_PREVIEWS", {}).values())
 
 
 def run_parts(name, figs, steps):
@@ -296,13 +323,18 @@ def main(argv=None):
                 print(f"{name:20s} " + " ".join(f"{k} {v:6.1f}" for k, v in parts.items()),
                       flush=True)
             return
-        print(f"median ms per drag step of {args.steps} (24 fps; goal <= 40 ms): wall (CPU)")
+        print(f"ms per drag step of {args.steps} (24 fps; goal <= 40 ms), median and largest: "
+              "wall (CPU); the feasibility tables built over the steps: whole + preview "
+              "(the previews' frequencies solved)")
         heads = {"bake": "bake op", "refresh": "refresh op", "drag": "drag step"}
-        print(f"{'case':20s} " + " ".join(f"{heads[w]:>15s}" for w in WAYS if w in args.ways))
+        print(f"{'case':20s} " + " ".join(f"{heads[w] + ' median':>15s} {'max':>15s} tables"
+                                          for w in WAYS if w in args.ways))
         for name in args.only or CASES:
-            wall, cpu = run_case(name, figs, args.steps, args.ways)
-            print(f"{name:20s} " + " ".join(f"{wall[w]:7.1f} ({cpu[w]:5.1f})" for w in wall),
-                  flush=True)
+            wall, cpu, top, top_cpu, built, nodes = run_case(name, figs, args.steps, args.ways)
+            print(f"{name:20s} " + " ".join(
+                f"{wall[w]:7.1f} ({cpu[w]:5.1f}) {top[w]:7.1f} ({top_cpu[w]:5.1f}) "
+                f"{built[w].real:3.0f}+{built[w].imag:.0f} ({nodes[w]})" for w in wall),
+                flush=True)
         print(f"load average after: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
     finally:
         addon.unregister()

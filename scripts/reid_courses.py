@@ -6,7 +6,7 @@ the skis' radius and edge against Reid's (their measures: core/course/reid.py, a
 and the whole run's extremes.
 
     python scripts/reid_courses.py [--gates 10 13] [--speed 12] [--stages 10 --choices 9]
-        [--line race] [--leg-force 5] [--rate 2.06] [--slope 19 --target-speed 12 [--grip 2]]
+        [--line race] [--leg-force 5] [--rate 2.06] [--slope 19 --target-speed 12 [--snow race] [--grip 2]]
 
 The courses (docs/racing.md, "The racer's line"): gates ``gap`` m apart along the fall line
 (+x), the line through them 2.5 m left and right of it, each turning pole a line from 1.5 m
@@ -26,14 +26,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from blender_turning.core.equipment import (SPORT_PRESETS, carving_of,  # noqa: E402
-                                            register_preset, sport_of)
+                                            register_preset)
 from blender_turning.core.course.reid import (REID, against_reid, com_radius,  # noqa: E402
                                               course, gate_positions, per_turn, summary)
 from blender_turning.core.course.scene import scene_from_dict  # noqa: E402
 from blender_turning.core.errors import PlanInfeasible  # noqa: E402
 from blender_turning.core.physics.grip import SNOW  # noqa: E402
 from blender_turning.core.planner.speed_cap import SpeedCap  # noqa: E402
-from blender_turning.core.sports import SPORTS  # noqa: E402
+from blender_turning.cli.terrain_flags import grip_of  # noqa: E402
 
 
 def extremes(traj, fig, x_lo: float, x_hi: float) -> dict:
@@ -86,9 +86,12 @@ def main(argv=None) -> int:
     p.add_argument("--target-speed", type=float, default=None, metavar="V",
                    help="with --slope: brake to this speed within the snow's grip "
                         "(docs/skidding.md, the planner brakes)")
+    p.add_argument("--snow", default="race", choices=tuple(SNOW),
+                   help="with --target-speed: the snow's grip (default race: a race piste, "
+                        "docs/skidding.md)")
     p.add_argument("--grip", type=float, default=None, metavar="MU",
-                   help="with --target-speed: the snow's largest force ratio (default: hard "
-                        "snow's 1.0)")
+                   help="with --target-speed: the snow's largest force ratio, overriding "
+                        "--snow's")
     a = p.parse_args(argv)
     if a.angulation is not None:
         record = SPORT_PRESETS[a.preset]
@@ -108,10 +111,7 @@ def main(argv=None) -> int:
         scene = scene_from_dict(doc, f"reid {gap:g}").with_settings(
             edge_limit=a.edge_limit)
         if a.target_speed is not None:
-            grip = SPORTS[sport_of(a.preset)].grip or SNOW["hard"]
-            if a.grip is not None:
-                grip = replace(grip, mu=a.grip, name=f"{a.grip:g}")
-            scene = replace(scene, speed_cap=SpeedCap(a.target_speed, grip))
+            scene = replace(scene, speed_cap=SpeedCap(a.target_speed, grip_of(a, a.preset)))
         t0 = time.perf_counter()
         try:
             result = scene.run()
@@ -123,7 +123,8 @@ def main(argv=None) -> int:
         turn = per_turn(traj, scene.figure, gate_x)
         ext = extremes(traj, scene.figure, gate_x[0], gate_x[-1])
         print(f"gates {gap:g} m at {a.speed:g} m/s{f' on {a.slope:g} deg' if a.slope else ''}"
-              f"{'' if a.target_speed is None else f', braking to {a.target_speed:g} m/s'} "
+              f"{'' if a.target_speed is None else f', braking to {a.target_speed:g} m/s'}"
+              f"{'' if a.target_speed is None else f' on {grip_of(a, a.preset).name} snow'} "
               f"({a.preset}, N = {a.stages}, q = {a.choices}, "
               f"t_stage {a.stage_time:g} s, line {a.line}, spread {a.spread}, "
               f"leg force <= {a.leg_force:g} BW, "

@@ -15,6 +15,7 @@ from blender_turning.blender.scene import follow_ground  # noqa: E402
 from blender_turning.blender.scene.scene_adapters import (FrameRange, SceneInputError,  # noqa: E402
                                                     figure_from_settings,
                                                     skidding_from_settings)
+from blender_turning.core.physics.grip import SNOW  # noqa: E402
 
 from mountain_scene import mountain_scene  # noqa: E402
 
@@ -61,6 +62,16 @@ def test_skidding_brakes_where_carving_cannot(scene):
     assert skidded.brake.max() > 1.0 and np.abs(skidded.skid).max() > 0.2
     late = skidded.t >= SECONDS / 2
     assert skidded.V_cm[late].mean() < carved.V_cm[late].mean() - 0.5
+
+
+@pytest.mark.parametrize("snow", ["HARD", "SOFT", "RACE"])
+def test_the_snow_menu_is_the_cores_snow(scene, snow):
+    """Each Snow item is the core's grip of that name (docs/skidding.md, Section 1)."""
+    fig = _figure(scene)
+    fig.turning.skid.style = "SKID"
+    fig.turning.skid.snow = snow
+    got = skidding_from_settings(fig, FrameRange.of_scene(bpy.context.scene))
+    assert got.grip == SNOW[snow.lower()]
 
 
 def test_a_keyed_target_speed_is_followed(scene):

@@ -92,8 +92,8 @@ def test_grip_and_snow_change_the_stop(tmp_path):
 @pytest.mark.parametrize("args, names", [
     (["--style", "fly"], ["--style", "'fly'", "carve|skid|wedge"]),
     (["--preset", "snowboarder", "--style", "wedge"], ["--style", "'wedge'", "carve|skid|slip"]),
-    (["--snow", "icy"], ["--snow", "'icy'", "hard|soft"]),
-    (["--grip", "0"], ["--grip", "0", "[0.01, 2]"]),
+    (["--snow", "icy"], ["--snow", "'icy'", "hard|soft|race"]),
+    (["--grip", "0"], ["--grip", "0", "[0.01, 2.75]"]),
     (["--grip", "nan"], ["--grip", "nan"]),
     (["--stop-at", "-1"], ["--stop-at", "-1", "[0, 1e+06]"]),
     (["--stop-side", "heel"], ["--stop-side", "skier"]),

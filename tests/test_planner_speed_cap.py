@@ -97,3 +97,7 @@ def test_follow_flags(tmp_path, capsys):
     assert "--target-speed = 0" in capsys.readouterr().err
     assert main(["follow", str(scene), "--target-speed", "8", "--grip", "9"]) == 2
     assert "--grip = 9" in capsys.readouterr().err
+    assert main(["follow", str(scene), "--snow", "race"]) == 2
+    assert "--snow needs --target-speed" in capsys.readouterr().err
+    assert main(["follow", str(scene), "--target-speed", "8", "--snow", "icy"]) == 2
+    assert "--snow = 'icy' is not one of hard|soft|race" in capsys.readouterr().err

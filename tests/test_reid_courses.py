@@ -3,6 +3,7 @@
 (the skis' radius), and the slalom racer's lines on both courses against Reid's turn radii and
 edge angles."""
 import math
+from dataclasses import replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -12,6 +13,8 @@ from blender_turning.core.course.reid import (REID, against_reid, com_radius, co
                                               gate_positions, per_turn, summary, turns)
 from blender_turning.core.course.scene import scene_from_dict
 from blender_turning.core.equipment import carving_of
+from blender_turning.core.physics.grip import SNOW
+from blender_turning.core.planner.speed_cap import SpeedCap
 
 
 def figure(l=0.0):
@@ -181,6 +184,33 @@ def test_at_13_m_s_the_racer_holds_the_10_m_course_within_5_body_weights():
         "reid 10")
     got = per_turn(scene.run().trajectory, scene.figure, gate_positions(10.0, 8))
     assert got["gates"].tolist() == [1, 2, 3, 4, 5, 6]
+    verdict = against_reid(got, 10.0)
+    assert verdict["radius"][2], verdict
+    assert verdict["edge"][2], verdict
+    assert got["F_bw"].max() <= 5.0
+
+
+@pytest.mark.slow
+def test_on_reids_19_deg_slope_a_race_piste_holds_the_racers_speed_and_line():
+    """The 10 m course on a 19 deg plane falling along it, the speed free (gravity, friction
+    0.05, drag), the planner braking to 12 m/s within a race piste's grip (Brown 1989's 70 deg:
+    a ratio of 2.75), the racer's line as above: the six inner turns stay within Reid's 11-13
+    m/s, their skis' radii and edges within 10 % of Reid's, every peak under 5 BW.  Measured:
+    11.2-12.7 m/s, 4.14 +- 0.68 m, 70.6 deg, 4.52 BW at most.  On hard pack (a ratio of 1, what
+    a carved turn leaning past 45 deg uses up) the racer cannot brake in its turns: 13-15.8 m/s
+    and no plan at t = 3.4 s (BENCHMARKS.md, "Racing and carving")."""
+    sidecut = carving_of("slalom_racer").sidecut_radius
+    scene = scene_from_dict({**course(10.0, 12.0, gates=8, planner={
+        "stages": 10, "choices": 9, "stage_time": 0.2, "line": "race", "spread": "range"}),
+        "terrain": {"type": "plane", "slope_deg": 19.0, "downhill_deg": 0.0},
+        "figure": {"preset": "slalom_racer", "body": {"V_cm": 12.0},
+                   "limits": {"dC_f_max": 2.06,
+                              "C_f_max": 1.0 / (sidecut * math.cos(math.radians(72.0)))}}},
+        "reid 10 on 19 deg")
+    scene = replace(scene, speed_cap=SpeedCap(12.0, SNOW["race"]))
+    got = per_turn(scene.run().trajectory, scene.figure, gate_positions(10.0, 8))
+    assert got["gates"].tolist() == [1, 2, 3, 4, 5, 6]
+    assert got["V_lo"].min() >= 11.0 and got["V_hi"].max() <= 13.0
     verdict = against_reid(got, 10.0)
     assert verdict["radius"][2], verdict
     assert verdict["edge"][2], verdict

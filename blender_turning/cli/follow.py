@@ -14,16 +14,14 @@ import json
 import math
 from dataclasses import replace
 
-from ..core.equipment import sport_of
 from ..core.errors import PathNotFinished, PlanInfeasible
-from ..core.physics.grip import SNOW
 from ..core.physics.params import check_range
 from ..core.planner.speed_cap import SpeedCap
-from ..core.registry import SPORTS
 from ..core.course.scene import check_horizon, load_scene
 from ..core.validate import check
 from .common import Outputs, require_matplotlib
 from .progress import Progress
+from .terrain_flags import SNOW_HELP, grip_of
 
 
 def register(sub):
@@ -50,6 +48,7 @@ def register(sub):
                    help="m/s: brake at the foot, within the grip, to hold at most this speed "
                         "(and what the grip allows on the path's tightest bend; "
                         "docs/skidding.md)")
+    p.add_argument("--snow", help=SNOW_HELP + " (with --target-speed)")
     p.add_argument("--grip", type=float, metavar="MU",
                    help="the friction circle's mu at the foot, overriding the sport's (with "
                         "--target-speed)")
@@ -76,8 +75,9 @@ def run(args) -> int:
     if args.spread is not None:
         changes["spread"] = args.spread
     scene = load_scene(args.scene)
-    if args.grip is not None and args.target_speed is None:
-        raise ValueError("--grip needs --target-speed (the grip bounds the braking)")
+    for flag, value in (("--grip", args.grip), ("--snow", args.snow)):
+        if value is not None and args.target_speed is None:
+            raise ValueError(f"{flag} needs --target-speed (the grip bounds the braking)")
     if args.target_speed is not None:
         scene = replace(scene, speed_cap=_speed_cap(args, scene.figure.name))
     if changes:
@@ -127,13 +127,10 @@ def run(args) -> int:
 
 
 def _speed_cap(args, sport: str) -> SpeedCap:
-    """The :class:`..core.planner.speed_cap.SpeedCap` of ``--target-speed`` and ``--grip``."""
+    """The :class:`..core.planner.speed_cap.SpeedCap` of ``--target-speed``, ``--snow`` and
+    ``--grip``."""
     V = check_range("--target-speed", args.target_speed, 0.0, 100.0, lo_open=True)
-    grip = SPORTS[sport_of(sport)].grip or SNOW["hard"]
-    if args.grip is not None:
-        mu = check("--grip", args.grip, "grip")
-        grip = replace(grip, mu=mu, name=f"{mu:g}")
-    return SpeedCap(V, grip)
+    return SpeedCap(V, grip_of(args, sport))
 
 
 def _progress(bar, duration):

@@ -31,6 +31,9 @@ from ..core.ground.terrain import Plane
 from ..core.physics.model import RESISTANCE, Resistance
 from ..core.validate import FieldError, Fields, check, read_json
 
+SNOW_HELP = ("hard|soft|race: the snow's grip (default hard; race: a race piste, "
+             "docs/skidding.md)")
+
 # flag -> (Resistance field, allowed range)
 RESISTANCE_FLAGS = {"friction": ("mu", 0.0, 1.0), "drag_area": ("CdA", 0.0, 10.0),
                     "air_density": ("rho", 0.0, 2.0)}
@@ -64,7 +67,7 @@ def add_terrain_flags(p) -> None:
     k = p.add_argument_group("grip and skidding (docs/skidding.md)")
     k.add_argument("--style", help="how the figure brakes: carve|skid|wedge|slip (skis: "
                                    "wedge, board: slip; default with --target-speed: skid)")
-    k.add_argument("--snow", help="hard|soft: the snow's grip (default hard)")
+    k.add_argument("--snow", help=SNOW_HELP)
     k.add_argument("--grip", type=float, metavar="MU",
                    help="the friction circle's mu at the foot, overriding the sport's (tyre: "
                         "dry asphalt 0.9, wet 0.5, gravel 0.35; snow: its largest ratio)")
@@ -126,11 +129,7 @@ def skid_options(args, sport: str, target: bool, habit=None):
     no ``--style`` the figure skids (``skid``), or brakes in its preset's style (``habit``, a
     :class:`..core.controllers.speed_habits.SpeedHabit`: the beginner's wedge)."""
     record = SPORTS[sport_of(sport)]          # a preset (slalom_racer) has its sport's grip
-    if args.snow is not None:
-        if record.grip is not None:
-            raise ValueError(f"--snow is for a sport on snow; the {sport} rides on "
-                             f"{record.grip.kind}s (give --grip MU)")
-        _choice("snow", args.snow, tuple(SNOW))
+    grip = grip_of(args, sport)
     if args.stop_side is not None:
         if "slip" not in record.styles:
             raise ValueError(f"--stop-side is for a board; the {sport} has none")
@@ -144,11 +143,23 @@ def skid_options(args, sport: str, target: bool, habit=None):
         return None
     if style is None:
         style = habit.style if habit is not None else "skid" if target else "carve"
+    return Skidding(style, grip, stop, args.stop_side)
+
+
+def grip_of(args, sport: str):
+    """The :class:`..core.physics.grip.Grip` of ``--snow`` and ``--grip`` for ``sport``: its
+    own (a tyre) or the snow named (default hard pack), ``--grip`` overriding its ratio."""
+    record = SPORTS[sport_of(sport)]          # a preset (slalom_racer) has its sport's grip
+    if args.snow is not None:
+        if record.grip is not None:
+            raise ValueError(f"--snow is for a sport on snow; the {sport} rides on "
+                             f"{record.grip.kind}s (give --grip MU)")
+        _choice("snow", args.snow, tuple(SNOW))
     grip = record.grip if record.grip is not None else snow(args.snow or "hard")
     if args.grip is not None:
         mu = check("--grip", args.grip, "grip")
         grip = replace(grip, mu=mu, name=f"{mu:g}")
-    return Skidding(style, grip, stop, args.stop_side)
+    return grip
 
 
 def start_point(args, ground) -> tuple:

@@ -200,8 +200,9 @@ RANGES: dict[str, Range] = {
                          lo_open=True),
     "brake_slope_time": Range(0.0, 1e3, "s", "the low-pass time of the slope read"),
     # -- grip and skidding (docs/skidding.md; core/physics/grip.py, core/physics/skidding.py) ------
-    "grip": Range(0.01, 2.0, "", "the friction circle's mu at the foot: tyre on dry asphalt 0.9, "
-                  "wet 0.5, gravel 0.35; snow up to ~1; 2 is a racing slick"),
+    "grip": Range(0.01, 2.75, "", "the friction circle's mu at the foot: tyre on dry asphalt "
+                  "0.9, wet 0.5, gravel 0.35; hard snow 1, a race piste 2.75 (Brown 1989: snow "
+                  "holds a force up to 40-70 deg from its normal)"),
     "grip_shear_angle": Range(0.0, math.radians(60.0), "rad", "how far from the ski base's "
                               "normal the snow holds the ski's force"),
     "stop_at": Range(0.0, 1e6, "s", "when a commanded stop begins"),

@@ -83,7 +83,8 @@ PREVIEW_STEPS = 50
 #: The release integrates with DEFAULT_DT.
 PREVIEW_STRIDE = 3
 #: A drag step's controller may take the feasible turns of a body within this (relative) of the
-#: figure's (:func:`..core.controllers.feasible.nearby_tables`); the release bakes its own.
+#: figure's in what they read of it (its COM height, ``J``, speed and gravity:
+#: :func:`..core.controllers.feasible.nearby_tables`); the release bakes its own.
 NEARBY_BODY = 0.02
 #: Settings that do not change the motion.
 _IGNORED = {"rna_type", "name", "live", "show_foot_track", "foot_track", "saved_state",

@@ -16,8 +16,10 @@ STYLE_ITEMS = [("CARVE", "Carve", "Brake by turning across the hill only (the pa
                ("WEDGE", "Wedge", "Snowplough: both skis edged inward, tips together (skis)", 2),
                ("SLIP", "Side-Slip", "The board across the fall line, sliding down it (board)",
                 3)]
-SNOW_ITEMS = [("HARD", "Hard Pack", "Groomed, icy snow: the edge holds up to about 1 g", 0),
-              ("SOFT", "Soft Snow", "Soft snow gives way earlier: less grip", 1)]
+SNOW_ITEMS = [("HARD", "Hard Pack", "Groomed snow: the edge holds up to about 1 g", 0),
+              ("SOFT", "Soft Snow", "Soft snow gives way earlier: less grip", 1),
+              ("RACE", "Race Piste", "Watered, icy race snow: the edge holds a force up to 70 "
+               "deg from the snow's normal (a ratio of 2.75)", 2)]
 SIDE_ITEMS = [("HEEL", "Heel Side", "The board's heel edge: the rider faces downhill", 0),
               ("TOE", "Toe Side", "The board's toe edge: the rider faces uphill", 1)]
 

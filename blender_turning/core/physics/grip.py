@@ -82,12 +82,17 @@ def snow(hardness: str) -> Grip:
         raise ValueError(f"snow = {hardness!r} is not one of {', '.join(SNOW)}") from None
 
 
-#: Snow by hardness (docs/skidding.md Section 1): hard pack holds a ski edged at 30 deg at the
-#: largest ratio a skidding ski reaches on a race piste (about 1: Reid et al. 2020, Front. Sports
-#: Act. Living 2:25, measured edge angles 65-71 deg at turn radii of 4-5 m carve, and hockey
-#: stops at about 1 g); soft snow gives way earlier and less.
+#: Snow by hardness (docs/skidding.md Section 1).  Brown (1989, "On the skiability of snow",
+#: ASTM STP 1022, 329-336) machined snow with a loaded edge and found the critical angle of the
+#: force from the snow's normal past which the edge no longer holds but skids: 40-70 deg on the
+#: snows he measured, higher the stronger the snow in shear against its hardness.  Hard pack
+#: holds 45 deg (a ratio of 1: a hockey stop at about 1 g); a race piste (prepared for the most
+#: hold: watered, icy) the top of Brown's range, 70 deg (a ratio of 2.75, the force of a racer
+#: carving at Reid et al.'s 65-71 deg edges, Front. Sports Act. Living 2:25, 2020); soft snow
+#: gives way earlier and less.
 SNOW = {"hard": Grip("snow", 1.0, math.radians(30.0), "hard"),
-        "soft": Grip("snow", 0.6, math.radians(20.0), "soft")}
+        "soft": Grip("snow", 0.6, math.radians(20.0), "soft"),
+        "race": Grip("snow", math.tan(math.radians(70.0)), math.radians(30.0), "race")}
 
 #: Tyres by surface: dry asphalt 0.9, wet 0.5, gravel 0.35 (docs/skidding.md Section 1).
 TYRE = {"dry": tyre(0.9, "dry"), "wet": tyre(0.5, "wet"), "gravel": tyre(0.35, "gravel")}
