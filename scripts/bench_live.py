@@ -4,6 +4,8 @@
         [--ways drag]      # some of the three ways only (a user rig's Bake Turns takes seconds)
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py --profile rigify-60   # cProfile
     PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py --parts    # where a drag step goes
+    PYTHONPATH=$PWD .venv/bin/python scripts/bench_live.py --capture calls.pkl --frame end
+        # the core's simulate calls of drag steps, for scripts/bench_drag_replay.py (no bpy)
 
 Each case is one figure with Live Preview on, the current frame in the middle of the range
 (``--frame end``: the last frame, the dearest: a drag step simulates from the first frame to
@@ -227,6 +229,49 @@ def run_parts(name, figs, steps):
             for part in ("sim", "map", "keys", "step")}
 
 
+def capture(name, figs, leans, path):
+    """Pickle the core's ``simulate(...)`` calls of one drag step at each of ``leans`` (deg) of
+    case ``name`` (the figure, the controller's constant inputs, the ground's height field, the
+    arguments) for ``scripts/bench_drag_replay.py``; returns how many."""
+    import pickle
+    from blender_turning.blender.jobs import pipeline
+    fig, setting, _ = case_setup(name, figs)
+    if setting != "lean":
+        raise SystemExit(f"--capture drags the Lean: {name} drags the {setting}")
+    for f in figs.values():
+        f.turning.live = f == fig
+    select(fig)
+    bpy.ops.turning.refresh_preview()
+    calls, real = [], pipeline.simulate
+
+    def record(figure, controller, duration, dt, **kwargs):
+        inputs = {k: None if s is None else s.constant_value for k, s in (
+            ("omega0", controller.omega0), ("theta_max", controller.theta_max),
+            ("heading", controller.heading))}
+        if inputs["omega0"] is None or inputs["theta_max"] is None or (
+                controller.heading is not None and inputs["heading"] is None):
+            raise SystemExit("--capture replays constant turn settings only (none keyed)")
+        calls.append({"figure": figure, **inputs, "duration": duration, "dt": dt,
+                      "nearby": live.NEARBY_BODY,
+                      "kwargs": {k: v for k, v in kwargs.items() if k != "meta"}})
+        return real(figure, controller, duration, dt, **kwargs)
+
+    pipeline.simulate = record
+    try:
+        for lean in leans:
+            fig.turning.lean = math.radians(lean)
+            live.schedule()
+    finally:
+        pipeline.simulate = real
+        if bpy.app.timers.is_registered(live._tick):
+            bpy.app.timers.unregister(live._tick)
+        live.settle()
+        fig.turning.live = False
+    with open(path, "wb") as f:
+        pickle.dump(calls, f)
+    return len(calls)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--steps", type=int, default=15)
@@ -237,6 +282,11 @@ def main(argv=None):
                     help="the current frame: the middle of the range or its last frame")
     ap.add_argument("--parts", action="store_true",
                     help="CPU ms of each drag step's simulation, mapping and keys")
+    ap.add_argument("--capture", metavar="PKL",
+                    help="pickle the simulate calls of the drag steps to --leans of one case "
+                         "(--only, default cyclist-ground-60) for scripts/bench_drag_replay.py")
+    ap.add_argument("--leans", nargs="*", type=float,
+                    default=[3.4, 3.6, 3.8, 3.9, 3.95, 3.99], help="deg, with --capture")
     args = ap.parse_args(argv)
     _at[0] = args.frame
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -255,6 +305,11 @@ def main(argv=None):
                 setattr(fig.turning, setting, values[k])
                 prof.runcall(live.schedule)
             pstats.Stats(prof).sort_stats("cumulative").print_stats(30)
+            return
+        if args.capture:
+            name = (args.only or ["cyclist-ground-60"])[0]
+            n = capture(name, figs, args.leans, args.capture)
+            print(f"{name}, current frame {args.frame}: {n} simulate calls in {args.capture}")
             return
         print(f"current frame: {args.frame} of the range")
         print(f"machine: {platform.machine()}, {os.cpu_count()} cores, load average "

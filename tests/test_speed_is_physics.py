@@ -26,7 +26,8 @@ def test_a_straight_tuck_reaches_the_closed_form_terminal_speed():
     = 88.7 m/s, far past the 60 m/s a user may give as a start speed.  The speed follows
     ``V_T tanh(sqrt(A k) t + atanh(V0 / V_T))`` (measured 2e-10 relative over 120 s)."""
     fig = preset("skier", m=90.0, V_cm=20.0)
-    traj = simulate(fig, Straight(fig.body), 120.0, 0.02, (0.0, 0.0, 0.0, 0.0, 0.0),
+    controller = Straight(fig.body)
+    traj = simulate(fig, controller, 120.0, 0.02, (0.0, 0.0, 0.0, 0.0, 0.0),
                     ground=Plane(PITCH, 0.0), resistance=TUCK)
     A, k, V_T = _terminal()
     assert V_T == pytest.approx(88.7, abs=0.05)
@@ -34,6 +35,9 @@ def test_a_straight_tuck_reaches_the_closed_form_terminal_speed():
     V = V_T * np.tanh(math.sqrt(A * k) * traj.t + math.atanh(20.0 / V_T))
     np.testing.assert_allclose(traj.V_cm, V, rtol=1e-8)
     assert traj.V_cm[-1] > 88.0
+    # The controller's body is at the speed reached too (made when asked), unchecked by the
+    # user's 60 m/s.
+    assert controller.body.V_cm == traj.V_cm[-1]
 
 
 def test_the_command_line_runs_the_tuck_past_60_m_s(tmp_path):

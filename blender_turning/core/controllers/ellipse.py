@@ -86,18 +86,47 @@ def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=
 
 def ellipse_alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius=0.05):
     """:func:`ellipse_alpha` on Python floats (one figure is stepped ~12,000 times a minute)."""
-    w2 = omega0 * omega0
-    x = om / (omega0 * theta_max)
-    y = th / theta_max
-    r = math.sqrt(x * x + y * y)
-    a = -w2 * th + GAIN * w2 * theta_max * (1.0 - r) * x / (r if r > 1.0 else 1.0)
-    if r < origin_radius:
-        f = 1.0 - r / origin_radius
-        a += 0.5 * alpha_max * f * f
-    return -alpha_max if a < -alpha_max else (alpha_max if a > alpha_max else a)
+    e = (theta_max, omega0, alpha_max)
+    return ellipse_law_one(e, e, origin_radius)(0.0, th, om)
+
+
+def ellipse_law_one(pos, neg, origin_radius=0.05):
+    """:func:`ellipse_alpha_one` of a turn's two half-turns: ``(t, th, om) -> alpha_v`` about
+    the ellipse ``pos = (theta_max, omega0, alpha_max)`` where ``th >= 0`` and ``neg`` where
+    not (:meth:`PhaseEllipse.step_law`), each ellipse's products (``omega0 theta_max``,
+    ``-omega0^2``, ``K omega0^2 theta_max``) made once: the same floats."""
+    def made(theta_max, omega0, alpha_max):
+        w2 = omega0 * omega0
+        return (theta_max, omega0 * theta_max, -w2, GAIN * w2 * theta_max, -alpha_max,
+                alpha_max, 0.5 * alpha_max)
+    P, N, sqrt = made(*pos), made(*neg), math.sqrt
+
+    def alpha(t, th, om):
+        theta_max, wt, neg_w2, gain, lo, hi, half = P if th >= 0.0 else N
+        x = om / wt
+        y = th / theta_max
+        r = sqrt(x * x + y * y)
+        a = neg_w2 * th + gain * (1.0 - r) * x / (r if r > 1.0 else 1.0)
+        if r < origin_radius:
+            f = 1.0 - r / origin_radius
+            a += half * f * f
+        return lo if a < lo else (hi if a > hi else a)
+    return alpha
+
+
+def _law_of(alpha_one):
+    """``alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius)`` as a law of two
+    half-turns (:func:`ellipse_law_one`'s signature)."""
+    def law_one(pos, neg, origin_radius=0.05):
+        def alpha(t, th, om):
+            return alpha_one(th, om, *(pos if th >= 0.0 else neg), origin_radius)
+        return alpha
+    return law_one
 
 
 LAWS = {"smooth": (ellipse_alpha, ellipse_alpha_one), "paper": (paper_alpha, paper_alpha_one)}
+#: Each law of a turn's two half-turns on floats, as :func:`ellipse_law_one` makes it.
+LAWS_ONE = {"smooth": ellipse_law_one, "paper": _law_of(paper_alpha_one)}
 
 
 class PhaseEllipse(Controller):
@@ -129,10 +158,12 @@ class PhaseEllipse(Controller):
         self.directional = directional
         self.law = law
         self._alpha, self._alpha_one = LAWS[law]
+        self._law_one = LAWS_ONE[law]
         self._limits_given = limits is not None
         self._limits = limits
         self._feasible = None if limits is None else feasible_turns(body, limits)
         self._table_speed = None    # the speed follow_speed took _feasible at (None: not yet)
+        self._cell = None           # and the cell of the grid it followed last (its floor)
         self._tables = {}           # a run's tables by speed, and their leans (_table_at)
         self._bp = self._bn = None  # beta of the left (theta_v >= 0) and right half-turns
         self._side = None           # +1 during a left half-turn, -1 right, per figure
@@ -168,13 +199,21 @@ class PhaseEllipse(Controller):
         self._forget()
 
     def _forget(self) -> None:
-        """Forget the ellipses made feasible (:meth:`_ellipse`): the table, the room or a
-        schedule changed.  With both schedules constant (and floats) the ellipse depends on
+        """Forget the ellipses made feasible (:meth:`_ellipse`) with every table: the room or a
+        schedule changed."""
+        self._by_table = {}         # (_memo, _fixed) of a table not followed now, by its speed
+        self._ellipses(None)
+
+    def _ellipses(self, kept) -> None:
+        """Take the ellipses ``kept`` (``(_memo, _fixed)`` made with the table followed now),
+        or none (``None``).  With both schedules constant (and floats) the ellipse depends on
         beta alone and :meth:`lean_law` keeps it per beta (``_fixed``)."""
-        self._memo = {}
-        const = (self._omega0.constant_value, self._theta_max.constant_value)
-        self._fixed = {} if all(type(v) is float for v in const) else None
+        if kept is None:
+            const = (self._omega0.constant_value, self._theta_max.constant_value)
+            kept = {}, {} if all(type(v) is float for v in const) else None
+        self._memo, self._fixed = kept
         self._batch = None          # a batch's per-figure ellipses (:meth:`_batch_lean`)
+        self._step = None           # the law of the betas and the table now (step_law)
 
     @property
     def steer_betas(self) -> tuple:
@@ -195,8 +234,8 @@ class PhaseEllipse(Controller):
         if not self._limits_given:
             self._limits = limits
             self._feasible = feasible_turns(self.body, limits)
-            self._table_speed = None
-        self._bp = self._bn = self._side = self._t_prev = None
+            self._table_speed = self._cell = None
+        self._bp = self._bn = self._side = self._t_prev = self._step = None
         self._planned = False
         self._forget()
         self._tables = {}
@@ -224,20 +263,29 @@ class PhaseEllipse(Controller):
         report = TurnsFollowed.of(sorted(followed, key=lambda f: f.t))
         return replace(report, lo=float(rec["lo"][k]), hi=float(rec["hi"][k]))
 
-    def follow_speed(self, V_cm: float) -> BodyParams:
+    def follow_speed(self, V_cm: float) -> None:
         """Steer at ``V_cm`` (:meth:`.Controller.follow_speed`) and keep the turn feasible at it.
 
         What is feasible depends on the speed (a slower figure needs more ``C_f`` for the same
         lean), so the table follows it, taken at the speed rounded *down* to ``SPEED_GRID``
         (never promising more than the current speed allows; a few tables, not one a step)."""
-        body = super().follow_speed(V_cm)
-        if self._limits is not None:
+        super().follow_speed(V_cm)
+        cell = math.floor(V_cm / SPEED_GRID)    # on terrain the speed changes every step
+        if self._limits is not None and cell != self._cell:
+            self._cell = cell
             grid = _table_speed(V_cm)
-            if grid != self._table_speed:       # on terrain the speed changes every step
-                self._feasible = self._table_at(grid)[0]
-                self._table_speed = grid
-                self._forget()                  # the ellipses made feasible by the old table
-        return body
+            if grid != self._table_speed:
+                self._take_table(grid)
+
+    def _take_table(self, grid: float) -> None:
+        """Follow the feasibility table of the grid speed ``grid`` (:meth:`_table_at`) with the
+        ellipses made feasible with it before in the run: on terrain the speed crosses a grid
+        line back and forth, and each ellipse made anew asks the table again."""
+        kept = self._by_table
+        kept[self._table_speed] = (self._memo, self._fixed)
+        self._feasible = self._table_at(grid)[0]
+        self._table_speed = grid
+        self._ellipses(kept.get(grid))          # not those made feasible by the old table
 
     def changes_between(self, V_a: float, V_b: float) -> bool:
         """The feasibility table changes between the two speeds (:meth:`follow_speed`) and with
@@ -247,6 +295,8 @@ class PhaseEllipse(Controller):
         nothing the law does (the commanded lean below both tables' bounds, the usual case)."""
         if self._limits is None:
             return False
+        if math.floor(V_a / SPEED_GRID) == math.floor(V_b / SPEED_GRID):
+            return False                        # one cell of the grid: one table
         a, b = _table_speed(V_a), _table_speed(V_b)
         if a == b:
             return False
@@ -401,6 +451,7 @@ class PhaseEllipse(Controller):
             soon = (th + om * dt) * side < 0.0           # a crossing within this step
             if first:
                 self._bp = self._bn = 1.0
+                self._step = None
                 self._side = -side if abs(th) < 0.05 * self.theta_max(t) else side
             elif side == self._side and not soon:        # most steps of one figure
                 self._planned = False
@@ -465,6 +516,7 @@ class PhaseEllipse(Controller):
                 self._bp = beta
             else:
                 self._bn = beta
+            self._step = None
             return
         goal = self.heading(t)                                    # per-figure headings too
         beta = self._modifier(np.asarray(theta_dir)[idx], side[idx], t, tmf, w, change, lo, hi,
@@ -552,39 +604,68 @@ class PhaseEllipse(Controller):
         return np.where(theta_v >= 0, self._bp, self._bn)
 
     def _half_turn(self, t, b):
-        """:meth:`_ellipse` of the schedules at ``t`` for beta ``b``, kept per beta while both
-        schedules are constant (``_fixed``, :meth:`_forget`)."""
+        """:meth:`_ellipse` of the schedules at ``t`` for beta ``b``, kept per beta with its law
+        on floats (:meth:`lean_law`) while both schedules are constant (``_fixed``,
+        :meth:`_forget`)."""
         e = self._ellipse(self._omega0(t), self._theta_max(t), b)
         fixed = self._fixed
         if fixed is not None and type(b) is float:
             if len(fixed) > 16:
                 fixed.clear()
-            fixed[b] = e
+            fixed[b] = (e, self._law_one(e, e, self.origin_radius))
         return e
 
     def target(self, t):
-        side = self._side
-        b = 1.0 if side is None else self._b(side)
+        side, bp = self._side, self._bp
+        if type(side) is float:                 # one figure: :meth:`_b` without the call
+            b = 1.0 if bp is None else bp if side >= 0.0 else self._bn
+        else:
+            b = 1.0 if side is None else self._b(side)
         fixed = self._fixed
-        e = fixed.get(b) if fixed is not None and type(b) is float else None
-        if e is None:
-            e = self._half_turn(t, b)
+        kept = fixed.get(b) if fixed is not None and type(b) is float else None
+        e = self._half_turn(t, b) if kept is None else kept[0]
         return e[1], e[0]
 
     def lean_law(self, t, theta_v, omega_v):
         """The law of the module docstring about the half-turn's ellipse (:meth:`_ellipse`; beta
-        by the side of the lean, :meth:`_b`); one figure on floats (:func:`ellipse_alpha_one`
-        or the paper's)."""
+        by the side of the lean, :meth:`_b`); one figure on floats (:func:`ellipse_law_one`
+        or the paper's, kept per half-turn)."""
         if type(theta_v) is float:
             bp = self._bp
             b = 1.0 if bp is None else bp if theta_v >= 0.0 else self._bn
             fixed = self._fixed
-            e = fixed.get(b) if fixed is not None and type(b) is float else None
-            if e is None:
-                e = self._half_turn(t, b)
+            kept = fixed.get(b) if fixed is not None and type(b) is float else None
+            if kept is not None:
+                return kept[1](t, theta_v, omega_v)
+            e = self._half_turn(t, b)
             return self._alpha_one(theta_v, omega_v, e[0], e[1], e[2], self.origin_radius)
         tm, w, amax = self._ellipse(self.omega0(t), self.theta_max(t), self._b(theta_v))
         return self._alpha(theta_v, omega_v, tm, w, amax, self.origin_radius)
+
+    def step_law(self, t):
+        """:meth:`lean_law` on floats over the step begun at ``t``: while both schedules are
+        constant, one law of the two half-turns' ellipses (:func:`ellipse_law_one`), without
+        the look-ups of :meth:`lean_law` at every stage; kept until a beta or the table changes
+        (``_step``: :meth:`_forget`, :meth:`begin_run`, :meth:`begin_step`, :meth:`_plan`)."""
+        law = self._step
+        if law is None:
+            fixed, bp, bn = self._fixed, self._bp, self._bn
+            if bp is None:
+                bp = bn = 1.0
+            if fixed is None or type(bp) is not float or type(bn) is not float:
+                return self.lean_law
+            law = self._step = self._law_one(self._fixed_turn(t, bp)[0],
+                                             self._fixed_turn(t, bn)[0], self.origin_radius)
+        return law
+
+    def _fixed_turn(self, t, b):
+        """``(ellipse, law)`` of the half-turn of beta ``b`` (a float) while both schedules are
+        constant (``_fixed``, :meth:`_half_turn`)."""
+        kept = self._fixed.get(b)
+        if kept is None:
+            self._half_turn(t, b)
+            kept = self._fixed[b]
+        return kept
 
 register_controller(ControllerType(
     name="ellipse", label="Phase Ellipse",

@@ -89,7 +89,8 @@ def integrate(body: BodyParams, limits: Limits, controller, state, n: int, dt: f
         t = i * dt
         if speed is not None and speed[i] != V_now:
             V_now = speed[i]
-            steered = controller.follow_speed(V_now)        # the controller's own body model
+            controller.follow_speed(V_now)                  # the controller's own body model
+            steered = controller.body
             moved = steered if controller.nominal_body is body else replace(body, V_cm=V_now)
             stage = rhs(moved, limits, controller.lean_law, controller.body)
         begin(t, (x0, x1, x2, x3, x4))

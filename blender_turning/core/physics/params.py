@@ -49,8 +49,7 @@ class BodyParams:
         On terrain the speed is a state and the controller follows it every step
         (:meth:`.controllers.base.Controller.follow_speed`), where ``replace``'s full check
         cost ~4 us a step."""
-        if not 0.0 < V_cm < math.inf:
-            raise ValueError(f"V_cm = {V_cm!r} m/s is not a positive finite speed")
+        reached_speed(V_cm)
         body = object.__new__(type(self))
         body.__dict__.update(self.__dict__)
         body.__dict__["V_cm"] = float(V_cm)
@@ -60,6 +59,14 @@ class BodyParams:
     def J(self) -> float:
         """``(I_v + l^2 m) / (m l)``: the inertia term of Eqs. (1), (2) and (9), m."""
         return (self.I_v + self.l * self.l * self.m) / (self.m * self.l)
+
+
+def reached_speed(V_cm: float) -> float:
+    """``V_cm`` (m/s) as a float, a speed the model reached (:meth:`BodyParams.at_speed`): only
+    a positive finite speed is a speed."""
+    if not 0.0 < V_cm < math.inf:
+        raise ValueError(f"V_cm = {V_cm!r} m/s is not a positive finite speed")
+    return float(V_cm)
 
 
 @dataclass(frozen=True)

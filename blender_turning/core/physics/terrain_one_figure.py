@@ -70,7 +70,7 @@ class TerrainStage:
         """The last braked stage's ``(F_brake / m, F_lat / m, N / m, hold)``, m/s^2
         (:mod:`.grip`): ``hold`` the braking force over the mass that would hold the speed
         (the speed's rate without the brake over the foot's speed ratio)."""
-        self.stage, self.lean = self._build(body, limits, resistance)
+        self.stage, self.lean, self.use_law = self._build(body, limits, resistance)
 
     def _along(self, t):
         """``(cos H, sin H)`` of the course at ``t``."""
@@ -87,11 +87,14 @@ class TerrainStage:
         cmax, rate = limits.C_f_max, limits.dC_f_max
         rated = rate != math.inf
         sin, cos, sqrt, atan = math.sin, math.cos, math.sqrt, math.atan
-        inf, copysign, margin = math.inf, math.copysign, PHYSICAL_MARGIN
+        copysign, margin = math.copysign, PHYSICAL_MARGIN
+        neg_g, neg_cmax = -g, -cmax
         derivatives, law = self.derivatives, self.controller.lean_law
         # The equilibrium lean: along the course (0), the plumb lean (1).
         kind = 0 if self._heading is not None else 1
         course, along = self._course, self._along
+        fixed = course[0] == math.inf                   # a constant course: (cos H, sin H)
+        cH0, sH0 = course[1], course[2]
         row = [None, 0.0]                       # the last lean's dv and equilibrium lean
         foot = self.foot
 
@@ -106,10 +109,12 @@ class TerrainStage:
                 p = hx * c + hy * s
                 eq = atan((hy * c - hx * s) / sqrt(1.0 + p * p))
             else:                                               # plumb_lean_along
-                if course[0] != inf:
-                    course[0] = None
                 hx, hy = dv[0], dv[1]
-                cH, sH = along(t)
+                if fixed:
+                    cH, sH = cH0, sH0
+                else:
+                    course[0] = None
+                    cH, sH = along(t)
                 q = hx * cH + hy * sH
                 eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))
             row[0], row[1] = dv, eq
@@ -126,7 +131,8 @@ class TerrainStage:
             tz = p / w
             nz = 1.0 / sqrt(1.0 + hx * hx + hy * hy)
             across = hx * s - hy * c                  # -b_z / (nz it): the slope across
-            kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz / (w * w)
+            ww = w * w
+            kappa = (hxx * c * c + 2.0 * hxy * c * s + hyy * s * s) * nz / ww
             g_n = g * nz
             g_b = g_n * across / w
             sn, cs = sin(th), cos(th)
@@ -138,30 +144,36 @@ class TerrainStage:
                 if dv is not None and dv is row[0]:
                     eq = row[1]                                 # the row's, from lean
                 elif kind == 0:                                 # plumb_lean_along the course
-                    cH, sH = (course[1], course[2]) if course[0] == t or \
-                        course[0] == inf else along(t)
+                    if fixed:
+                        cH, sH = cH0, sH0
+                    else:
+                        cH, sH = (course[1], course[2]) if course[0] == t else along(t)
                     q = hx * cH + hy * sH
                     eq = atan((hy * cH - hx * sH) / sqrt(1.0 + q * q))
                 else:                                           # plumb_lean
                     eq = atan(-across / w)
                 k = ((g_n + VV * kappa) * sn + g_b * cs - law(t, th - eq, om) * law_J)
                 den = k * law_l * sn + VV * cs
-                cf = k / den if den > 0.0 else copysign(inf, k)
+                cf = k / den if den > 0.0 else copysign(math.inf, k)
             # Section 3: |C_f| <= C_f_max, the physical branch on the side of the lean, the rate.
             ls = l * sn
             if ls > 0.0:                              # max, min of floats without the calls
-                lo, hi = -cmax, margin / ls
+                lo, hi = neg_cmax, margin / ls
                 hi = hi if hi < cmax else cmax
             elif ls < 0.0:
                 lo, hi = margin / ls, cmax
-                lo = lo if lo > -cmax else -cmax
+                lo = lo if lo > neg_cmax else neg_cmax
             else:
-                lo, hi = -cmax, cmax
+                lo, hi = neg_cmax, cmax
             cf = lo if cf < lo else hi if cf > hi else cf
             if rated and anchor is not None:
                 step = rate * tau
-                cf = anchor - step if cf < anchor - step else \
-                    anchor + step if cf > anchor + step else cf
+                lo = anchor - step
+                if cf < lo:
+                    cf = lo
+                else:
+                    hi = anchor + step
+                    cf = hi if cf > hi else cf
             # Eq. (21), Eq. (2) on terrain, the normal force and the speed (Sections 2-3).
             ratio = 1.0 / (1.0 - cf * ls)
             V_f = V * ratio
@@ -169,11 +181,11 @@ class TerrainStage:
             alpha = (G_n * sn + (g_b - V * V_f * cf) * cs) / J
             # N / m, and theta_dir' = V_f (C_f turn_gain + kappa_n bend_gain) (module doc).
             N_m = G_n - l * (alpha * sn + om * om * cs)
-            turn = V_f * nz * (cf * (w * w) + kappa * across * w)
+            turn = V_f * nz * (cf * ww + kappa * across * w)
             u = V_f / w
             # The speed: gravity on the body, friction at the foot, drag, the lean's share
             # (docs/TERRAIN.md Section 4).
-            dV = -g * tz - mu * N_m * ratio - kd * VV + l * om * cs * V_f * cf
+            dV = neg_g * tz - mu * N_m * ratio - kd * VV + l * om * cs * V_f * cf
             fb = self.brake
             if fb is not None:                        # docs/skidding.md Section 2
                 F_lat = V * V_f * cf + l * (alpha * cs - om * om * sn) - g_b   # foot_lateral
@@ -182,4 +194,9 @@ class TerrainStage:
                 dV -= b * ratio
             return (u * c, u * s, turn, om, alpha, dV, alpha, V_f, cf)
 
-        return stage, lean
+        def use_law(step_law):
+            """The law the coming stages ask (:meth:`.Controller.step_law` of the step)."""
+            nonlocal law
+            law = step_law
+
+        return stage, lean, use_law

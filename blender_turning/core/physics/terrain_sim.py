@@ -16,6 +16,7 @@ across the hill (docs/TERRAIN.md Section 6).
 from __future__ import annotations
 
 import math
+from itertools import chain
 
 import numpy as np
 
@@ -158,7 +159,9 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
             skid.restore()
     if stop == "halted":
         rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None
-    traj = _trajectory(body, ground, np.array(rows, float), stride * dt, info)
+    # The rows' floats into one array (np.array of a list of tuples: twice the time).
+    rec = np.fromiter(chain.from_iterable(rows), float, len(rows) * len(rows[0]))
+    traj = _trajectory(body, ground, rec.reshape(len(rows), -1), stride * dt, info)
     if stop == "fell":
         raise FellOver(float(traj.t[-1]), float(rows[-1][11]), traj,
                        fall_cause(limits, traj.C_f, traj.t))
@@ -209,66 +212,77 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     foot = rhs.foot
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
     begin, target, fall = controller.begin_step, controller.target, limits.theta_fall
+    follow, changes = controller.follow_speed, controller.changes_between
+    step_law, use_law = controller.step_law, rhs.use_law
     anchor = None if anchor is None else float(anchor)
     x0, x1, x2, x3, x4, x5 = (float(v) for v in st)
-    fine = (dt, 0.5 * dt, dt / 6.0)
-    coarse = (stride * dt, 0.5 * (stride * dt), (stride * dt) / 6.0)
+    step_f, h_f, w6_f = dt, 0.5 * dt, dt / 6.0
+    step_c, h_c, w6_c = stride * dt, 0.5 * (stride * dt), (stride * dt) / 6.0
     reach = REACH * stride * dt
     fastest = SPAN * getattr(ground, "cell", math.inf) / (stride * dt)   # m/s, coarse steps
-    changes = controller.changes_between
     x_lo, x_hi, y_lo, y_hi = getattr(ground, "extent", (-math.inf, math.inf, -math.inf,
                                                         math.inf))
+    low = MIN_SPEED                 # the speed the controller is steered at: max(V, low)
+    plain = brake is None and skid is None
 
     def advance(t, step, h, w6, shared, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4, a5,
                 cf):
-        """RK4's stages 2-4 and the step, and the ground at the step's end (``None``: to be
-        read there).  A coarse step reads the ground once for both midpoint stages: stage 3's
-        foot lies ``h (k2 - k1)`` from stage 2's (about a millimetre at 3 m/s), and takes stage
-        2's slopes carried there to first order by its curvatures, and its curvatures
-        (``tests/test_terrain_preview.py``'s cyclist: within 0.01 mm of the run reading the
-        ground there over 30 s; 4-5 mm with the slopes held, not carried); the step's end, a
-        few millimetres from stage 4's foot, takes stage 4's ground carried the same way (the
-        next step's first stage and the lean the controller sees there: within the midpoints'
-        bounds of the ground's)."""
+        """RK4's stages 2-4 and the step: the state at the step's end and the ground there
+        (``None``: to be read there), 7 floats.  A coarse step reads the ground once for both
+        midpoint stages: stage 3's foot lies ``h (k2 - k1)`` from stage 2's (about a
+        millimetre at 3 m/s), and takes stage 2's slopes carried there to first order by its
+        curvatures, and its curvatures (``tests/test_terrain_preview.py``'s cyclist: within
+        0.01 mm of the run reading the ground there over 30 s; 4-5 mm with the slopes held, not
+        carried); the step's end, a few millimetres from stage 4's foot, takes stage 4's ground
+        carried the same way (the next step's first stage and the lean the controller sees
+        there: within the midpoints' bounds of the ground's)."""
         px, py = x0 + h * a0, x1 + h * a1
         dv = derivatives(px, py) if shared else None
+        t_h = t + h
         b0, b1, b2, b3, b4, b5, _, _, _ = stage(
-            t + h, px, py, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5, cf, h, dv)
+            t_h, px, py, x2 + h * a2, x3 + h * a3, x4 + h * a4, x5 + h * a5, cf, h, dv)
         qx, qy = x0 + h * b0, x1 + h * b1
-        if dv is not None:
-            dv = _carried(dv, qx - px, qy - py)
+        if dv is not None:          # stage 2's slopes carried by its curvatures (first order)
+            hx, hy, hxx, hxy, hyy = dv
+            mx, my = qx - px, qy - py
+            dv = (hx + hxx * mx + hxy * my, hy + hxy * mx + hyy * my, hxx, hxy, hyy)
         c0, c1, c2, c3, c4, c5, _, _, _ = stage(
-            t + h, qx, qy, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5, cf, h, dv)
+            t_h, qx, qy, x2 + h * b2, x3 + h * b3, x4 + h * b4, x5 + h * b5, cf, h, dv)
         sx, sy = x0 + step * c0, x1 + step * c1
         if dv is not None:
             dv = derivatives(sx, sy)
         d0, d1, d2, d3, d4, d5, _, _, _ = stage(
             t + step, sx, sy, x2 + step * c2, x3 + step * c3, x4 + step * c4, x5 + step * c5,
             cf, step, dv)
-        y = (x0 + w6 * (a0 + 2.0 * (b0 + c0) + d0), x1 + w6 * (a1 + 2.0 * (b1 + c1) + d1),
-             x2 + w6 * (a2 + 2.0 * (b2 + c2) + d2), x3 + w6 * (a3 + 2.0 * (b3 + c3) + d3),
-             x4 + w6 * (a4 + 2.0 * (b4 + c4) + d4), x5 + w6 * (a5 + 2.0 * (b5 + c5) + d5))
-        if dv is not None and x_lo <= y[0] <= x_hi and y_lo <= y[1] <= y_hi:
-            dv = _carried(dv, y[0] - sx, y[1] - sy)
+        y0 = x0 + w6 * (a0 + 2.0 * (b0 + c0) + d0)
+        y1 = x1 + w6 * (a1 + 2.0 * (b1 + c1) + d1)
+        if dv is not None and x_lo <= y0 <= x_hi and y_lo <= y1 <= y_hi:
+            hx, hy, hxx, hxy, hyy = dv            # stage 4's, carried the same way
+            ex, ey = y0 - sx, y1 - sy
+            dv = (hx + hxx * ex + hxy * ey, hy + hxy * ex + hyy * ey, hxx, hxy, hyy)
         else:
             dv = None
-        return y, dv
+        return (y0, y1, x2 + w6 * (a2 + 2.0 * (b2 + c2) + d2),
+                x3 + w6 * (a3 + 2.0 * (b3 + c3) + d3), x4 + w6 * (a4 + 2.0 * (b4 + c4) + d4),
+                x5 + w6 * (a5 + 2.0 * (b5 + c5) + d5), dv)
 
     rows = []
     append = rows.append
     V_now = body.V_cm
-    i, ahead, last, near = 0, None, dt, None
+    V_law = low if low > V_now else V_now
+    i, ahead, last, near, law_now = 0, None, dt, None, None
     while True:
         t = i * dt
         if x5 != V_now:
             # Below MIN_SPEED the run stops at this row (a body slower than the table of ranges
             # allows is never made): the last row is steered at the minimum speed.
-            controller.follow_speed(max(x5, MIN_SPEED))
-            V_now = x5
-        if brake is not None and not (skid is not None and skid.stopping):
-            brake.update(t, (x0, x1, x2, x3, x4, x5))
-        if skid is not None:
-            skid.update(t, (x0, x1, x2, x3, x4, x5), foot)
+            V_now, V_law = x5, low if low > x5 else x5
+            follow(V_law)
+        if not plain:
+            if brake is not None and not (skid is not None and skid.stopping):
+                brake.update(t, (x0, x1, x2, x3, x4, x5))
+            if skid is not None:
+                skid.update(t, (x0, x1, x2, x3, x4, x5), foot)
         if ahead is None:
             if near is not None:                # carried from the last step's stage 4
                 dv = near
@@ -282,23 +296,28 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
             dv, rel = ahead
             ahead = None
         begin(t, (x0, x1, x2, rel, x4))
+        law = step_law(t)
+        if law is not law_now:
+            use_law(law)
+            law_now = law
         row = stride == 1 or i % stride == 0
         a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,
                                                        dv)
-        (step, h, w6), k, y = fine, 1, None
+        step, h, w6, k, y = step_f, h_f, w6_f, 1, None
         slow = stride > 1 and x5 <= fastest         # the preview's reads shared (advance)
         if slow and row and i + stride < n and rel * (rel + x4 * reach) > 0.0:
             try:
-                y, dv_y = advance(t, *coarse, True, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4,
-                                  a5, cf)
-                if changes(max(x5, MIN_SPEED), max(y[5], MIN_SPEED)):
+                y = advance(t, step_c, h_c, w6_c, True, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3,
+                            a4, a5, cf)
+                if changes(V_law, low if low > y[5] else y[5]):
                     raise _Fine
+                dv_y = y[6]
                 if dv_y is None:
                     dv_y = derivatives(y[0], y[1])
-                rel_y = lean(t + coarse[0], *y[:4], dv_y)
-                if rel * rel_y <= 0.0 or rel_y * (rel_y + y[4] * coarse[0]) <= 0.0:
+                rel_y = lean(t + step_c, y[0], y[1], y[2], y[3], dv_y)
+                if rel * rel_y <= 0.0 or rel_y * (rel_y + y[4] * step_c) <= 0.0:
                     raise _Fine
-                (step, h, w6), k, ahead = coarse, stride, (dv_y, rel_y)
+                step, h, w6, k, ahead = step_c, h_c, w6_c, stride, (dv_y, rel_y)
             except (_Fine, OffTerrain):
                 y = None
         if row:
@@ -306,31 +325,27 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
             if skid is not None:
                 skid_b = foot[0]
                 skid_a = skid.skid(skid_b, foot[1], foot[2], x3)
-            append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, *target(t), rel, skid_b, skid_a))
+            w, tm = target(t)
+            append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, w, tm, rel, skid_b, skid_a))
             if abs(rel) > fall:
                 return rows, "fell"
-            if x5 < MIN_SPEED:
+            if x5 < low:
                 return rows, "halted" if skid is not None and skid.stopping else "stopped"
         if i + 1 >= n:
             break
-        near = None
         if y is None:
             try:
-                y, near = advance(t, step, h, w6, slow, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3,
-                                  a4, a5, cf)
+                y = advance(t, step, h, w6, slow, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4,
+                            a5, cf)
             except OffTerrain:
                 return rows, "left"
-        x0, x1, x2, x3, x4, x5 = y
+            x0, x1, x2, x3, x4, x5, near = y
+        else:
+            x0, x1, x2, x3, x4, x5, near = y
+            near = None
         anchor, last = cf, step
         i += k
     return rows, None
-
-
-def _carried(dv, ex, ey):
-    """The ground's slopes ``dv`` (:attr:`.terrain_one_figure.TerrainStage.derivatives`) carried
-    ``(ex, ey)`` by its curvatures (to first order), the curvatures held."""
-    hx, hy, hxx, hxy, hyy = dv
-    return (hx + hxx * ex + hxy * ey, hy + hxy * ex + hyy * ey, hxx, hxy, hyy)
 
 
 class _Fine(Exception):
