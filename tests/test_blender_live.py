@@ -13,7 +13,6 @@ import pytest
 os.environ.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="turning-user-"))
 bpy = pytest.importorskip("bpy")
 
-from blender_turning.blender import compat  # noqa: E402
 from blender_turning.blender.anim import bake  # noqa: E402
 from blender_turning.blender.jobs import live  # noqa: E402
 
