@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from blender_turning.core import preset
-from blender_turning.core.controllers.ellipse import LAWS
+from blender_turning.core.controllers.ellipse import LAWS, LAWS_ONE
 from blender_turning.core.controllers.heading_table import heading_table
 
 TWO_PI = 2 * math.pi
@@ -37,6 +37,12 @@ def test_ellipse_law_on_floats_equals_the_array_law(law):
         vec = ellipse_alpha(th, om, tmax, w0, amax)
         one = [ellipse_alpha_one(float(a), float(b), tmax, w0, amax) for a, b in zip(th, om)]
         np.testing.assert_allclose(one, vec, rtol=0, atol=1e-12 * amax)
+        # a step's law of both half-turns (PhaseEllipse.step_law): the same floats, bit for bit
+        e, f = (tmax, w0, amax), (0.9 * tmax, 1.1 * w0, amax)
+        step = LAWS_ONE[law](e, f)
+        assert [step(0.0, float(a), float(b)) for a, b in zip(th, om)] == [
+            ellipse_alpha_one(float(a), float(b), *(e if a >= 0.0 else f))
+            for a, b in zip(th, om)]
 
 
 def test_table_value_and_beta_solve_on_floats_equal_the_array_versions():

@@ -85,9 +85,18 @@ def ellipse_alpha(theta_v, omega_v, theta_max, omega0, alpha_max, origin_radius=
 
 
 def ellipse_alpha_one(th, om, theta_max, omega0, alpha_max, origin_radius=0.05):
-    """:func:`ellipse_alpha` on Python floats (one figure is stepped ~12,000 times a minute)."""
-    e = (theta_max, omega0, alpha_max)
-    return ellipse_law_one(e, e, origin_radius)(0.0, th, om)
+    """:func:`ellipse_alpha` on Python floats (one figure is stepped ~12,000 times a minute; a
+    keyed Lean or Turn Period asks it at every stage).  :func:`ellipse_law_one` makes the same
+    floats with each ellipse's products made once (tests/test_one_figure.py holds them equal)."""
+    w2 = omega0 * omega0
+    x = om / (omega0 * theta_max)
+    y = th / theta_max
+    r = math.sqrt(x * x + y * y)
+    a = -w2 * th + GAIN * w2 * theta_max * (1.0 - r) * x / (r if r > 1.0 else 1.0)
+    if r < origin_radius:
+        f = 1.0 - r / origin_radius
+        a += 0.5 * alpha_max * f * f
+    return -alpha_max if a < -alpha_max else (alpha_max if a > alpha_max else a)
 
 
 def ellipse_law_one(pos, neg, origin_radius=0.05):
