@@ -64,6 +64,7 @@ def test_skidding_brakes_where_carving_cannot(scene):
     assert skidded.V_cm[late].mean() < carved.V_cm[late].mean() - 0.5
 
 
+@pytest.mark.installed
 @pytest.mark.parametrize("snow", ["HARD", "SOFT", "RACE"])
 def test_the_snow_menu_is_the_cores_snow(scene, snow):
     """Each Snow item is the core's grip of that name (docs/skidding.md, Section 1)."""
