@@ -106,6 +106,25 @@ def test_one_bad_figure_bakes_nothing(scene):
     assert snapshot() == before
 
 
+def test_a_keyed_lean_is_checked_at_the_first_frame_past_its_range(scene):
+    fig = add("SKIER")
+    s = fig.turning
+    scene.frame_end = 48
+    for frame, deg in ((1, 20.0), (40, 70.0)):
+        s.lean = math.radians(deg)
+        fig.keyframe_insert('turning.lean', frame=frame)
+    first = None
+    for frame in range(1, 49):
+        scene.frame_set(frame)
+        if first is None and s.lean >= s.fall_angle:
+            first = frame
+    assert first is not None and 1 < first < 40
+    select([fig], fig)
+    with pytest.raises(RuntimeError, match=f"Lean \\(turning.lean\\) = .* deg at frame {first} "
+                       r"is outside the allowed range \[1, 60\) deg"):
+        bpy.ops.turning.bake_turns()
+
+
 def modal_bake(figs):
     """A stand-in ``self`` for the modal Bake Turns over ``figs`` (no window in the wheel)."""
     from blender_turning.blender.jobs.bake_job import BakeJob

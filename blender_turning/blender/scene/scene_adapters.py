@@ -236,7 +236,10 @@ def controller_from_settings(obj, figure: Figure, frames: FrameRange) -> PhaseEl
     if np.any(values["period"] <= 0):
         raise ValueError("turn period must stay positive over the frame range")
     leans = lean_range(figure.limits.theta_fall, f"the {figure.name}")
-    for k in np.flatnonzero([not leans.contains(v) for v in values["lean"]])[:1]:
+    # Each value checked once (a Lean not keyed: one value at every frame; a drag step checks
+    # 1,441 frames of a 60 s range).
+    good = [v for v in np.unique(values["lean"]).tolist() if leans.contains(v)]
+    for k in np.flatnonzero(~np.isin(values["lean"], good))[:1]:
         raise SceneInputError(f"Lean (turning.lean) = {math.degrees(values['lean'][k]):.6g} deg "
                               f"at frame {frames.start + k} is outside the allowed range "
                               f"{leans.deg()}: {leans.reason}")
