@@ -21,11 +21,12 @@ W, TM, V = 2 * math.pi / 3.0, math.radians(4.0), 3.0
 START = (-95.0, 10.0, 0.0, 0.0, W * TM, V)
 
 
-def _run(stride=1, dt=0.02, limits=None, duration=30.0):
+def _run(stride=1, dt=0.02, limits=None, duration=30.0, keep=0.0):
     fig = replace(CYCLIST, body=replace(CYCLIST.body, V_cm=V),
                   limits=limits or CYCLIST.limits)
     return simulate(fig, PhaseEllipse(fig.body, W, TM, heading=0.0), duration, dt,
-                    state0=START, ground=ROLLS, resistance=RESISTANCE["cyclist"], stride=stride)
+                    state0=START, ground=ROLLS, resistance=RESISTANCE["cyclist"], stride=stride,
+                    keep=keep)
 
 
 def _off(a, b):
@@ -186,6 +187,21 @@ def test_a_coarse_step_moves_at_most_a_cell_and_a_quarter(speed, coarse):
     same = [np.array_equal(getattr(preview, k), getattr(exact, k)[::3])
             for k in ("x", "y", "theta_dir", "theta_v", "omega_v", "V_cm", "C_f")]
     assert all(same) == (not coarse) and any(same) == (not coarse)
+
+
+@pytest.mark.parametrize("stride, keep", [(3, 7.3), (3, 7.26), (1, 4.01), (3, 0.0)])
+def test_a_window_s_run_keeps_the_samples_from_the_last_at_or_before_its_first_frame(stride,
+                                                                                    keep):
+    """A drag step's window (``keep``, the first frame's time) keeps the whole run's samples from
+    the last one at or before it, bit for bit (``s`` from the run's start), and so the frames
+    resampled from there: what the window maps is the whole run's."""
+    whole, part = _run(stride, duration=10.0), _run(stride, duration=10.0, keep=keep)
+    k = len(whole.t) - len(part.t)
+    assert part.t[0] <= keep and (keep == 0.0 or part.t[0] > keep - stride * 0.02)
+    assert np.array_equal(part.data, whole.data[:, k:]) and (part.s[0] > 0) == (part.t[0] > 0)
+    first = math.ceil(keep * 24)
+    np.testing.assert_array_equal(part.resample(24, start=0.0, ground=ROLLS, first=first).data,
+                                  whole.resample(24, start=0.0, ground=ROLLS, first=first).data)
 
 
 def test_stride_is_checked():

@@ -159,7 +159,8 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
                     state0=(*state0, speed(0.0)),
                     meta={"figure": obj.name, "ground_object": ground.name},
                     ground=ground.field, resistance=resistance_from_settings(s),
-                    target_speed=target, skidding=skidding, stride=stride)
+                    target_speed=target, skidding=skidding, stride=stride,
+                    keep=skip / frames.fps if offset == 0.0 else 0.0)
     traj = resampled(on_crowd_clock(with_turn(traj, controller), offset), shown, ground.field,
                      frames.start, skip)
     return on_ground(traj, ground)

@@ -147,7 +147,7 @@ def slalom_start(body: BodyParams, omega0: float, theta_max: float, heading: flo
 def simulate(figure: Figure, controller: Controller, duration: float, dt: float = DEFAULT_DT,
              state0=None, C_f0=None, meta: dict | None = None, speed=None, ground=FLAT,
              resistance: Resistance | None = None, target_speed=None,
-             skidding=None, stride: int = 1) -> Trajectory:
+             skidding=None, stride: int = 1, keep: float = 0.0) -> Trajectory:
     """Simulate one figure on ``ground`` (:mod:`.model`: ``Flat()``, the default, a
     :class:`.terrain.Plane` or a :class:`.terrain.HeightField`); raise a
     :class:`.errors.RunEnded` (:class:`.errors.FellOver`, :class:`.errors.Stopped`,
@@ -167,19 +167,21 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
     (:func:`.skidding.lean_within_grip`); ``meta["grip_limited"]`` then says so.
 
     ``stride`` > 1: a preview on terrain, steps of ``stride dt`` away from the lean's zero
-    crossings (:func:`.terrain_sim.simulate_free`); the paper's model takes a coarser ``dt``."""
+    crossings (:func:`.terrain_sim.simulate_free`); the paper's model takes a coarser ``dt``.
+    ``keep`` (s; where the speed is a state): the trajectory from its last sample at or before
+    ``keep`` on (:func:`.terrain_sim.simulate_free`); the paper's model keeps every sample."""
     grip = skidding.grip if skidding is not None else getattr(
         SPORTS.get(figure.name), "grip", None)
     with lean_within_grip(controller, grip) as report:
         traj = _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, ground,
-                         resistance, target_speed, skidding, stride)
+                         resistance, target_speed, skidding, stride, keep)
     if report:
         traj.meta["grip_limited"] = report[0]
     return traj
 
 
 def _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, ground, resistance,
-              target_speed, skidding, stride=1) -> Trajectory:
+              target_speed, skidding, stride=1, keep=0.0) -> Trajectory:
     """:func:`simulate` with the lean as given."""
     ground = FLAT if ground is None else ground
     res = NO_RESISTANCE if resistance is None else resistance
@@ -189,7 +191,7 @@ def _simulate(figure, controller, duration, dt, state0, C_f0, meta, speed, groun
             raise ValueError("speed is a state on terrain (it follows the slope): give a "
                              "speed schedule or a ground, not both")
         return simulate_free(figure, controller, duration, dt, state0, ground, res, C_f0, meta,
-                             target_speed, skidding, stride)
+                             target_speed, skidding, stride, keep)
     if stride != 1:
         raise ValueError(f"stride = {stride!r}: the paper's model (flat ground, the speed held) "
                          "steps every dt; give it a coarser dt instead")

@@ -71,7 +71,8 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
                   state0=None, ground=FLAT, resistance: Resistance = NO_RESISTANCE,
                   C_f0=None, meta: dict | None = None,
                   target_speed: TargetSpeed | float | None = None,
-                  skidding: Skidding | None = None, stride: int = 1) -> Trajectory:
+                  skidding: Skidding | None = None, stride: int = 1,
+                  keep: float = 0.0) -> Trajectory:
     """Simulate one figure on ``ground`` with ``resistance``; returns a :class:`Trajectory`
     whose ``z`` is the ground under the foot and ``V_cm`` the speed (a state).
 
@@ -91,7 +92,11 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
 
     ``stride`` > 1 (a preview, :func:`_loop`): steps of ``stride dt`` away from the zero
     crossings of the lean (from the equilibrium lean), steps of ``dt`` on the same grid about
-    them, a sample every ``stride dt``; not with ``target_speed`` or ``skidding``."""
+    them, a sample every ``stride dt``; not with ``target_speed`` or ``skidding``.
+
+    ``keep`` (s): a run that ends the trajectory leaves out the samples before the last one at
+    or before ``keep`` (a window's run: the frames resampled from there on are the whole
+    trajectory's, bit for bit; ``s`` counts from the start)."""
     body, limits = figure.body, figure.limits
     check_range("duration", duration, 0.0, 1e6, lo_open=True)
     check_range("dt", dt, 1e-5, 1.0)
@@ -160,8 +165,8 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     if stop == "halted":
         rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None
     # The rows' floats into one array (np.array of a list of tuples: twice the time).
-    rec = np.fromiter(chain.from_iterable(rows), float, len(rows) * len(rows[0]))
-    traj = _trajectory(body, ground, rec.reshape(len(rows), -1), stride * dt, info)
+    first = 0 if stop is not None else _first_kept(len(rows), stride * dt, keep)
+    traj = _trajectory(body, ground, rows, stride * dt, info, first)
     if stop == "fell":
         raise FellOver(float(traj.t[-1]), float(rows[-1][11]), traj,
                        fall_cause(limits, traj.C_f, traj.t))
@@ -352,16 +357,28 @@ class _Fine(Exception):
     """A coarse step of :func:`_loop` that steps of ``dt`` must take instead."""
 
 
-def _trajectory(body, ground, rec, dt, info) -> Trajectory:
-    """The trajectory columns (docs/ARCHITECTURE.md Section 3) from the per-sample rows."""
-    n = len(rec)
-    x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel, brake, skid = rec.T
+def _first_kept(n: int, dt: float, keep: float) -> int:
+    """The last of ``n`` samples ``k dt`` at or before ``keep`` (0 before the first)."""
+    k = min(n - 1, max(0, int(keep / dt)))
+    while k > 0 and k * dt > keep:
+        k -= 1
+    return k
+
+
+def _trajectory(body, ground, rows, dt, info, first=0) -> Trajectory:
+    """The trajectory columns (docs/ARCHITECTURE.md Section 3) from the per-sample rows, from
+    row ``first`` on (``s`` from the first row)."""
+    n = len(rows)
+    # The rows' floats into one array (np.array of a list of tuples: twice the time).
+    rec = np.fromiter(chain.from_iterable(rows[first:]), float, (n - first) * len(rows[0]))
+    x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel, brake, skid = rec.reshape(n - first, -1).T
     fr = surface_frame(ground, x, y, d, body.g)
-    ds = 0.5 * (V_f[1:] + V_f[:-1]) * dt                 # along the surface (the foot's speed)
-    cols = {"t": np.arange(n) * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
+    V_all = V_f if first == 0 else np.fromiter((r[8] for r in rows), float, n)
+    ds = 0.5 * (V_all[1:] + V_all[:-1]) * dt             # along the surface (the foot's speed)
+    cols = {"t": np.arange(n)[first:] * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
             "omega_v": om, "alpha_v": alpha, "C_f": cf, "V_f": V_f, "z": fr.z, "V_cm": V,
             "F_leg": model.leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
             "phi": phase(rel, om, tm, w),
-            "s": np.concatenate([[0.0], np.cumsum(ds)]), "brake": brake, "skid": skid,
+            "s": np.concatenate([[0.0], np.cumsum(ds)])[first:], "brake": brake, "skid": skid,
             "ski_heading": d + skid}
     return Trajectory.from_columns(cols, info)
