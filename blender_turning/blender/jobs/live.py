@@ -39,6 +39,7 @@ from bpy.app.handlers import persistent
 from ...core import DEFAULT_DT
 from ...core.controllers.feasible import nearby_tables
 from ...core.errors import FellOver, TurningError
+from ...core.physics.terrain_sim import GRID
 from ...mapping import MAPPINGS
 from ...mapping.retarget.retarget import path_length
 from ...mapping.sports.snow import tilt_gain
@@ -74,14 +75,15 @@ WINDOW, MARGIN = 2, 12
 #: and lean within 0.02 deg of the exact run's (measured over leans of 15-45 deg, speeds of
 #: 8-20 m/s, turns of 1.5-3 s, docs/live-preview.md).  The release integrates with DEFAULT_DT.
 PREVIEW_STEPS = 50
-#: A drag step on a Ground mesh (no Target Speed, no skidding) steps PREVIEW_STRIDE DEFAULT_DT
-#: at a time where nothing discrete happens, and DEFAULT_DT on the bake's own grid about the
-#: lean's zero crossings and a new feasibility table that changes the turn's lean, and where a
+#: A drag step on a Ground mesh (no Target Speed, no skidding) steps up to PREVIEW_STRIDE
+#: DEFAULT_DT at a time where nothing discrete happens, and DEFAULT_DT on the bake's own grid about
+#: the lean's zero crossings and a new feasibility table that changes the turn's lean, and where a
 #: coarse step would cross more than 1.25 cells of the height field
-#: (:func:`...core.physics.terrain_sim.simulate_free`'s ``stride``): the benchmark's cyclist
-#: within 8 cm of the release over 30 s, a third of its ground reads (docs/live-preview.md).
-#: The release integrates with DEFAULT_DT.
-PREVIEW_STRIDE = 3
+#: (:func:`...core.physics.terrain_sim.simulate_free`'s ``stride``), keeping PREVIEW_TURN_STEPS
+#: steps a turn period (its shortest over the range) and taking at least the core's ``GRID``:
+#: 5 DEFAULT_DT for 3 s turns, 3 for 2 s turns (fewer steps a turn took moguls metres off,
+#: docs/live-preview.md).  The release integrates with DEFAULT_DT.
+PREVIEW_STRIDE, PREVIEW_TURN_STEPS = 6, 30
 #: A drag step's controller may take the feasible turns of a body within this (relative) of the
 #: figure's in what they read of it (its COM height, ``J``, speed and gravity:
 #: :func:`..core.controllers.feasible.nearby_tables`); the release bakes its own.
@@ -305,7 +307,7 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
     skip = 0 if fit or fitted is not None else mlo - frames.start
     with nearby_tables(NEARBY_BODY):      # a Body slider's step: no new feasibility table
         traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground,
-                               coarse_dt=coarse, stride=PREVIEW_STRIDE, skip=skip)
+                               coarse_dt=coarse, stride=preview_stride(period), skip=skip)
     # What the mapping reads of the whole run, from the part simulated: the edge tilt's fit
     # (Section 7), the distance the wheels turn from (the built-in's from the arc length at the
     # run's first frame, t = 0; a user's rig's from the foot point's chords of one frame).
@@ -325,6 +327,13 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
         return False
     export_ready.clear_equipment(fig)
     return True
+
+
+def preview_stride(period: float) -> int:
+    """The longest step of a drag step on a Ground mesh, in DEFAULT_DT, for turns of ``period``
+    s at the shortest (:data:`PREVIEW_STRIDE`)."""
+    steps = int(period / (PREVIEW_TURN_STEPS * DEFAULT_DT) + 1e-9)
+    return min(PREVIEW_STRIDE, max(GRID, steps))
 
 
 def _drag_rig(fig):

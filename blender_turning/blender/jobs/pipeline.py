@@ -155,7 +155,7 @@ def simulate_figure(obj, frames: FrameRange, start=None, height=None, ground="re
         raise SceneInputError("Target Speed (turning.terrain.target_speed) steers the turns "
                               "across the hill about the Heading: turn on Hold Heading")
     stride = stride if target is None and skidding is None else 1
-    traj = simulate(figure, controller, duration + 2 * (stride - 1) * dt, dt,
+    traj = simulate(figure, controller, duration, dt,
                     state0=(*state0, speed(0.0)),
                     meta={"figure": obj.name, "ground_object": ground.name},
                     ground=ground.field, resistance=resistance_from_settings(s),

@@ -43,15 +43,24 @@ ski or wheel has."""
 
 REACH = 2.0
 """A run with ``stride`` > 1 (:func:`_loop`) steps with ``dt`` while the lean's rate carries it
-across zero within REACH coarse steps (the rate of the lean from the equilibrium lean is not
-``omega_v`` on terrain: the margin catches most of what the linear guess misses)."""
+across zero within REACH times the coarse step it would take (the rate of the lean from the
+equilibrium lean is not ``omega_v`` on terrain: the margin catches most of what the linear
+guess misses)."""
+
+GRID = 3
+"""After steps of ``dt`` (about a zero crossing of the lean, or a table that changes the turn), a
+run with ``stride`` > 1 (:func:`_loop`) takes its next coarse step from a step ``i`` that GRID
+divides: the same steps as coarse steps of ``GRID dt`` alone there.  Resuming coarse steps at
+once left a snowboarder at 12 m/s on a 12 deg slope 2.6 m from the bake 30 s in (0.8 m on the
+grid; BENCHMARKS.md, "Live Preview on a Ground mesh: longer coarse steps")."""
 
 SPAN = 1.25
 """A coarse step (:func:`_loop`) moves at most SPAN cells of a height field: the spline rounds a
 mesh's creases over about a cell (Blender's Ground mesh is sampled at a quarter of its faces),
-and a step whose stages lie further apart misses them.  The benchmark's cyclist (3 m/s, 0.25 m
-cells) takes its coarse steps at 0.7 cells; a snowboarder at 12 m/s on such ground, stepped
-coarsely, ended 12 m from the bake 20 s in (here: the bake's steps throughout).
+and a step whose stages lie further apart misses them.  The benchmark's cyclist (1.4-4.6 m/s,
+0.25 m cells) steps 3-5 ``dt`` at a time; a figure too fast for ``GRID dt`` takes the bake's
+steps (a snowboarder at 12 m/s on such ground, stepped coarsely, ended 12 m from the bake 20 s
+in).
 docs/live-preview.md has the errors measured."""
 
 
@@ -90,9 +99,11 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     ``target_speed``; a stop skids to rest, and the figure then stands still across the fall line
     to the end of ``duration`` (no :class:`.errors.Stopped`).
 
-    ``stride`` > 1 (a preview, :func:`_loop`): steps of ``stride dt`` away from the zero
-    crossings of the lean (from the equilibrium lean), steps of ``dt`` on the same grid about
-    them, a sample every ``stride dt``; not with ``target_speed`` or ``skidding``.
+    ``stride`` > 1 (a preview, :func:`_loop`): steps of up to ``stride dt`` (at least
+    :data:`GRID`) away from the zero crossings of the lean (from the equilibrium lean), steps of
+    ``dt`` on the same grid about them, a sample at each step's start (``t`` on the grid of
+    ``dt``, not evenly spaced: :meth:`.Trajectory.resample` takes it); not with
+    ``target_speed`` or ``skidding``.
 
     ``keep`` (s): a run that ends the trajectory leaves out the samples before the last one at
     or before ``keep`` (a window's run: the frames resampled from there on are the whole
@@ -132,16 +143,17 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
             raise ValueError("target_speed steers the heading: the controller needs a heading "
                              "(the course, e.g. the fall line)")
         brake = _Braking(rule, controller, figure, ground, resistance, st, schedule)
-    if type(stride) is not int or not 1 <= stride <= 10:
-        raise ValueError(f"stride = {stride!r} is not a whole number of steps in [1, 10]")
+    if type(stride) is not int or not (stride == 1 or GRID <= stride <= 10):
+        raise ValueError(f"stride = {stride!r} is not 1 or a whole number of steps in "
+                         f"[{GRID}, 10]")
     if stride > 1 and (target_speed is not None or skidding is not None):
         raise ValueError("stride > 1 steps the carved model only: give no target_speed or "
                          "skidding with it")
-    n = (int(math.floor(duration / (stride * dt) + 1e-9))) * stride + 1
-    info = {"preset": figure.name, "dt": stride * dt, **body_meta(body),
+    n = int(math.floor(duration / dt + 1e-9)) + 1
+    info = {"preset": figure.name, "dt": dt, **body_meta(body),
             "ground": describe_ground(ground), **resistance_meta(resistance), **(meta or {})}
     if stride > 1:
-        info["fine_dt"] = dt
+        info["stride"] = stride
     if brake is not None:
         info["target_speed"] = brake.rule.speed
     if skidding is not None:
@@ -155,8 +167,8 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
         stage = TerrainStage(body, limits, resistance, ground, controller)
         if skid is not None:
             skid.stage = stage
-        rows, stop = _loop(body, limits, controller, ground, st, n, dt, C_f0, brake, stage,
-                           skid, stride)
+        rows, stop, at = _loop(body, limits, controller, ground, st, n, dt, C_f0, brake, stage,
+                               skid, stride)
     finally:
         if brake is not None:
             controller.heading = course
@@ -165,8 +177,9 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     if stop == "halted":
         rows, stop = stand_rows(rows, n, ground, body.g, skidding.grip), None
     # The rows' floats into one array (np.array of a list of tuples: twice the time).
-    first = 0 if stop is not None else _first_kept(len(rows), stride * dt, keep)
-    traj = _trajectory(body, ground, rows, stride * dt, info, first)
+    steps = np.arange(len(rows)) if at is None else np.array(at)
+    first = 0 if stop is not None else _first_kept(steps, dt, keep)
+    traj = _trajectory(body, ground, rows, steps, dt, info, first)
     if stop == "fell":
         raise FellOver(float(traj.t[-1]), float(rows[-1][11]), traj,
                        fall_cause(limits, traj.C_f, traj.t))
@@ -186,33 +199,34 @@ def _checked(schedule: Schedule):
 
 
 def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid, stride=1):
-    """Up to ``n`` samples; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean from
-    the controller's equilibrium lean, F_brake / m, skid)``.  Classical RK4 on Python floats,
-    written out (``rhs``, a :class:`.terrain_one_figure.TerrainStage`, for the stages), ``C_f``
-    bounded at every stage relative to the curvature at the step's start, as
-    :func:`.model.rk4_step` does; ``skid`` (:class:`.skidding._Skid`) sets the braking
-    command of each step.  Returns ``(rows, None | "fell" | "stopped" | "halted" | "left")``
-    (``halted``: a commanded stop came to rest).
+    """Up to ``n`` steps of ``dt``; rows of ``(state 6, alpha_v, C_f, V_f, omega0, theta_max, lean
+    from the controller's equilibrium lean, F_brake / m, skid)``.  Classical RK4 on Python
+    floats, written out (``rhs``, a :class:`.terrain_one_figure.TerrainStage`, for the stages),
+    ``C_f`` bounded at every stage relative to the curvature at the step's start, as
+    :func:`.model.rk4_step` does; ``skid`` (:class:`.skidding._Skid`) sets the braking command
+    of each step.  Returns ``(rows, None | "fell" | "stopped" | "halted" | "left", steps)``
+    (``halted``: a commanded stop came to rest; ``steps``: each row's ``i`` on the grid of
+    ``dt``, ``None`` with ``stride = 1``: a row at every step).
 
-    ``stride`` > 1 (a preview; no ``brake``, no ``skid``): a row every ``stride`` steps of the
-    grid ``i dt``, and between two rows one RK4 step of ``stride dt`` where the lean (from the
-    equilibrium lean) keeps its sign, else steps of ``dt``.  What makes a run's error first
-    order in ``dt`` on terrain happens at the lean's zero crossings: directional control plans
-    the coming half-turn at the step before one (Section 5.2,
+    ``stride`` > 1 (a preview; no ``brake``, no ``skid``): a row at each step's start, and one
+    RK4 step of ``k dt`` (``k`` up to ``stride``, as far as :data:`SPAN` allows) where the lean
+    (from the equilibrium lean) keeps its sign, else steps of ``dt``.  What makes a run's error
+    first order in ``dt`` on terrain happens at the lean's zero crossings: directional control
+    plans the coming half-turn at the step before one (Section 5.2,
     :meth:`.PhaseEllipse.begin_step`: a crossing within the step, ``theta_v + omega_v dt``
     across zero) and the law switches to its ellipse there (a jump in ``alpha_v`` inside a
-    step), and so does a controller taking new feasible turns at a speed it passes where
-    they change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the
-    same grid, those steps take the ``stride = 1`` run's instants.  A coarse step is tried where
-    the lean's rate carries it across zero within no fewer than :data:`REACH` coarse steps and
-    it moves at most :data:`SPAN` cells of a height field, and kept only if the controller does
-    not change over it and it ends on the same side with no crossing within ``stride dt`` ahead
-    (where ``begin_step``, seeing the long step behind it, would plan).  Where a coarse step may
-    be taken (slow enough for :data:`SPAN`), a step of either length reads the ground three
-    times, not four (:func:`advance`: the midpoints share a read, the end is carried from stage
-    4); faster, the preview's steps are the ``stride = 1`` run's, bit for bit.  A step's first
-    stage bounds the rate of ``C_f`` relative to the last step's, ``last`` s before (Section 3).
-    The fall and a stop are checked at the rows."""
+    step), and so does a controller taking new feasible turns at a speed it passes where they
+    change the law (:meth:`.Controller.changes_between`).  Stepped with ``dt`` on the same grid,
+    those steps take the ``stride = 1`` run's instants.  A coarse step is tried after a coarse
+    step or, after steps of ``dt``, from a step :data:`GRID` divides, where the lean's rate does
+    not carry it across zero within :data:`REACH` times its length, and kept only if the
+    controller does not change over it and it ends on the same side with no crossing within its
+    length ahead (where ``begin_step``, seeing the long step behind it, would plan).  Where a
+    coarse step may be taken (slow enough for :data:`SPAN` at ``GRID dt``), a step of any length
+    reads the ground three times, not four (:func:`advance`: the midpoints share a read, the end
+    is carried from stage 4); faster, the preview's steps are the ``stride = 1`` run's, bit for
+    bit.  A step's first stage bounds the rate of ``C_f`` relative to the last step's, ``last``
+    s before (Section 3). The fall and a stop are checked at the rows."""
     controller.begin_run(limits)
     foot = rhs.foot
     derivatives, lean, stage = rhs.derivatives, rhs.lean, rhs.stage
@@ -222,9 +236,8 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
     anchor = None if anchor is None else float(anchor)
     x0, x1, x2, x3, x4, x5 = (float(v) for v in st)
     step_f, h_f, w6_f = dt, 0.5 * dt, dt / 6.0
-    step_c, h_c, w6_c = stride * dt, 0.5 * (stride * dt), (stride * dt) / 6.0
-    reach = REACH * stride * dt
-    fastest = SPAN * getattr(ground, "cell", math.inf) / (stride * dt)   # m/s, coarse steps
+    cells = SPAN * getattr(ground, "cell", math.inf) / dt    # the speed moving SPAN cells a dt
+    at = None if stride == 1 else []
     x_lo, x_hi, y_lo, y_hi = getattr(ground, "extent", (-math.inf, math.inf, -math.inf,
                                                         math.inf))
     low = MIN_SPEED                 # the speed the controller is steered at: max(V, low)
@@ -295,22 +308,31 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
                 try:
                     dv = derivatives(x0, x1)
                 except OffTerrain:              # the step ended past the edge
-                    return rows, "left"
+                    return rows, "left", at
             rel = lean(t, x0, x1, x2, x3, dv)
         else:                                   # found by the coarse step that led here
             dv, rel = ahead
             ahead = None
         begin(t, (x0, x1, x2, rel, x4))
+        if at is not None:
+            at.append(i)
         law = step_law(t)
         if law is not law_now:
             use_law(law)
             law_now = law
-        row = stride == 1 or i % stride == 0
         a0, a1, a2, a3, a4, a5, alpha, V_f, cf = stage(t, x0, x1, x2, x3, x4, x5, anchor, last,
                                                        dv)
         step, h, w6, k, y = step_f, h_f, w6_f, 1, None
-        slow = stride > 1 and x5 <= fastest         # the preview's reads shared (advance)
-        if slow and row and i + stride < n and rel * (rel + x4 * reach) > 0.0:
+        slow = stride > 1 and x5 * GRID <= cells    # the preview's reads shared (advance)
+        # The coarse step: up to stride dt, SPAN cells, the run's end; after steps of dt, from
+        # the grid of GRID dt.
+        kc = (stride if x5 * stride <= cells else int(cells / x5)) if slow else 1
+        if kc > n - 1 - i:
+            kc = n - 1 - i
+        if kc > 1 and (last != step_f or i % GRID == 0) and \
+                rel * (rel + x4 * (REACH * kc * dt)) > 0.0:
+            step_c = kc * dt
+            h_c, w6_c = 0.5 * step_c, step_c / 6.0
             try:
                 y = advance(t, step_c, h_c, w6_c, True, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3,
                             a4, a5, cf)
@@ -322,20 +344,19 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
                 rel_y = lean(t + step_c, y[0], y[1], y[2], y[3], dv_y)
                 if rel * rel_y <= 0.0 or rel_y * (rel_y + y[4] * step_c) <= 0.0:
                     raise _Fine
-                step, h, w6, k, ahead = step_c, h_c, w6_c, stride, (dv_y, rel_y)
+                step, h, w6, k, ahead = step_c, h_c, w6_c, kc, (dv_y, rel_y)
             except (_Fine, OffTerrain):
                 y = None
-        if row:
-            skid_b = skid_a = 0.0
-            if skid is not None:
-                skid_b = foot[0]
-                skid_a = skid.skid(skid_b, foot[1], foot[2], x3)
-            w, tm = target(t)
-            append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, w, tm, rel, skid_b, skid_a))
-            if abs(rel) > fall:
-                return rows, "fell"
-            if x5 < low:
-                return rows, "halted" if skid is not None and skid.stopping else "stopped"
+        skid_b = skid_a = 0.0
+        if skid is not None:
+            skid_b = foot[0]
+            skid_a = skid.skid(skid_b, foot[1], foot[2], x3)
+        w, tm = target(t)
+        append((x0, x1, x2, x3, x4, x5, alpha, cf, V_f, w, tm, rel, skid_b, skid_a))
+        if abs(rel) > fall:
+            return rows, "fell", at
+        if x5 < low:
+            return rows, "halted" if skid is not None and skid.stopping else "stopped", at
         if i + 1 >= n:
             break
         if y is None:
@@ -343,39 +364,38 @@ def _loop(body, limits, controller, ground, st, n, dt, anchor, brake, rhs, skid,
                 y = advance(t, step, h, w6, slow, x0, x1, x2, x3, x4, x5, a0, a1, a2, a3, a4,
                             a5, cf)
             except OffTerrain:
-                return rows, "left"
+                return rows, "left", at
             x0, x1, x2, x3, x4, x5, near = y
         else:
             x0, x1, x2, x3, x4, x5, near = y
             near = None
         anchor, last = cf, step
         i += k
-    return rows, None
+    return rows, None, at
 
 
 class _Fine(Exception):
     """A coarse step of :func:`_loop` that steps of ``dt`` must take instead."""
 
 
-def _first_kept(n: int, dt: float, keep: float) -> int:
-    """The last of ``n`` samples ``k dt`` at or before ``keep`` (0 before the first)."""
-    k = min(n - 1, max(0, int(keep / dt)))
-    while k > 0 and k * dt > keep:
-        k -= 1
-    return k
+def _first_kept(steps: np.ndarray, dt: float, keep: float) -> int:
+    """The last of the samples at ``steps dt`` at or before ``keep`` (0 before the first)."""
+    return max(0, int(np.searchsorted(steps * dt, keep, side="right")) - 1)
 
 
-def _trajectory(body, ground, rows, dt, info, first=0) -> Trajectory:
-    """The trajectory columns (docs/ARCHITECTURE.md Section 3) from the per-sample rows, from
-    row ``first`` on (``s`` from the first row)."""
+def _trajectory(body, ground, rows, steps, dt, info, first=0) -> Trajectory:
+    """The trajectory columns (docs/ARCHITECTURE.md Section 3) from the per-sample rows at the
+    times ``steps dt``, from row ``first`` on (``s`` from the first row)."""
     n = len(rows)
     # The rows' floats into one array (np.array of a list of tuples: twice the time).
     rec = np.fromiter(chain.from_iterable(rows[first:]), float, (n - first) * len(rows[0]))
     x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel, brake, skid = rec.reshape(n - first, -1).T
     fr = surface_frame(ground, x, y, d, body.g)
     V_all = V_f if first == 0 else np.fromiter((r[8] for r in rows), float, n)
-    ds = 0.5 * (V_all[1:] + V_all[:-1]) * dt             # along the surface (the foot's speed)
-    cols = {"t": np.arange(n)[first:] * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
+    # Along the surface (the foot's speed); a step of dt each, or the steps between the rows.
+    ds = 0.5 * (V_all[1:] + V_all[:-1]) * (dt if len(steps) == steps[-1] + 1 else
+                                            np.diff(steps) * dt)
+    cols = {"t": steps[first:] * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
             "omega_v": om, "alpha_v": alpha, "C_f": cf, "V_f": V_f, "z": fr.z, "V_cm": V,
             "F_leg": model.leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
             "phi": phase(rel, om, tm, w),
