@@ -23,7 +23,12 @@ made):
   release (``stride = 1``) run, and of runs on the test suite's grounds (``CASES``: the rolls,
   a mogul slope with and without a course, a plane, a 12 deg slope, flat ground with friction,
   a straight run, a target speed with skidding), each at both strides where a preview may
-  run: two trees whose digests agree step bit for bit alike.
+  run: two trees whose digests agree step bit for bit alike;
+- ``error``: how far a preview is from its release, at 24 fps over the run: the foot's largest
+  distance (cm) and the heading's and the lean's largest differences (deg), for each captured
+  call (at its stride) and the slope, mogul and rolls cases at strides 3 and 5 and at Live
+  Preview's for their turns (:func:`...terrain_sim.preview_stride`), with the release at a
+  thousandth of a degree more lean, for scale (a run that sensitive parts from itself).
 """
 from __future__ import annotations
 
@@ -37,6 +42,8 @@ import subprocess
 import sys
 import time
 from dataclasses import replace
+
+import numpy as np
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -52,6 +59,7 @@ from blender_turning.core.ground.terrain_gen import ski_slope  # noqa: E402
 from blender_turning.core.physics import terrain_one_figure  # noqa: E402
 from blender_turning.core.physics.model import RESISTANCE  # noqa: E402
 from blender_turning.core.physics.skidding import Skidding  # noqa: E402
+from blender_turning.core.physics.terrain_sim import preview_stride  # noqa: E402
 
 
 def run(call, stride=None):
@@ -85,13 +93,15 @@ def cases():
 
     def make(sport, V, period, lean_deg, heading, ground, start, duration, **kw):
         fig = replace(preset(sport), body=replace(preset(sport).body, V_cm=V))
-        w, tm = 2 * math.pi / period, math.radians(lean_deg)
+        w = 2 * math.pi / period
 
-        def go(stride):
+        def go(stride, more_deg=0.0):
+            tm = math.radians(lean_deg + more_deg)
             ctl = PhaseEllipse(fig.body, w, tm, heading, limits=fig.limits)
             s0 = start if len(start) == 6 else (*slalom_start(fig.body, w, tm, *start), V)
             return _traj(lambda: simulate(fig, ctl, duration, 0.02, s0, ground=ground,
                                           resistance=RESISTANCE[sport], stride=stride, **kw))
+        go.period, go.ground = period, ground
         return go
 
     cyclist = 2 * math.pi / 3.0 * math.radians(4.0)
@@ -117,6 +127,35 @@ def cases():
                                        (fall, 20.0, 390.0), 20.0, target_speed=10.0,
                                        skidding=Skidding("skid", corridor=5.0)),
     }
+
+
+def off(a, b, ground):
+    """``(foot cm, heading deg, lean deg)``: the largest differences of ``a`` from ``b`` at
+    24 fps over the frames both cover."""
+    fa, fb = (t.resample(24, start=0.0, ground=ground) for t in (a, b))
+    n = min(len(fa), len(fb))
+    return (100 * np.hypot(fa.x[:n] - fb.x[:n], fa.y[:n] - fb.y[:n]).max(),
+            math.degrees(np.abs(fa.theta_dir[:n] - fb.theta_dir[:n]).max()),
+            math.degrees(np.abs(fa.theta_v[:n] - fb.theta_v[:n]).max()))
+
+
+def errors(calls):
+    """The ``error`` table's lines."""
+    def cell(v):
+        return "{:.1f} cm / {:.2f} / {:.2f} deg".format(*v)
+    for call in calls:
+        ground, release = call["kwargs"]["ground"], run(call, 1)
+        yield (f"captured, lean {math.degrees(call['theta_max']):.2f} deg, stride "
+               f"{call['kwargs']['stride']}: {cell(off(run(call), release, ground))}")
+    for name, go in cases().items():
+        if not hasattr(go, "period") or go.ground is FLAT:
+            continue
+        live = preview_stride(go.period, 0.02)
+        release = go(1)
+        parts = [f"stride {k}{' (live)' if k == live else ''} "
+                 f"{cell(off(go(k), release, go.ground))}" for k in sorted({3, 5, live})]
+        parts.append(f"release at +0.001 deg {off(go(1, 0.001), release, go.ground)[0]:.1f} cm")
+        yield f"{name} ({go.period:g} s turns): " + "; ".join(parts)
 
 
 def count(calls):
@@ -166,7 +205,7 @@ def callgrind(path, python=sys.executable):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("calls", help="the pickle of bench_live.py --capture")
-    ap.add_argument("what", choices=("count", "callgrind", "time", "hash", "passes"))
+    ap.add_argument("what", choices=("count", "callgrind", "time", "hash", "error", "passes"))
     ap.add_argument("--repeat", type=int, default=5, help="passes timed (passes: run)")
     args = ap.parse_args(argv)
     with open(args.calls, "rb") as f:
@@ -181,6 +220,8 @@ def main(argv=None):
         for _ in range(args.repeat):
             for call in calls:
                 run(call)
+    elif args.what == "error":
+        print("\n".join(errors(calls)))
     elif args.what == "count":
         print(" ".join(f"{k} {v:,.0f}" for k, v in count(calls).items()), "per run")
     elif args.what == "time":

@@ -592,8 +592,6 @@ def test_a_drag_step_on_a_ground_mesh_takes_coarse_steps_within_its_measured_err
     from blender_turning.blender.jobs import pipeline
     from blender_turning.blender.scene.ground import mesh_from_height_field
     from blender_turning.core.ground.terrain_gen import ski_slope
-    # 30 steps a turn at least: 5 dt a step for 3 s turns, 3 (the core's grid) for 2 s and less.
-    assert [live.preview_stride(p) for p in (1.0, 2.0, 2.4, 3.0, 3.6, 10.0)] == [3, 3, 4, 5, 6, 6]
     scene.frame_end = 24 * 30 + 1
     rolls = ski_slope(length=200.0, width=200.0, slope_deg=0.0, cell=1.0)
     mesh = bpy.data.objects.new("Rolls", mesh_from_height_field(bpy, rolls, "Rolls"))

@@ -15,6 +15,7 @@ from blender_turning.core import PhaseEllipse, preset, simulate
 from blender_turning.core.controllers import ellipse
 from blender_turning.core.ground.terrain_gen import ski_slope
 from blender_turning.core.physics.model import RESISTANCE
+from blender_turning.core.physics.terrain_sim import preview_stride
 
 ROLLS = ski_slope(length=200.0, width=200.0, slope_deg=0.0, cell=1.0)
 CYCLIST = preset("cyclist")
@@ -230,6 +231,14 @@ def test_a_longer_stride_steps_up_to_it_and_resumes_on_the_grid_after_steps_of_d
     assert plans == [e[0] for e in bake_events if len(e) == 2]
     foot, heading = _off(longer, exact)
     assert foot < 0.03 and heading < 0.2
+
+
+def test_live_previews_stride_keeps_30_steps_a_turn_and_the_grid():
+    """5 dt a step for 3 s turns (Live Preview's cyclist), 3 (the grid) for 2 s and less, 6 at
+    most; a longest step of 1 is the bake's."""
+    assert [preview_stride(p, 0.02) for p in (1.0, 2.0, 2.4, 3.0, 3.6, 10.0)] == \
+        [3, 3, 4, 5, 6, 6]
+    assert preview_stride(3.0, 0.02, longest=1) == 1 and preview_stride(3.0, 0.01) == 6
 
 
 def test_stride_is_checked():

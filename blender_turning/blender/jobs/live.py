@@ -39,7 +39,7 @@ from bpy.app.handlers import persistent
 from ...core import DEFAULT_DT
 from ...core.controllers.feasible import nearby_tables
 from ...core.errors import FellOver, TurningError
-from ...core.physics.terrain_sim import GRID
+from ...core.physics.terrain_sim import preview_stride
 from ...mapping import MAPPINGS
 from ...mapping.retarget.retarget import path_length
 from ...mapping.sports.snow import tilt_gain
@@ -80,9 +80,9 @@ PREVIEW_STEPS = 50
 #: the lean's zero crossings and a new feasibility table that changes the turn's lean, and where a
 #: coarse step would cross more than 1.25 cells of the height field
 #: (:func:`...core.physics.terrain_sim.simulate_free`'s ``stride``), keeping PREVIEW_TURN_STEPS
-#: steps a turn period (its shortest over the range) and taking at least the core's ``GRID``:
-#: 5 DEFAULT_DT for 3 s turns, 3 for 2 s turns (fewer steps a turn took moguls metres off,
-#: docs/live-preview.md).  The release integrates with DEFAULT_DT.
+#: steps a turn period (its shortest over the range; the core's ``preview_stride``): 5 DEFAULT_DT
+#: for 3 s turns, 3 for 2 s turns (docs/live-preview.md).  The release integrates with
+#: DEFAULT_DT.
 PREVIEW_STRIDE, PREVIEW_TURN_STEPS = 6, 30
 #: A drag step's controller may take the feasible turns of a body within this (relative) of the
 #: figure's in what they read of it (its COM height, ``J``, speed and gravity:
@@ -307,7 +307,8 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
     skip = 0 if fit or fitted is not None else mlo - frames.start
     with nearby_tables(NEARBY_BODY):      # a Body slider's step: no new feasibility table
         traj = simulate_figure(fig, FrameRange(frames.start, mhi, frames.fps), ground=ground,
-                               coarse_dt=coarse, stride=preview_stride(period), skip=skip)
+                               coarse_dt=coarse, skip=skip, stride=preview_stride(
+                                   period, DEFAULT_DT, PREVIEW_STRIDE, PREVIEW_TURN_STEPS))
     # What the mapping reads of the whole run, from the part simulated: the edge tilt's fit
     # (Section 7), the distance the wheels turn from (the built-in's from the arc length at the
     # run's first frame, t = 0; a user's rig's from the foot point's chords of one frame).
@@ -327,13 +328,6 @@ def _rebake_window(fig, frames: FrameRange) -> bool:
         return False
     export_ready.clear_equipment(fig)
     return True
-
-
-def preview_stride(period: float) -> int:
-    """The longest step of a drag step on a Ground mesh, in DEFAULT_DT, for turns of ``period``
-    s at the shortest (:data:`PREVIEW_STRIDE`)."""
-    steps = int(period / (PREVIEW_TURN_STEPS * DEFAULT_DT) + 1e-9)
-    return min(PREVIEW_STRIDE, max(GRID, steps))
 
 
 def _drag_rig(fig):

@@ -190,6 +190,16 @@ def simulate_free(figure: Figure, controller: Controller, duration: float, dt: f
     return traj
 
 
+def preview_stride(period: float, dt: float, longest: int = 6, per_turn: int = 30) -> int:
+    """A preview's ``stride`` (:func:`simulate_free`) for turns of ``period`` s at the shortest:
+    steps of at most ``period / per_turn`` (at least :data:`GRID` dt, at most ``longest`` dt).
+    Fewer than 30 steps a turn took a skier on moguls (2 s turns, 10 m/s, 2 m cells) metres
+    from the bake over 12 s (BENCHMARKS.md, "Live Preview on a Ground mesh: longer coarse
+    steps"); ``longest`` 1 is the bake's own step."""
+    steps = int(period / (per_turn * dt) + 1e-9)
+    return min(longest, max(GRID, steps))
+
+
 def _checked(schedule: Schedule):
     """``schedule`` of a target speed, each value checked when read (m/s, (0, 100])."""
     def at(t):
