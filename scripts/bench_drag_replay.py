@@ -62,12 +62,15 @@ from blender_turning.core.physics.skidding import Skidding  # noqa: E402
 from blender_turning.core.physics.terrain_sim import preview_stride  # noqa: E402
 
 
-def run(call, stride=None):
-    """One captured call, as the drag step runs it (``stride``: another longest step)."""
+def run(call, stride=None, whole=False):
+    """One captured call, as the drag step runs it (``stride``: another longest step;
+    ``whole``: every sample, not the window's only)."""
     fig, dt = call["figure"], call["dt"]
     ctl = PhaseEllipse(fig.body, call["omega0"], call["theta_max"], call["heading"],
                        limits=fig.limits)
     kwargs = dict(call["kwargs"], stride=call["kwargs"]["stride"] if stride is None else stride)
+    if whole:
+        kwargs["keep"] = 0.0
     with nearby_tables(call["nearby"]):
         return _traj(lambda: simulate(fig, ctl, call["duration"], dt, **kwargs))
 
@@ -144,11 +147,11 @@ def errors(calls):
     def cell(v):
         return "{:.1f} cm / {:.2f} / {:.2f} deg".format(*v)
     for call in calls:
-        ground, release = call["kwargs"]["ground"], run(call, 1)
+        ground, release = call["kwargs"]["ground"], run(call, 1, True)
         yield (f"captured, lean {math.degrees(call['theta_max']):.2f} deg, stride "
-               f"{call['kwargs']['stride']}: {cell(off(run(call), release, ground))}")
+               f"{call['kwargs']['stride']}: {cell(off(run(call, whole=True), release, ground))}")
     for name, go in cases().items():
-        if not hasattr(go, "period") or go.ground is FLAT:
+        if not hasattr(go, "period") or go.ground is FLAT or "target" in name:
             continue
         live = preview_stride(go.period, 0.02)
         release = go(1)
@@ -236,7 +239,7 @@ def main(argv=None):
     else:
         for call in calls:
             print(f"captured, lean {math.degrees(call['theta_max']):.2f} deg: preview "
-                  f"{_digest(run(call))}, release {_digest(run(call, 1))}")
+                  f"{_digest(run(call, whole=True))}, release {_digest(run(call, 1, True))}")
         for name, go in cases().items():
             strides = (1,) if "target" in name else (1, 3, 5)
             print(f"{name}: " + ", ".join(f"stride {s} {_digest(go(s))}" for s in strides))
