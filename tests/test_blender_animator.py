@@ -106,6 +106,7 @@ def test_one_bad_figure_bakes_nothing(scene):
     assert snapshot() == before
 
 
+@pytest.mark.installed
 def test_a_keyed_lean_is_checked_at_the_first_frame_past_its_range(scene):
     fig = add("SKIER")
     s = fig.turning

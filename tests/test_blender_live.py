@@ -583,6 +583,7 @@ def test_a_drag_step_on_the_papers_model_takes_fewer_steps_within_its_measured_e
     assert steps[-1] == 0.02
 
 
+@pytest.mark.installed
 def test_a_drag_step_on_a_ground_mesh_takes_coarse_steps_within_its_measured_error(
         scene, monkeypatch):
     """The cyclist of ``scripts/bench_live.py`` (the rolls of ``ski_slope`` without its slope,
