@@ -166,7 +166,7 @@ def simulate(figure: Figure, controller: Controller, duration: float, dt: float 
     A tyre (the sport's grip, or ``skidding``'s) holds the lean to what its grip allows
     (:func:`.skidding.lean_within_grip`); ``meta["grip_limited"]`` then says so.
 
-    ``stride`` > 1: a preview on terrain, steps of ``stride dt`` away from the lean's zero
+    ``stride`` > 1: a preview on terrain, steps of up to ``stride dt`` away from the lean's zero
     crossings (:func:`.terrain_sim.simulate_free`); the paper's model takes a coarser ``dt``.
     ``keep`` (s; where the speed is a state): the trajectory from its last sample at or before
     ``keep`` on (:func:`.terrain_sim.simulate_free`); the paper's model keeps every sample."""

@@ -402,9 +402,8 @@ def _trajectory(body, ground, rows, steps, dt, info, first=0) -> Trajectory:
     x, y, d, th, om, V, alpha, cf, V_f, w, tm, rel, brake, skid = rec.reshape(n - first, -1).T
     fr = surface_frame(ground, x, y, d, body.g)
     V_all = V_f if first == 0 else np.fromiter((r[8] for r in rows), float, n)
-    # Along the surface (the foot's speed); a step of dt each, or the steps between the rows.
-    ds = 0.5 * (V_all[1:] + V_all[:-1]) * (dt if len(steps) == steps[-1] + 1 else
-                                            np.diff(steps) * dt)
+    # Along the surface (the foot's speed) over the steps between the rows (one dt: dt itself).
+    ds = 0.5 * (V_all[1:] + V_all[:-1]) * (np.diff(steps) * dt)
     cols = {"t": steps[first:] * dt, "x": x, "y": y, "theta_dir": d, "theta_v": th,
             "omega_v": om, "alpha_v": alpha, "C_f": cf, "V_f": V_f, "z": fr.z, "V_cm": V,
             "F_leg": model.leg_force(body, th, om, alpha, cf, V, V_f, fr)[0],
